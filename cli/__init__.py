@@ -1,0 +1,55 @@
+"""The ``vistrack`` command line: parse, call the library, show progress, print.
+
+Errors from bad input are one line (``Error: ...``) and a non-zero exit, never
+a traceback.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from vistrack import __version__
+
+from .reproduce import reproduce
+
+__all__ = ["cli", "main"]
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="vistrack")
+def cli():
+    """vistrack: particle-filter object tracking that uses the observation well.
+
+    Algorithms from P. Torma's thesis (Bootstrap/CONDENSATION, AVPF, LLS, LIS)
+    on a vectorised particle core. Run `vistrack COMMAND --help` for details.
+
+    \b
+    Examples:
+      vistrack reproduce bearings --runs 20          # thesis §4.5.5, one ship
+      vistrack reproduce bearings --ships 3 --particles 10,100
+    """
+
+
+cli.add_command(reproduce)
+
+
+def main(argv=None):
+    """Console entry point: run the group, turn usage errors into one line."""
+    try:
+        code = cli.main(args=argv, prog_name="vistrack", standalone_mode=False)
+    except click.exceptions.NoArgsIsHelpError as e:
+        click.echo(e.ctx.get_help() if e.ctx else str(e))
+        sys.exit(0)
+    except click.ClickException as e:
+        msg = e.format_message().replace("\n", " ")
+        click.echo(f"Error: {msg}", err=True)
+        sys.exit(e.exit_code)
+    except click.exceptions.Abort:
+        click.echo("Aborted.", err=True)
+        sys.exit(130)
+    except KeyboardInterrupt:
+        click.echo("Interrupted.", err=True)
+        sys.exit(130)
+    sys.exit(code if isinstance(code, int) else 0)

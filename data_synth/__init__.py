@@ -1,0 +1,1 @@
+"""Synthetic data with exact ground truth (bearings sequences; video clips to come)."""

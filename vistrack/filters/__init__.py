@@ -1,0 +1,47 @@
+"""Particle filters, one module per algorithm, all with ``step(particles, obs, rng)``.
+
+See DESIGN.md's algorithm table; aliases follow the literature's names.
+"""
+
+from .avpf import AVPF
+from .base import ParticleFilter, filter_steps
+from .bootstrap import Bootstrap
+from .lis import LIS, GaussMixtureProposal
+from .lls import LLS, Window
+from .sir import SIR
+
+__all__ = [
+    "ParticleFilter",
+    "filter_steps",
+    "Bootstrap",
+    "SIR",
+    "AVPF",
+    "LLS",
+    "Window",
+    "LIS",
+    "GaussMixtureProposal",
+    "ALGORITHMS",
+    "make_filter",
+]
+
+ALGORITHMS = {
+    "bootstrap": Bootstrap,
+    "condensation": Bootstrap,
+    "n-ips": Bootstrap,
+    "pf-gordon": Bootstrap,
+    "sir": SIR,
+    "avpf": AVPF,
+    "lls": LLS,
+    "lis": LIS,
+}
+
+
+def make_filter(name, model, **kwargs):
+    """The filter registered as ``name`` on ``model``; a clear ``ValueError`` if unknown."""
+    try:
+        cls = ALGORITHMS[name]
+    except KeyError:
+        raise ValueError(
+            f"unknown algorithm {name!r}; choose from {', '.join(sorted(ALGORITHMS))}"
+        ) from None
+    return cls(model, **kwargs)

@@ -1,0 +1,135 @@
+"""The shared step of every particle filter (thesis 001, Figs. 2.3, 3.1, 4.11, 4.13).
+
+A filter is ``step(particles, obs, rng) -> particles``. The skeleton is the
+same for all algorithms of the thesis:
+
+1. resample ``(Z_{t-1}, w_{t-1})`` if the policy says so;
+2. ``propose``: draw new states and compute the log weight increment — the
+   one part that differs between algorithms;
+3. add the increment to the log-weights; a step in which every weight is zero
+   or NaN is reported (:class:`~vistrack.particles.DegenerateWeightsWarning`)
+   and recovered from by keeping the equally weighted prediction.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from ..particles import ParticleSet, checked_weights
+from ..resampling import get_scheme, needs_resampling
+
+__all__ = ["ParticleFilter", "filter_steps", "prior_as_kernel"]
+
+
+def prior_as_kernel(model):
+    """The model seen by the first step, where ``Y_1`` observes ``X_1 ~ p_0``.
+
+    ``predict`` draws from the prior ``p_0`` and ``transition_logpdf`` is
+    ``log p_0``, so every algorithm's first update is its ordinary step with
+    ``p_0`` in the place of ``K`` (Figs. 2.3, 4.11, 4.13 start from ``p_0``).
+    Local moves use ``model.with_local_prior`` when the model has one (a move
+    that need not keep the support of ``K``); ``first_step = True`` tells a
+    model to scale its windows to ``p_0`` rather than to ``K``.
+    """
+    m = copy.copy(model)
+    m.first_step = True
+    m.predict = lambda prev, rng: model.sample_prior(len(prev), rng)
+    m.predict_mean = lambda prev: np.broadcast_to(model.prior_mean, prev.shape).copy()
+    m.transition_logpdf = lambda new, old: model.prior_logpdf(new)
+    if hasattr(model, "with_local_prior"):
+        m.with_local = model.with_local_prior
+    return m
+
+
+class ParticleFilter:
+    """Base class: resample, ``propose``, weight.
+
+    Parameters
+    ----------
+    model : object
+        Supplies ``sample_prior(n, rng)``, ``predict(states, rng)``,
+        ``transition_logpdf(new, old)`` and ``loglik(obs, states)``, all
+        vectorised over particles.
+    resample : str or callable
+        Resampling scheme (``multinomial``, ``residual``, ``stratified``,
+        ``systematic``).
+    ess_threshold : float or None
+        Resample every step when ``None`` (or ``>= 1``), else when
+        ``ESS < ess_threshold * N``.
+    """
+
+    name = "base"
+
+    def __init__(self, model, *, resample="systematic", ess_threshold=None):
+        self.model = model
+        self.resample_scheme = get_scheme(resample)
+        self.ess_threshold = ess_threshold
+
+    def bind(self, model):
+        """This filter with the same parameters on another ``model``."""
+        other = copy.copy(self)
+        other.model = model
+        return other
+
+    def first_step(self, obs, n, rng):
+        """``n`` particles ``X_1 ~ p_0`` updated with the first observation ``Y_1``."""
+        if n < 1:
+            raise ValueError(f"number of particles must be positive, got {n}")
+        if not hasattr(self, "_first"):
+            self._first = self.bind(prior_as_kernel(self.model))
+        prior = ParticleSet(np.zeros((n, getattr(self.model, "dim", 1))))
+        return self._first.step(prior, obs, rng)
+
+    def initialize(self, n, rng):
+        """``n`` equally weighted particles from the prior ``p_0``."""
+        if n < 1:
+            raise ValueError(f"number of particles must be positive, got {n}")
+        return ParticleSet(self.model.sample_prior(n, rng))
+
+    def _resampled(self, particles, rng):
+        """States and log-weights after the resampling policy."""
+        n = particles.n
+        if needs_resampling(particles.ess, n, self.ess_threshold):
+            idx = self.resample_scheme(particles.weights, n, rng)
+            return particles.states[idx], np.full(n, -np.log(n))
+        return particles.states, particles.log_weights
+
+    def propose(self, prev, obs, rng):
+        """Draw new states from ``prev (N, d)``.
+
+        Returns
+        -------
+        new : ndarray (N, d)
+            The new particle positions ``Z_t``.
+        log_incr : ndarray (N,)
+            Log weight increment.
+        predicted : ndarray (N, d)
+            The plain prediction ``X_t ~ K(.|prev)`` used if the step degenerates.
+        """
+        raise NotImplementedError
+
+    def step(self, particles, obs, rng):
+        """One filtering step ``S_{t-1} -> S_t``."""
+        prev, log_w = self._resampled(particles, rng)
+        new, log_incr, predicted = self.propose(prev, obs, rng)
+        log_w, degenerate = checked_weights(log_w + log_incr, predicted, self.name)
+        if degenerate:
+            new = predicted
+        return ParticleSet(new, log_w, degenerate)
+
+
+def filter_steps(filt, observations, n, rng, particles=None):
+    """Run ``filt`` over ``observations``; yield the particle set after each step.
+
+    Without ``particles`` the first observation is of ``X_1 ~ p_0``
+    (:meth:`ParticleFilter.first_step`); with them, every observation follows a
+    prediction from the given set.
+    """
+    for obs in observations:
+        if particles is None:
+            particles = filt.first_step(obs, n, rng)
+        else:
+            particles = filt.step(particles, obs, rng)
+        yield particles

@@ -1,0 +1,20 @@
+"""Bootstrap filter / CONDENSATION / N-IPS (thesis 001, §2.6, Fig. 2.3).
+
+Predict with the dynamics ``K``, weight with the likelihood ``r``, resample.
+"""
+
+from __future__ import annotations
+
+from .base import ParticleFilter
+
+__all__ = ["Bootstrap"]
+
+
+class Bootstrap(ParticleFilter):
+    """``Z_t ~ K(.|Z_{t-1})``, ``w_t = r(Y_t|Z_t)``."""
+
+    name = "bootstrap"
+
+    def propose(self, prev, obs, rng):
+        x = self.model.predict(prev, rng)
+        return x, self.model.loglik(obs, x), x

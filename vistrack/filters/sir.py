@@ -1,0 +1,38 @@
+"""Sequential importance resampling with a user proposal (thesis 001, §3.1, Fig. 3.1).
+
+``X_t ~ pi(.|X_{t-1}, Y_t)``, ``w_t = w_{t-1} r(Y_t|X_t) K(X_t|X_{t-1}) / pi(X_t|X_{t-1}, Y_t)``.
+"""
+
+from __future__ import annotations
+
+from .base import ParticleFilter
+
+__all__ = ["SIR"]
+
+
+class SIR(ParticleFilter):
+    """SIR filter.
+
+    Parameters
+    ----------
+    model : object
+        The tracking model (see :class:`~vistrack.filters.base.ParticleFilter`).
+    proposal : object
+        ``sample(prev, obs, rng) -> new (N, d)`` and
+        ``logpdf(new, prev, obs) -> (N,)``; must be positive wherever ``K`` is.
+    """
+
+    name = "sir"
+
+    def __init__(self, model, proposal, **kwargs):
+        super().__init__(model, **kwargs)
+        self.proposal = proposal
+
+    def propose(self, prev, obs, rng):
+        x = self.proposal.sample(prev, obs, rng)
+        log_incr = (
+            self.model.loglik(obs, x)
+            + self.model.transition_logpdf(x, prev)
+            - self.proposal.logpdf(x, prev, obs)
+        )
+        return x, log_incr, self.model.predict(prev, rng)

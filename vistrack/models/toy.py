@@ -1,0 +1,95 @@
+"""A 1-D Gaussian random walk with a Gauss-mixture likelihood (thesis 001, Figs. 4.1, 4.9).
+
+The known-answer problem for proper weighting: the prediction ``p`` is Gaussian
+and the likelihood ``f`` a Gauss mixture, so the posterior ``f p / I(f p)`` is a
+Gauss mixture in closed form (Appendix D).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..filters.lis import GaussMixtureProposal
+from ..filters.lls import Window
+from ..gaussian import gaussian_product
+
+__all__ = ["GaussMixtureToy"]
+
+
+class GaussMixtureToy:
+    """``x_t = x_{t-1} + N(0, q)``, ``r(y|x) = Σ_i p_i N(x; mu_i, s_i^2)`` (``obs`` ignored).
+
+    Parameters
+    ----------
+    prior_mean, prior_var : float
+        ``p_0``.
+    q : float
+        Process noise variance.
+    weights, means, stds : array_like
+        The likelihood mixture (fixed, peaky: the "curse of reliable observations").
+    window : float
+        Window scale for LLS (box half-width) and LIS (Gaussian std).
+    """
+
+    dim = 1
+
+    def __init__(self, prior_mean=0.0, prior_var=1.0, q=1.0, weights=(0.3, 0.7), means=(-1.0, 1.5),
+                 stds=(0.05, 0.02), window=0.5):
+        self.prior_mean = float(prior_mean)
+        self.prior_var = float(prior_var)
+        self.q = float(q)
+        w = np.asarray(weights, float)
+        self.log_p = np.log(w / w.sum())
+        self.mu = np.asarray(means, float)
+        self.var = np.asarray(stds, float) ** 2
+        self.window = float(window)
+
+    def sample_prior(self, n, rng):
+        return self.prior_mean + np.sqrt(self.prior_var) * rng.standard_normal((n, 1))
+
+    def prior_logpdf(self, states):
+        d = states[:, 0] - self.prior_mean
+        return -0.5 * d * d / self.prior_var - 0.5 * np.log(2 * np.pi * self.prior_var)
+
+    def predict(self, states, rng):
+        return states + np.sqrt(self.q) * rng.standard_normal(states.shape)
+
+    def predict_mean(self, states):
+        return states.copy()
+
+    def transition_logpdf(self, new, old):
+        d = (new - old)[:, 0]
+        return -0.5 * d * d / self.q - 0.5 * np.log(2 * np.pi * self.q)
+
+    def loglik(self, obs, states):
+        x = states[:, :1]
+        comp = self.log_p - 0.5 * (x - self.mu) ** 2 / self.var - 0.5 * np.log(2 * np.pi * self.var)
+        mx = comp.max(axis=1, keepdims=True)
+        return (mx + np.log(np.exp(comp - mx).sum(axis=1, keepdims=True)))[:, 0]
+
+    def local_coords(self, states):
+        return states[:, :1]
+
+    def with_local(self, states, u):
+        return np.asarray(u, float).reshape(len(states), 1)
+
+    def local_mixture(self, obs, states):
+        """``q = f`` itself: LIS with this proposal is exact LLS (§4.5)."""
+        n, k = len(states), len(self.mu)
+        return (np.broadcast_to(self.log_p, (n, k)), np.broadcast_to(self.mu[:, None], (n, k, 1)),
+                np.broadcast_to(self.var[:, None, None], (n, k, 1, 1)))
+
+    def lis_proposal(self):
+        return GaussMixtureProposal(self, np.array([[self.window**2]]))
+
+    def lls_window(self):
+        return Window("box", [self.window], grid=41)
+
+    def posterior(self, x_prev):
+        """Exact ``f p / I(f p)`` for ``p = N(x_prev, q)``: ``(log weights, means, variances)``."""
+        mu, cov, log_c = gaussian_product(self.mu[:, None], self.var[:, None, None],
+                                          np.full((len(self.mu), 1), x_prev), np.full((len(self.mu), 1, 1), self.q))
+        lw = self.log_p + log_c
+        lw -= np.max(lw)
+        lw -= np.log(np.sum(np.exp(lw)))
+        return lw, mu[:, 0], cov[:, 0, 0]

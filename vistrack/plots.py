@@ -1,0 +1,47 @@
+"""Plots for experiment reports (matplotlib, Agg backend; PNG files)."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+__all__ = ["plot_error_vs_time", "plot_error_vs_n"]
+
+
+def plot_error_vs_time(curves, path, *, title="Tracking error vs time step"):
+    """One line per (algorithm, N): mean error at each time step (thesis Fig. 4.18)."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+    for (algo, n), err in curves.items():
+        ax.plot(range(1, len(err) + 1), err, marker="o", ms=3, label=f"{algo}, N={n}")
+    ax.set_xlabel("time step")
+    ax.set_ylabel("mean position error")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def plot_error_vs_n(results, path, *, key="mean_error_final", err_key="std_error_final",
+                    title="Final-step error vs number of particles"):
+    """Mean final error ± std vs N, one line per algorithm (thesis Fig. 4.21)."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+    algos = list(dict.fromkeys(r["algo"] for r in results))
+    for algo in algos:
+        rows = sorted((r for r in results if r["algo"] == algo), key=lambda r: r["particles"])
+        ax.errorbar([r["particles"] for r in rows], [r[key] for r in rows],
+                    yerr=[r[err_key] for r in rows], marker="o", capsize=3, label=algo)
+    ax.set_xscale("log")
+    ax.set_xlabel("number of particles N")
+    ax.set_ylabel("mean final-step position error (± std)")
+    ax.set_title(title)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path

@@ -1,0 +1,1 @@
+"""Reproductions of the seeds' experiments (thesis 001 §4.5.5, ...)."""
