@@ -1,0 +1,76 @@
+"""The command line: help, the bearings reproduction's files, one-line errors."""
+
+import json
+
+import matplotlib.image as mpimg
+import pytest
+
+from vistrack.cli import main
+
+RESULT_KEYS = {"algo", "particles", "ships", "mean_error_final", "std_error_final", "mean_error", "ms_per_run"}
+
+
+def run(argv, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    out = capsys.readouterr()
+    return e.value.code, out.out, out.err
+
+
+def test_version_and_help(capsys):
+    code, out, _ = run(["--version"], capsys)
+    assert code == 0 and out.startswith("vistrack, version")
+    code, out, _ = run(["--help"], capsys)
+    assert code == 0 and "reproduce" in out
+    code, out, _ = run(["reproduce", "bearings", "--help"], capsys)
+    assert code == 0 and "--particles" in out and "--plots" in out
+
+
+def test_reproduce_bearings_writes_json_and_plots(tmp_path, capsys):
+    js = tmp_path / "r.json"
+    argv = ["reproduce", "bearings", "--sequences", "2", "--runs", "2", "--steps", "4",
+            "--particles", "10,20", "--algos", "bootstrap,lis", "--seed", "3", "-q",
+            "--json", str(js), "--plots", str(tmp_path / "plots")]
+    code, out, err = run(argv, capsys)
+    assert code == 0, err
+    assert "final err" in out and "lis" in out
+    data = json.loads(js.read_text())
+    assert set(data) == {"config", "results"}
+    assert data["config"]["particles"] == [10, 20] and data["config"]["seed"] == 3
+    assert len(data["results"]) == 4
+    for row in data["results"]:
+        assert RESULT_KEYS <= set(row)
+        assert row["ships"] == 1 and row["mean_error_final"] > 0 and row["ms_per_run"] > 0
+    for name in ("error_vs_time.png", "error_vs_n.png"):
+        png = tmp_path / "plots" / name
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert mpimg.imread(png).shape[0] > 100
+    # same seed, same numbers
+    js2 = tmp_path / "r2.json"
+    run(argv[:-4] + ["--json", str(js2)], capsys)
+    strip = lambda d: [{k: v for k, v in r.items() if k != "ms_per_run"} for r in d["results"]]  # noqa: E731
+    assert strip(json.loads(js2.read_text())) == strip(data)
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--particles", "0"], "--particles must be positive"),
+        (["--particles", "10,abc"], "comma-separated integers"),
+        (["--runs", "-1"], "--runs must be a positive integer"),
+        (["--algos", "bootstrap,magic"], "unknown algorithm 'magic'"),
+        (["--json", "/nonexistent-dir/x.json"], "does not exist"),
+        (["--ships", "0"], "--ships must be at least 1"),
+    ],
+)
+def test_bad_input_gives_one_clear_line(args, message, capsys):
+    code, out, err = run(["reproduce", "bearings", "--runs", "1", "--sequences", "1", "-q"] + args, capsys)
+    assert code != 0
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("Error:") and message in lines[0]
+    assert "Traceback" not in err + out
+
+
+def test_unknown_command_is_one_line(capsys):
+    code, _, err = run(["frobnicate"], capsys)
+    assert code == 2 and err.strip().startswith("Error:") and len(err.strip().splitlines()) == 1
