@@ -63,13 +63,13 @@ def bearings(ships, sequences, runs, steps, algos, particles, seed, resample, es
         cfg.validate()
     except ValueError as e:
         raise click.ClickException(str(e)) from None
-    check_writable(json_path, "--json file")
     if plots_dir:
         try:
             os.makedirs(plots_dir, exist_ok=True)
         except OSError as e:
             raise click.ClickException(f"cannot create --plots folder {plots_dir}: {e.strerror}") from None
         check_writable(os.path.join(plots_dir, "error_vs_time.png"), "plot")
+    check_writable(json_path, "--json file")
 
     total = len(algos) * len(particles) * sequences * runs
     with tqdm(total=total, unit="run", desc="bearings", disable=quiet, leave=False) as bar:

@@ -74,3 +74,12 @@ def test_bad_input_gives_one_clear_line(args, message, capsys):
 def test_unknown_command_is_one_line(capsys):
     code, _, err = run(["frobnicate"], capsys)
     assert code == 2 and err.strip().startswith("Error:") and len(err.strip().splitlines()) == 1
+
+
+def test_json_may_go_into_the_plots_folder(tmp_path, capsys):
+    """The README's first command writes the JSON into the folder --plots creates."""
+    out = tmp_path / "bearings-out"
+    code, _, err = run(["reproduce", "bearings", "--sequences", "1", "--runs", "1", "--particles", "10", "-q",
+                        "--plots", str(out), "--json", str(out / "results.json")], capsys)
+    assert code == 0, err
+    assert json.loads((out / "results.json").read_text())["results"]
