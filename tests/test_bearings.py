@@ -76,9 +76,9 @@ def test_lis_proposal_lies_along_the_observed_bearing(rng):
     y = np.array([1.9])
     log_p, mu, cov = m.local_mixture(y, x)
     d = np.array([np.cos(1.9), np.sin(1.9)])
-    mean = mu[:, 0]
+    mean = mu[:, 0, 0]
     assert np.abs(mean @ np.array([-d[1], d[0]])) == pytest.approx(np.zeros(20), abs=1e-15)
-    w, v = np.linalg.eigh(cov[:, 0])
+    w, v = np.linalg.eigh(cov[:, 0, 0])
     assert w[:, 1] / w[:, 0] == pytest.approx(np.full(20, m.kappa))
     assert np.abs(np.abs(v[:, :, 1] @ d)) == pytest.approx(np.ones(20))
 

@@ -57,3 +57,13 @@ def test_gm_logpdf_is_log_of_weighted_sum():
     x = np.array([[0.7], [-1.0]])
     expect = np.log(0.2 * stats.norm(0, 1).pdf(x[:, 0]) + 0.8 * stats.norm(2, 0.5).pdf(x[:, 0]))
     assert gm_logpdf(x, log_p, mu, cov) == pytest.approx(expect)
+
+
+@pytest.mark.parametrize("m", [1, 2, 3])
+def test_small_matrix_fast_paths_match_numpy(m, rng):
+    from vistrack.gaussian import _cholesky, _inv_spd
+
+    a = rng.standard_normal((5, m, m))
+    s = a @ np.swapaxes(a, -1, -2) + 0.1 * np.eye(m)
+    assert _cholesky(s) == pytest.approx(np.linalg.cholesky(s))
+    assert _inv_spd(s) == pytest.approx(np.linalg.inv(s))

@@ -62,3 +62,22 @@ def test_degenerate_step_is_reported_and_recovered(rng):
         assert p.degenerate
         assert np.all(np.isfinite(p.states))
         assert p.ess == pytest.approx(40)
+
+
+def test_make_filter_errors_are_clear():
+    from vistrack.filters import make_filter
+
+    with pytest.raises(ValueError, match="unknown algorithm 'nope'"):
+        make_filter("nope", GaussMixtureToy())
+    with pytest.raises(ValueError, match="sir needs a proposal"):
+        make_filter("sir", GaussMixtureToy())
+
+
+def test_ess_threshold_zero_never_resamples(rng):
+    filt = Bootstrap(GaussMixtureToy(), ess_threshold=0.0)
+    p = filt.first_step(None, 50, rng)
+    q = filt.step(p, None, rng)
+    # without resampling, weights accumulate: log w_2 = log w_1 + log r
+    x = q.states
+    expect = p.log_weights + filt.model.loglik(None, x)
+    assert q.log_weights == pytest.approx(expect)

@@ -34,7 +34,7 @@ class WrongMixtureToy(GaussMixtureToy):
 
     def local_mixture(self, obs, states):
         n = len(states)
-        return np.zeros((n, 1)), np.full((n, 1, 1), 1.0), np.full((n, 1, 1, 1), 0.6**2)
+        return np.zeros((n, 1, 1)), np.full((n, 1, 1, 1), 1.0), np.full((n, 1, 1, 1, 1), 0.6**2)
 
 
 def exact(model):

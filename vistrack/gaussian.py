@@ -26,9 +26,40 @@ def _solve_lower(L, b):
     return np.linalg.solve(L, b[..., None])[..., 0]
 
 
+def _cholesky(cov):
+    """Batched Cholesky factor; closed form for 1x1 and 2x2 (numpy's call overhead
+    dominates for the small batches of a particle filter)."""
+    m = cov.shape[-1]
+    if m == 1:
+        return np.sqrt(cov)
+    if m == 2:
+        l00 = np.sqrt(cov[..., 0, 0])
+        l10 = cov[..., 1, 0] / l00
+        l11 = np.sqrt(cov[..., 1, 1] - l10 * l10)
+        L = np.zeros(cov.shape)
+        L[..., 0, 0], L[..., 1, 0], L[..., 1, 1] = l00, l10, l11
+        return L
+    return np.linalg.cholesky(cov)
+
+
+def _inv_spd(s):
+    """Batched inverse of symmetric positive-definite matrices (closed form up to 2x2)."""
+    m = s.shape[-1]
+    if m == 1:
+        return 1.0 / s
+    if m == 2:
+        a, b, c = s[..., 0, 0], s[..., 0, 1], s[..., 1, 1]
+        det = a * c - b * b
+        inv = np.empty(s.shape)
+        inv[..., 0, 0], inv[..., 1, 1] = c / det, a / det
+        inv[..., 0, 1] = inv[..., 1, 0] = -b / det
+        return inv
+    return np.linalg.inv(s)
+
+
 def mvn_logpdf(x, mean, cov):
     """Log-density of ``N(mean, cov)`` at ``x``; broadcasts over leading axes."""
-    L = np.linalg.cholesky(cov)
+    L = _cholesky(cov)
     z = _solve_lower(L, np.asarray(x) - mean)
     m = z.shape[-1]
     logdet = 2.0 * np.sum(np.log(np.diagonal(L, axis1=-2, axis2=-1)), axis=-1)
@@ -37,7 +68,7 @@ def mvn_logpdf(x, mean, cov):
 
 def mvn_sample(mean, cov, rng):
     """One draw from each ``N(mean[...], cov[...])``, shape of ``mean``."""
-    L = np.linalg.cholesky(cov)
+    L = _cholesky(cov)
     e = rng.standard_normal(np.shape(mean))
     return mean + np.einsum("...ij,...j->...i", L, e)
 
@@ -59,8 +90,7 @@ def gaussian_product(mu1, cov1, mu2, cov2):
     s = cov1 + cov2
     log_c = mvn_logpdf(mu1, mu2, s)
     # gain form: cov = cov1 - cov1 s^-1 cov1, mu = mu1 + cov1 s^-1 (mu2 - mu1)
-    gain = np.linalg.solve(s, cov1)  # s^-1 cov1 (s, cov1 symmetric)
-    gain = np.swapaxes(gain, -1, -2)  # cov1 s^-1
+    gain = cov1 @ _inv_spd(s)
     mu = mu1 + np.einsum("...ij,...j->...i", gain, mu2 - mu1)
     cov = cov1 - gain @ cov1
     cov = 0.5 * (cov + np.swapaxes(cov, -1, -2))

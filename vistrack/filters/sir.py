@@ -17,15 +17,20 @@ class SIR(ParticleFilter):
     ----------
     model : object
         The tracking model (see :class:`~vistrack.filters.base.ParticleFilter`).
-    proposal : object
+    proposal : object or None
         ``sample(prev, obs, rng) -> new (N, d)`` and
         ``logpdf(new, prev, obs) -> (N,)``; must be positive wherever ``K`` is.
+        ``None`` asks the model (``model.sir_proposal()``).
     """
 
     name = "sir"
 
-    def __init__(self, model, proposal, **kwargs):
+    def __init__(self, model, proposal=None, **kwargs):
         super().__init__(model, **kwargs)
+        if proposal is None:
+            if not hasattr(model, "sir_proposal"):
+                raise ValueError(f"sir needs a proposal and {type(model).__name__} does not supply one")
+            proposal = model.sir_proposal()
         self.proposal = proposal
 
     def propose(self, prev, obs, rng):

@@ -188,29 +188,25 @@ class Bearings:
         return out
 
     def local_mixture(self, obs, states):
-        """LIS proposal of §4.5.5 as a one-component Gauss mixture over all positions.
+        """LIS proposal of §4.5.5: one Gaussian per ship (a product over ships).
 
         Per ship: mean the predicted position projected onto the observed
         bearing ray; covariance ``U diag(kappa s^2, s^2) U^T`` with ``U`` the
         rotation by the bearing and ``s = R * sigma_angle`` the Gaussian fit of the
         wrapped Cauchy converted to distance at the predicted range ``R``.
-        Block-diagonal over ships (product form).
+
+        Returns ``log_p (N, M, 1)``, ``mu (N, M, 1, 2)``, ``cov (N, M, 1, 2, 2)``.
         """
         n, m = len(states), self.ships
         p = self.positions(states)  # (N, M, 2)
-        c, s = np.cos(obs), np.sin(obs)  # (M,)
-        d = np.stack([c, s], axis=-1)  # (M, 2) unit vectors along the rays
+        d = np.stack([np.cos(obs), np.sin(obs)], axis=-1)  # (M, 2) unit vectors along the rays
         along = np.maximum(np.einsum("nmk,mk->nm", p, d), 0.0)
         mean = along[..., None] * d  # (N, M, 2)
-        rng_ = np.maximum(np.linalg.norm(p, axis=-1), 1e-9)
-        var = (rng_ * self.sigma_angle) ** 2  # (N, M)
-        dd = d[:, :, None] * d[:, None, :]  # (M, 2, 2) along-ray projector
-        perp = np.eye(2) - dd
-        blocks = var[..., None, None] * (self.kappa * dd + perp)  # (N, M, 2, 2)
-        cov = np.zeros((n, 2 * m, 2 * m))
-        for k in range(m):  # block diagonal: a loop over ships, not particles
-            cov[:, 2 * k : 2 * k + 2, 2 * k : 2 * k + 2] = blocks[:, k]
-        return np.zeros((n, 1)), mean.reshape(n, 1, 2 * m), cov[:, None]
+        var = (np.maximum(np.hypot(p[..., 0], p[..., 1]), 1e-9) * self.sigma_angle) ** 2  # (N, M)
+        dd = d[:, :, None] * d[:, None, :]  # (M, 2, 2) projector onto the ray
+        shape = (self.kappa - 1.0) * dd + np.eye(2)  # kappa along the ray, 1 across
+        cov = var[..., None, None] * shape
+        return np.zeros((n, m, 1)), mean[:, :, None, :], cov[:, :, None]
 
     first_step = False
 
@@ -223,8 +219,9 @@ class Bearings:
         return np.full(2 * self.ships, self.sigma_g)
 
     def lis_proposal(self):
-        """The §4.5.5 LIS proposal with a Gaussian window (:meth:`window_std`)."""
-        return GaussMixtureProposal(self, np.diag(self.window_std() ** 2))
+        """The §4.5.5 LIS proposal with a Gaussian window (:meth:`window_std`) per ship."""
+        var = self.window_std().reshape(self.ships, 2) ** 2
+        return GaussMixtureProposal(self, var[:, :, None] * np.eye(2))
 
     def lls_window(self):
         """Gaussian window of std ``sigma_g`` on positions (for LLS)."""

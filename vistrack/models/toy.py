@@ -76,8 +76,8 @@ class GaussMixtureToy:
     def local_mixture(self, obs, states):
         """``q = f`` itself: LIS with this proposal is exact LLS (§4.5)."""
         n, k = len(states), len(self.mu)
-        return (np.broadcast_to(self.log_p, (n, k)), np.broadcast_to(self.mu[:, None], (n, k, 1)),
-                np.broadcast_to(self.var[:, None, None], (n, k, 1, 1)))
+        return (np.broadcast_to(self.log_p, (n, 1, k)), np.broadcast_to(self.mu[:, None], (n, 1, k, 1)),
+                np.broadcast_to(self.var[:, None, None], (n, 1, k, 1, 1)))
 
     def lis_proposal(self):
         return GaussMixtureProposal(self, np.array([[self.window**2]]))
