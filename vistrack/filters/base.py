@@ -61,16 +61,32 @@ class ParticleFilter:
     """
 
     name = "base"
+    #: parts whose default the model supplies: attribute -> model method name
+    model_parts = {}
 
     def __init__(self, model, *, resample="systematic", ess_threshold=None):
         self.model = model
         self.resample_scheme = get_scheme(resample)
         self.ess_threshold = ess_threshold
+        self._from_model = set()
+
+    def _set_part(self, attr, value):
+        """Set ``attr`` to ``value``, or to what the model's default method gives."""
+        if value is None:
+            method = self.model_parts[attr]
+            if not hasattr(self.model, method):
+                raise ValueError(f"{self.name} needs a {attr} and {type(self.model).__name__} does not supply one")
+            value = getattr(self.model, method)()
+            self._from_model.add(attr)
+        setattr(self, attr, value)
 
     def bind(self, model):
-        """This filter with the same parameters on another ``model``."""
+        """This filter with the same parameters on another ``model``; parts that
+        came from the old model's defaults are taken from the new one."""
         other = copy.copy(self)
         other.model = model
+        for attr in self._from_model:
+            setattr(other, attr, getattr(model, self.model_parts[attr])())
         return other
 
     def first_step(self, obs, n, rng):

@@ -79,17 +79,11 @@ class LIS(ParticleFilter):
     """
 
     name = "lis"
+    model_parts = {"proposal": "lis_proposal"}
 
     def __init__(self, model, proposal=None, **kwargs):
         super().__init__(model, **kwargs)
-        self._own_proposal = proposal is None
-        self.proposal = model.lis_proposal() if proposal is None else proposal
-
-    def bind(self, model):
-        other = super().bind(model)
-        if self._own_proposal:
-            other.proposal = model.lis_proposal()
-        return other
+        self._set_part("proposal", proposal)
 
     def propose(self, prev, obs, rng):
         model = self.model

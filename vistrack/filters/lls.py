@@ -86,17 +86,11 @@ class LLS(ParticleFilter):
     """
 
     name = "lls"
+    model_parts = {"window": "lls_window"}
 
     def __init__(self, model, window=None, **kwargs):
         super().__init__(model, **kwargs)
-        self._own_window = window is None
-        self.window = model.lls_window() if window is None else window
-
-    def bind(self, model):
-        other = super().bind(model)
-        if self._own_window:
-            other.window = model.lls_window()
-        return other
+        self._set_part("window", window)
 
     def propose(self, prev, obs, rng):
         model, win = self.model, self.window

@@ -24,14 +24,11 @@ class SIR(ParticleFilter):
     """
 
     name = "sir"
+    model_parts = {"proposal": "sir_proposal"}
 
     def __init__(self, model, proposal=None, **kwargs):
         super().__init__(model, **kwargs)
-        if proposal is None:
-            if not hasattr(model, "sir_proposal"):
-                raise ValueError(f"sir needs a proposal and {type(model).__name__} does not supply one")
-            proposal = model.sir_proposal()
-        self.proposal = proposal
+        self._set_part("proposal", proposal)
 
     def propose(self, prev, obs, rng):
         x = self.proposal.sample(prev, obs, rng)
