@@ -1,0 +1,157 @@
+"""Video I/O and per-frame feature maps: known answers, round trips, clear errors."""
+
+import warnings
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from vistrack.features import FeatureMaps, box_dog
+from vistrack.video import VideoDecodeWarning, VideoError, VideoWriter, find_groundtruth, open_video, read_rects
+
+REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
+
+
+def moving_square(i, size=(96, 64)):
+    w, h = size
+    f = np.full((h, w, 3), 40, np.uint8)
+    x = 10 + 2 * i
+    f[20:40, x : x + 20] = (200, 180, 160)
+    return f
+
+
+# -- feature maps -------------------------------------------------------------
+def test_sobel_of_a_step_edge_is_four_times_the_step():
+    g = np.zeros((20, 30), np.uint8)
+    g[:, 15:] = 10
+    fm = FeatureMaps(g)
+    expect = np.zeros((20, 30), np.float32)
+    expect[:, 14:16] = 40.0
+    assert fm.gx == pytest.approx(expect)
+    assert fm.gy == pytest.approx(np.zeros((20, 30)))
+    assert fm.mag == pytest.approx(expect)
+
+
+def test_zero_and_constant_frames_give_zero_maps():
+    for value in (0, 77):
+        fm = FeatureMaps(np.full((24, 32, 3), value, np.uint8))
+        for name in ("gx", "gy", "mag", "dog_small", "dog_large"):
+            assert np.abs(getattr(fm, name)).max() == pytest.approx(0.0, abs=1e-3), name
+
+
+def test_dog_responds_to_a_thin_bright_line():
+    g = np.zeros((40, 40), np.float32)
+    g[:, 20] = 90.0
+    d = box_dog(g, 3, 7)
+    assert d[20, 20] == pytest.approx(90 / 3 - 90 / 7, rel=1e-5)
+    assert d[20, 20] > 0 and d[20, 30] == pytest.approx(0.0, abs=1e-4)
+    with pytest.raises(ValueError):
+        box_dog(g, 7, 3)
+
+
+def test_maps_are_computed_once(monkeypatch):
+    fm = FeatureMaps(moving_square(0))
+    calls = []
+    real = cv2.Sobel
+    monkeypatch.setattr(cv2, "Sobel", lambda *a, **k: calls.append(1) or real(*a, **k))
+    for _ in range(3):
+        fm.gx, fm.mag, fm.integral("abs_gx")
+    assert len(calls) == 2  # gx, then gy for the magnitude; never again
+
+
+def test_box_means_from_integral_images_match_direct_means(rng):
+    fm = FeatureMaps(rng.integers(0, 255, (50, 70, 3)).astype(np.uint8))
+    x0, y0 = rng.integers(0, 30, 20), rng.integers(0, 20, 20)
+    x1, y1 = x0 + rng.integers(1, 30, 20), y0 + rng.integers(1, 25, 20)
+    got = fm.box_mean("abs_gx", x0, y0, x1, y1)
+    direct = [np.abs(fm.gx[b:d, a:c]).mean() for a, b, c, d in zip(x0, y0, x1, y1)]
+    assert got == pytest.approx(direct, rel=1e-5)
+    assert np.isnan(fm.box_mean("gray", 5, 5, 5, 9))
+
+
+# -- video --------------------------------------------------------------------
+def test_write_then_read_round_trip(tmp_path):
+    path = tmp_path / "clip.mp4"
+    with VideoWriter(path, 25, (96, 64)) as w:
+        for i in range(30):
+            w.write(moving_square(i))
+    src = open_video(path)
+    assert src.frame_count == 30 and src.size == (96, 64) and src.fps == pytest.approx(25)
+    frames = list(src)
+    assert [i for i, _ in frames] == list(range(30))
+    assert np.abs(frames[7][1].astype(int) - moving_square(7)).mean() < 8
+    # a clip folder with video.mp4 opens the same way
+    path.rename(tmp_path / "video.mp4")
+    assert open_video(tmp_path).frame_count == 30
+
+
+def test_image_folder_in_otb_layout(tmp_path):
+    (tmp_path / "img").mkdir()
+    for i in range(5):
+        cv2.imwrite(str(tmp_path / "img" / f"{i + 1:04d}.png"), moving_square(i))
+    (tmp_path / "groundtruth_rect.txt").write_text("10,20,20,20\n12\t20\t20\t20\n")
+    src = open_video(tmp_path)
+    assert src.frame_count == 5 and src.size == (96, 64)
+    assert all(np.array_equal(f, moving_square(i)) for i, f in src)
+    gt = read_rects(find_groundtruth(tmp_path))
+    assert gt.tolist() == [[10, 20, 20, 20], [12, 20, 20, 20]]
+
+
+@pytest.mark.parametrize(
+    "kind, message",
+    [
+        ("missing", "does not exist"),
+        ("empty", "is empty"),
+        ("text", "not a video"),
+        ("folder", "holds no video and no images"),
+    ],
+)
+def test_bad_sources_raise_one_clear_error(tmp_path, kind, message):
+    path = tmp_path / ("nothing" if kind == "folder" else f"{kind}.mp4")
+    if kind == "empty":
+        path.write_bytes(b"")
+    elif kind == "text":
+        path.write_text("not a video at all\n" * 50)
+    elif kind == "folder":
+        path.mkdir()
+    with pytest.raises(VideoError, match=message):
+        open_video(path)
+
+
+def test_bad_rect_file(tmp_path):
+    p = tmp_path / "gt.txt"
+    p.write_text("1,2,3,4\n1,2,x,4\n")
+    with pytest.raises(VideoError, match="line 2"):
+        read_rects(p)
+
+
+def test_truncated_stream_warns_and_keeps_frames(tmp_path):
+    path = tmp_path / "clip.avi"
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 25, (96, 64))
+    for i in range(40):
+        w.write(moving_square(i))
+    w.release()
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) * 6 // 10])
+    try:
+        src = open_video(path)
+    except VideoError:
+        pytest.skip("this OpenCV build cannot open a truncated AVI at all")
+    if src.frame_count is None or src.frame_count < 40:
+        pytest.skip("container does not announce the frame count after truncation")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        n = sum(1 for _ in src)
+    assert 0 < n < 40
+    assert any(issubclass(c.category, VideoDecodeWarning) for c in caught)
+
+
+# -- real clips (skipped when ../shared/data is absent) ------------------------
+@pytest.mark.skipif(not (REAL / "car4_otb_first100").is_dir(), reason="shared real data not present")
+def test_real_otb_folder_and_video():
+    src = open_video(REAL / "car4_otb_first100")
+    assert src.frame_count == 100 and src.size == (360, 240)
+    assert read_rects(find_groundtruth(REAL / "car4_otb_first100")).shape == (100, 4)
+    plate = open_video(REAL / "plate_in_polo_dashcam" / "plate_in_polo_dashcam.mp4")
+    assert plate.size == (552, 530) and plate.frame_count == 138

@@ -1,0 +1,109 @@
+"""Per-frame feature maps, computed once and lazily, shared by every particle (DESIGN.md).
+
+Grayscale ``float32``; Sobel ``gx``, ``gy`` (3x3, unnormalised: a unit step
+gives 4) and magnitude; difference-of-boxes DoG at two scales (thesis §1.3.2:
+"2D DoG filters approximated by the difference of two 2D box-filters"), and
+integral images of any map. All computed with OpenCV (5-15x faster than the
+scipy/scikit-image equivalents, DESIGN.md performance notes).
+
+Coordinates: maps are indexed ``[row, col] = [y, x]``; the API speaks ``(x, y)``.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import cv2
+import numpy as np
+
+__all__ = ["FeatureMaps", "box_dog"]
+
+
+def box_dog(gray, inner, outer):
+    """``box_inner(gray) - box_outer(gray)``: mean over an ``inner``-wide square minus
+    the mean over an ``outer``-wide square (odd sizes, ``inner < outer``)."""
+    if not (0 < inner < outer):
+        raise ValueError(f"need 0 < inner < outer, got {inner}, {outer}")
+    a = cv2.boxFilter(gray, cv2.CV_32F, (inner, inner), borderType=cv2.BORDER_REFLECT)
+    b = cv2.boxFilter(gray, cv2.CV_32F, (outer, outer), borderType=cv2.BORDER_REFLECT)
+    return a - b
+
+
+class FeatureMaps:
+    """Lazily computed feature maps of one frame.
+
+    Parameters
+    ----------
+    frame : ndarray of shape (H, W, 3) uint8 BGR, or (H, W) gray
+    dog_small, dog_large : tuple of int
+        ``(inner, outer)`` box sizes of the thin- and thick-line DoG filters.
+    """
+
+    def __init__(self, frame, *, dog_small=(3, 7), dog_large=(5, 13)):
+        self.frame = frame
+        self.dog_sizes = {"small": tuple(dog_small), "large": tuple(dog_large)}
+        self._integrals = {}
+
+    @property
+    def shape(self):
+        return self.frame.shape[:2]
+
+    @cached_property
+    def gray(self):
+        """Grayscale, float32 in [0, 255]."""
+        f = self.frame
+        if f.ndim == 3:
+            f = cv2.cvtColor(f, cv2.COLOR_BGR2GRAY)
+        return f.astype(np.float32)
+
+    @cached_property
+    def gx(self):
+        """Sobel derivative along x (columns)."""
+        return cv2.Sobel(self.gray, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT)
+
+    @cached_property
+    def gy(self):
+        """Sobel derivative along y (rows)."""
+        return cv2.Sobel(self.gray, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REFLECT)
+
+    @cached_property
+    def mag(self):
+        """Gradient magnitude ``sqrt(gx^2 + gy^2)``."""
+        return cv2.magnitude(self.gx, self.gy)
+
+    @cached_property
+    def dog_small(self):
+        """Thin-line DoG ``G_s I``."""
+        return box_dog(self.gray, *self.dog_sizes["small"])
+
+    @cached_property
+    def dog_large(self):
+        """Thick-line DoG ``G_l I``."""
+        return box_dog(self.gray, *self.dog_sizes["large"])
+
+    def integral(self, name):
+        """Integral image (float64, shape ``(H+1, W+1)``) of the map ``name``
+        (``gray``, ``gx``, ``abs_gx``, ``abs_gy``, ``mag``, ``abs_dog_small``, ...)."""
+        if name not in self._integrals:
+            if name.startswith("abs_"):
+                src = np.abs(getattr(self, name[4:]))
+            else:
+                src = getattr(self, name)
+            self._integrals[name] = cv2.integral(src, sdepth=cv2.CV_64F)
+        return self._integrals[name]
+
+    def box_mean(self, name, x0, y0, x1, y1):
+        """Mean of map ``name`` over the pixel boxes ``[x0, x1) x [y0, y1)`` (arrays broadcast).
+
+        Boxes are clipped to the frame; an empty box gives NaN.
+        """
+        ii = self.integral(name)
+        h, w = self.shape
+        x0 = np.clip(np.asarray(x0, int), 0, w)
+        x1 = np.clip(np.asarray(x1, int), 0, w)
+        y0 = np.clip(np.asarray(y0, int), 0, h)
+        y1 = np.clip(np.asarray(y1, int), 0, h)
+        s = ii[y1, x1] - ii[y0, x1] - ii[y1, x0] + ii[y0, x0]
+        area = (x1 - x0) * (y1 - y0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(area > 0, s / np.maximum(area, 1), np.nan)

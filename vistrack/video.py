@@ -1,0 +1,207 @@
+"""Video sources and writers (DESIGN.md: open a file or an image-sequence folder).
+
+``open_video(path)`` accepts
+
+* a video file that OpenCV decodes (mp4, avi, ...);
+* an image-sequence folder: ``img/*.jpg`` (OTB style) or images directly in it;
+* a clip folder: ``video.mp4`` (synthetic clips) or the one video file it holds.
+
+Frames come as ``(index, frame)`` with ``frame`` a ``uint8`` BGR array of shape
+``(H, W, 3)``; ``frame_count``, ``fps`` and ``size`` are known up front where the
+container says. A frame that fails to decode mid-stream ends the iteration with
+a :class:`VideoDecodeWarning` (the frames so far are kept); a path that is
+missing, not a video, or holds no frame raises :class:`VideoError` with one
+clear sentence.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+__all__ = [
+    "VideoError",
+    "VideoDecodeWarning",
+    "VideoSource",
+    "open_video",
+    "VideoWriter",
+    "read_rects",
+    "find_groundtruth",
+]
+
+IMAGE_EXT = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".ppm", ".pgm"}
+VIDEO_EXT = {".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"}
+
+
+class VideoError(ValueError):
+    """The path cannot be opened as a video source."""
+
+
+class VideoDecodeWarning(RuntimeWarning):
+    """A frame failed to decode before the announced end of the stream."""
+
+
+class VideoSource:
+    """An opened video: iterate for ``(index, frame)``.
+
+    Attributes
+    ----------
+    path : Path
+    frame_count : int or None
+        Number of frames if the container says (always known for image folders).
+    fps : float
+        Frames per second (30 for image folders, as in the data manifest).
+    size : tuple of int
+        ``(width, height)``.
+    """
+
+    def __init__(self, path, *, _images=None):
+        self.path = Path(path)
+        self._images = _images
+        if _images is not None:
+            first = cv2.imread(str(_images[0]), cv2.IMREAD_COLOR)
+            if first is None:
+                raise VideoError(f"{_images[0]} is not a readable image")
+            self.frame_count = len(_images)
+            self.fps = 30.0
+            self.size = (first.shape[1], first.shape[0])
+            return
+        cap = cv2.VideoCapture(str(self.path))
+        try:
+            ok, frame = cap.read() if cap.isOpened() else (False, None)
+            if not ok or frame is None:
+                raise VideoError(f"{self.path} is not a video OpenCV can decode, or it has no frames")
+            n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+            self.frame_count = n if n > 0 else None
+            fps = cap.get(cv2.CAP_PROP_FPS)
+            self.fps = float(fps) if fps and fps > 0 else 30.0
+            self.size = (frame.shape[1], frame.shape[0])
+        finally:
+            cap.release()
+
+    def __len__(self):
+        if self.frame_count is None:
+            raise TypeError("frame count unknown for this container")
+        return self.frame_count
+
+    def __iter__(self):
+        if self._images is not None:
+            for i, p in enumerate(self._images):
+                frame = cv2.imread(str(p), cv2.IMREAD_COLOR)
+                if frame is None:
+                    warnings.warn(f"frame {i} ({p.name}) failed to decode; stopping there", VideoDecodeWarning,
+                                  stacklevel=2)
+                    return
+                yield i, frame
+            return
+        cap = cv2.VideoCapture(str(self.path))
+        try:
+            i = 0
+            while True:
+                ok, frame = cap.read()
+                if not ok:
+                    break
+                yield i, frame
+                i += 1
+            if self.frame_count is not None and i < self.frame_count:
+                warnings.warn(f"{self.path.name}: decoding stopped at frame {i} of {self.frame_count}",
+                              VideoDecodeWarning, stacklevel=2)
+        finally:
+            cap.release()
+
+
+def _image_files(folder):
+    return sorted(p for p in Path(folder).iterdir() if p.suffix.lower() in IMAGE_EXT and p.is_file())
+
+
+def open_video(path):
+    """Open a video file, an image-sequence folder or a clip folder (see module doc)."""
+    p = Path(path)
+    if not p.exists():
+        raise VideoError(f"{p} does not exist")
+    if p.is_file():
+        if os.path.getsize(p) == 0:
+            raise VideoError(f"{p} is empty")
+        return VideoSource(p)
+    if (p / "img").is_dir() and _image_files(p / "img"):
+        return VideoSource(p, _images=_image_files(p / "img"))
+    if (p / "video.mp4").is_file():
+        return VideoSource(p / "video.mp4")
+    videos = sorted(q for q in p.iterdir() if q.suffix.lower() in VIDEO_EXT)
+    if len(videos) == 1:
+        return VideoSource(videos[0])
+    images = _image_files(p)
+    if images:
+        return VideoSource(p, _images=images)
+    if len(videos) > 1:
+        raise VideoError(f"{p} holds several videos ({', '.join(v.name for v in videos)}); name one")
+    raise VideoError(f"{p} holds no video and no images")
+
+
+def read_rects(path):
+    """``x, y, w, h`` boxes, one per line (comma, tab or space separated) -> ``(n, 4)`` float array."""
+    rows = []
+    with open(path) as f:
+        for k, line in enumerate(f, 1):
+            line = line.strip()
+            if not line:
+                continue
+            parts = line.replace(",", " ").replace("\t", " ").split()
+            try:
+                rows.append([float(v) for v in parts[:4]])
+            except ValueError:
+                raise VideoError(f"{path}, line {k}: expected x,y,w,h numbers, got {line!r}") from None
+            if len(parts) < 4:
+                raise VideoError(f"{path}, line {k}: expected 4 values x,y,w,h, got {len(parts)}")
+    return np.array(rows, dtype=float).reshape(-1, 4)
+
+
+def find_groundtruth(path):
+    """The OTB-style ``groundtruth_rect.txt`` beside a video or in a clip folder, or ``None``."""
+    p = Path(path)
+    folder = p if p.is_dir() else p.parent
+    gt = folder / "groundtruth_rect.txt"
+    return gt if gt.is_file() else None
+
+
+class VideoWriter:
+    """Write BGR ``uint8`` frames to an mp4 (``mp4v``), as a context manager.
+
+    Parameters
+    ----------
+    path : str or Path
+    fps : float
+    size : tuple of int
+        ``(width, height)``; every frame must have it.
+    """
+
+    def __init__(self, path, fps, size):
+        self.path = Path(path)
+        if not self.path.parent.is_dir():
+            raise VideoError(f"cannot write {self.path}: folder {self.path.parent} does not exist")
+        self.size = tuple(int(v) for v in size)
+        self._w = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"mp4v"), float(fps), self.size)
+        if not self._w.isOpened():
+            raise VideoError(f"cannot open {self.path} for writing")
+        self.frames = 0
+
+    def write(self, frame):
+        if (frame.shape[1], frame.shape[0]) != self.size:
+            raise ValueError(f"frame size {frame.shape[1]}x{frame.shape[0]} != video size {self.size[0]}x{self.size[1]}")
+        if frame.ndim == 2:
+            frame = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+        self._w.write(np.ascontiguousarray(frame, dtype=np.uint8))
+        self.frames += 1
+
+    def close(self):
+        self._w.release()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
