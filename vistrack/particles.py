@@ -87,11 +87,6 @@ class ParticleSet:
                 f"log_weights must have shape ({n},), got {self.log_weights.shape}"
             )
 
-    @classmethod
-    def uniform(cls, states):
-        """Equally weighted particles."""
-        return cls(states)
-
     @property
     def n(self):
         """Number of particles N."""
@@ -132,11 +127,11 @@ class ParticleSet:
         return ParticleSet(self.states[idx])
 
 
-def checked_weights(log_w, fallback_states, what="step"):
-    """Return ``(log_w, states_ok)``; on all-zero/NaN weights warn and signal recovery.
+def checked_weights(log_w, what="step"):
+    """Return ``(log_w, degenerate)``; on all-zero/NaN weights warn and return uniform weights.
 
-    Used by filters: when no weight is usable the caller replaces the set by
-    the equally weighted prediction ``fallback_states``.
+    Used by filters: when ``degenerate`` the caller replaces the states by the
+    equally weighted prediction.
     """
     log_w = np.where(np.isnan(log_w), -np.inf, log_w)
     if np.isfinite(np.max(log_w)):

@@ -56,5 +56,5 @@ class AVPF(ParticleFilter):
         k = self.resample_scheme(lam, n, rng)
         x = self.model.predict(prev[k], rng)
         log_w = self.model.loglik(obs, x) - loglik_mu[k]
-        log_w, degenerate = checked_weights(log_w, x, self.name)
+        log_w, degenerate = checked_weights(log_w, self.name)
         return ParticleSet(x, log_w, degenerate)

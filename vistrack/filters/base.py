@@ -130,7 +130,7 @@ class ParticleFilter:
         """One filtering step ``S_{t-1} -> S_t``."""
         prev, log_w = self._resampled(particles, rng)
         new, log_incr, predicted = self.propose(prev, obs, rng)
-        log_w, degenerate = checked_weights(log_w + log_incr, predicted, self.name)
+        log_w, degenerate = checked_weights(log_w + log_incr, self.name)
         if degenerate:
             new = predicted
         return ParticleSet(new, log_w, degenerate)

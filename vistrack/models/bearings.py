@@ -82,9 +82,9 @@ def ship_means(m):
     if m <= 3:
         return SHIP_MEANS[:m].copy()
     phi = 2 * np.pi * np.arange(m) / m
-    radius, speed = 0.2, 0.055
+    radius, speed = 0.2, 0.0055  # velocity tangent to the circle
     return np.stack(
-        [radius * np.cos(phi), -speed * np.sin(phi) / 10, radius * np.sin(phi), speed * np.cos(phi) / 10],
+        [radius * np.cos(phi), -speed * np.sin(phi), radius * np.sin(phi), speed * np.cos(phi)],
         axis=1,
     )
 
