@@ -14,6 +14,8 @@ def test_logsumexp_is_stable():
     lw = np.array([1000.0, 1000.0])
     assert logsumexp(lw) == pytest.approx(1000.0 + np.log(2))
     assert logsumexp(np.array([-np.inf, -np.inf])) == -np.inf
+    rows = np.array([[0.0, np.log(3.0)], [-np.inf, -np.inf], [2000.0, 2000.0]])
+    assert logsumexp(rows, axis=1) == pytest.approx([np.log(4.0), -np.inf, 2000.0 + np.log(2)])
     w = normalized_weights(np.array([-1e4, -1e4 + np.log(3)]))
     assert w == pytest.approx([0.25, 0.75])
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .particles import logsumexp
+
 __all__ = ["mvn_logpdf", "mvn_sample", "gaussian_product", "gm_logpdf"]
 
 _LOG2PI = np.log(2.0 * np.pi)
@@ -107,7 +109,4 @@ def gm_logpdf(x, log_p, mu, cov):
     mu : ndarray (..., n, m)
     cov : ndarray (..., n, m, m)
     """
-    comp = log_p + mvn_logpdf(np.asarray(x)[..., None, :], mu, cov)
-    mx = np.max(comp, axis=-1, keepdims=True)
-    mx = np.where(np.isfinite(mx), mx, 0.0)
-    return mx[..., 0] + np.log(np.sum(np.exp(comp - mx), axis=-1))
+    return logsumexp(log_p + mvn_logpdf(np.asarray(x)[..., None, :], mu, cov), axis=-1)

@@ -25,13 +25,15 @@ class DegenerateWeightsWarning(RuntimeWarning):
     """Every weight of a step was zero or NaN; the particles were re-drawn."""
 
 
-def logsumexp(log_w):
-    """``log(sum(exp(log_w)))`` computed without overflow; ``-inf`` if all are ``-inf``."""
+def logsumexp(log_w, axis=None):
+    """``log(sum(exp(log_w)))`` over ``axis`` without overflow; ``-inf`` where all are ``-inf``."""
     log_w = np.asarray(log_w, dtype=float)
-    m = np.max(log_w)
-    if not np.isfinite(m):
-        return m if m == np.inf else -np.inf
-    return m + np.log(np.sum(np.exp(log_w - m)))
+    m = np.max(log_w, axis=axis, keepdims=True)
+    shift = np.where(np.isfinite(m), m, 0.0)
+    with np.errstate(divide="ignore"):
+        out = shift + np.log(np.sum(np.exp(log_w - shift), axis=axis, keepdims=True))
+    out = np.where(m == np.inf, np.inf, out)
+    return out.item() if axis is None else np.squeeze(out, axis=axis)
 
 
 def normalized_weights(log_w):

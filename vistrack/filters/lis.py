@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..gaussian import gaussian_product, gm_logpdf, mvn_sample
+from ..particles import logsumexp
 from .base import ParticleFilter
 
 __all__ = ["LIS", "GaussMixtureProposal"]
@@ -52,10 +53,8 @@ class GaussMixtureProposal:
         win = self.window_cov if self.window_cov.ndim == 2 else self.window_cov[:, None]
         nu, c, log_norm = gaussian_product(mu, cov, u, win)
         log_l = log_p + log_norm  # (N, B, n)
-        mx = np.max(log_l, axis=-1, keepdims=True)
-        ok = np.all(np.isfinite(mx[..., 0]), axis=1)
-        mx = np.where(np.isfinite(mx), mx, 0.0)
-        log_alpha = np.sum(mx[..., 0] + np.log(np.sum(np.exp(log_l - mx), axis=-1)), axis=1)
+        log_alpha = np.sum(logsumexp(log_l, axis=-1), axis=1)
+        ok = np.isfinite(log_alpha)
         if log_l.shape[-1] == 1:
             nu, c = nu[:, :, 0], c[:, :, 0]
         else:

@@ -21,6 +21,7 @@ import itertools
 
 import numpy as np
 
+from ..particles import logsumexp
 from .base import ParticleFilter
 
 __all__ = ["LLS", "Window"]
@@ -100,10 +101,8 @@ class LLS(ParticleFilter):
         cand_u = (u[:, None, :] + win.offsets[None]).reshape(n * k, -1)
         cand = model.with_local(np.repeat(x, k, axis=0), cand_u)
         log_rg = model.loglik(obs, cand).reshape(n, k) + win.log_g_offsets
-        mx = np.max(log_rg, axis=1)
-        ok = np.isfinite(mx)
-        mx = np.where(ok, mx, 0.0)
-        log_alpha = mx + np.log(np.sum(np.exp(log_rg - mx[:, None]), axis=1)) + win.log_cell
+        log_alpha = logsumexp(log_rg, axis=1) + win.log_cell
+        ok = np.isfinite(log_alpha)
         j = _categorical_rows(log_rg, rng)
         z_u = u + win.offsets[j] + win.cell * (rng.random(u.shape) - 0.5)
         z = model.with_local(x, z_u)
