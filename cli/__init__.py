@@ -13,6 +13,8 @@ import click
 from vistrack import __version__
 
 from .reproduce import reproduce
+from .run import run
+from .synth import synth
 
 __all__ = ["cli", "main"]
 
@@ -27,12 +29,16 @@ def cli():
 
     \b
     Examples:
+      vistrack synth contour --out clip              # synthetic clip with ground truth
+      vistrack run clip --algo ls-n-ips -n 30 --init-gt --out annotated.mp4 --track track.csv
       vistrack reproduce bearings --runs 20          # thesis §4.5.5, one ship
       vistrack reproduce bearings --ships 3 --particles 10,100
     """
 
 
 cli.add_command(reproduce)
+cli.add_command(run)
+cli.add_command(synth)
 
 
 def main(argv=None):

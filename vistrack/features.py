@@ -16,7 +16,7 @@ from functools import cached_property
 import cv2
 import numpy as np
 
-__all__ = ["FeatureMaps", "box_dog"]
+__all__ = ["FeatureMaps", "box_dog", "remap_points"]
 
 
 def box_dog(gray, inner, outer):
@@ -29,6 +29,30 @@ def box_dog(gray, inner, outer):
     return a - b
 
 
+_REMAP_COLS = 1024
+
+
+def remap_points(img, x, y):
+    """Bilinear samples of ``img`` at points ``(x, y)`` with ``cv2.remap``.
+
+    The points are laid out as a ``(rows, 1024)`` map (remap wants both sides
+    below 32767) and padded with an outside point; outside samples are 0.
+    """
+    shape = np.shape(x)
+    m = int(np.prod(shape))
+    rows = max(1, -(-m // _REMAP_COLS))
+    mx = np.empty(rows * _REMAP_COLS, np.float32)
+    my = np.empty(rows * _REMAP_COLS, np.float32)
+    mx[:m] = np.ravel(x)
+    my[:m] = np.ravel(y)
+    mx[m:] = -10.0
+    my[m:] = -10.0
+    out = cv2.remap(img, mx.reshape(rows, _REMAP_COLS), my.reshape(rows, _REMAP_COLS), cv2.INTER_LINEAR,
+                    borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    ch = out.shape[2:] if out.ndim == 3 else ()
+    return out.reshape((rows * _REMAP_COLS,) + ch)[:m].reshape(shape + ch)
+
+
 class FeatureMaps:
     """Lazily computed feature maps of one frame.
 
@@ -39,10 +63,22 @@ class FeatureMaps:
         ``(inner, outer)`` box sizes of the thin- and thick-line DoG filters.
     """
 
-    def __init__(self, frame, *, dog_small=(3, 7), dog_large=(5, 13)):
+    def __init__(self, frame, *, dog_small=(3, 7), dog_large=(5, 13), buffers=None):
         self.frame = frame
         self.dog_sizes = {"small": tuple(dog_small), "large": tuple(dog_large)}
         self._integrals = {}
+        self._buffers = buffers
+
+    def _buf(self, name, shape, dtype=np.float32):
+        """A reusable output array (fresh arrays cost a page fault per 4 KiB, DESIGN.md);
+        without a buffer pool, ``None`` (cv2 allocates)."""
+        if self._buffers is None:
+            return None
+        key = (name, shape, np.dtype(dtype))
+        b = self._buffers.get(key)
+        if b is None:
+            b = self._buffers[key] = np.empty(shape, dtype)
+        return b
 
     @property
     def shape(self):
@@ -53,23 +89,44 @@ class FeatureMaps:
         """Grayscale, float32 in [0, 255]."""
         f = self.frame
         if f.ndim == 3:
-            f = cv2.cvtColor(f, cv2.COLOR_BGR2GRAY)
-        return f.astype(np.float32)
+            f = cv2.cvtColor(f, cv2.COLOR_BGR2GRAY, dst=self._buf("gray8", f.shape[:2], np.uint8))
+        out = self._buf("gray", f.shape)
+        if out is None:
+            return f.astype(np.float32)
+        out[...] = f
+        return out
 
     @cached_property
     def gx(self):
         """Sobel derivative along x (columns)."""
-        return cv2.Sobel(self.gray, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT)
+        return cv2.Sobel(self.gray, cv2.CV_32F, 1, 0, dst=self._buf("gx", self.shape), ksize=3,
+                         borderType=cv2.BORDER_REFLECT)
 
     @cached_property
     def gy(self):
         """Sobel derivative along y (rows)."""
-        return cv2.Sobel(self.gray, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REFLECT)
+        return cv2.Sobel(self.gray, cv2.CV_32F, 0, 1, dst=self._buf("gy", self.shape), ksize=3,
+                         borderType=cv2.BORDER_REFLECT)
 
     @cached_property
     def mag(self):
         """Gradient magnitude ``sqrt(gx^2 + gy^2)``."""
-        return cv2.magnitude(self.gx, self.gy)
+        return cv2.magnitude(self.gx, self.gy, magnitude=self._buf("mag", self.shape))
+
+    @cached_property
+    def gxy(self):
+        """``gx`` and ``gy`` as one 2-channel map (one bilinear lookup gives both)."""
+        return cv2.merge([self.gx, self.gy], dst=self._buf("gxy", self.shape + (2,)))
+
+    @cached_property
+    def mean_mag(self):
+        """Mean gradient magnitude over the frame (a contrast scale for edge thresholds)."""
+        return float(cv2.mean(self.mag)[0])
+
+    def sample_gradient(self, x, y):
+        """Bilinear ``(gx, gy)`` at float pixel coordinates ``x, y`` (any equal shapes);
+        zero outside the frame. Returns an array of shape ``x.shape + (2,)``."""
+        return remap_points(self.gxy, x, y)
 
     @cached_property
     def dog_small(self):

@@ -8,6 +8,7 @@ from .base import ParticleFilter, filter_steps
 from .bootstrap import Bootstrap
 from .lis import LIS, GaussMixtureProposal
 from .lls import LLS, Window
+from .ls_n_ips import LSNIPS
 from .sir import SIR
 
 __all__ = [
@@ -19,6 +20,7 @@ __all__ = [
     "LLS",
     "Window",
     "LIS",
+    "LSNIPS",
     "GaussMixtureProposal",
     "ALGORITHMS",
     "make_filter",
@@ -33,6 +35,7 @@ ALGORITHMS = {
     "avpf": AVPF,
     "lls": LLS,
     "lis": LIS,
+    "ls-n-ips": LSNIPS,
 }
 
 

@@ -93,14 +93,25 @@ class LLS(ParticleFilter):
         super().__init__(model, **kwargs)
         self._set_part("window", window)
 
+    def _grid_loglik(self, obs, x, u):
+        """``log r`` at the grid cell centres ``(N, G)``. A model may supply
+        ``loglik_local_grid(obs, x, offsets)`` (e.g. from measurements it has
+        already made); any approximation there only changes the proposal, as
+        the weight uses the exact ``r`` at the drawn point."""
+        model, win = self.model, self.window
+        if hasattr(model, "loglik_local_grid"):
+            return model.loglik_local_grid(obs, x, win.offsets)
+        n, k = x.shape[0], win.offsets.shape[0]
+        cand_u = (u[:, None, :] + win.offsets[None]).reshape(n * k, -1)
+        cand = model.with_local(np.repeat(x, k, axis=0), cand_u)
+        return model.loglik(obs, cand).reshape(n, k)
+
     def propose(self, prev, obs, rng):
         model, win = self.model, self.window
         x = model.predict(prev, rng)
-        n, k = x.shape[0], win.offsets.shape[0]
+        n = x.shape[0]
         u = model.local_coords(x)  # (N, m)
-        cand_u = (u[:, None, :] + win.offsets[None]).reshape(n * k, -1)
-        cand = model.with_local(np.repeat(x, k, axis=0), cand_u)
-        log_rg = model.loglik(obs, cand).reshape(n, k) + win.log_g_offsets
+        log_rg = self._grid_loglik(obs, x, u) + win.log_g_offsets
         log_alpha = logsumexp(log_rg, axis=1) + win.log_cell
         ok = np.isfinite(log_alpha)
         j = _categorical_rows(log_rg, rng)

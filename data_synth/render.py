@@ -1,0 +1,96 @@
+"""Shared pieces of the synthetic video renderers: textures, clutter, lighting, blur, noise."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import cv2
+import numpy as np
+
+__all__ = ["smooth_noise", "clutter_background", "motion_blur", "lighting", "add_noise", "write_clip_files"]
+
+
+def smooth_noise(shape, rng, scale=8.0):
+    """Gaussian-smoothed white noise in ``[0, 1]`` of ``shape (H, W)`` (feature size ``scale`` px)."""
+    h, w = shape
+    small = rng.random((max(2, int(h / scale)) + 2, max(2, int(w / scale)) + 2)).astype(np.float32)
+    big = cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)
+    lo, hi = float(big.min()), float(big.max())
+    return (big - lo) / max(hi - lo, 1e-6)
+
+
+def clutter_background(size, rng, shapes=120):
+    """A BGR ``float32`` background full of edges: smooth colour noise plus random lines,
+    rectangles, ellipses and strokes (``shapes`` of them)."""
+    w, h = size
+    base = np.stack([smooth_noise((h, w), rng, 24) for _ in range(3)], axis=-1)
+    img = (60 + 120 * base).astype(np.float32)
+    lw = max(1, int(round(min(w, h) / 160)))
+    for _ in range(shapes):
+        col = tuple(float(c) for c in rng.uniform(20, 235, 3))
+        kind = rng.integers(4)
+        x, y = int(rng.uniform(0, w)), int(rng.uniform(0, h))
+        s = int(rng.uniform(0.03, 0.18) * min(w, h))
+        if kind == 0:
+            ang = rng.uniform(0, np.pi)
+            dx, dy = int(s * np.cos(ang)), int(s * np.sin(ang))
+            cv2.line(img, (x - dx, y - dy), (x + dx, y + dy), col, int(rng.integers(1, 3)) * lw, cv2.LINE_AA)
+        elif kind == 1:
+            cv2.rectangle(img, (x, y), (x + s, y + int(s * rng.uniform(0.3, 1.5))), col,
+                          -1 if rng.random() < 0.5 else lw)
+        elif kind == 2:
+            cv2.ellipse(img, (x, y), (s // 2 + 1, int(s * rng.uniform(0.2, 0.6)) + 1), float(rng.uniform(0, 180)),
+                        0, 360, col, -1 if rng.random() < 0.4 else lw, cv2.LINE_AA)
+        else:
+            pts = np.cumsum(rng.normal(0, s / 3, (6, 2)), axis=0) + (x, y)
+            cv2.polylines(img, [pts.astype(np.int32)], False, col, lw, cv2.LINE_AA)
+    return img
+
+
+def motion_blur(img, velocity):
+    """Blur along ``velocity (vx, vy)`` (px/frame) with a line kernel of that length."""
+    length = float(np.hypot(*velocity))
+    if length < 1.5:
+        return img
+    k = int(np.ceil(length)) | 1
+    kern = np.zeros((k, k), np.float32)
+    c = k // 2
+    d = np.asarray(velocity, float) / length * (length / 2)
+    cv2.line(kern, (int(round(c - d[0])), int(round(c - d[1]))), (int(round(c + d[0])), int(round(c + d[1]))),
+             1.0, 1, cv2.LINE_AA)
+    kern /= kern.sum()
+    return cv2.filter2D(img, -1, kern, borderType=cv2.BORDER_CONSTANT)
+
+
+def lighting(size, t, phase, amplitude=0.25, period=150.0):
+    """Multiplicative illumination field at frame ``t``: a global gain that drifts over
+    time times a horizontal gradient that sweeps across the frame."""
+    w, h = size
+    gain = 1.0 + amplitude * np.sin(2 * np.pi * t / period + phase)
+    x = np.linspace(0.0, 1.0, w, dtype=np.float32)
+    sweep = 1.0 + 0.5 * amplitude * np.cos(2 * np.pi * (x - t / (2 * period)))
+    return (gain * sweep)[None, :, None].astype(np.float32)
+
+
+def add_noise(img, rng, sigma):
+    """Sensor noise: additive Gaussian of std ``sigma`` (8-bit units), clipped to uint8."""
+    noisy = img + rng.normal(0.0, sigma, img.shape).astype(np.float32)
+    return np.clip(noisy, 0, 255).astype(np.uint8)
+
+
+def write_clip_files(out, rows, columns, meta):
+    """Write ``groundtruth.csv`` (header row, one row per frame) and ``meta.json`` into ``out``."""
+    with open(out / "groundtruth.csv", "w", newline="") as f:
+        wr = csv.writer(f)
+        wr.writerow(columns)
+        for r in rows:
+            wr.writerow([_fmt(r[c]) for c in columns])
+    with open(out / "meta.json", "w") as f:
+        json.dump(meta, f, indent=2)
+
+
+def _fmt(v):
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    return f"{float(v):.3f}"

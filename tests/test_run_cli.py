@@ -1,0 +1,134 @@
+"""`vistrack synth contour` and `vistrack run`: files, columns, annotated video, errors."""
+
+import csv
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from vistrack.cli import main
+
+REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
+
+
+def run(argv, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    out = capsys.readouterr()
+    return e.value.code, out.out, out.err
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory):
+    out = tmp_path_factory.mktemp("synth") / "clip"
+    with pytest.raises(SystemExit) as e:
+        main(["synth", "contour", "--out", str(out), "--frames", "25", "--size", "160x120", "--seed", "2",
+              "--clutter", "low", "--no-distractor", "-q"])
+    assert e.value.code == 0
+    return out
+
+
+def header(path):
+    with open(path, newline="") as f:
+        return next(csv.reader(f))
+
+
+def rows(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_synth_contour_writes_clip(clip):
+    assert {p.name for p in clip.iterdir()} >= {"video.mp4", "groundtruth.csv", "meta.json"}
+    h = header(clip / "groundtruth.csv")
+    assert h[:8] == ["frame", "visible", "cx", "cy", "w", "h", "angle_deg", "scale"]
+    assert "qx0" in h and "qy23" in h
+    assert len(rows(clip / "groundtruth.csv")) == 25
+
+
+def test_run_writes_track_and_annotated_video(clip, tmp_path, capsys):
+    track, video = tmp_path / "t.csv", tmp_path / "a.mp4"
+    code, out, err = run(["run", str(clip / "video.mp4"), "--algo", "ls-n-ips", "-n", "20", "--init-gt",
+                          "--track", str(track), "--out", str(video), "--show-particles", "5", "-q"], capsys)
+    assert code == 0, err
+    h = header(track)
+    assert h[:8] == ["frame", "visible", "cx", "cy", "w", "h", "angle_deg", "scale"]
+    assert h[-2:] == ["ess", "ms"]
+    r = rows(track)
+    assert len(r) == 25 and [int(x["frame"]) for x in r] == list(range(25))
+    assert all(1.0 <= float(x["ess"]) <= 20.0 for x in r)
+    truth = rows(clip / "groundtruth.csv")
+    err_px = [np.hypot(float(a["cx"]) - float(b["cx"]), float(a["cy"]) - float(b["cy"])) for a, b in zip(r, truth)]
+    assert np.mean(err_px) < 3.0
+    cap = cv2.VideoCapture(str(video))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 25
+    ok, frame = cap.read()
+    assert ok and frame.shape == (120, 160, 3)
+
+
+def test_run_same_seed_same_track(clip, tmp_path, capsys):
+    outs = []
+    for k, seed in enumerate([7, 7, 8]):
+        p = tmp_path / f"t{k}.csv"
+        code, _, err = run(["run", str(clip), "--algo", "lis", "-n", "15", "--seed", str(seed), "--init-gt",
+                            "--track", str(p), "-q", "--max-frames", "10"], capsys)
+        assert code == 0, err
+        outs.append([{k: v for k, v in row.items() if k != "ms"} for row in rows(p)])
+    assert outs[0] == outs[1] and outs[0] != outs[2]
+
+
+def test_run_with_init_box_and_summary(clip, capsys):
+    code, out, err = run(["run", str(clip), "--model", "contour", "--algo", "bootstrap", "-n", "50",
+                          "--init", "60,40,40,40", "--max-frames", "5"], capsys)
+    assert code == 0, err
+    assert "5 frames" in out and "vs ground truth" in out
+
+
+@pytest.mark.parametrize("argv,msg", [
+    (["--init", "1,2,3"], "x,y,w,h"),
+    (["--init", "1,2,0,4"], "positive"),
+    (["--init", "1,2,3,4", "--init-gt"], "either --init or --init-gt"),
+    (["--algo", "nope"], "nope"),
+    (["-n", "0"], "0"),
+])
+def test_run_bad_options(clip, capsys, argv, msg):
+    code, out, err = run(["run", str(clip)] + argv, capsys)
+    assert code != 0
+    assert msg in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_run_bad_inputs(tmp_path, clip, capsys):
+    code, _, err = run(["run", str(tmp_path / "missing.mp4"), "--init", "1,1,5,5"], capsys)
+    assert code != 0 and "does not exist" in err
+    bad = tmp_path / "bad.mp4"
+    bad.write_bytes(b"not a video at all")
+    code, _, err = run(["run", str(bad), "--init", "1,1,5,5"], capsys)
+    assert code != 0 and "cannot decode" in err.replace("OpenCV can decode", "cannot decode")
+    # a contour needs a start; a bare video has no ground truth to start from
+    lone = tmp_path / "lone"
+    lone.mkdir()
+    (lone / "v.mp4").write_bytes((clip / "video.mp4").read_bytes())
+    code, _, err = run(["run", str(lone / "v.mp4"), "--model", "contour"], capsys)
+    assert code != 0 and "--init" in err
+    code, _, err = run(["run", str(lone / "v.mp4"), "--model", "contour", "--init-gt"], capsys)
+    assert code != 0 and "no groundtruth" in err
+    code, _, err = run(["run", str(clip), "--init-gt", "--track", str(tmp_path / "nodir" / "t.csv")], capsys)
+    assert code != 0 and "does not exist" in err
+
+
+def test_synth_bad_size(tmp_path, capsys):
+    code, _, err = run(["synth", "contour", "--out", str(tmp_path / "c"), "--size", "12x9"], capsys)
+    assert code != 0 and "too small" in err
+    code, _, err = run(["synth", "contour", "--out", str(tmp_path / "c"), "--size", "big"], capsys)
+    assert code != 0 and "WIDTHxHEIGHT" in err
+
+
+@pytest.mark.skipif(not (REAL / "hand_vot2013").is_dir(), reason="../shared/data not present")
+def test_run_on_real_clip_with_init_gt(tmp_path, capsys):
+    track = tmp_path / "t.csv"
+    code, out, err = run(["run", str(REAL / "hand_vot2013"), "--model", "contour", "--algo", "ls-n-ips",
+                          "-n", "30", "--init-gt", "--max-frames", "30", "--track", str(track)], capsys)
+    assert code == 0, err
+    assert len(rows(track)) == 30 and "vs ground truth" in out

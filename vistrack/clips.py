@@ -1,0 +1,122 @@
+"""Clip folders: a video plus ground truth and metadata (DESIGN.md, Files).
+
+A synthetic clip folder holds ``video.mp4``, ``groundtruth.csv`` (header row,
+one row per frame: ``frame, visible, cx, cy, w, h, angle_deg`` + model columns)
+and ``meta.json``. A real clip is a video or an image folder with an OTB-style
+``groundtruth_rect.txt`` (``x, y, w, h`` per line). :func:`load_clip` accepts
+the folder or the video inside it.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .video import VideoError, find_groundtruth, open_video, read_rects
+
+__all__ = ["Clip", "load_clip", "read_groundtruth_csv", "write_track_csv"]
+
+
+@dataclass
+class Clip:
+    """An opened clip.
+
+    Attributes
+    ----------
+    source : VideoSource
+    folder : Path
+    meta : dict or None
+        ``meta.json`` contents (synthetic clips).
+    truth : dict of str -> ndarray, or None
+        Ground-truth columns (one entry per frame). OTB rectangles become
+        ``frame, visible, cx, cy, w, h, x, y``.
+    """
+
+    source: object
+    folder: Path
+    meta: dict | None
+    truth: dict | None
+
+    @property
+    def model_name(self):
+        return (self.meta or {}).get("model")
+
+    def first_box(self):
+        """``(x, y, w, h)`` of the first ground-truth frame where the object is visible."""
+        t = self.truth
+        if t is None:
+            raise VideoError(f"{self.folder} has no ground truth (groundtruth.csv or groundtruth_rect.txt)")
+        vis = np.flatnonzero(t["visible"] > 0)
+        if not len(vis):
+            raise VideoError(f"{self.folder}: the object is never visible in the ground truth")
+        k = vis[0]
+        return t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k]
+
+
+def read_groundtruth_csv(path):
+    """Columns of a ``groundtruth.csv`` (or track CSV) as float arrays."""
+    with open(path, newline="") as f:
+        rd = csv.reader(f)
+        try:
+            header = next(rd)
+        except StopIteration:
+            raise VideoError(f"{path} is empty") from None
+        rows = [r for r in rd if r]
+    try:
+        data = np.array(rows, dtype=float).reshape(len(rows), len(header))
+    except ValueError:
+        raise VideoError(f"{path}: every row needs {len(header)} numbers") from None
+    return {h: data[:, k] for k, h in enumerate(header)}
+
+
+def _rects_truth(rects):
+    x, y, w, h = rects.T
+    ok = (w > 0) & (h > 0) & np.all(np.isfinite(rects), axis=1)
+    return {"frame": np.arange(len(rects), dtype=float), "visible": ok.astype(float), "cx": x + w / 2,
+            "cy": y + h / 2, "w": w, "h": h, "x": x, "y": y}
+
+
+def load_clip(path):
+    """Open a clip folder, a video file (with its folder's ground truth) or an image folder."""
+    p = Path(path)
+    source = open_video(p)
+    folder = p if p.is_dir() else p.parent
+    meta = None
+    if (folder / "meta.json").is_file():
+        try:
+            meta = json.loads((folder / "meta.json").read_text())
+        except json.JSONDecodeError as e:
+            raise VideoError(f"{folder / 'meta.json'} is not valid JSON: {e}") from None
+    truth = None
+    if (folder / "groundtruth.csv").is_file():
+        truth = read_groundtruth_csv(folder / "groundtruth.csv")
+        missing = {"frame", "visible", "cx", "cy", "w", "h"} - set(truth)
+        if missing:
+            raise VideoError(f"{folder / 'groundtruth.csv'} lacks columns {', '.join(sorted(missing))}")
+    elif find_groundtruth(p) is not None:
+        truth = _rects_truth(read_rects(find_groundtruth(p)))
+    return Clip(source, folder, meta, truth)
+
+
+def write_track_csv(path, rows, columns=None):
+    """Write track rows (dicts) with a header; ``columns`` fixes the order (default: first row's keys)."""
+    columns = columns or list(rows[0]) if rows else (columns or [])
+    with open(path, "w", newline="") as f:
+        wr = csv.writer(f)
+        wr.writerow(columns)
+        for r in rows:
+            wr.writerow([_fmt(r.get(c, "")) for c in columns])
+
+
+def _fmt(v):
+    if isinstance(v, (bool, np.bool_)):
+        return str(int(v))
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, str):
+        return v
+    return f"{float(v):.3f}"

@@ -1,0 +1,58 @@
+"""Tracking errors and losses (DESIGN.md evaluation protocol; thesis §3.2.5, §4.5.3).
+
+- contour: centre distance (px); lost when it exceeds 50 px at the thesis's
+  240-px frame width, scaled with the frame width;
+- P(lost) per frame is the fraction of runs lost; the mean error is over
+  runs (and frames) not lost.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["center_error", "contour_lost_threshold", "summarize_runs", "iou"]
+
+
+def center_error(est_cx, est_cy, true_cx, true_cy):
+    """Euclidean centre distance (px), elementwise."""
+    return np.hypot(np.asarray(est_cx) - true_cx, np.asarray(est_cy) - true_cy)
+
+
+def contour_lost_threshold(frame_width):
+    """50 px at 240-px frame width (thesis §3.2.5), scaled with the width."""
+    return 50.0 * frame_width / 240.0
+
+
+def summarize_runs(errors, lost):
+    """Summaries of ``errors, lost (runs, frames)`` arrays.
+
+    Returns a dict: ``p_lost_per_frame (frames,)``, ``p_lost_final``, ``p_lost_mean``
+    (average over frames), ``mean_error`` (over all not-lost run-frames, NaN if none)
+    and ``error_per_frame (frames,)`` (mean over runs not lost at that frame).
+    """
+    errors = np.asarray(errors, float)
+    lost = np.asarray(lost, bool)
+    p = lost.mean(axis=0)
+    ok = ~lost
+    with np.errstate(invalid="ignore"):
+        per_frame = np.where(ok.any(axis=0), np.sum(np.where(ok, errors, 0), axis=0) / ok.sum(axis=0), np.nan)
+    return {
+        "p_lost_per_frame": p,
+        "p_lost_final": float(p[-1]),
+        "p_lost_mean": float(p.mean()),
+        "mean_error": float(errors[ok].mean()) if ok.any() else float("nan"),
+        "error_per_frame": per_frame,
+    }
+
+
+def iou(a, b):
+    """Intersection over union of boxes ``(..., 4)`` as ``(x, y, w, h)``."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    x0 = np.maximum(a[..., 0], b[..., 0])
+    y0 = np.maximum(a[..., 1], b[..., 1])
+    x1 = np.minimum(a[..., 0] + a[..., 2], b[..., 0] + b[..., 2])
+    y1 = np.minimum(a[..., 1] + a[..., 3], b[..., 1] + b[..., 3])
+    inter = np.clip(x1 - x0, 0, None) * np.clip(y1 - y0, 0, None)
+    union = a[..., 2] * a[..., 3] + b[..., 2] * b[..., 3] - inter
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(union > 0, inter / union, 0.0)

@@ -1,0 +1,562 @@
+"""B-spline contour tracking (thesis 001, §1.3.1, §4.3.1, §4.4.3).
+
+Contour
+    A closed uniform cubic B-spline through ``n`` support points ``q`` (they lie
+    on the curve): ``s(t) = Φ(t) A^-1 q`` with ``A`` the circulant
+    ``(1/6, 4/6, 1/6)`` mapping control to support points.
+Pose (eq. 1.1)
+    ``q = W z + q0`` with ``W = [[1, 0, q0x, -q0y], [0, 1, q0y, q0x]]`` and the
+    template ``q0`` centred on its support points' mean, so ``z = (cx, cy, a, b)``
+    is the centre and ``(1 + a) + i b = scale · e^{i angle}``. ``z = 0`` is the
+    template at the origin (the identity similarity).
+State
+    ``(z_t, z_{t-1})``, shape ``(N, 8)``; AR(2) dynamics (constant velocity with
+    damping ``d``): ``z_t = z_{t-1} + d (z_{t-1} - z_{t-2}) + σ ε``.
+Likelihood (Blake and Isard; measurement lines at the support points, §4.3.1)
+    Along the outward unit normal ``n_i`` at each support point ``q_i`` the
+    gradient component along the normal, ``g · n_i``, is sampled bilinearly at
+    offsets ``ν_k = k`` px, ``|k| <= half_line``. Edge features are the local
+    maxima of ``|g · n_i|`` above ``τ = edge_threshold · mean|∇I|`` of the
+    frame whose direction is within ~32° of the contour's (``|g · n| >= 0.85 |g|``). With non-detection probability ``q`` and clutter density ``λ``
+    (features per pixel of line), each line contributes
+
+        log(1 + (1 / (sqrt(2π) σ q λ)) Σ_j exp(-ν_j² / (2 σ²)))
+
+    and lines are independent: ``log r = Σ_i`` of that. One array operation
+    covers N particles × n normals × L samples.
+Local search ``LS_λ`` (§4.3.1, LMS)
+    The strongest edge on each normal within ``l = l0 · (size / 60) · scale``
+    (``l0 = 16`` for the thesis's 60-px contour) gives ``q̂``; ``ẑ = W⁺ (q̂ - q0)``
+    with ``W⁺ = (WᵀUW)⁻¹WᵀU`` and ``U = diag(B, B)`` the spline norm; the move
+    is rejected when ``|ẑ - z| > λ`` in any coordinate, ``λ = (7, 7, 0.1, 0.15)``
+    for (cx, cy, a, b) with the translation part scaled by frame width / 240.
+Local moves for LLS and LIS act on translation only (§4.4.3): the edge
+    features along the normals already sampled give, for a translation ``δ``,
+    the shifted edge distances ``ν_j - n_i · δ``, so ``r`` on a whole grid of
+    translations costs one matrix product (an approximation of ``r`` used
+    only inside the proposal; weights use the exact ``r`` at the final point).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..filters.lis import GaussMixtureProposal
+from ..filters.lls import Window
+
+__all__ = ["BSpline", "Contour", "ellipse_template", "pose_from", "pose_params"]
+
+_M = np.array([[-1.0, 3, -3, 1], [3, -6, 3, 0], [-3, 0, 3, 0], [1, 4, 1, 0]]) / 6.0
+
+
+def _basis(t, n, deriv=0):
+    """Control-point weights ``(len(t), n)`` of a closed uniform cubic B-spline at ``t``
+    (``t`` in units of segments; support point ``i`` sits at ``t = i``)."""
+    t = np.asarray(t, dtype=float) % n
+    k = np.floor(t).astype(int)
+    u = t - k
+    if deriv == 0:
+        pw = np.stack([u**3, u**2, u, np.ones_like(u)], axis=1)
+    else:
+        pw = np.stack([3 * u**2, 2 * u, np.ones_like(u), np.zeros_like(u)], axis=1)
+    w = pw @ _M  # weights of control points k-1, k, k+1, k+2
+    out = np.zeros((len(t), n))
+    rows = np.arange(len(t))
+    for j in range(4):
+        np.add.at(out, (rows, (k - 1 + j) % n), w[:, j])
+    return out
+
+
+class BSpline:
+    """Closed uniform cubic B-spline through ``n`` support points (§1.3.1, §4.3.1)."""
+
+    def __init__(self, n):
+        if n < 4:
+            raise ValueError(f"a closed cubic B-spline needs at least 4 support points, got {n}")
+        self.n = n
+        a = np.zeros((n, n))
+        idx = np.arange(n)
+        a[idx, idx] = 4 / 6
+        a[idx, (idx + 1) % n] = 1 / 6
+        a[idx, (idx - 1) % n] = 1 / 6
+        self.A = a
+        self.A_inv = np.linalg.inv(a)
+        # B = A^-T (1/L ∫ φ φ^T) A^-1, the Gram integral by 64-point-per-segment midpoint rule
+        t = (np.arange(64 * n) + 0.5) / 64
+        phi = _basis(t, n)
+        self.B = self.A_inv.T @ (phi.T @ phi / len(t)) @ self.A_inv
+
+    def curve_matrix(self, t, deriv=0):
+        """``C (len(t), n)`` with curve points ``s(t) = C q`` for support points ``q``."""
+        return _basis(t, self.n, deriv) @ self.A_inv
+
+    def dense(self, per_segment=8):
+        """Curve matrix for ``per_segment`` points per segment (for drawing and sizes)."""
+        return self.curve_matrix(np.arange(self.n * per_segment) / per_segment)
+
+
+def ellipse_template(w, h, n=24):
+    """Support points of an axis-aligned ellipse of width ``w`` and height ``h``, centred."""
+    phi = 2 * np.pi * np.arange(n) / n
+    return np.stack([0.5 * w * np.cos(phi), 0.5 * h * np.sin(phi)], axis=1)
+
+
+def pose_from(cx, cy, scale, angle_deg):
+    """``z = (cx, cy, a, b)`` for a centre, scale and angle (degrees)."""
+    th = np.deg2rad(angle_deg)
+    return np.array([cx, cy, scale * np.cos(th) - 1.0, scale * np.sin(th)], dtype=float)
+
+
+def pose_params(z):
+    """``(scale, angle_deg)`` of poses ``z (..., 4)``."""
+    z = np.asarray(z, float)
+    return np.hypot(1 + z[..., 2], z[..., 3]), np.rad2deg(np.arctan2(z[..., 3], 1 + z[..., 2]))
+
+
+def _edge_peaks(gn, thresh):
+    """Local maxima of the edge strength ``gn >= 0`` along the last axis above ``thresh`` (edge features)."""
+    m = gn
+    peak = m > thresh
+    peak[..., 1:] &= m[..., 1:] >= m[..., :-1]
+    peak[..., :-1] &= m[..., :-1] > m[..., 1:]
+    return peak
+
+
+class Contour:
+    """Contour tracking model with similarity pose and AR(2) dynamics.
+
+    Parameters
+    ----------
+    template : array_like of shape (n, 2)
+        Support points ``q0`` of the template (pixels); centred here.
+    init_pose : array_like of shape (4,)
+        Pose ``z = (cx, cy, a, b)`` of the object in the first frame (prior mean).
+    frame_size : tuple of int
+        ``(width, height)``; scales the thesis's pixel parameters (240×180 frames).
+    sigma_xy, sigma_a, sigma_b : float
+        Process noise std of translation (default ``0.08 · size``), ``a`` and ``b``.
+    damping : float
+        Velocity carried over, ``d`` in ``z_t = z_{t-1} + d (z_{t-1} - z_{t-2}) + σ ε``.
+    prior_std : array_like of shape (4,), optional
+        Std of ``p_0`` around ``init_pose`` (default ``(σ_xy, σ_xy, 0.03, 0.03)``).
+    sigma_edge : float
+        Std (px) of the edge position along a normal (default ``2 · size / 60``, at least 1.5).
+    half_line : int
+        Likelihood measurement lines span ``±half_line`` px (default ``ceil(3 σ_edge) + 1``).
+    q_miss, clutter_density : float
+        Non-detection probability ``q`` and clutter features per px ``λ``.
+    edge_threshold : float
+        Edge features need ``|g · n| > edge_threshold · mean|∇I|``.
+    cos_min : float
+        ... and an edge direction within ``arccos(cos_min)`` of the contour's
+        (``|g · n| >= cos_min |g|``; 0.85 is about 32°).
+    search_length : float
+        ``l0`` of the local search at the thesis's 60-px scale (16).
+    search_lambda : array_like of shape (4,)
+        ``λ`` of ``LS_λ`` for ``(cx, cy, a, b)`` at 240-px frame width.
+    """
+
+    dim = 8
+    first_step = False
+
+    def __init__(self, template, init_pose, frame_size, *, sigma_xy=None, sigma_a=0.02, sigma_b=0.03,
+                 damping=0.8, prior_std=None, sigma_edge=None, half_line=None, q_miss=0.1,
+                 clutter_density=0.05, edge_threshold=2.0, cos_min=0.85, search_length=16.0,
+                 search_iterations=1, search_lambda=(7.0, 7.0, 0.1, 0.15), measure_per_segment=2,
+                 polarity=None):
+        q0 = np.asarray(template, dtype=float)
+        if q0.ndim != 2 or q0.shape[1] != 2 or len(q0) < 4:
+            raise ValueError("template must be an (n, 2) array of at least 4 support points")
+        self.q0 = q0 - q0.mean(axis=0)
+        self.n = len(q0)
+        self.spline = BSpline(self.n)
+        self.frame_size = (int(frame_size[0]), int(frame_size[1]))
+        dense = self.spline.dense() @ self.q0
+        self.size = float(np.mean(dense.max(axis=0) - dense.min(axis=0)))
+        if not self.size > 0:
+            raise ValueError("template has zero size")
+        ref = self.size / 60.0
+        # W (eq. 1.1), spline norm U = diag(B, B) and W+ = (W^T U W)^-1 W^T U (§4.3.1)
+        qx, qy = self.q0[:, 0], self.q0[:, 1]
+        one, zero = np.ones(self.n), np.zeros(self.n)
+        self.W = np.block([[one[:, None], zero[:, None], qx[:, None], -qy[:, None]],
+                           [zero[:, None], one[:, None], qy[:, None], qx[:, None]]])
+        U = np.kron(np.eye(2), self.spline.B)
+        self.W_plus = np.linalg.solve(self.W.T @ U @ self.W, self.W.T @ U)
+        # outward unit normals of the template at the support points and at the
+        # measurement points (``measure_per_segment`` per spline segment)
+        self.normals0 = self._template_normals(np.arange(self.n))
+        t_meas = np.arange(self.n * measure_per_segment) / measure_per_segment
+        self.meas0 = self.spline.curve_matrix(t_meas) @ self.q0
+        self.meas_normals0 = self._template_normals(t_meas)
+        mx, my = self.meas0[:, 0], self.meas0[:, 1]
+        one_m, zero_m = np.ones(len(mx)), np.zeros(len(mx))
+        w_m = np.block([[one_m[:, None], zero_m[:, None], mx[:, None], -my[:, None]],
+                        [zero_m[:, None], one_m[:, None], my[:, None], mx[:, None]]])
+        self.W_meas_plus = np.linalg.pinv(w_m)
+        self.dense_matrix = self.spline.dense()
+        self.polarity = polarity
+
+        self.init_pose = np.asarray(init_pose, dtype=float).reshape(4)
+        self.sigma = np.array([sigma_xy if sigma_xy is not None else 0.08 * self.size,
+                               0, sigma_a, sigma_b], dtype=float)
+        self.sigma[1] = self.sigma[0]
+        self.damping = np.array([damping, damping, 0.0, 0.0])
+        ps = np.array(prior_std if prior_std is not None else (self.sigma[0], self.sigma[0], 0.03, 0.03), float)
+        self.prior_std = ps
+        self.prior_mean = np.concatenate([self.init_pose, self.init_pose])
+        self.sigma_edge = float(sigma_edge if sigma_edge is not None else max(1.5, 2.0 * ref))
+        self.half_line = int(half_line if half_line is not None else np.ceil(3 * self.sigma_edge) + 1)
+        self.line_offsets = np.arange(-self.half_line, self.half_line + 1, dtype=float)
+        self.log_c = -np.log(np.sqrt(2 * np.pi) * self.sigma_edge * q_miss * clutter_density)
+        self.edge_threshold = float(edge_threshold)
+        self.cos_min = float(cos_min)
+        self.search_length = float(search_length) * ref
+        self.search_iterations = int(search_iterations)
+        self.search_rule = "nearest"
+        self.grid_step = 2.25
+        self.search_check = False
+        frame_ref = self.frame_size[0] / 240.0
+        lam = np.asarray(search_lambda, dtype=float).copy()
+        lam[:2] *= frame_ref
+        self.search_lambda = lam
+
+    def _template_normals(self, t):
+        tang = self.spline.curve_matrix(t, deriv=1) @ self.q0
+        nrm = np.stack([tang[:, 1], -tang[:, 0]], axis=1)
+        nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+        pts = self.spline.curve_matrix(t) @ self.q0
+        return -nrm if np.sum(np.einsum("ij,ij->i", nrm, pts)) < 0 else nrm
+
+    @classmethod
+    def from_box(cls, box, frame_size, *, n=24, **kwargs):
+        """An ellipse template fitted to the box ``(x, y, w, h)``, starting there."""
+        x, y, w, h = (float(v) for v in box)
+        if not (w > 0 and h > 0):
+            raise ValueError(f"init box needs positive width and height, got {w}x{h}")
+        return cls(ellipse_template(w, h, n), (x + w / 2, y + h / 2, 0.0, 0.0), frame_size, **kwargs)
+
+    @classmethod
+    def from_template(cls, support, frame_size, *, cx, cy, scale=1.0, angle_deg=0.0, **kwargs):
+        """Template support points (scale 1, angle 0) starting at pose ``(cx, cy, scale, angle)``."""
+        return cls(support, pose_from(cx, cy, scale, angle_deg), frame_size, **kwargs)
+
+    # -- geometry ---------------------------------------------------------------
+    @staticmethod
+    def _rot(z):
+        """``(1 + a, b)`` per pose: the similarity's linear part."""
+        return 1.0 + z[..., 2], z[..., 3]
+
+    def _place(self, z, pts0):
+        """Template points ``pts0 (m, 2)`` under poses ``z (N, 4)``: ``(N, m, 2)``."""
+        c, s = self._rot(z)
+        px, py = pts0[:, 0], pts0[:, 1]
+        x = z[:, 0:1] + c[:, None] * px - s[:, None] * py
+        y = z[:, 1:2] + s[:, None] * px + c[:, None] * py
+        return np.stack([x, y], axis=-1)
+
+    def _turn(self, z, n0):
+        """Unit vectors ``n0 (m, 2)`` rotated by the poses' angles: ``(N, m, 2)``."""
+        c, s = self._rot(z)
+        r = np.maximum(np.hypot(c, s), 1e-12)
+        c, s = (c / r)[:, None], (s / r)[:, None]
+        nx, ny = n0[:, 0], n0[:, 1]
+        return np.stack([c * nx - s * ny, s * nx + c * ny], axis=-1)
+
+    def support_points(self, z):
+        """Support points ``q = W z + q0`` as ``(N, n, 2)`` for poses ``z (N, 4)``."""
+        return self._place(z, self.q0)
+
+    def normals(self, z):
+        """Unit outward normals ``(N, n, 2)`` at the support points."""
+        return self._turn(z, self.normals0)
+
+    def measurement_lines(self, z):
+        """Measurement points and unit normals ``(N, M, 2)`` each (likelihood lines)."""
+        return self._place(z, self.meas0), self._turn(z, self.meas_normals0)
+
+    def outline(self, states, per_segment=8):
+        """Dense curve points ``(N, n·per_segment, 2)`` of the contours of ``states``."""
+        z = np.atleast_2d(states)[:, :4]
+        q = self.support_points(z)
+        mat = self.dense_matrix if per_segment == 8 else self.spline.dense(per_segment)
+        return np.einsum("mn,knd->kmd", mat, q)
+
+    def box(self, states):
+        """Bounding boxes ``(N, 4)`` as ``(x, y, w, h)`` of the contours."""
+        pts = self.outline(states)
+        lo, hi = pts.min(axis=1), pts.max(axis=1)
+        return np.concatenate([lo, hi - lo], axis=1)
+
+    # -- dynamics ---------------------------------------------------------------
+    def sample_prior(self, n, rng):
+        z = self.init_pose + self.prior_std * rng.standard_normal((n, 4))
+        return np.concatenate([z, z], axis=1)
+
+    def prior_logpdf(self, states):
+        e = (states[:, :4] - self.init_pose) / self.prior_std
+        return -0.5 * np.sum(e * e, axis=1) - np.sum(np.log(self.prior_std)) - 2 * np.log(2 * np.pi)
+
+    def predict_mean(self, states):
+        z1, z2 = states[:, :4], states[:, 4:]
+        return np.concatenate([z1 + self.damping * (z1 - z2), z1], axis=1)
+
+    def predict(self, states, rng):
+        out = self.predict_mean(states)
+        out[:, :4] += self.sigma * rng.standard_normal((len(states), 4))
+        return out
+
+    def transition_logpdf(self, new, old):
+        """``log K(new|old)``: Gaussian in ``z_t``; ``z_{t-1}`` of ``new`` is ``z_t`` of ``old``."""
+        e = (new[:, :4] - self.predict_mean(old)[:, :4]) / self.sigma
+        return -0.5 * np.sum(e * e, axis=1) - np.sum(np.log(self.sigma)) - 2 * np.log(2 * np.pi)
+
+    # -- likelihood -------------------------------------------------------------
+    def _profiles(self, obs, z, offsets, support=False):
+        """Edge strength along the measurement lines ``(N, M, L)`` at ``offsets``
+        (``(L,)`` or ``(N, 1, L)``; at the support points with ``support=True``).
+
+        The normal gradient ``|g · n|`` (or ``polarity · g · n`` clipped at 0 when
+        the model has a polarity), zeroed where the edge direction is more than
+        ``arccos(cos_min)`` off the contour's (``|g · n| < cos_min · |g|``).
+        """
+        if support:
+            q, nrm = self.support_points(z), self.normals(z)
+        else:
+            q, nrm = self.measurement_lines(z)
+        q = q.astype(np.float32)
+        nrm = nrm.astype(np.float32)
+        off = np.asarray(offsets, dtype=np.float32)
+        nx, ny = nrm[..., 0:1], nrm[..., 1:2]
+        g = obs.sample_gradient(q[..., 0:1] + nx * off, q[..., 1:2] + ny * off)
+        gx, gy = g[..., 0], g[..., 1]
+        gn = gx * nx
+        gn += gy * ny
+        if self.polarity:
+            gn *= self.polarity
+        else:
+            np.abs(gn, out=gn)
+        gx *= gx
+        gy *= gy
+        gx += gy
+        gx *= self.cos_min**2
+        gn[(gn * gn < gx) | (gn < 0)] = 0.0
+        return gn
+
+    def learn_polarity(self, obs, agree=0.75):
+        """Set ``polarity`` from the first frame at the initial pose: the sign of ``g · n``
+        at the strongest edge near each measurement point, if at least ``agree`` of
+        them share it (an object darker or brighter than its surroundings); else
+        leave edges unsigned. Returns the polarity (``+1``, ``-1`` or ``None``)."""
+        saved, self.polarity = self.polarity, None
+        z = self.init_pose[None]
+        off = np.arange(-2.0, 2.5, 0.5)
+        q, nrm = self.measurement_lines(z)
+        g = obs.sample_gradient(q[..., 0:1] + nrm[..., 0:1] * off, q[..., 1:2] + nrm[..., 1:2] * off)
+        gn = (g[..., 0] * nrm[..., 0:1] + g[..., 1] * nrm[..., 1:2])[0]  # (M, L)
+        best = np.take_along_axis(gn, np.argmax(np.abs(gn), axis=1)[:, None], 1)[:, 0]
+        strong = np.abs(best) > self._threshold(obs)
+        self.polarity = saved
+        if strong.sum() < 0.5 * len(best):
+            return self.polarity
+        frac = np.mean(best[strong] > 0)
+        if frac >= agree:
+            self.polarity = 1
+        elif frac <= 1 - agree:
+            self.polarity = -1
+        return self.polarity
+
+    def _threshold(self, obs):
+        return self.edge_threshold * max(obs.mean_mag, 1e-6)
+
+    def loglik(self, obs, states):
+        """Blake–Isard measurement-line log-likelihood (module docstring) ``(N,)``."""
+        gn = self._profiles(obs, states[:, :4], self.line_offsets)
+        peaks = _edge_peaks(gn, self._threshold(obs))
+        kern = np.exp(-0.5 * (self.line_offsets / self.sigma_edge) ** 2)
+        return np.sum(np.log1p(np.exp(self.log_c) * (peaks @ kern)), axis=1)
+
+    # -- local search LS_λ (LS-N-IPS, §4.3.1) ------------------------------------
+    def _lms_fit(self, obs, z, samples, reach_factor=1.0):
+        """One LMS step: on each normal within the search length, the edge feature
+        nearest to the predicted curve, projected with ``W⁺`` (normals without an
+        edge keep their predicted point)."""
+        scale, _ = pose_params(z)
+        reach = self.search_length * scale * reach_factor  # (N,)
+        off = reach[:, None, None] * np.linspace(-1.0, 1.0, samples)  # (N, 1, L)
+        gn = self._profiles(obs, z, off, support=True)
+        peaks = _edge_peaks(gn, self._threshold(obs))
+        if self.search_rule == "nearest":
+            score = np.where(peaks, -np.abs(off), -np.inf)
+        elif self.search_rule == "strongest":
+            score = np.where(peaks, gn, -np.inf)
+        else:  # strength discounted with distance
+            score = np.where(peaks, np.log(np.maximum(gn, 1e-9)) - 0.5 * (off / (0.5 * reach[:, None, None])) ** 2, -np.inf)
+        best = np.argmax(score, axis=-1)  # (N, n)
+        found = peaks.any(axis=-1)
+        nu = np.where(found, np.take_along_axis(np.broadcast_to(off, peaks.shape), best[..., None], -1)[..., 0], 0.0)
+        q_hat = self.support_points(z) + nu[..., None] * self.normals(z)
+        d = np.concatenate([q_hat[..., 0] - self.q0[:, 0], q_hat[..., 1] - self.q0[:, 1]], axis=1)
+        return d @ self.W_plus.T
+
+    def local_search(self, obs, states):
+        """``LS_λ`` of §4.3 / eq. 4.1 for contours: refine predicted poses ``z_t``.
+
+        One set of measurement lines, long enough for every move, serves both steps:
+
+        1. translation: the argmax of ``r`` over a grid of shifts ``δ`` within
+           ``(λ_x, λ_y)`` (the grid likelihood of :meth:`loglik_local_grid`);
+        2. the LMS fit of §4.3.1 from there: on each normal the edge nearest to the
+           shifted curve within ``l = l0 · scale / 2``, fitted in the least-squares
+           sense, ``ẑ = W_m⁺ (p̂ - p0)`` with ``W_m`` the matrix ``W`` of eq. 1.1 on the
+           measurement points (two per spline segment, a discretisation of the
+           spline norm ``U``; normals without an edge keep the shifted point).
+
+        The LMS result is used only if it is within ``λ`` of the prediction (max
+        norm per coordinate; else the translation step alone), and the move is
+        kept only if it raises the exact likelihood, so ``r(y|LS_λ(x, y)) >= r(y|x)``.
+        Returns the states and their log-likelihoods.
+        """
+        n = len(states)
+        z = states[:, :4]
+        lx, ly = self.search_lambda[:2]
+        step = max(1.0, self.grid_step * self.sigma_edge)
+        gx = np.arange(-np.floor(lx / step), np.floor(lx / step) + 1) * step
+        gy = np.arange(-np.floor(ly / step), np.floor(ly / step) + 1) * step
+        grid = np.stack(np.meshgrid(gx, gy), axis=-1).reshape(-1, 2)
+        scale, _ = pose_params(z)
+        reach_lms = step
+        off, peaks = self._peaks_wide(obs, z, np.hypot(lx, ly) + reach_lms)
+        pts, nrm = self.measurement_lines(z)
+        ll_grid = self._grid_from_peaks(off, peaks, nrm, grid)
+        delta = grid[np.argmax(ll_grid, axis=1)]  # (N, 2)
+        z_t = z.copy()
+        z_t[:, :2] += delta
+        # LMS: nearest feature to the shifted curve on each line (offsets along the old line)
+        shift = np.einsum("kmd,kd->km", nrm, delta)  # (N, M)
+        dist = np.where(peaks, np.abs(off - shift[..., None]), np.inf)
+        j = np.argmin(dist, axis=-1)
+        found = np.take_along_axis(dist, j[..., None], -1)[..., 0] <= reach_lms
+        # the edge found on the old line, moved along the contour with the shift
+        # (edges are locally parallel to the contour): p + δ + (ν - n·δ) n
+        nu = np.where(found, off[j] - shift, 0.0)
+        p_hat = pts + delta[:, None, :] + nu[..., None] * nrm
+        d = np.concatenate([p_hat[..., 0] - self.meas0[:, 0], p_hat[..., 1] - self.meas0[:, 1]], axis=1)
+        z_hat = d @ self.W_meas_plus.T
+        near = np.all(np.abs(z_hat - z) <= self.search_lambda, axis=1)
+        cand = states.copy()
+        cand[:, :4] = np.where(near[:, None], z_hat, z_t)  # the grid step is within λ by construction
+        if not self.search_check:
+            return cand, self.loglik(obs, cand)
+        allc = np.stack([states, cand])  # (2, N, 8)
+        ll = self.loglik(obs, allc.reshape(-1, self.dim)).reshape(2, n)
+        best = np.argmax(ll, axis=0)
+        return allc[best, np.arange(n)], ll[best, np.arange(n)]
+
+    def lms_step(self, obs, states, samples=33):
+        """The plain LMS step of §4.3.1 at the support points: the edge nearest to the
+        curve on each normal within ``l = l0 · scale``, ``ẑ = W⁺ (q̂ - q0)`` with the
+        spline norm. Returns new states (not checked against ``λ``)."""
+        out = states.copy()
+        out[:, :4] = self._lms_fit(obs, states[:, :4], samples)
+        return out
+
+    # -- local moves on translation (LLS / LIS, §4.4.3) ---------------------------
+    def local_coords(self, states):
+        return states[:, :2]
+
+    def with_local(self, states, u):
+        """Move the current translation to ``u`` (the previous pose stays)."""
+        out = states.copy()
+        out[:, :2] = u
+        return out
+
+    def with_local_prior(self, states, u):
+        """First step: move both poses (zero initial velocity, as ``p_0`` has)."""
+        out = states.copy()
+        out[:, :2] = u
+        out[:, 4:6] = u
+        return out
+
+    def window_std(self):
+        """Window std on translation: the spread of ``K`` (or of ``p_0`` on the first step)."""
+        return self.prior_std[:2] if self.first_step else self.sigma[:2]
+
+    def _peaks_wide(self, obs, z, reach):
+        """Edge features on lines long enough for shifts up to ``reach`` px."""
+        h = int(np.ceil(reach)) + self.half_line
+        off = np.arange(-h, h + 1, dtype=float)
+        gn = self._profiles(obs, z, off)
+        return off, _edge_peaks(gn, self._threshold(obs))
+
+    def loglik_local_grid(self, obs, states, offsets):
+        """``log r`` at ``states`` translated by each of ``offsets (G, 2)``: ``(N, G)``.
+
+        From one set of lines: a translation ``δ`` shifts the edge distances on
+        normal ``i`` by ``-n_i · δ``, so ``Σ_j exp(-(ν_j - n_i·δ)² / 2σ²)`` is the
+        feature train smoothed by the Gaussian, read at ``n_i · δ``.
+        """
+        z = states[:, :4]
+        off, peaks = self._peaks_wide(obs, z, np.max(np.abs(offsets)) * np.sqrt(2))
+        return self._grid_from_peaks(off, peaks, self.measurement_lines(z)[1], offsets)
+
+    def _grid_from_peaks(self, off, peaks, nrm, offsets):
+        kern = np.exp(-0.5 * ((off[:, None] - off[None, :]) / self.sigma_edge) ** 2).astype(np.float32)
+        smooth = peaks.astype(np.float32) @ kern  # (N, M, L): S_i(ν') at ν' = off
+        shift = nrm @ np.asarray(offsets, float).T  # (N, M, G): n_i · δ
+        # nearest line sample (1 px apart): one flat gather
+        idx = np.clip(np.rint(shift - off[0]).astype(np.intp), 0, len(off) - 1)
+        n, m, L = smooth.shape
+        idx += (np.arange(n * m) * L).reshape(n, m, 1)
+        val = smooth.reshape(-1)[idx]
+        return np.sum(np.log1p(np.exp(self.log_c) * val), axis=1)
+
+    def local_mixture(self, obs, states, defensive=0.2):
+        """LIS proposal on translation: a Gaussian from the edges nearest to the predicted
+        contour (least squares along the normals, precision ``Σ n nᵀ / σ_edge²``), mixed
+        with a broad defensive component ``N(x, 4 Σ_g)`` of weight ``defensive``.
+
+        Returns ``log_p (N, 1, 2)``, ``mu (N, 1, 2, 2)``, ``cov (N, 1, 2, 2, 2)``.
+        """
+        z = states[:, :4]
+        win = self.window_std()
+        off, peaks = self._peaks_wide(obs, z, 3 * np.max(win))
+        dist = np.where(peaks, np.abs(off), np.inf)
+        j = np.argmin(dist, axis=-1)
+        found = np.isfinite(np.take_along_axis(dist, j[..., None], -1)[..., 0])  # (N, n)
+        nu = np.where(found, off[j], 0.0)
+        nrm = self.measurement_lines(z)[1]
+        wgt = found.astype(float)
+        prec = np.einsum("ki,kia,kib->kab", wgt, nrm, nrm) / self.sigma_edge**2 + np.eye(2) * 1e-6
+        rhs = np.einsum("ki,ki,kia->ka", wgt, nu, nrm) / self.sigma_edge**2
+        cov_fit = np.linalg.inv(prec)
+        # the fit needs edges on at least ~two directions; else lean on the prior spread
+        cov_fit = cov_fit + np.eye(2) * self.sigma_edge**2
+        mu_fit = states[:, :2] + np.einsum("kab,kb->ka", np.linalg.inv(prec), rhs)
+        n = len(states)
+        big = np.broadcast_to(np.diag(4 * win**2), (n, 2, 2))
+        mu = np.stack([mu_fit, states[:, :2]], axis=1)[:, None]
+        cov = np.stack([cov_fit, big], axis=1)[:, None]
+        log_p = np.log(np.array([1 - defensive, defensive]))
+        return np.broadcast_to(log_p, (n, 1, 2)).copy(), mu, cov
+
+    def lis_proposal(self):
+        """LIS with the edge-fit translation proposal and a Gaussian window (:meth:`window_std`)."""
+        return GaussMixtureProposal(self, np.diag(self.window_std() ** 2))
+
+    def lls_window(self):
+        """Box window of half-width ``2 σ`` on translation, 7×7 grid (§4.4.3)."""
+        return Window("box", 2.0 * self.window_std(), grid=7)
+
+    # -- output -------------------------------------------------------------------
+    def describe(self, state):
+        """Track-file fields of one state: centre, box, angle, scale, support points."""
+        state = np.asarray(state, float).reshape(1, -1)
+        z = state[0, :4]
+        x, y, w, h = self.box(state)[0]
+        scale, angle = pose_params(z)
+        row = {"cx": z[0], "cy": z[1], "w": w, "h": h, "angle_deg": float(angle), "scale": float(scale)}
+        q = self.support_points(state[:, :4])[0]
+        row.update({f"qx{i}": v for i, v in enumerate(q[:, 0])})
+        row.update({f"qy{i}": v for i, v in enumerate(q[:, 1])})
+        return row
