@@ -92,7 +92,7 @@ def test_local_search_moves_towards_the_edges(rng):
     obs = FeatureMaps(frame)
     m = Contour(ellipse_template(50, 50), (100, 70, 0, 0), (200, 150))
     m.learn_polarity(obs)
-    m.search_check = True
+    m.search_check = True  # the guarantee r(LS(x)) >= r(x) is checked exactly
     z = np.array([100.0, 70.0, 0.0, 0.0]) + np.c_[rng.normal(0, 3, (40, 2)), rng.normal(0, 0.03, (40, 2))]
     x = np.concatenate([z, z], axis=1)
     out, ll = m.local_search(obs, x)

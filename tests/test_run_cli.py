@@ -132,3 +132,29 @@ def test_run_on_real_clip_with_init_gt(tmp_path, capsys):
                           "-n", "30", "--init-gt", "--max-frames", "30", "--track", str(track)], capsys)
     assert code == 0, err
     assert len(rows(track)) == 30 and "vs ground truth" in out
+
+
+def test_reproduce_contour_json_and_plots(tmp_path, capsys):
+    import json
+
+    import matplotlib.image as mpimg
+
+    js = tmp_path / "r.json"
+    code, out, err = run(["reproduce", "contour", "--clips", str(tmp_path / "clips"), "--make", "1", "--frames", "12",
+                          "--size", "160x120", "--runs", "2", "--algos", "ls-n-ips:10,bootstrap:50", "--workers", "1",
+                          "--json", str(js), "--plots", str(tmp_path / "p"), "-q"], capsys)
+    assert code == 0, err
+    assert "P(lost) final" in out
+    data = json.loads(js.read_text())
+    assert set(data) == {"config", "results"}
+    assert [(r["algo"], r["particles"]) for r in data["results"]] == [("ls-n-ips", 10), ("bootstrap", 50)]
+    for r in data["results"]:
+        assert len(r["p_lost_per_frame"]) == 12 and 0 <= r["p_lost_final"] <= 1 and r["frames_per_s"] > 0
+    for name in ("p_lost_vs_frame.png", "error_vs_frame.png"):
+        assert mpimg.imread(tmp_path / "p" / name).ndim == 3
+
+
+@pytest.mark.parametrize("algos,msg", [("foo:10", "unknown algorithm"), ("lis:abc", "ALGO:N"), ("lis:0", "positive")])
+def test_reproduce_contour_bad_algos(tmp_path, capsys, algos, msg):
+    code, _, err = run(["reproduce", "contour", "--clips", str(tmp_path), "--algos", algos, "-q"], capsys)
+    assert code != 0 and msg in err

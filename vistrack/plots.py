@@ -7,7 +7,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-__all__ = ["plot_error_vs_time", "plot_error_vs_n"]
+__all__ = ["plot_error_vs_time", "plot_error_vs_n", "plot_per_frame"]
 
 
 def plot_error_vs_time(curves, path, *, title="Tracking error vs time step"):
@@ -41,6 +41,22 @@ def plot_error_vs_n(results, path, *, key="mean_error_final", err_key="std_error
     ax.set_title(title)
     ax.grid(alpha=0.3, which="both")
     ax.legend()
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def plot_per_frame(curves, path, *, ylabel, title):
+    """One line per label: a per-frame curve (thesis Figs. 3.9–3.10, 4.15–4.16)."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+    for label, y in curves.items():
+        ax.plot(range(len(y)), y, lw=1.2, label=label)
+    ax.set_xlabel("frame")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)

@@ -154,6 +154,17 @@ class Contour:
         ``l0`` of the local search at the thesis's 60-px scale (16).
     search_lambda : array_like of shape (4,)
         ``λ`` of ``LS_λ`` for ``(cx, cy, a, b)`` at 240-px frame width.
+    search_grid_step : float
+        Spacing of the local search's translation grid, in units of ``sigma_edge``.
+    search_check : bool
+        Keep a local-search move only if the exact likelihood does not drop
+        (costs N more likelihood evaluations; the grid maximises the grid
+        likelihood, which is nearly always enough).
+    measure_per_segment : int
+        Measurement lines per spline segment (2: ``M = 2n`` lines).
+    polarity : {None, 1, -1}
+        Edge polarity along the outward normal (see :meth:`learn_polarity`);
+        ``None`` for unsigned edges.
     """
 
     dim = 8
@@ -162,8 +173,8 @@ class Contour:
     def __init__(self, template, init_pose, frame_size, *, sigma_xy=None, sigma_a=0.02, sigma_b=0.03,
                  damping=0.8, prior_std=None, sigma_edge=None, half_line=None, q_miss=0.1,
                  clutter_density=0.05, edge_threshold=2.0, cos_min=0.85, search_length=16.0,
-                 search_iterations=1, search_lambda=(7.0, 7.0, 0.1, 0.15), measure_per_segment=2,
-                 polarity=None):
+                 search_iterations=1, search_lambda=(7.0, 7.0, 0.1, 0.15), search_grid_step=1.5,
+                 search_check=False, measure_per_segment=2, polarity=None):
         q0 = np.asarray(template, dtype=float)
         if q0.ndim != 2 or q0.shape[1] != 2 or len(q0) < 4:
             raise ValueError("template must be an (n, 2) array of at least 4 support points")
@@ -214,8 +225,8 @@ class Contour:
         self.search_length = float(search_length) * ref
         self.search_iterations = int(search_iterations)
         self.search_rule = "nearest"
-        self.grid_step = 2.25
-        self.search_check = False
+        self.grid_step = float(search_grid_step)
+        self.search_check = bool(search_check)
         frame_ref = self.frame_size[0] / 240.0
         lam = np.asarray(search_lambda, dtype=float).copy()
         lam[:2] *= frame_ref
