@@ -151,3 +151,16 @@ def test_same_seed_same_track(small_clip):
 
     np.testing.assert_array_equal(run(5), run(5))
     assert not np.array_equal(run(5), run(6))
+
+
+def test_support_point_lms_step_with_spline_norm(rng):
+    """The §4.3.1 LMS step (W⁺ with the spline norm U) recovers translation and scale."""
+    obs = FeatureMaps(disk_frame(clutter=False))
+    m = Contour(ellipse_template(50, 50), (100, 70, 0, 0), (200, 150))
+    z = np.c_[100 + rng.normal(0, 3, (30, 1)), 70 + rng.normal(0, 3, (30, 1)), rng.normal(0, 0.05, (30, 1)),
+              np.zeros((30, 1))]
+    out = np.concatenate([z, z], axis=1)
+    for _ in range(3):  # normals see only the normal component: each step takes about half
+        out = m.lms_step(obs, out)
+    assert np.mean(np.hypot(out[:, 0] - 100, out[:, 1] - 70)) < np.mean(np.hypot(z[:, 0] - 100, z[:, 1] - 70)) / 3
+    assert np.mean(np.abs(out[:, 2])) < 0.03  # radius within ~0.75 px (edge sampling bias)

@@ -10,10 +10,12 @@ Pose (eq. 1.1)
     is the centre and ``(1 + a) + i b = scale · e^{i angle}``. ``z = 0`` is the
     template at the origin (the identity similarity).
 State
-    ``(z_t, z_{t-1})``, shape ``(N, 8)``; AR(2) dynamics (constant velocity with
-    damping ``d``): ``z_t = z_{t-1} + d (z_{t-1} - z_{t-2}) + σ ε``.
-Likelihood (Blake and Isard; measurement lines at the support points, §4.3.1)
-    Along the outward unit normal ``n_i`` at each support point ``q_i`` the
+    ``(z_t, z_{t-1})``, shape ``(N, 8)``; AR(2) dynamics
+    ``z_t = z_{t-1} + d (z_{t-1} - z_{t-2}) + σ ε`` with the velocity carried over
+    (``d = 0.8``) on translation and a random walk (``d = 0``) on ``a, b``.
+Likelihood (Blake and Isard; §1.3.1)
+    Along the outward unit normal ``n_i`` at each measurement point (two per
+    spline segment) the
     gradient component along the normal, ``g · n_i``, is sampled bilinearly at
     offsets ``ν_k = k`` px, ``|k| <= half_line``. Edge features are the local
     maxima of ``|g · n_i|`` above ``τ = edge_threshold · mean|∇I|`` of the
@@ -24,12 +26,15 @@ Likelihood (Blake and Isard; measurement lines at the support points, §4.3.1)
 
     and lines are independent: ``log r = Σ_i`` of that. One array operation
     covers N particles × n normals × L samples.
-Local search ``LS_λ`` (§4.3.1, LMS)
-    The strongest edge on each normal within ``l = l0 · (size / 60) · scale``
-    (``l0 = 16`` for the thesis's 60-px contour) gives ``q̂``; ``ẑ = W⁺ (q̂ - q0)``
-    with ``W⁺ = (WᵀUW)⁻¹WᵀU`` and ``U = diag(B, B)`` the spline norm; the move
-    is rejected when ``|ẑ - z| > λ`` in any coordinate, ``λ = (7, 7, 0.1, 0.15)``
-    for (cx, cy, a, b) with the translation part scaled by frame width / 240.
+Local search ``LS_λ`` (§4.3, eq. 4.1; LMS of §4.3.1)
+    The best translation on a grid within ``λ`` (from one set of long lines),
+    then an LMS fit of the nearest edges for scale and rotation
+    (:meth:`Contour.local_search`); the move is rejected when ``|ẑ - z| > λ`` in
+    any coordinate, ``λ = (7, 7, 0.1, 0.15)`` for (cx, cy, a, b) with the
+    translation part scaled by frame width / 240. The plain LMS step at the
+    support points, ``ẑ = W⁺ (q̂ - q0)`` with ``W⁺ = (WᵀUW)⁻¹WᵀU`` and
+    ``U = diag(B, B)`` the spline norm, search length ``l = l0 · (size/60) · scale``
+    (``l0 = 16``), is :meth:`Contour.lms_step`.
 Local moves for LLS and LIS act on translation only (§4.4.3): the edge
     features along the normals already sampled give, for a translation ``δ``,
     the shifted edge distances ``ν_j - n_i · δ``, so ``r`` on a whole grid of
