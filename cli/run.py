@@ -9,7 +9,7 @@ import click
 import numpy as np
 from tqdm import tqdm
 
-from vistrack.builders import MODELS, build_model
+from vistrack.builders import MODELS, build_model, read_support_points
 from vistrack.clips import load_clip, write_track_csv
 from vistrack.filters import make_filter
 from vistrack.metrics import center_error, contour_lost_threshold
@@ -56,6 +56,9 @@ class Box(click.ParamType):
 @click.option("--init-gt", "init_gt", is_flag=False, flag_value="", default=None, metavar="[FILE]",
               help="Start from the first ground-truth frame: the clip's own (groundtruth.csv with meta.json "
                    "template, or OTB groundtruth_rect.txt), or FILE.")
+@click.option("--template", "template_path", type=click.Path(dir_okay=False),
+              help="Contour support points (x y per line, or JSON): used where they lie in the first "
+                   "frame, or fitted to --init / --init-gt boxes. Default: an ellipse, or the clip's template.")
 @click.option("--track", "track_path", type=click.Path(dir_okay=False), help="Write the track CSV here.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False), help="Write the annotated mp4 here.")
 @click.option("--show-particles", default=10, show_default=True, type=click.IntRange(min=0),
@@ -66,7 +69,7 @@ class Box(click.ParamType):
               help="Resample when ESS < threshold·N [default: every frame].")
 @click.option("--max-frames", type=click.IntRange(min=1), help="Stop after this many frames.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary.")
-def run(video, model_name, algo, particles, seed, init, init_gt, track_path, out_path, show_particles,
+def run(video, model_name, algo, particles, seed, init, init_gt, template_path, track_path, out_path, show_particles,
         resample, ess_threshold, max_frames, quiet):
     """Track the object in VIDEO (a video file, an image folder or a clip folder).
 
@@ -74,6 +77,7 @@ def run(video, model_name, algo, particles, seed, init, init_gt, track_path, out
     Examples:
       vistrack synth contour --out clip && vistrack run clip --algo ls-n-ips -n 30 --init-gt --out a.mp4
       vistrack run video.mp4 --model contour --init 120,80,60,60 --track track.csv
+      vistrack run video.mp4 --model contour --template hand.txt --out a.mp4
 
     The track CSV has one row per frame: frame, visible, cx, cy, w, h,
     angle_deg, scale, the support points qx0.., qy0.., then ess and ms (time
@@ -89,7 +93,8 @@ def run(video, model_name, algo, particles, seed, init, init_gt, track_path, out
         name = model_name or clip.model_name or "contour"
         if name not in MODELS:
             raise click.ClickException(f"{video}: meta.json names model {name!r}, which this version cannot track")
-        model = build_model(name, clip, init=init, init_gt=init_gt)
+        template = read_support_points(template_path) if template_path else None
+        model = build_model(name, clip, init=init, init_gt=init_gt, template=template)
     except (VideoError, ValueError) as e:
         raise click.ClickException(str(e)) from None
     filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)

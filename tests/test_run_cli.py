@@ -158,3 +158,21 @@ def test_reproduce_contour_json_and_plots(tmp_path, capsys):
 def test_reproduce_contour_bad_algos(tmp_path, capsys, algos, msg):
     code, _, err = run(["reproduce", "contour", "--clips", str(tmp_path), "--algos", algos, "-q"], capsys)
     assert code != 0 and msg in err
+
+
+def test_run_with_template_file(clip, tmp_path, capsys):
+    """A support-point file in first-frame pixels starts the contour where it lies."""
+    truth = rows(clip / "groundtruth.csv")[0]
+    n = sum(1 for k in truth if k.startswith("qx"))
+    tmpl = tmp_path / "hand.txt"
+    tmpl.write_text("# x y\n" + "\n".join(f"{truth[f'qx{i}']} {truth[f'qy{i}']}" for i in range(n)) + "\n")
+    track = tmp_path / "t.csv"
+    code, _, err = run(["run", str(clip), "--model", "contour", "--algo", "ls-n-ips", "-n", "20", "--template",
+                        str(tmpl), "--track", str(track), "--max-frames", "10", "-q"], capsys)
+    assert code == 0, err
+    r, t = rows(track), rows(clip / "groundtruth.csv")
+    err_px = [np.hypot(float(a["cx"]) - float(b["cx"]), float(a["cy"]) - float(b["cy"])) for a, b in zip(r, t)]
+    assert np.mean(err_px) < 3.0
+    tmpl.write_text("1 2\n3 4\n")
+    code, _, err = run(["run", str(clip), "--template", str(tmpl)], capsys)
+    assert code != 0 and "at least 4 support points" in err

@@ -14,7 +14,7 @@ from .features import FeatureMaps
 from .models.contour import Contour
 from .video import VideoError, read_rects
 
-__all__ = ["MODELS", "initial_truth", "build_model"]
+__all__ = ["MODELS", "initial_truth", "build_model", "read_support_points"]
 
 MODELS = ("contour",)
 
@@ -46,23 +46,61 @@ def initial_truth(clip, init_gt):
     return {k: float(v[vis[0]]) for k, v in truth.items()}
 
 
+def read_support_points(path):
+    """Contour support points from a file: ``x y`` (or ``x,y``) per line, ``#`` comments,
+    or a JSON list of ``[x, y]`` pairs (or a meta.json with ``template.support_points``)."""
+    p = Path(path)
+    if not p.is_file():
+        raise VideoError(f"template file {p} does not exist")
+    text = p.read_text()
+    if p.suffix == ".json":
+        import json
+
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as e:
+            raise VideoError(f"template file {p} is not valid JSON: {e}") from None
+        if isinstance(data, dict):
+            data = (data.get("template") or {}).get("support_points", data.get("support_points"))
+        pts = np.asarray(data, dtype=float) if data is not None else np.zeros((0, 2))
+    else:
+        rows = []
+        for k, line in enumerate(text.splitlines(), 1):
+            line = line.split("#")[0].strip()
+            if not line:
+                continue
+            parts = line.replace(",", " ").split()
+            try:
+                rows.append([float(v) for v in parts])
+            except ValueError:
+                raise VideoError(f"{p}, line {k}: expected two numbers x y, got {line!r}") from None
+            if len(parts) != 2:
+                raise VideoError(f"{p}, line {k}: expected two numbers x y, got {len(parts)}")
+        pts = np.asarray(rows, dtype=float).reshape(-1, 2)
+    if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 4:
+        raise VideoError(f"template file {p} needs at least 4 support points (x y), got {len(pts)}")
+    return pts
+
+
 def _first_frame(clip):
     for _, frame in clip.source:
         return frame
     raise VideoError(f"{clip.source.path}: no frame could be decoded")
 
 
-def build_model(name, clip, *, init=None, init_gt=None, polarity="auto", **params):
+def build_model(name, clip, *, init=None, init_gt=None, template=None, polarity="auto", **params):
     """The model ``name`` for ``clip`` started from ``init`` (x, y, w, h) or the ground truth.
 
     For ``contour``: with the clip's template (meta.json) and a ground-truth row
     that has ``scale``/``angle_deg``, the template at that pose; otherwise an
-    ellipse fitted to the box. ``polarity="auto"`` learns the edge polarity from
+    ellipse fitted to the box. ``template`` (support points, ``(n, 2)`` pixels)
+    replaces the ellipse: scaled to fit the box when one is given, else used
+    where it lies in the first frame. ``polarity="auto"`` learns the edge polarity from
     the first frame (:meth:`Contour.learn_polarity`); ``None`` keeps edges unsigned.
     """
     size = clip.source.size
     if name == "contour":
-        model = _contour(clip, size, init, init_gt, params)
+        model = _contour(clip, size, init, init_gt, template, params)
         if polarity == "auto":
             model.learn_polarity(FeatureMaps(_first_frame(clip)))
         else:
@@ -71,12 +109,31 @@ def build_model(name, clip, *, init=None, init_gt=None, polarity="auto", **param
     raise VideoError(f"unknown model {name!r}; choose from {', '.join(MODELS)}")
 
 
-def _contour(clip, size, init, init_gt, params):
+def _fit_template(template, box, size, params):
+    """The support points scaled (uniformly) and moved to fit the box ``(x, y, w, h)``."""
+    x, y, w, h = (float(v) for v in box)
+    q = np.asarray(template, float)
+    ext = q.max(axis=0) - q.min(axis=0)
+    s = float(np.sqrt(w * h / max(ext[0] * ext[1], 1e-9)))
+    q = (q - q.mean(axis=0)) * s
+    return Contour(q, (x + w / 2, y + h / 2, 0.0, 0.0), size, **params)
+
+
+def _contour(clip, size, init, init_gt, template, params):
     if init is not None:
+        if template is not None:
+            return _fit_template(template, init, size, params)
         return Contour.from_box(init, size, **params)
     if init_gt is None:
-        raise VideoError("the contour model needs a start: --init x,y,w,h or --init-gt")
+        if template is not None:  # support points where they lie in the first frame
+            q = np.asarray(template, float)
+            c = q.mean(axis=0)
+            return Contour(q - c, (c[0], c[1], 0.0, 0.0), size, **params)
+        raise VideoError("the contour model needs a start: --init x,y,w,h, --init-gt or --template FILE")
     row = initial_truth(clip, init_gt)
+    if template is not None:
+        return _fit_template(template, (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"]),
+                             size, params)
     tmpl = ((clip.meta or {}).get("template") or {}).get("support_points")
     if tmpl is not None and "scale" in row:
         return Contour.from_template(np.asarray(tmpl, float), size, cx=row["cx"], cy=row["cy"],
