@@ -12,9 +12,10 @@ import click
 
 from vistrack import __version__
 
+from .eval import eval_cmd
 from .reproduce import reproduce
 from .run import run
-from .synth import synth
+from .synth import synth, synth_suite
 
 __all__ = ["cli", "main"]
 
@@ -37,8 +38,10 @@ def cli():
 
 
 cli.add_command(reproduce)
+cli.add_command(eval_cmd)
 cli.add_command(run)
 cli.add_command(synth)
+cli.add_command(synth_suite)
 
 
 def main(argv=None):

@@ -67,3 +67,23 @@ def contour(out, frames, size, seed, clutter, distractor, shape, quiet):
                           shape=shape, progress=bar.update)
     if not quiet:
         click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({frames} frames, {size[0]}x{size[1]})")
+
+
+@click.command("synth-suite")
+@click.option("--kind", required=True, type=click.Choice(["contour", "plate", "landmarks"]))
+@click.option("--clips", "n_clips", default=10, show_default=True, type=click.IntRange(min=1))
+@click.option("--seed", default=1, show_default=True, type=int, help="Seed of the first clip (then +1, +2, ...).")
+@click.option("--frames", default=300, show_default=True, type=click.IntRange(min=1))
+@click.option("--size", default="320x240", show_default=True, type=Size())
+@click.option("--out", required=True, type=click.Path(file_okay=False), help="Folder to hold the clip folders.")
+@click.option("--quiet", "-q", is_flag=True)
+def synth_suite(kind, n_clips, seed, frames, size, out, quiet):
+    """A suite of clips for `vistrack eval` (OUT/<kind>-<seed>/ each)."""
+    if kind != "contour":
+        raise click.ClickException(f"--kind {kind}: this version generates contour suites only")
+    out = _out_dir(out)
+    with tqdm(total=n_clips * frames, unit="frame", disable=quiet, desc=f"synth-suite {kind}") as bar:
+        for s in range(seed, seed + n_clips):
+            make_contour_clip(out / f"{kind}-{s:02d}", frames=frames, size=size, seed=s, progress=bar.update)
+    if not quiet:
+        click.echo(f"wrote {n_clips} {kind} clips into {out}")

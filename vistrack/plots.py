@@ -7,7 +7,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-__all__ = ["plot_error_vs_time", "plot_error_vs_n", "plot_per_frame"]
+__all__ = ["plot_error_vs_time", "plot_error_vs_n", "plot_per_frame", "plot_vs_n", "plot_success"]
 
 
 def plot_error_vs_time(curves, path, *, title="Tracking error vs time step"):
@@ -54,6 +54,51 @@ def plot_per_frame(curves, path, *, ylabel, title):
         ax.plot(range(len(y)), y, lw=1.2, label=label)
     ax.set_xlabel("frame")
     ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def plot_vs_n(summaries, path, *, key, ylabel, title=None):
+    """``key`` (averaged over clips) vs number of particles, one line per algorithm."""
+    import numpy as np
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+    for algo in dict.fromkeys(s["algo"] for s in summaries):
+        ns = sorted({s["particles"] for s in summaries if s["algo"] == algo})
+        ys = []
+        for n in ns:
+            v = [s[key] for s in summaries if s["algo"] == algo and s["particles"] == n and s[key] is not None]
+            ys.append(np.mean(v) if v else np.nan)
+        ax.plot(ns, ys, marker="o", label=algo)
+    ax.set_xscale("log")
+    ax.set_xlabel("number of particles N")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title or f"{ylabel} vs N")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def plot_success(curves, path, *, title="Success plot (IoU)"):
+    """Fraction of frames with IoU above each threshold, with the AUC in the legend."""
+    import numpy as np
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+    for label, y in curves.items():
+        th = np.linspace(0, 1, len(y))
+        ax.plot(th, y, label=f"{label} (AUC {np.mean(y):.3f})")
+    ax.set_xlabel("IoU threshold")
+    ax.set_ylabel("success rate")
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1.02)
     ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)

@@ -1,0 +1,221 @@
+"""``vistrack eval``: algorithms × particle counts × runs over clips, on Dask."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import shutil
+import warnings
+from pathlib import Path
+
+import click
+import numpy as np
+from tqdm import tqdm
+
+from vistrack.evaluation import (EvalConfig, check_algos, find_clips, load_task_results, run_task, summarize,
+                                 task_done, task_list)
+from vistrack.video import VideoError
+
+from .options import IntList, StrList
+
+__all__ = ["eval_cmd"]
+
+CSV_COLUMNS = ["clip", "algo", "particles", "run", "frames", "mean_error", "p_lost", "success_auc",
+               "precision_20px", "frames_per_s", "mean_ess"]
+
+
+def _client(scheduler, workers, timeout, in_process=False):
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:  # pragma: no cover - a declared dependency
+        raise click.ClickException("vistrack eval needs dask.distributed: pip install distributed") from None
+    if scheduler:
+        try:
+            return Client(scheduler, timeout=f"{timeout}s"), None
+        except (OSError, TimeoutError) as e:
+            raise click.ClickException(f"cannot reach the Dask scheduler at {scheduler} within {timeout} s ({e})") \
+                from None
+    cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                           processes=not in_process, dashboard_address=None)
+    return Client(cluster), cluster
+
+
+def _task_row(r):
+    err = [e for e, lost in zip(r["error"], r["lost"]) if e is not None and not lost]
+    ess = [e for e in r["ess"] if e is not None]
+    return {"clip": r["clip"], "algo": r["algo"], "particles": r["particles"], "run": r["run"], "frames": r["frames"],
+            "mean_error": float(np.mean(err)) if err else "", "p_lost": float(np.mean(r["lost"])),
+            "success_auc": float(np.mean([np.mean(np.array(r["iou"]) > t) for t in np.linspace(0, 1, 21)])),
+            "precision_20px": float(np.mean([e is not None and e <= 20 for e in r["error"]])),
+            "frames_per_s": 1e3 / float(np.mean(r["ms"])), "mean_ess": float(np.mean(ess)) if ess else ""}
+
+
+def _write_outputs(out, cfg, summaries, rows, chosen):
+    with open(out / "results.json", "w") as f:
+        json.dump({"config": {"clips": [str(c) for c in cfg.clips], "algos": cfg.algos, "particles": cfg.particles,
+                              "runs": cfg.runs, "seed": cfg.seed, "model": cfg.model, "equal_time": chosen},
+                   "results": summaries}, f, indent=1)
+    with open(out / "results.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, CSV_COLUMNS)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()})
+    from vistrack.plots import plot_per_frame, plot_vs_n, plot_success
+
+    labels = {}
+    for s in summaries:
+        labels.setdefault(f"{s['algo']}, N={s['particles']}", []).append(s)
+
+    def avg(key):
+        out_ = {}
+        for k, ss in labels.items():
+            arr = np.array([[np.nan if v is None else v for v in s[key]] for s in ss], float)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                out_[k] = np.nanmean(arr, axis=0)
+        return out_
+
+    same_len = len({len(s["p_lost_per_frame"]) for s in summaries}) == 1
+    plots = []
+    if same_len:
+        plots.append(plot_per_frame(avg("error_per_frame"), out / "error_vs_frame.png",
+                                    ylabel="mean centre error (px), runs not lost", title="Tracking error per frame"))
+        plots.append(plot_per_frame(avg("p_lost_per_frame"), out / "p_lost_vs_frame.png", ylabel="P(lost)",
+                                    title="Probability of losing the object per frame"))
+    plots.append(plot_vs_n(summaries, out / "error_vs_n.png", key="mean_error", ylabel="mean centre error (px)"))
+    plots.append(plot_vs_n(summaries, out / "fps_vs_n.png", key="frames_per_s", ylabel="frames/s (filter)"))
+    plots.append(plot_success({k: np.mean([s["success_curve"] for s in ss], axis=0) for k, ss in labels.items()},
+                              out / "success.png"))
+    lines = ["# vistrack eval report", "",
+             f"{len(cfg.clips)} clip(s) × algorithms {', '.join(cfg.algos)} × N {cfg.particles} × {cfg.runs} run(s), "
+             f"seed {cfg.seed}, model {cfg.model}.", ""]
+    if chosen:
+        lines += ["Equal time per frame: N chosen per algorithm: "
+                  + ", ".join(f"{a} N={n}" for a, n in chosen.items()), ""]
+    lines += ["| algo | N | mean error (px) | P(lost) | P(lost) last frame | success AUC | precision@20px | frames/s |",
+              "|---|---|---|---|---|---|---|---|"]
+    for k, ss in labels.items():
+        me = [s["mean_error"] for s in ss if s["mean_error"] is not None]
+        lines.append(f"| {ss[0]['algo']} | {ss[0]['particles']} | {np.mean(me) if me else float('nan'):.2f} | "
+                     f"{np.mean([s['p_lost'] for s in ss]):.3f} | {np.mean([s['p_lost_final'] for s in ss]):.3f} | "
+                     f"{np.mean([s['success_auc'] for s in ss]):.3f} | {np.mean([s['precision_20px'] for s in ss]):.3f} | "
+                     f"{np.mean([s['frames_per_s'] for s in ss]):.0f} |")
+    lines += ["", "Averages over clips. Plots:", ""] + [f"![{Path(p).stem}]({Path(p).name})" for p in plots]
+    lines += ["", "Per-task rows: `results.csv`; everything: `results.json`."]
+    (out / "report.md").write_text("\n".join(lines) + "\n")
+    return plots
+
+
+def _equal_time(cfg, clips, frames=30):
+    """N per algorithm for the time per frame of the first algorithm at the first N (thesis Tables 4.1, 4.3)."""
+    import time
+
+    from vistrack.builders import build_model
+    from vistrack.clips import load_clip
+    from vistrack.filters import make_filter
+    from vistrack.tracking import track
+
+    clip = load_clip(clips[0])
+    fr = []
+    for i, f in clip.source:
+        if i >= frames:
+            break
+        fr.append((i, f))
+    model = build_model(cfg.model, clip, init_gt="")
+
+    def ms(algo, n):
+        best = np.inf
+        for _ in range(2):
+            t0 = time.perf_counter()
+            for _ in track(fr, make_filter(algo, model), n, np.random.default_rng(0)):
+                pass
+            best = min(best, (time.perf_counter() - t0) * 1e3 / len(fr))
+        return best
+
+    n_ref = cfg.particles[0]
+    budget = ms(cfg.algos[0], n_ref)
+    chosen = {cfg.algos[0]: n_ref}
+    for algo in cfg.algos[1:]:
+        t1, t2 = ms(algo, n_ref), ms(algo, 2 * n_ref)
+        per = max((t2 - t1) / n_ref, 1e-6)  # ms per particle; t(N) = t1 + per (N - n_ref)
+        chosen[algo] = int(max(1, round(n_ref + (budget - t1) / per)))
+    return chosen
+
+
+@click.command("eval")
+@click.argument("clips", nargs=-1, required=True, type=click.Path())
+@click.option("--algos", default="lis,bootstrap", show_default=True, type=StrList(),
+              help="Algorithms (bootstrap, ls-n-ips, lls, lis, avpf) and OpenCV trackers (opencv-mil, ...).")
+@click.option("--particles", default="100,750", show_default=True, type=IntList(), help="Particle counts N.")
+@click.option("--runs", default=20, show_default=True, type=click.IntRange(min=1), help="Runs per clip × algo × N.")
+@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--model", default="contour", show_default=True, type=click.Choice(["contour"]))
+@click.option("--equal-time", is_flag=True, help="Pick N per algorithm for equal CPU time per frame.")
+@click.option("--scheduler", help="Address of a running Dask scheduler (tcp://host:8786) [default: a LocalCluster].")
+@click.option("--workers", default=0, show_default=True, type=click.IntRange(min=0),
+              help="LocalCluster worker processes (0: one per core).")
+@click.option("--timeout", default=10, show_default=True, type=click.IntRange(min=1),
+              help="Seconds to wait for --scheduler.")
+@click.option("--in-process", is_flag=True, help="LocalCluster workers as threads of this process (debugging, tests).")
+@click.option("--resume", is_flag=True, help="Keep finished task files in --out and run only the rest.")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Results folder.")
+@click.option("--quiet", "-q", is_flag=True)
+def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, workers, timeout, in_process, resume,
+             out_dir, quiet):
+    """Evaluate algorithms over CLIPS (clip folders, videos with ground truth, or folders of clip folders).
+
+    Every clip × algorithm × N × run is one Dask task writing its own file
+    under OUT/tasks, so --resume continues an interrupted evaluation. Writes
+    OUT/results.json, OUT/results.csv (one row per task), PNG plots and
+    OUT/report.md.
+    """
+    if any(n < 1 for n in particles) or not particles:
+        raise click.ClickException("--particles needs positive integers")
+    try:
+        check_algos(algos)
+        clip_paths = find_clips(clips)
+    except (ValueError, VideoError) as e:
+        raise click.ClickException(str(e)) from None
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise click.ClickException(f"cannot create --out {out}: {e.strerror}") from None
+    if not resume and (out / "tasks").is_dir():
+        shutil.rmtree(out / "tasks")
+    cfg = EvalConfig(clips=clip_paths, algos=list(algos), particles=list(particles), runs=runs, seed=seed, model=model)
+    chosen = None
+    tasks = task_list(cfg, clip_paths)
+    if equal_time:
+        chosen = _equal_time(cfg, clip_paths)
+        if not quiet:
+            click.echo("equal time per frame: " + ", ".join(f"{a} N={n}" for a, n in chosen.items()))
+        tasks = [t for t in task_list(EvalConfig(**{**cfg.__dict__, "particles": [1]}), clip_paths)]
+        for t in tasks:
+            n = chosen.get(t["algo"], 1)
+            t["particles"] = n
+            t["name"] = t["name"].replace("__N1__", f"__N{n}__")
+    pending = [t for t in tasks if not (resume and task_done(t, out))]
+    if pending:
+        client, cluster = _client(scheduler, workers, timeout, in_process)
+        try:
+            from distributed import as_completed
+
+            futs = [client.submit(run_task, t, str(out), key=f"vistrack-{t['name']}-{seed}", retries=2, pure=False)
+                    for t in pending]
+            with tqdm(total=len(tasks), initial=len(tasks) - len(pending), unit="task", desc="eval",
+                      disable=quiet) as bar:
+                for f in as_completed(futs):
+                    f.result()
+                    bar.update(1)
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    results = load_task_results(tasks, out)
+    summaries = summarize(results)
+    plots = _write_outputs(out, cfg, summaries, [_task_row(r) for r in results], chosen)
+    if not quiet:
+        click.echo((out / "report.md").read_text().split("\n\nAverages")[0].split("\n\n", 1)[-1])
+        click.echo(f"wrote {out / 'results.json'}, results.csv, report.md and {len(plots)} plots")

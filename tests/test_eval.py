@@ -1,0 +1,105 @@
+"""`vistrack eval`: files, JSON schema, plots, resume and worker-count invariance, bad input."""
+
+import csv
+import json
+import shutil
+
+import matplotlib.image as mpimg
+import pytest
+
+from vistrack.cli import main
+from vistrack.data_synth.contour import make_contour_clip
+
+SUMMARY_KEYS = {"clip", "algo", "particles", "runs", "mean_error", "p_lost", "p_lost_final", "p_lost_per_frame",
+                "error_per_frame", "success_auc", "success_curve", "precision_20px", "frames_per_s", "mean_ess"}
+
+
+def run(argv, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    out = capsys.readouterr()
+    return e.value.code, out.out, out.err
+
+
+@pytest.fixture(scope="module")
+def suite(tmp_path_factory):
+    d = tmp_path_factory.mktemp("suite")
+    for s in (1, 2):
+        make_contour_clip(d / f"c{s}", frames=10, size=(128, 96), seed=s, clutter="low", distractor=False)
+    return d
+
+
+def grid(suite, out, *extra):
+    return ["eval", str(suite), "--algos", "lis,bootstrap", "--particles", "10,20", "--runs", "3", "--seed", "4",
+            "--out", str(out), "-q", *extra]
+
+
+def strip_timing(results):
+    """Everything but the measured times, which no two executions share."""
+    return {"config": results["config"],
+            "results": [{k: v for k, v in r.items() if k != "frames_per_s"} for r in results["results"]]}
+
+
+def test_eval_files_schema_resume_and_workers(suite, tmp_path, capsys):
+    full = tmp_path / "full"
+    code, _, err = run(grid(suite, full, "--in-process", "--workers", "2"), capsys)
+    assert code == 0, err
+    data = json.loads((full / "results.json").read_text())
+    assert set(data) == {"config", "results"}
+    assert len(data["results"]) == 2 * 2 * 2  # clip × algo × N
+    for r in data["results"]:
+        assert set(r) >= SUMMARY_KEYS and r["runs"] == 3
+        assert 0 <= r["success_auc"] <= 1 and 0 <= r["p_lost"] <= 1 and len(r["p_lost_per_frame"]) == 10
+    with open(full / "results.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 2 * 2 * 2 * 3
+    for png in ("error_vs_frame.png", "p_lost_vs_frame.png", "error_vs_n.png", "fps_vs_n.png", "success.png"):
+        assert mpimg.imread(full / png).ndim == 3
+    assert "| lis | 10 |" in (full / "report.md").read_text()
+
+    # killed midway: half the task files gone; --resume finishes with the same results
+    part = tmp_path / "part"
+    shutil.copytree(full, part)
+    for p in sorted((part / "tasks").iterdir())[::2]:
+        p.unlink()
+    (part / "results.json").unlink()
+    code, _, err = run(grid(suite, part, "--in-process", "--workers", "1", "--resume"), capsys)
+    assert code == 0, err
+    assert strip_timing(json.loads((part / "results.json").read_text())) == strip_timing(data)
+
+    # one worker from scratch: the same results as two
+    one = tmp_path / "one"
+    code, _, err = run(grid(suite, one, "--in-process", "--workers", "1"), capsys)
+    assert code == 0, err
+    assert strip_timing(json.loads((one / "results.json").read_text())) == strip_timing(data)
+
+
+def test_eval_bad_input(suite, tmp_path, capsys):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    code, _, err = run(["eval", str(empty), "--out", str(tmp_path / "o")], capsys)
+    assert code != 0 and "holds no clips" in err
+    nogt = tmp_path / "nogt"
+    nogt.mkdir()
+    shutil.copy(suite / "c1" / "video.mp4", nogt / "video.mp4")
+    code, _, err = run(["eval", str(nogt), "--out", str(tmp_path / "o")], capsys)
+    assert code != 0 and "eval needs ground truth" in err
+    code, _, err = run(["eval", str(suite), "--algos", "lis,nope", "--out", str(tmp_path / "o")], capsys)
+    assert code != 0 and "unknown algorithm 'nope'" in err
+    import cv2
+
+    if not hasattr(cv2, "TrackerCSRT_create"):
+        code, _, err = run(["eval", str(suite), "--algos", "opencv-csrt", "--out", str(tmp_path / "o")], capsys)
+        assert code != 0 and "opencv-contrib" in err
+    code, _, err = run(["eval", str(suite / "c1"), "--runs", "1", "--particles", "5", "--scheduler",
+                        "tcp://127.0.0.1:9", "--timeout", "2", "--out", str(tmp_path / "o")], capsys)
+    assert code != 0 and "cannot reach the Dask scheduler" in err
+
+
+def test_synth_suite(tmp_path, capsys):
+    code, _, err = run(["synth-suite", "--kind", "contour", "--clips", "2", "--seed", "5", "--frames", "5",
+                        "--size", "96x72", "--out", str(tmp_path / "s"), "-q"], capsys)
+    assert code == 0, err
+    names = sorted(p.name for p in (tmp_path / "s").iterdir())
+    assert names == ["contour-05", "contour-06"]
+    assert json.loads((tmp_path / "s" / "contour-06" / "meta.json").read_text())["seed"] == 6

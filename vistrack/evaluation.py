@@ -1,0 +1,236 @@
+"""Batch evaluation: clip × algorithm × N × run -> tasks -> results (DESIGN.md, evaluation protocol).
+
+Every task tracks one clip once and writes its own result file
+``tasks/<clip>__<algo>__N<n>__r<run>.json`` (written to a temporary name and
+renamed, so a file that exists is complete). Finished tasks are skipped on
+``resume``; a worker that dies loses only its own task. Run ``r`` on clip
+``c`` draws from ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]`` (the
+same stream for every algorithm and N: common random numbers), so results do
+not depend on the number of workers or the order in which tasks run.
+
+Per frame a task records the centre error, whether the tracker is lost
+(centre error > 50 px at 240-px width, scaled — thesis §3.2.5), the IoU of the
+estimated box with the true box, ESS and ms. :func:`summarize` turns the task
+files into per clip × algo × N summaries (mean error over frames not lost,
+P(lost) per frame and overall, success AUC over IoU thresholds 0..1,
+precision at 20 px, frames/s, mean ESS).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .builders import build_model
+from .clips import load_clip
+from .filters import ALGORITHMS, make_filter
+from .metrics import center_error, contour_lost_threshold, iou
+from .tracking import track
+from .video import VideoError
+
+__all__ = ["EvalConfig", "find_clips", "task_list", "run_task", "summarize", "OPENCV_TRACKERS", "check_algos"]
+
+#: OpenCV trackers by name -> constructor attribute (contrib ones may be missing)
+OPENCV_TRACKERS = {"opencv-mil": "TrackerMIL_create", "opencv-kcf": "TrackerKCF_create",
+                   "opencv-csrt": "TrackerCSRT_create"}
+IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
+
+
+@dataclass
+class EvalConfig:
+    clips: list
+    algos: list = field(default_factory=lambda: ["lis", "bootstrap"])
+    particles: list = field(default_factory=lambda: [100, 750])
+    runs: int = 20
+    seed: int = 0
+    model: str = "contour"
+
+
+def check_algos(algos):
+    """Raise ``ValueError`` for unknown algorithms or OpenCV trackers this OpenCV lacks."""
+    import cv2
+
+    for a in algos:
+        if a in OPENCV_TRACKERS:
+            if not hasattr(cv2, OPENCV_TRACKERS[a]) and not hasattr(getattr(cv2, "legacy", None), OPENCV_TRACKERS[a]):
+                raise ValueError(f"{a} is not in this OpenCV build ({cv2.__version__}); "
+                                 "KCF and CSRT need opencv-contrib-python")
+        elif a not in ALGORITHMS:
+            known = sorted(set(ALGORITHMS) | set(OPENCV_TRACKERS))
+            raise ValueError(f"unknown algorithm {a!r}; choose from {', '.join(known)}")
+
+
+def _is_clip(p):
+    return (p / "video.mp4").is_file() or (p / "img").is_dir() or (p / "groundtruth_rect.txt").is_file()
+
+
+def find_clips(paths):
+    """Clip folders from clip folders, videos or directories of clip folders.
+
+    Raises ``VideoError`` for a missing path, an empty directory, or a clip
+    without ground truth (eval needs it; ``run`` does not).
+    """
+    clips = []
+    for raw in paths:
+        p = Path(raw)
+        if not p.exists():
+            raise VideoError(f"{p} does not exist")
+        if p.is_file() or _is_clip(p):
+            clips.append(p)
+            continue
+        sub = sorted(q for q in p.iterdir() if q.is_dir() and _is_clip(q))
+        if not sub:
+            raise VideoError(f"{p} holds no clips (folders with video.mp4 or img/ and ground truth)")
+        clips.extend(sub)
+    for c in clips:
+        if load_clip(c).truth is None:
+            raise VideoError(f"{c} has no ground truth (groundtruth.csv or groundtruth_rect.txt): "
+                             "eval needs ground truth; `vistrack run` does not")
+    return clips
+
+
+def _name(clip):
+    p = Path(clip)
+    return (p.parent.name if p.is_file() else p.name).replace("__", "_")
+
+
+def task_list(cfg, clips):
+    """All tasks as dicts ``{clip, clip_index, algo, particles, run, seed_seq, name}``."""
+    streams = np.random.SeedSequence(cfg.seed).spawn(len(clips))
+    tasks = []
+    for ci, clip in enumerate(clips):
+        seqs = streams[ci].spawn(cfg.runs)
+        for algo in cfg.algos:
+            ns = [1] if algo in OPENCV_TRACKERS else cfg.particles
+            for n in ns:
+                for r in range(cfg.runs):
+                    if algo in OPENCV_TRACKERS and r > 0:
+                        continue  # deterministic: one run
+                    tasks.append({"clip": str(clip), "clip_index": ci, "algo": algo, "particles": int(n), "run": r,
+                                  "seed_seq": seqs[r], "model": cfg.model,
+                                  "name": f"{ci:03d}_{_name(clip)}__{algo}__N{n}__r{r}"})
+    return tasks
+
+
+def _truth_boxes(t):
+    return np.stack([t["cx"] - t["w"] / 2, t["cy"] - t["h"] / 2, t["w"], t["h"]], axis=1)
+
+
+def _track_opencv(algo, clip, frames):
+    import cv2
+
+    ctor = getattr(cv2, OPENCV_TRACKERS[algo], None) or getattr(cv2.legacy, OPENCV_TRACKERS[algo])
+    tracker = ctor()
+    x, y, w, h = clip.first_box()
+    boxes, ms = [], []
+    for k, (_, frame) in enumerate(frames):
+        t0 = time.perf_counter()
+        if k == 0:
+            tracker.init(frame, (int(round(x)), int(round(y)), int(round(w)), int(round(h))))
+            box = (x, y, w, h)
+        else:
+            ok, b = tracker.update(frame)
+            box = tuple(float(v) for v in b) if ok else (np.nan,) * 4
+        ms.append((time.perf_counter() - t0) * 1e3)
+        boxes.append(box)
+    return np.array(boxes, float), np.array(ms), np.full(len(boxes), np.nan)
+
+
+def run_task(task, out_dir):
+    """Track one clip once; write ``out_dir/tasks/<name>.json``; return its path."""
+    out = Path(out_dir) / "tasks" / f"{task['name']}.json"
+    clip = load_clip(task["clip"])
+    frames = list(clip.source)
+    algo, n = task["algo"], task["particles"]
+    if algo in OPENCV_TRACKERS:
+        boxes, ms, ess = _track_opencv(algo, clip, frames)
+    else:
+        model = build_model(task["model"], clip, init_gt="")
+        filt = make_filter(algo, model)
+        rng = np.random.default_rng(task["seed_seq"])
+        est, ms, ess = [], [], []
+        for res in track(frames, filt, n, rng):
+            est.append(res.estimate)
+            ms.append(res.ms)
+            ess.append(res.ess)
+        boxes = model.box(np.array(est))
+        ms, ess = np.array(ms), np.array(ess)
+    t = clip.truth
+    m = min(len(boxes), len(t["cx"]))
+    truth = _truth_boxes(t)[:m]
+    boxes = boxes[:m]
+    err = center_error(boxes[:, 0] + boxes[:, 2] / 2, boxes[:, 1] + boxes[:, 3] / 2,
+                       truth[:, 0] + truth[:, 2] / 2, truth[:, 1] + truth[:, 3] / 2)
+    err = np.where(np.isfinite(err), err, np.inf)
+    visible = np.asarray(t["visible"][:m]) > 0
+    result = {
+        "clip": task["clip"], "algo": algo, "particles": n, "run": task["run"],
+        "frames": int(m), "visible": visible.astype(int).tolist(),
+        "error": [float(e) if np.isfinite(e) else None for e in err],
+        "lost": (err > contour_lost_threshold(clip.source.size[0])).astype(int).tolist(),
+        "iou": [float(v) for v in np.nan_to_num(iou(boxes, truth), nan=0.0)],
+        "ms": [float(v) for v in ms[:m]],
+        "ess": [None if not np.isfinite(v) else float(v) for v in ess[:m]],
+    }
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_suffix(f".tmp{os.getpid()}")
+    tmp.write_text(json.dumps(result))
+    tmp.replace(out)
+    return str(out)
+
+
+def task_done(task, out_dir):
+    """Whether ``task``'s result file exists and parses (for ``--resume``)."""
+    p = Path(out_dir) / "tasks" / f"{task['name']}.json"
+    if not p.is_file():
+        return False
+    try:
+        json.loads(p.read_text())
+    except (json.JSONDecodeError, OSError):
+        return False
+    return True
+
+
+def load_task_results(tasks, out_dir):
+    return [json.loads((Path(out_dir) / "tasks" / f"{t['name']}.json").read_text()) for t in tasks]
+
+
+def summarize(results):
+    """Per clip × algo × N summaries (list of dicts, in first-seen order) from task results."""
+    groups = {}
+    for r in results:
+        groups.setdefault((r["clip"], r["algo"], r["particles"]), []).append(r)
+    out = []
+    for (clip, algo, n), rs in groups.items():
+        rs = sorted(rs, key=lambda r: r["run"])
+        vis = np.array(rs[0]["visible"], bool)
+        err = np.array([[np.inf if e is None else e for e in r["error"]] for r in rs])
+        lost = np.array([r["lost"] for r in rs], bool) & vis
+        ok = ~lost & vis
+        p_lost = lost.mean(axis=0)
+        with np.errstate(invalid="ignore"):
+            err_frame = np.where(ok.any(axis=0), np.sum(np.where(ok, err, 0), axis=0) / ok.sum(axis=0), np.nan)
+        ious = np.array([r["iou"] for r in rs])[:, vis]
+        success = [float(np.mean(ious > th)) for th in IOU_THRESHOLDS]
+        precision20 = float(np.mean(err[:, vis] <= 20.0))
+        ms = np.array([np.mean(r["ms"]) for r in rs])
+        ess = [e for r in rs for e in r["ess"] if e is not None]
+        out.append({
+            "clip": clip, "algo": algo, "particles": n, "runs": len(rs),
+            "mean_error": float(err[ok].mean()) if ok.any() else None,
+            "p_lost": float(p_lost[vis].mean()) if vis.any() else 0.0,
+            "p_lost_final": float(p_lost[-1]),
+            "p_lost_per_frame": p_lost.tolist(),
+            "error_per_frame": [None if not np.isfinite(v) else float(v) for v in err_frame],
+            "success_auc": float(np.mean(success)),
+            "success_curve": success,
+            "precision_20px": precision20,
+            "frames_per_s": float(1e3 / ms.mean()),
+            "mean_ess": float(np.mean(ess)) if ess else None,
+        })
+    return out
