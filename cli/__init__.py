@@ -12,6 +12,7 @@ import click
 
 from vistrack import __version__
 
+from .demo import demo
 from .eval import eval_cmd
 from .reproduce import reproduce
 from .run import run
@@ -30,6 +31,7 @@ def cli():
 
     \b
     Examples:
+      vistrack demo                                  # generate, track, compare: ./vistrack-demo
       vistrack synth contour --out clip              # synthetic clip with ground truth
       vistrack run clip --algo ls-n-ips -n 30 --init-gt --out annotated.mp4 --track track.csv
       vistrack reproduce bearings --runs 20          # thesis §4.5.5, one ship
@@ -38,6 +40,7 @@ def cli():
 
 
 cli.add_command(reproduce)
+cli.add_command(demo)
 cli.add_command(eval_cmd)
 cli.add_command(run)
 cli.add_command(synth)

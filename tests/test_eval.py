@@ -103,3 +103,18 @@ def test_synth_suite(tmp_path, capsys):
     names = sorted(p.name for p in (tmp_path / "s").iterdir())
     assert names == ["contour-05", "contour-06"]
     assert json.loads((tmp_path / "s" / "contour-06" / "meta.json").read_text())["seed"] == 6
+
+
+def test_demo_writes_videos_tracks_and_report(tmp_path, capsys):
+    import cv2
+
+    out = tmp_path / "demo"
+    code, stdout, err = run(["demo", "--out", str(out), "--frames", "12", "--runs", "1"], capsys)
+    assert code == 0, err
+    for algo in ("ls-n-ips", "lis", "bootstrap"):
+        cap = cv2.VideoCapture(str(out / f"contour-{algo}.mp4"))
+        assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 12
+        with open(out / f"contour-{algo}.csv", newline="") as f:
+            assert len(list(csv.DictReader(f))) == 12
+    assert (out / "eval" / "report.md").is_file() and str(out) in stdout
+    assert len(json.loads((out / "eval" / "results.json").read_text())["results"]) == 3 * 2

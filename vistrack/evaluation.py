@@ -8,7 +8,8 @@ renamed, so a file that exists is complete). Finished tasks are skipped on
 same stream for every algorithm and N: common random numbers), so results do
 not depend on the number of workers or the order in which tasks run.
 
-Per frame a task records the centre error, whether the tracker is lost
+Boxes are ``(cx ± w/2, cy ± h/2)`` with ``cx, cy`` the pose centre, as in
+groundtruth.csv. Per frame a task records the centre error, whether the tracker is lost
 (centre error > 50 px at 240-px width, scaled — thesis §3.2.5), the IoU of the
 estimated box with the true box, ESS and ms. :func:`summarize` turns the task
 files into per clip × algo × N summaries (mean error over frames not lost,
@@ -158,7 +159,10 @@ def run_task(task, out_dir):
             est.append(res.estimate)
             ms.append(res.ms)
             ess.append(res.ess)
-        boxes = model.box(np.array(est))
+        est = np.array(est)
+        wh = model.box(est)[:, 2:]
+        # boxes centred on the pose centre, as groundtruth.csv's (cx, cy, w, h)
+        boxes = np.concatenate([est[:, :2] - wh / 2, wh], axis=1)
         ms, ess = np.array(ms), np.array(ess)
     t = clip.truth
     m = min(len(boxes), len(t["cx"]))
