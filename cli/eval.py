@@ -13,13 +13,13 @@ import click
 import numpy as np
 from tqdm import tqdm
 
-from vistrack.evaluation import (EvalConfig, check_algos, find_clips, load_task_results, run_task, summarize,
+from vistrack.evaluation import (EvalConfig, check_algos, execute, find_clips, load_task_results, summarize,
                                  task_done, task_list)
 from vistrack.video import VideoError
 
 from .options import IntList, StrList
 
-__all__ = ["eval_cmd"]
+__all__ = ["eval_cmd", "run_tasks"]
 
 CSV_COLUMNS = ["clip", "algo", "particles", "run", "frames", "mean_error", "p_lost", "success_auc",
                "precision_20px", "frames_per_s", "mean_ess"]
@@ -39,6 +39,21 @@ def _client(scheduler, workers, timeout, in_process=False):
     cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
                            processes=not in_process, dashboard_address=None)
     return Client(cluster), cluster
+
+
+def run_tasks(tasks, out, *, scheduler=None, workers=0, timeout=10, in_process=False, resume=False, quiet=False,
+              desc="tasks"):
+    """Execute ``tasks`` on Dask (a LocalCluster unless ``scheduler``) with a progress bar."""
+    if resume and all(task_done(t, out) for t in tasks):
+        return
+    client, cluster = _client(scheduler, workers, timeout, in_process)
+    try:
+        with tqdm(total=len(tasks), unit="task", desc=desc, disable=quiet) as bar:
+            execute(tasks, out, client, resume=resume, progress=bar.update)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
 
 
 def _task_row(r):
@@ -196,23 +211,8 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, 
             n = chosen.get(t["algo"], 1)
             t["particles"] = n
             t["name"] = t["name"].replace("__N1__", f"__N{n}__")
-    pending = [t for t in tasks if not (resume and task_done(t, out))]
-    if pending:
-        client, cluster = _client(scheduler, workers, timeout, in_process)
-        try:
-            from distributed import as_completed
-
-            futs = [client.submit(run_task, t, str(out), key=f"vistrack-{t['name']}-{seed}", retries=2, pure=False)
-                    for t in pending]
-            with tqdm(total=len(tasks), initial=len(tasks) - len(pending), unit="task", desc="eval",
-                      disable=quiet) as bar:
-                for f in as_completed(futs):
-                    f.result()
-                    bar.update(1)
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+    run_tasks(tasks, out, scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process,
+              resume=resume, quiet=quiet, desc="eval")
     results = load_task_results(tasks, out)
     summaries = summarize(results)
     plots = _write_outputs(out, cfg, summaries, [_task_row(r) for r in results], chosen)

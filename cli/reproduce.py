@@ -9,7 +9,7 @@ import click
 from tqdm import tqdm
 
 from vistrack.reproduce.bearings import DEFAULT_ALGOS, BearingsConfig, run_bearings
-from vistrack.reproduce.contour import ContourConfig, config_dict, run_contour
+from vistrack.reproduce.contour import ContourConfig, config_dict, contour_results, contour_tasks
 
 from .options import IntList, StrList, check_writable
 
@@ -135,16 +135,22 @@ def _contour_table(results):
 @click.option("--runs", default=10, show_default=True, type=click.IntRange(min=1), help="Runs per clip.")
 @click.option("--seed", default=0, show_default=True, type=int)
 @click.option("--workers", default=0, show_default=True, type=click.IntRange(min=0),
-              help="Worker processes (0: one per core).")
+              help="LocalCluster worker processes (0: one per core).")
+@click.option("--scheduler", help="Address of a running Dask scheduler [default: a LocalCluster].")
+@click.option("--out", "out_dir", default="contour-results", show_default=True, type=click.Path(file_okay=False),
+              help="Folder for the per-task result files (OUT/tasks).")
+@click.option("--resume", is_flag=True, help="Keep finished tasks in --out and run only the rest.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
               help="Write P(lost) vs frame and error vs frame PNGs here.")
 @click.option("--quiet", "-q", is_flag=True)
-def contour(clips_dir, make, frames, size, entries, runs, seed, workers, json_path, plots_dir, quiet):
+def contour(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler, out_dir, resume, json_path,
+            plots_dir, quiet):
     """Contour tracking in clutter with a distractor (thesis §4.3.2, Table 4.1).
 
     Tracks every clip RUNS times with every ALGO:N from the first frame's
-    ground truth; prints P(lost) (centre error > 50 px at 240-px width,
+    ground truth, as tasks of the evaluation engine (Dask; --resume continues
+    an interrupted run); prints P(lost) (centre error > 50 px at 240-px width,
     scaled) at the last frame and averaged over frames, the mean error of
     runs not lost, and the filter's time per frame.
     """
@@ -170,9 +176,18 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, json_pa
                 make_contour_clip(base / f"contour-{s:02d}", frames=frames, size=wh, seed=s, clutter="high",
                                   distractor=True, progress=bar.update)
         clips = sorted(p for p in base.iterdir() if (p / "groundtruth.csv").is_file())
-    cfg = ContourConfig(clips=clips, entries=entries, runs=runs, seed=seed, workers=workers)
-    with tqdm(total=len(clips) * len(entries) * runs, unit="run", desc="contour", disable=quiet, leave=False) as bar:
-        results = run_contour(cfg, progress=bar.update)
+    cfg = ContourConfig(clips=clips, entries=entries, runs=runs, seed=seed)
+    tasks = contour_tasks(cfg)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    if not resume and (out / "tasks").is_dir():
+        import shutil
+
+        shutil.rmtree(out / "tasks")
+    from .eval import run_tasks
+
+    run_tasks(tasks, out, scheduler=scheduler, workers=workers, resume=resume, quiet=quiet, desc="contour")
+    results = contour_results(tasks, out)
     click.echo(f"{len(clips)} clips x {runs} runs")
     click.echo(_contour_table(results))
     if json_path:

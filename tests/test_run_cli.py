@@ -142,6 +142,7 @@ def test_reproduce_contour_json_and_plots(tmp_path, capsys):
     js = tmp_path / "r.json"
     code, out, err = run(["reproduce", "contour", "--clips", str(tmp_path / "clips"), "--make", "1", "--frames", "12",
                           "--size", "160x120", "--runs", "2", "--algos", "ls-n-ips:10,bootstrap:50", "--workers", "1",
+                          "--out", str(tmp_path / "res"),
                           "--json", str(js), "--plots", str(tmp_path / "p"), "-q"], capsys)
     assert code == 0, err
     assert "P(lost) final" in out

@@ -34,7 +34,8 @@ from .metrics import center_error, contour_lost_threshold, iou
 from .tracking import track
 from .video import VideoError
 
-__all__ = ["EvalConfig", "find_clips", "task_list", "run_task", "summarize", "OPENCV_TRACKERS", "check_algos"]
+__all__ = ["EvalConfig", "find_clips", "task_list", "run_task", "execute", "summarize", "pooled_summary",
+           "OPENCV_TRACKERS", "check_algos"]
 
 #: OpenCV trackers by name -> constructor attribute (contrib ones may be missing)
 OPENCV_TRACKERS = {"opencv-mil": "TrackerMIL_create", "opencv-kcf": "TrackerKCF_create",
@@ -50,6 +51,8 @@ class EvalConfig:
     runs: int = 20
     seed: int = 0
     model: str = "contour"
+    #: explicit (algo, N) pairs instead of the algos × particles grid
+    entries: list | None = None
 
 
 def check_algos(algos):
@@ -106,15 +109,15 @@ def task_list(cfg, clips):
     tasks = []
     for ci, clip in enumerate(clips):
         seqs = streams[ci].spawn(cfg.runs)
-        for algo in cfg.algos:
-            ns = [1] if algo in OPENCV_TRACKERS else cfg.particles
-            for n in ns:
-                for r in range(cfg.runs):
-                    if algo in OPENCV_TRACKERS and r > 0:
-                        continue  # deterministic: one run
-                    tasks.append({"clip": str(clip), "clip_index": ci, "algo": algo, "particles": int(n), "run": r,
-                                  "seed_seq": seqs[r], "model": cfg.model,
-                                  "name": f"{ci:03d}_{_name(clip)}__{algo}__N{n}__r{r}"})
+        pairs = cfg.entries or [(a, n) for a in cfg.algos
+                                 for n in ([1] if a in OPENCV_TRACKERS else cfg.particles)]
+        for algo, n in pairs:
+            for r in range(cfg.runs):
+                if algo in OPENCV_TRACKERS and r > 0:
+                    continue  # deterministic: one run
+                tasks.append({"clip": str(clip), "clip_index": ci, "algo": algo, "particles": int(n), "run": r,
+                              "seed_seq": seqs[r], "model": cfg.model,
+                              "name": f"{ci:03d}_{_name(clip)}__{algo}__N{n}__r{r}"})
     return tasks
 
 
@@ -237,4 +240,49 @@ def summarize(results):
             "frames_per_s": float(1e3 / ms.mean()),
             "mean_ess": float(np.mean(ess)) if ess else None,
         })
+    return out
+
+
+def execute(tasks, out_dir, client, *, resume=False, progress=None, key_prefix="vistrack"):
+    """Run the tasks not yet done on a ``distributed.Client``; each writes its own file.
+
+    ``progress(k)`` is called as tasks finish (and once for those skipped on resume).
+    """
+    from distributed import as_completed
+
+    pending = [t for t in tasks if not (resume and task_done(t, out_dir))]
+    if progress and len(tasks) > len(pending):
+        progress(len(tasks) - len(pending))
+    futs = [client.submit(run_task, t, str(out_dir), key=f"{key_prefix}-{t['name']}", retries=2, pure=False)
+            for t in pending]
+    for f in as_completed(futs):
+        f.result()
+        if progress:
+            progress(1)
+    return len(pending)
+
+
+def pooled_summary(results, lost_threshold=None):
+    """Per (algo, N) over all clips and runs (same frame count): P(lost) per frame, at the
+    last frame and averaged, mean error over frames not lost, ms per frame, mean ESS."""
+    groups = {}
+    for r in results:
+        groups.setdefault((r["algo"], r["particles"]), []).append(r)
+    out = []
+    for (algo, n), rs in groups.items():
+        err = np.array([[np.inf if e is None else e for e in r["error"]] for r in rs])
+        lost = np.array([r["lost"] for r in rs], bool)
+        ok = ~lost
+        p = lost.mean(axis=0)
+        with np.errstate(invalid="ignore"):
+            per = np.where(ok.any(axis=0), np.sum(np.where(ok, err, 0), axis=0) / ok.sum(axis=0), np.nan)
+        ms = float(np.mean([np.mean(r["ms"]) for r in rs]))
+        ess = [e for r in rs for e in r["ess"] if e is not None]
+        out.append({"algo": algo, "particles": n, "clips": len({r["clip"] for r in rs}),
+                    "runs": len(rs) // max(1, len({r["clip"] for r in rs})),
+                    "p_lost_final": float(p[-1]), "p_lost_mean": float(p.mean()),
+                    "mean_error": float(err[ok].mean()) if ok.any() else float("nan"),
+                    "ms_per_frame": ms, "frames_per_s": 1e3 / ms, "mean_ess": float(np.mean(ess)) if ess else None,
+                    "p_lost_per_frame": p.tolist(),
+                    "error_per_frame": [None if not np.isfinite(v) else float(v) for v in per]})
     return out
