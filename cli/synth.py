@@ -8,6 +8,7 @@ import click
 from tqdm import tqdm
 
 from vistrack.data_synth.contour import CLUTTER, make_contour_clip
+from vistrack.data_synth.plate import make_plate_clip
 
 __all__ = ["synth"]
 
@@ -65,6 +66,28 @@ def contour(out, frames, size, seed, clutter, distractor, shape, quiet):
     with tqdm(total=frames, unit="frame", disable=quiet, desc="synth contour") as bar:
         make_contour_clip(out, frames=frames, size=size, seed=seed, clutter=clutter, distractor=distractor,
                           shape=shape, progress=bar.update)
+    if not quiet:
+        click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({frames} frames, {size[0]}x{size[1]})")
+
+
+@synth.command()
+@click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write.")
+@click.option("--frames", default=300, show_default=True, type=click.IntRange(min=1))
+@click.option("--size", default="640x480", show_default=True, type=Size())
+@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--cars", default=3, show_default=True, type=click.IntRange(min=1), help="Cars driving through.")
+@click.option("--layout", default="jp", show_default=True, type=click.Choice(["jp", "single-row"]),
+              help="Plate layout: Japanese (Fig. 1.5) or single-row (European/Indian style).")
+@click.option("--overlap", is_flag=True, help="Let several cars be in view at once.")
+@click.option("--quiet", "-q", is_flag=True)
+def plate(out, frames, size, seed, cars, layout, overlap, quiet):
+    """A road scene in which cars carrying plates drive through (thesis §1.3.2, §4.5.3)."""
+    if size[0] < 160 or size[1] < 120:
+        raise click.ClickException(f"frame size {size[0]}x{size[1]} is too small for plates (at least 160x120)")
+    out = _out_dir(out)
+    with tqdm(total=frames, unit="frame", disable=quiet, desc="synth plate") as bar:
+        make_plate_clip(out, frames=frames, size=size, seed=seed, cars=cars, layout=layout, overlap=overlap,
+                        progress=bar.update)
     if not quiet:
         click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({frames} frames, {size[0]}x{size[1]})")
 
