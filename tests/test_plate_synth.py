@@ -41,3 +41,26 @@ def test_synth_plate_bad_size(tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
         main(["synth", "plate", "--out", str(tmp_path / "p"), "--size", "100x80"])
     assert e.value.code != 0 and "too small" in capsys.readouterr().err
+
+
+def test_plate_likelihood_has_a_narrow_dominant_peak_at_the_plate(road):
+    """Fig. 1.6: over a (u, w) grid at the true angle and scale, the maximum of r is at the
+    true plate, and poses 15 % of the plate width away are far less likely."""
+    from vistrack.features import FeatureMaps
+    from vistrack.models.plate import PlateLikelihood
+
+    clip = load_clip(road)
+    t = clip.truth
+    frames = dict(clip.source)
+    lik = PlateLikelihood("jp")
+    vis = np.flatnonzero(t["visible"] > 0)
+    for k in vis[[len(vis) // 4, len(vis) // 2, 3 * len(vis) // 4]]:
+        obs = FeatureMaps(frames[k])
+        s, th = t["scale"][k], np.deg2rad(t["angle_deg"][k])
+        du, dw = np.meshgrid(np.arange(-40, 41, 1.0), np.arange(-30, 31, 1.0))
+        poses = np.stack([t["cx"][k] + du.ravel(), t["cy"][k] + dw.ravel(), np.full(du.size, th),
+                          np.full(du.size, s)], axis=1)
+        ll = lik.loglik(obs, poses)
+        dist = np.hypot(du.ravel(), dw.ravel())
+        assert dist[np.argmax(ll)] <= 0.08 * s + 1.5
+        assert ll.max() - ll[dist > 0.15 * s].max() > 1.0
