@@ -32,14 +32,21 @@ def box_dog(gray, inner, outer):
 _REMAP_COLS = 1024
 
 
-def remap_points(img, x, y):
+def remap_points(img, x, y, border=0):
     """Bilinear samples of ``img`` at points ``(x, y)`` with ``cv2.remap``.
 
     The points are laid out as a ``(rows, 1024)`` map (remap wants both sides
-    below 32767) and padded with an outside point; outside samples are 0.
+    below 32767) and padded with an outside point; outside samples are ``border``
+    (a scalar or one value per channel).
     """
     shape = np.shape(x)
     m = int(np.prod(shape))
+    limit = 32000 * _REMAP_COLS
+    if m > limit:  # remap's size limit: in chunks
+        xf, yf = np.ravel(x), np.ravel(y)
+        parts = [remap_points(img, xf[i:i + limit], yf[i:i + limit], border) for i in range(0, m, limit)]
+        out = np.concatenate(parts)
+        return out.reshape(shape + out.shape[1:])
     rows = max(1, -(-m // _REMAP_COLS))
     mx = np.empty(rows * _REMAP_COLS, np.float32)
     my = np.empty(rows * _REMAP_COLS, np.float32)
@@ -48,7 +55,7 @@ def remap_points(img, x, y):
     mx[m:] = -10.0
     my[m:] = -10.0
     out = cv2.remap(img, mx.reshape(rows, _REMAP_COLS), my.reshape(rows, _REMAP_COLS), cv2.INTER_LINEAR,
-                    borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+                    borderMode=cv2.BORDER_CONSTANT, borderValue=border)
     ch = out.shape[2:] if out.ndim == 3 else ()
     return out.reshape((rows * _REMAP_COLS,) + ch)[:m].reshape(shape + ch)
 
