@@ -47,7 +47,9 @@ class Box(click.ParamType):
 @click.command()
 @click.argument("video", type=click.Path(exists=True))
 @click.option("--model", "model_name", type=click.Choice(MODELS), default=None,
-              help="Tracking model [default: the clip's meta.json model, else contour].")
+              help="Tracking model [default: the clip's meta.json model, else plate].")
+@click.option("--layout", type=click.Choice(["jp", "single-row"]), default=None,
+              help="Plate layout [default: the clip's, else jp].")
 @click.option("--algo", default="lis", show_default=True, type=click.Choice(RUN_ALGOS), help="Particle filter.")
 @click.option("-n", "--particles", default=100, show_default=True, type=click.IntRange(min=1),
               help="Number of particles N.")
@@ -69,7 +71,7 @@ class Box(click.ParamType):
               help="Resample when ESS < threshold·N [default: every frame].")
 @click.option("--max-frames", type=click.IntRange(min=1), help="Stop after this many frames.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary.")
-def run(video, model_name, algo, particles, seed, init, init_gt, template_path, track_path, out_path, show_particles,
+def run(video, model_name, layout, algo, particles, seed, init, init_gt, template_path, track_path, out_path, show_particles,
         resample, ess_threshold, max_frames, quiet):
     """Track the object in VIDEO (a video file, an image folder or a clip folder).
 
@@ -90,11 +92,14 @@ def run(video, model_name, algo, particles, seed, init, init_gt, template_path, 
         raise click.UsageError("give either --init or --init-gt, not both")
     try:
         clip = load_clip(video)
-        name = model_name or clip.model_name or "contour"
+        name = model_name or clip.model_name or "plate"
         if name not in MODELS:
             raise click.ClickException(f"{video}: meta.json names model {name!r}, which this version cannot track")
         template = read_support_points(template_path) if template_path else None
-        model = build_model(name, clip, init=init, init_gt=init_gt, template=template)
+        extra = {"layout": layout} if name == "plate" else {"template": template}
+        if name == "plate" and template is not None:
+            raise click.UsageError("--template is for the contour model")
+        model = build_model(name, clip, init=init, init_gt=init_gt, **extra)
     except (VideoError, ValueError) as e:
         raise click.ClickException(str(e)) from None
     filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)
@@ -116,7 +121,8 @@ def run(video, model_name, algo, particles, seed, init, init_gt, template_path, 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", DegenerateWeightsWarning)
             for res in track(frames(), filt, particles, rng):
-                row = {"frame": res.index, "visible": 1}
+                vis = model.visible(res.maps, res.estimate) if hasattr(model, "visible") else True
+                row = {"frame": res.index, "visible": int(vis)}
                 row.update(model.describe(res.estimate))
                 row["ess"] = res.ess
                 row["ms"] = res.ms
@@ -125,7 +131,7 @@ def run(video, model_name, algo, particles, seed, init, init_gt, template_path, 
                 n_degenerate += bool(res.particles.degenerate)
                 if writer:
                     text = f"#{res.index}  {algo} N={particles}  ESS {res.ess:.1f}"
-                    writer.write(annotate(res.frame, model.outline(res.estimate),
+                    writer.write(annotate(res.frame, model.outline(res.estimate) if vis else [],
                                           model.outline(top_particles(res.particles, show_particles)), text))
                 bar.update(1)
                 bar.set_postfix(ess=f"{res.ess:.1f}", refresh=False)

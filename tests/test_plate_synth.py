@@ -102,3 +102,18 @@ def test_plate_dynamics_entering_branch(rng):
     assert np.all(np.isfinite(lp))
     moved = model.with_local(new, new[:, :2] + 5.0)
     np.testing.assert_array_equal(model.entering(moved), model.entering(new))
+
+
+def test_run_plate_clip_default_model_writes_vertices(road, tmp_path, capsys):
+    import csv
+
+    track = tmp_path / "t.csv"
+    with pytest.raises(SystemExit) as e:
+        main(["run", str(road / "video.mp4"), "--algo", "lis", "-n", "20", "--max-frames", "6", "--track", str(track),
+              "-q"])
+    assert e.value.code == 0, capsys.readouterr().err
+    with open(track, newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 6
+    assert list(rows[0])[:8] == ["frame", "visible", "cx", "cy", "w", "h", "angle_deg", "scale"]
+    assert {"x0", "y3", "ess", "ms"} <= set(rows[0]) and set(r["visible"] for r in rows) <= {"0", "1"}

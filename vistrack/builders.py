@@ -16,7 +16,7 @@ from .video import VideoError, read_rects
 
 __all__ = ["MODELS", "initial_truth", "build_model", "read_support_points"]
 
-MODELS = ("contour",)
+MODELS = ("contour", "plate")
 
 
 def initial_truth(clip, init_gt):
@@ -106,7 +106,27 @@ def build_model(name, clip, *, init=None, init_gt=None, template=None, polarity=
         else:
             model.polarity = polarity
         return model
+    if name == "plate":
+        return _plate(clip, size, init, init_gt, params)
     raise VideoError(f"unknown model {name!r}; choose from {', '.join(MODELS)}")
+
+
+def _plate(clip, size, init, init_gt, params):
+    """Plate model; without a start it acquires plates through the entering-car component."""
+    from .models.plate import Plate
+
+    layout = params.pop("layout", None) or (clip.meta or {}).get("layout") or "jp"
+    model = Plate(size, layout=layout, **params)
+    box = init
+    if box is None and init_gt is not None:
+        row = initial_truth(clip, init_gt)
+        box = (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"])
+    if box is not None:
+        x, y, w, h = (float(v) for v in box)
+        pose = np.array([x + w / 2, y + h / 2, 0.0, w])
+        model.prior_mean = np.concatenate([pose, pose])
+        model.start = (pose, np.array([0.05 * w, 0.05 * h, 0.03, 0.05 * w]))
+    return model
 
 
 def _fit_template(template, box, size, params):

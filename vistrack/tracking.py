@@ -27,6 +27,7 @@ class FrameResult:
     particles: ParticleSet
     estimate: np.ndarray
     ms: float
+    maps: object = None
 
     @property
     def ess(self):
@@ -62,4 +63,4 @@ def track(frames, filt, n, rng, *, estimator=None):
             particles = filt.step(particles, maps, rng)
         est = estimator(particles) if estimator else particles.mean()
         ms = (time.perf_counter() - t0) * 1e3
-        yield FrameResult(i, frame, particles, est, ms)
+        yield FrameResult(i, frame, particles, est, ms, maps)

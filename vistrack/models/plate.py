@@ -157,15 +157,25 @@ class Plate:
         z[:, 3] = np.clip(z[:, 3], *self.scale_range)
         return np.concatenate([z, z], axis=1)
 
+    #: optional ``(mean, std)`` of the first pose (``--init``); else the entering density
+    start = None
+    #: the estimate is reported visible when ``log r`` at it exceeds this
+    visible_loglik = 10.0
+
     def sample_prior(self, n, rng):
-        return self._enter(n, rng)
+        if self.start is None:
+            return self._enter(n, rng)
+        mean, std = self.start
+        z = mean + std * rng.standard_normal((n, 4))
+        return np.concatenate([z, z], axis=1)
 
     def _logn(self, x, mean, std):
         e = (x - mean) / std
         return -0.5 * np.sum(e * e, axis=-1) - np.sum(np.log(std)) - 2 * np.log(2 * np.pi)
 
     def prior_logpdf(self, states):
-        return self._logn(states[:, :4], self.enter_mean, self.enter_std)
+        mean, std = self.start if self.start is not None else (self.enter_mean, self.enter_std)
+        return self._logn(states[:, :4], mean, std)
 
     def predict_mean(self, states):
         z1, z2 = states[:, :4], states[:, 4:]
@@ -208,6 +218,11 @@ class Plate:
         v = self.vertices(states)
         lo, hi = v.min(axis=1), v.max(axis=1)
         return np.concatenate([lo, hi - lo], axis=1)
+
+    def visible(self, obs, state):
+        """Whether a plate is reported at ``state``: ``log r`` above :attr:`visible_loglik`
+        (provisional: to be calibrated on the synthetic suite)."""
+        return bool(self.loglik(obs, np.asarray(state, float).reshape(1, -1))[0] > self.visible_loglik)
 
     def describe(self, state):
         s = np.asarray(state, float).reshape(1, -1)
