@@ -206,11 +206,7 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, 
         chosen = _equal_time(cfg, clip_paths)
         if not quiet:
             click.echo("equal time per frame: " + ", ".join(f"{a} N={n}" for a, n in chosen.items()))
-        tasks = [t for t in task_list(EvalConfig(**{**cfg.__dict__, "particles": [1]}), clip_paths)]
-        for t in tasks:
-            n = chosen.get(t["algo"], 1)
-            t["particles"] = n
-            t["name"] = t["name"].replace("__N1__", f"__N{n}__")
+        tasks = task_list(EvalConfig(**{**cfg.__dict__, "entries": list(chosen.items())}), clip_paths)
     run_tasks(tasks, out, scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process,
               resume=resume, quiet=quiet, desc="eval")
     results = load_task_results(tasks, out)

@@ -6,7 +6,7 @@ import os
 
 import click
 
-__all__ = ["IntList", "StrList", "check_writable"]
+__all__ = ["IntList", "StrList", "Box", "Size", "check_writable"]
 
 
 class IntList(click.ParamType):
@@ -32,6 +32,42 @@ class StrList(click.ParamType):
         if isinstance(value, list):
             return value
         return [v.strip() for v in str(value).split(",") if v.strip()]
+
+
+class Box(click.ParamType):
+    """``x,y,w,h`` in pixels."""
+
+    name = "x,y,w,h"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, tuple):
+            return value
+        try:
+            v = tuple(float(s) for s in str(value).split(","))
+        except ValueError:
+            self.fail(f"expected four numbers x,y,w,h, got {value!r}", param, ctx)
+        if len(v) != 4:
+            self.fail(f"expected four numbers x,y,w,h, got {len(v)}", param, ctx)
+        if v[2] <= 0 or v[3] <= 0:
+            self.fail(f"width and height must be positive, got {v[2]:g}x{v[3]:g}", param, ctx)
+        return v
+
+
+class Size(click.ParamType):
+    """``WIDTHxHEIGHT``."""
+
+    name = "WxH"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, tuple):
+            return value
+        try:
+            w, h = (int(v) for v in str(value).lower().split("x"))
+        except ValueError:
+            self.fail(f"expected WIDTHxHEIGHT such as 320x240, got {value!r}", param, ctx)
+        if w < 64 or h < 48:
+            self.fail(f"frame size {w}x{h} is too small (at least 64x48)", param, ctx)
+        return (w, h)
 
 
 def check_writable(path, what):

@@ -158,7 +158,7 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
 
     from vistrack.filters import ALGORITHMS
 
-    from .synth import Size
+    from .options import Size
 
     for algo, _ in entries:
         if algo not in ALGORITHMS:

@@ -18,30 +18,11 @@ from vistrack.render import annotate
 from vistrack.tracking import top_particles, track
 from vistrack.video import VideoError, VideoWriter
 
-from .options import check_writable
+from .options import Box, check_writable
 
 __all__ = ["run"]
 
 RUN_ALGOS = ("bootstrap", "ls-n-ips", "lls", "lis", "avpf", "condensation")
-
-
-class Box(click.ParamType):
-    """``x,y,w,h`` in pixels."""
-
-    name = "x,y,w,h"
-
-    def convert(self, value, param, ctx):
-        if isinstance(value, tuple):
-            return value
-        try:
-            v = tuple(float(s) for s in str(value).split(","))
-        except ValueError:
-            self.fail(f"expected four numbers x,y,w,h, got {value!r}", param, ctx)
-        if len(v) != 4:
-            self.fail(f"expected four numbers x,y,w,h, got {len(v)}", param, ctx)
-        if v[2] <= 0 or v[3] <= 0:
-            self.fail(f"width and height must be positive, got {v[2]:g}x{v[3]:g}", param, ctx)
-        return v
 
 
 @click.command()

@@ -10,24 +10,9 @@ from tqdm import tqdm
 from vistrack.data_synth.contour import CLUTTER, make_contour_clip
 from vistrack.data_synth.plate import make_plate_clip
 
+from .options import Size
+
 __all__ = ["synth"]
-
-
-class Size(click.ParamType):
-    """``WIDTHxHEIGHT``."""
-
-    name = "WxH"
-
-    def convert(self, value, param, ctx):
-        if isinstance(value, tuple):
-            return value
-        try:
-            w, h = (int(v) for v in str(value).lower().split("x"))
-        except ValueError:
-            self.fail(f"expected WIDTHxHEIGHT such as 320x240, got {value!r}", param, ctx)
-        if w < 64 or h < 48:
-            self.fail(f"frame size {w}x{h} is too small (at least 64x48)", param, ctx)
-        return (w, h)
 
 
 def _out_dir(out):

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-import csv
 import json
 
 import cv2
 import numpy as np
+
+from vistrack.clips import write_track_csv
 
 __all__ = ["smooth_noise", "clutter_background", "motion_blur", "lighting", "add_noise", "write_clip_files"]
 
@@ -81,16 +82,6 @@ def add_noise(img, rng, sigma):
 
 def write_clip_files(out, rows, columns, meta):
     """Write ``groundtruth.csv`` (header row, one row per frame) and ``meta.json`` into ``out``."""
-    with open(out / "groundtruth.csv", "w", newline="") as f:
-        wr = csv.writer(f)
-        wr.writerow(columns)
-        for r in rows:
-            wr.writerow([_fmt(r[c]) for c in columns])
+    write_track_csv(out / "groundtruth.csv", rows, columns)
     with open(out / "meta.json", "w") as f:
         json.dump(meta, f, indent=2)
-
-
-def _fmt(v):
-    if isinstance(v, (int, np.integer)):
-        return str(int(v))
-    return f"{float(v):.3f}"

@@ -104,7 +104,7 @@ def load_clip(path):
 
 def write_track_csv(path, rows, columns=None):
     """Write track rows (dicts) with a header; ``columns`` fixes the order (default: first row's keys)."""
-    columns = columns or list(rows[0]) if rows else (columns or [])
+    columns = columns or (list(rows[0]) if rows else [])
     with open(path, "w", newline="") as f:
         wr = csv.writer(f)
         wr.writerow(columns)

@@ -30,7 +30,7 @@ import numpy as np
 from .builders import build_model
 from .clips import load_clip
 from .filters import ALGORITHMS, make_filter
-from .metrics import center_error, contour_lost_threshold, iou
+from .metrics import center_error, contour_lost_threshold, iou, summarize_runs
 from .tracking import track
 from .video import VideoError
 
@@ -262,7 +262,7 @@ def execute(tasks, out_dir, client, *, resume=False, progress=None, key_prefix="
     return len(pending)
 
 
-def pooled_summary(results, lost_threshold=None):
+def pooled_summary(results):
     """Per (algo, N) over all clips and runs (same frame count): P(lost) per frame, at the
     last frame and averaged, mean error over frames not lost, ms per frame, mean ESS."""
     groups = {}
@@ -271,18 +271,13 @@ def pooled_summary(results, lost_threshold=None):
     out = []
     for (algo, n), rs in groups.items():
         err = np.array([[np.inf if e is None else e for e in r["error"]] for r in rs])
-        lost = np.array([r["lost"] for r in rs], bool)
-        ok = ~lost
-        p = lost.mean(axis=0)
-        with np.errstate(invalid="ignore"):
-            per = np.where(ok.any(axis=0), np.sum(np.where(ok, err, 0), axis=0) / ok.sum(axis=0), np.nan)
+        s = summarize_runs(err, np.array([r["lost"] for r in rs], bool))
         ms = float(np.mean([np.mean(r["ms"]) for r in rs]))
         ess = [e for r in rs for e in r["ess"] if e is not None]
         out.append({"algo": algo, "particles": n, "clips": len({r["clip"] for r in rs}),
                     "runs": len(rs) // max(1, len({r["clip"] for r in rs})),
-                    "p_lost_final": float(p[-1]), "p_lost_mean": float(p.mean()),
-                    "mean_error": float(err[ok].mean()) if ok.any() else float("nan"),
+                    "p_lost_final": s["p_lost_final"], "p_lost_mean": s["p_lost_mean"], "mean_error": s["mean_error"],
                     "ms_per_frame": ms, "frames_per_s": 1e3 / ms, "mean_ess": float(np.mean(ess)) if ess else None,
-                    "p_lost_per_frame": p.tolist(),
-                    "error_per_frame": [None if not np.isfinite(v) else float(v) for v in per]})
+                    "p_lost_per_frame": s["p_lost_per_frame"].tolist(),
+                    "error_per_frame": [None if not np.isfinite(v) else float(v) for v in s["error_per_frame"]]})
     return out

@@ -7,6 +7,16 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+def _finish(fig, ax, path):
+    """Grid, legend, layout, save as PNG, close; returns ``path``."""
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
 __all__ = ["plot_error_vs_time", "plot_error_vs_n", "plot_per_frame", "plot_vs_n", "plot_success"]
 
 
@@ -55,12 +65,7 @@ def plot_per_frame(curves, path, *, ylabel, title):
     ax.set_xlabel("frame")
     ax.set_ylabel(ylabel)
     ax.set_title(title)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _finish(fig, ax, path)
 
 
 def plot_vs_n(summaries, path, *, key, ylabel, title=None):
@@ -79,12 +84,7 @@ def plot_vs_n(summaries, path, *, key, ylabel, title=None):
     ax.set_xlabel("number of particles N")
     ax.set_ylabel(ylabel)
     ax.set_title(title or f"{ylabel} vs N")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _finish(fig, ax, path)
 
 
 def plot_success(curves, path, *, title="Success plot (IoU)"):
@@ -100,9 +100,4 @@ def plot_success(curves, path, *, title="Success plot (IoU)"):
     ax.set_xlim(0, 1)
     ax.set_ylim(0, 1.02)
     ax.set_title(title)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _finish(fig, ax, path)

@@ -229,7 +229,6 @@ class Contour:
         self.cos_min = float(cos_min)
         self.search_length = float(search_length) * ref
         self.search_iterations = int(search_iterations)
-        self.search_rule = "nearest"
         self.grid_step = float(search_grid_step)
         self.search_check = bool(search_check)
         frame_ref = self.frame_size[0] / 240.0
@@ -402,12 +401,7 @@ class Contour:
         off = reach[:, None, None] * np.linspace(-1.0, 1.0, samples)  # (N, 1, L)
         gn = self._profiles(obs, z, off, support=True)
         peaks = _edge_peaks(gn, self._threshold(obs))
-        if self.search_rule == "nearest":
-            score = np.where(peaks, -np.abs(off), -np.inf)
-        elif self.search_rule == "strongest":
-            score = np.where(peaks, gn, -np.inf)
-        else:  # strength discounted with distance
-            score = np.where(peaks, np.log(np.maximum(gn, 1e-9)) - 0.5 * (off / (0.5 * reach[:, None, None])) ** 2, -np.inf)
+        score = np.where(peaks, -np.abs(off), -np.inf)
         best = np.argmax(score, axis=-1)  # (N, n)
         found = peaks.any(axis=-1)
         nu = np.where(found, np.take_along_axis(np.broadcast_to(off, peaks.shape), best[..., None], -1)[..., 0], 0.0)

@@ -31,7 +31,7 @@ _SETS = ("h_edge", "h_free", "v_edge", "v_free", "small", "big")
 
 def _grid_points(rects, per_unit=24):
     """Sample points (unit-square coords) inside each rectangle, about ``per_unit`` per unit length."""
-    pts, owner = [], []
+    pts = []
     for r in rects:
         x0, y0, x1, y1 = r
         nx = max(2, int(np.ceil((x1 - x0) * per_unit)))
