@@ -20,20 +20,15 @@ def _finish(fig, ax, path):
 __all__ = ["plot_error_vs_time", "plot_error_vs_n", "plot_per_frame", "plot_vs_n", "plot_success"]
 
 
-def plot_error_vs_time(curves, path, *, title="Tracking error vs time step"):
-    """One line per (algorithm, N): mean error at each time step (thesis Fig. 4.18)."""
+def plot_error_vs_time(curves, path, *, title="Tracking error vs time step", ylabel="mean position error"):
+    """One line per (algorithm, N): mean error at each time step (thesis Fig. 4.18, seed 000 Fig. 2)."""
     fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
     for (algo, n), err in curves.items():
         ax.plot(range(1, len(err) + 1), err, marker="o", ms=3, label=f"{algo}, N={n}")
     ax.set_xlabel("time step")
-    ax.set_ylabel("mean position error")
+    ax.set_ylabel(ylabel)
     ax.set_title(title)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _finish(fig, ax, path)
 
 
 def plot_error_vs_n(results, path, *, key="mean_error_final", err_key="std_error_final",

@@ -9,6 +9,9 @@ from .bootstrap import Bootstrap
 from .lis import LIS, GaussMixtureProposal
 from .lls import LLS, Window
 from .ls_n_ips import LSNIPS
+from .pf_doucet import PFDoucet
+from .pf_eis import PFEIS
+from .pf_eis_mt import PFEISMT
 from .sir import SIR
 
 __all__ = [
@@ -21,6 +24,9 @@ __all__ = [
     "Window",
     "LIS",
     "LSNIPS",
+    "PFDoucet",
+    "PFEIS",
+    "PFEISMT",
     "GaussMixtureProposal",
     "ALGORITHMS",
     "make_filter",
@@ -36,6 +42,9 @@ ALGORITHMS = {
     "lls": LLS,
     "lis": LIS,
     "ls-n-ips": LSNIPS,
+    "pf-doucet": PFDoucet,
+    "pf-eis": PFEIS,
+    "pf-eis-mt": PFEISMT,
 }
 
 
