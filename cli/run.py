@@ -12,7 +12,7 @@ from tqdm import tqdm
 from vistrack.builders import MODELS, build_model, read_support_points
 from vistrack.clips import load_clip, write_track_csv
 from vistrack.filters import make_filter
-from vistrack.metrics import center_error, contour_lost_threshold
+from vistrack.metrics import center_error, contour_lost_threshold, landmark_error
 from vistrack.particles import DegenerateWeightsWarning
 from vistrack.render import annotate
 from vistrack.tracking import top_particles, track
@@ -22,7 +22,12 @@ from .options import Box, check_writable
 
 __all__ = ["run"]
 
-RUN_ALGOS = ("bootstrap", "ls-n-ips", "lls", "lis", "avpf", "condensation")
+RUN_ALGOS = ("bootstrap", "ls-n-ips", "lls", "lis", "avpf", "condensation",
+             "pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt")
+#: the algorithms each model supports, default first
+MODEL_ALGOS = {"contour": ("lis", "bootstrap", "condensation", "ls-n-ips", "lls", "avpf"),
+               "plate": ("lis", "bootstrap", "condensation", "lls", "avpf"),
+               "landmarks": ("pf-eis-mt", "pf-eis", "pf-doucet", "pf-gordon", "bootstrap")}
 
 
 @click.command()
@@ -31,7 +36,8 @@ RUN_ALGOS = ("bootstrap", "ls-n-ips", "lls", "lis", "avpf", "condensation")
               help="Tracking model [default: the clip's meta.json model, else plate].")
 @click.option("--layout", type=click.Choice(["jp", "single-row"]), default=None,
               help="Plate layout [default: the clip's, else jp].")
-@click.option("--algo", default="lis", show_default=True, type=click.Choice(RUN_ALGOS), help="Particle filter.")
+@click.option("--algo", default=None, type=click.Choice(RUN_ALGOS),
+              help="Particle filter [default: lis; pf-eis-mt for landmarks].")
 @click.option("-n", "--particles", default=100, show_default=True, type=click.IntRange(min=1),
               help="Number of particles N.")
 @click.option("--seed", default=0, show_default=True, type=int, help="Random seed (same seed, same track).")
@@ -41,7 +47,8 @@ RUN_ALGOS = ("bootstrap", "ls-n-ips", "lls", "lis", "avpf", "condensation")
                    "template, or OTB groundtruth_rect.txt), or FILE.")
 @click.option("--template", "template_path", type=click.Path(dir_okay=False),
               help="Contour support points (x y per line, or JSON): used where they lie in the first "
-                   "frame, or fitted to --init / --init-gt boxes. Default: an ellipse, or the clip's template.")
+                   "frame, or fitted to --init / --init-gt boxes. Default: an ellipse, or the clip's template. "
+                   "Landmarks: the first frame's landmark positions.")
 @click.option("--track", "track_path", type=click.Path(dir_okay=False), help="Write the track CSV here.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False), help="Write the annotated mp4 here.")
 @click.option("--show-particles", default=10, show_default=True, type=click.IntRange(min=0),
@@ -63,9 +70,13 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
       vistrack run video.mp4 --model contour --template hand.txt --out a.mp4
 
     The track CSV has one row per frame: frame, visible, cx, cy, w, h,
-    angle_deg, scale, the support points qx0.., qy0.., then ess and ms (time
-    spent on the frame). With ground truth beside the video, the summary
-    reports the centre error.
+    angle_deg, scale, the model's points (contour: support points qx0..,
+    qy0..; plate: vertices x0..y3; landmarks: lx0.., ly0..), then ess and ms
+    (time spent on the frame). With ground truth beside the video, the
+    summary reports the centre error (landmarks: the mean landmark error).
+
+    \b
+    Landmarks (seed 000): vistrack synth landmarks --out lm && vistrack run lm --algo pf-eis-mt --out lm.mp4
     """
     check_writable(track_path, "track file")
     check_writable(out_path, "annotated video")
@@ -79,7 +90,13 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         template = read_support_points(template_path) if template_path else None
         extra = {"layout": layout} if name == "plate" else {"template": template}
         if name == "plate" and template is not None:
-            raise click.UsageError("--template is for the contour model")
+            raise click.UsageError("--template is for the contour and landmarks models")
+        if name == "landmarks" and init is not None:
+            raise click.UsageError("--init is a box; the landmarks model starts from --template FILE or --init-gt")
+        algo = algo or MODEL_ALGOS[name][0]
+        if algo not in MODEL_ALGOS[name]:
+            raise click.UsageError(f"--algo {algo} does not run on the {name} model; "
+                                   f"choose from {', '.join(MODEL_ALGOS[name])}")
         model = build_model(name, clip, init=init, init_gt=init_gt, **extra)
     except (VideoError, ValueError) as e:
         raise click.ClickException(str(e)) from None
@@ -131,6 +148,10 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
     ms = np.array([r["ms"] for r in rows])
     click.echo(f"{n} frames, {n / wall:.0f} frames/s end to end ({1e3 / ms.mean():.0f} frames/s in the filter), "
                f"mean ESS {ess_sum / n:.1f} of {particles}" + (f", {n_degenerate} degenerate frames" if n_degenerate else ""))
+    if clip.truth is not None and name == "landmarks" and "lx0" in clip.truth:
+        err = landmark_error(rows, clip.truth, model.k)
+        click.echo(f"vs ground truth: mean landmark error {err.mean():.2f} px (per frame: median "
+                   f"{np.median(err):.2f}, max {err.max():.2f})")
     if clip.truth is not None and name == "contour":
         t = clip.truth
         k = np.array([r["frame"] for r in rows], int)

@@ -8,6 +8,7 @@ import click
 from tqdm import tqdm
 
 from vistrack.data_synth.contour import CLUTTER, make_contour_clip
+from vistrack.data_synth.landmarks import make_landmark_clip
 from vistrack.data_synth.plate import make_plate_clip
 
 from .options import Size
@@ -77,21 +78,57 @@ def plate(out, frames, size, seed, cars, layout, overlap, quiet):
         click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({frames} frames, {size[0]}x{size[1]})")
 
 
+@synth.command()
+@click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write.")
+@click.option("--k", "k", default=5, show_default=True, type=click.IntRange(min=3), help="Number of landmarks K.")
+@click.option("--frames", default=200, show_default=True, type=click.IntRange(min=1))
+@click.option("--size", default="640x480", show_default=True, type=Size())
+@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--clutter-blobs", default=6, show_default=True, type=click.IntRange(min=0),
+              help="Drifting blobs identical to the landmarks.")
+@click.option("--occlusion", default=0.01, show_default=True, type=click.FloatRange(0, 1),
+              help="Per-frame probability that a landmark disappears for 3-10 frames.")
+@click.option("--quiet", "-q", is_flag=True)
+def landmarks(out, k, frames, size, seed, clutter_blobs, occlusion, quiet):
+    """K landmark blobs moving and deforming by the shape model of seed 000 (§3.1): scale and
+    rotation about the image centre, shape change in the tangent space; clutter blobs, occlusions,
+    lighting change and noise. Ground truth: every landmark's position per frame (lx0.., ly0..)."""
+    if size[0] < 128 or size[1] < 96:
+        raise click.ClickException(f"frame size {size[0]}x{size[1]} is too small for landmarks (at least 128x96)")
+    out = _out_dir(out)
+    with tqdm(total=frames, unit="frame", disable=quiet, desc="synth landmarks") as bar:
+        make_landmark_clip(out, k=k, frames=frames, size=size, seed=seed, clutter_blobs=clutter_blobs,
+                           occlusion=occlusion, progress=bar.update)
+    if not quiet:
+        click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({frames} frames, {size[0]}x{size[1]}, K={k})")
+
+
+#: per kind: clip maker, default frames, default size
+SUITES = {"contour": (make_contour_clip, 300, (320, 240)), "plate": (make_plate_clip, 300, (640, 480)),
+          "landmarks": (make_landmark_clip, 200, (640, 480))}
+
+
 @click.command("synth-suite")
 @click.option("--kind", required=True, type=click.Choice(["contour", "plate", "landmarks"]))
 @click.option("--clips", "n_clips", default=10, show_default=True, type=click.IntRange(min=1))
 @click.option("--seed", default=1, show_default=True, type=int, help="Seed of the first clip (then +1, +2, ...).")
-@click.option("--frames", default=300, show_default=True, type=click.IntRange(min=1))
-@click.option("--size", default="320x240", show_default=True, type=Size())
+@click.option("--frames", default=None, type=click.IntRange(min=1),
+              help="Frames per clip [default: 300; 200 for landmarks].")
+@click.option("--size", default=None, type=Size(), help="Frame size [default: 320x240 contour, 640x480 plate/landmarks].")
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="Folder to hold the clip folders.")
 @click.option("--quiet", "-q", is_flag=True)
 def synth_suite(kind, n_clips, seed, frames, size, out, quiet):
-    """A suite of clips for `vistrack eval` (OUT/<kind>-<seed>/ each)."""
-    if kind != "contour":
-        raise click.ClickException(f"--kind {kind}: this version generates contour suites only")
+    """A suite of clips for `vistrack eval` (OUT/<kind>-<seed>/ each), with each kind's defaults
+    (contour: high clutter and a distractor; plate: 3 cars, JP layout; landmarks: K = 5)."""
+    make, frames_default, size_default = SUITES[kind]
+    frames = frames or frames_default
+    size = size or size_default
     out = _out_dir(out)
     with tqdm(total=n_clips * frames, unit="frame", disable=quiet, desc=f"synth-suite {kind}") as bar:
         for s in range(seed, seed + n_clips):
-            make_contour_clip(out / f"{kind}-{s:02d}", frames=frames, size=size, seed=s, progress=bar.update)
+            try:
+                make(out / f"{kind}-{s:02d}", frames=frames, size=size, seed=s, progress=bar.update)
+            except ValueError as e:
+                raise click.ClickException(str(e)) from None
     if not quiet:
         click.echo(f"wrote {n_clips} {kind} clips into {out}")

@@ -16,7 +16,7 @@ from .video import VideoError, read_rects
 
 __all__ = ["MODELS", "initial_truth", "build_model", "read_support_points"]
 
-MODELS = ("contour", "plate")
+MODELS = ("contour", "plate", "landmarks")
 
 
 def initial_truth(clip, init_gt):
@@ -108,7 +108,41 @@ def build_model(name, clip, *, init=None, init_gt=None, template=None, polarity=
         return model
     if name == "plate":
         return _plate(clip, size, init, init_gt, params)
+    if name == "landmarks":
+        return _landmarks(clip, size, init_gt, template, params)
     raise VideoError(f"unknown model {name!r}; choose from {', '.join(MODELS)}")
+
+
+def _landmarks(clip, size, init_gt, template, params):
+    """Landmark model started from the first frame's landmarks: ``--template FILE`` (x y per
+    line), ``--init-gt`` (lx0.., ly0.. columns), or the clip's meta.json; the clip's centre,
+    scale and dynamics when meta.json has them."""
+    from .models.landmarks import LandmarkVideo
+
+    meta = clip.meta or {}
+    if template is not None:
+        first = np.asarray(template, float)
+    elif init_gt is not None:
+        row = initial_truth(clip, init_gt)
+        k = 0
+        while f"lx{k}" in row:
+            k += 1
+        if k < 3:
+            raise VideoError("--init-gt: the ground truth has no landmark columns lx0.., ly0.. (need at least 3)")
+        first = np.array([[row[f"lx{i}"], row[f"ly{i}"]] for i in range(k)])
+    elif (meta.get("template") or {}).get("landmarks"):
+        first = np.asarray(meta["template"]["landmarks"], float)
+    else:
+        raise VideoError("the landmarks model needs the first frame's landmarks: --template FILE (x y per line) "
+                         "or --init-gt")
+    kw = dict(params)
+    if meta.get("model") == "landmarks":
+        kw.setdefault("centre", meta.get("centre"))
+        kw.setdefault("scale_px", meta.get("scale_px"))
+        kw.setdefault("theta0", meta.get("theta0", 0.0))
+        for key, v in (meta.get("dynamics") or {}).items():
+            kw.setdefault(key, v)
+    return LandmarkVideo(first, size, **{k: v for k, v in kw.items() if v is not None})
 
 
 def _plate(clip, size, init, init_gt, params):

@@ -16,7 +16,7 @@ from functools import cached_property
 import cv2
 import numpy as np
 
-__all__ = ["FeatureMaps", "box_dog", "remap_points"]
+__all__ = ["FeatureMaps", "box_dog", "remap_points", "blob_peaks"]
 
 
 def box_dog(gray, inner, outer):
@@ -27,6 +27,33 @@ def box_dog(gray, inner, outer):
     a = cv2.boxFilter(gray, cv2.CV_32F, (inner, inner), borderType=cv2.BORDER_REFLECT)
     b = cv2.boxFilter(gray, cv2.CV_32F, (outer, outer), borderType=cv2.BORDER_REFLECT)
     return a - b
+
+
+def blob_peaks(response, threshold, radius=3):
+    """Bright-blob centres: local maxima of ``response`` (a DoG map) above ``threshold``.
+
+    A pixel is a peak when it equals the maximum of its ``(2r+1)²`` neighbourhood
+    (``cv2.dilate``); its position is refined to sub-pixel by a parabola
+    through the neighbours along x and along y. Returns ``(M, 2)`` float
+    ``(x, y)`` and the ``(M,)`` peak values, strongest first.
+    """
+    r = np.asarray(response, np.float32)
+    k = 2 * int(radius) + 1
+    dil = cv2.dilate(r, np.ones((k, k), np.uint8))
+    ys, xs = np.nonzero((r >= dil) & (r > threshold))
+    h, w = r.shape
+    keep = (xs > 0) & (xs < w - 1) & (ys > 0) & (ys < h - 1)
+    xs, ys = xs[keep], ys[keep]
+    c = r[ys, xs].astype(float)
+
+    def vertex(a, b):  # offset of the parabola through (-1, a), (0, c), (1, b)
+        den = a - 2 * c + b
+        return np.where(den < 0, 0.5 * (a - b) / np.where(den < 0, den, -1.0), 0.0)
+
+    dx = np.clip(vertex(r[ys, xs - 1], r[ys, xs + 1]), -0.5, 0.5)
+    dy = np.clip(vertex(r[ys - 1, xs], r[ys + 1, xs]), -0.5, 0.5)
+    order = np.argsort(-c)
+    return np.column_stack([xs + dx, ys + dy])[order], c[order]
 
 
 _REMAP_COLS = 1024

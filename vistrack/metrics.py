@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["center_error", "contour_lost_threshold", "summarize_runs", "iou"]
+__all__ = ["center_error", "contour_lost_threshold", "summarize_runs", "landmark_error", "iou"]
 
 
 def center_error(est_cx, est_cy, true_cx, true_cy):
@@ -43,6 +43,19 @@ def summarize_runs(errors, lost):
         "mean_error": float(errors[ok].mean()) if ok.any() else float("nan"),
         "error_per_frame": per_frame,
     }
+
+
+def landmark_error(rows, truth, k):
+    """Mean distance (px) between estimated and true landmarks per frame.
+
+    ``rows``: track rows (``frame``, ``lx0..``, ``ly0..``); ``truth``: ground-truth
+    columns with the same names. Frames beyond the truth are ignored.
+    """
+    idx = np.array([r["frame"] for r in rows], int)
+    ok = idx < len(truth["lx0"])
+    est = np.array([[[r[f"lx{i}"], r[f"ly{i}"]] for i in range(k)] for r, o in zip(rows, ok) if o])
+    tru = np.stack([np.column_stack([truth[f"lx{i}"][idx[ok]], truth[f"ly{i}"][idx[ok]]]) for i in range(k)], axis=1)
+    return np.linalg.norm(est - tru, axis=2).mean(axis=1)
 
 
 def iou(a, b):

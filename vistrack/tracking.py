@@ -49,18 +49,24 @@ def track(frames, filt, n, rng, *, estimator=None):
 
     Yields a :class:`FrameResult` per frame. The first frame observes
     ``X_1 ~ p_0`` (``filt.first_step``). ``estimator(particles)`` gives the point
-    estimate (default: the weighted mean). The feature maps of a frame live in
+    estimate (default: the model's ``estimate`` if it has one, else the weighted
+    mean). A model with an ``observe(maps, previous_particles)`` method turns
+    each frame's maps into its observation ``Y_t`` (landmarks: blob detection
+    and association); otherwise the maps are the observation. The feature maps of a frame live in
     buffers that the next frame overwrites: use them before asking for the next.
     """
     particles = None
+    estimator = estimator or getattr(filt.model, "estimate", None)
+    observe = getattr(filt.model, "observe", None)
     buffers = {}  # feature-map buffers reused from frame to frame
     for i, frame in frames:
         t0 = time.perf_counter()
         maps = FeatureMaps(frame, buffers=buffers)
+        obs = observe(maps, particles) if observe else maps
         if particles is None:
-            particles = filt.first_step(maps, n, rng)
+            particles = filt.first_step(obs, n, rng)
         else:
-            particles = filt.step(particles, maps, rng)
+            particles = filt.step(particles, obs, rng)
         est = estimator(particles) if estimator else particles.mean()
         ms = (time.perf_counter() - t0) * 1e3
         yield FrameResult(i, frame, particles, est, ms, maps)
