@@ -114,7 +114,8 @@ SUITES = {"contour": (make_contour_clip, 300, (320, 240)), "plate": (make_plate_
 @click.option("--seed", default=1, show_default=True, type=int, help="Seed of the first clip (then +1, +2, ...).")
 @click.option("--frames", default=None, type=click.IntRange(min=1),
               help="Frames per clip [default: 300; 200 for landmarks].")
-@click.option("--size", default=None, type=Size(), help="Frame size [default: 320x240 contour, 640x480 plate/landmarks].")
+@click.option("--size", default=None, type=Size(),
+              help="Frame size [default: 320x240 contour, 640x480 plate/landmarks].")
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="Folder to hold the clip folders.")
 @click.option("--quiet", "-q", is_flag=True)
 def synth_suite(kind, n_clips, seed, frames, size, out, quiet):

@@ -146,8 +146,9 @@ class Landmarks:
         m = self.k * (self.k - 2)
         self._sl = {"s": 0, "theta": 1, "c": slice(2, 2 + self.dc)}
         o = 2 + self.dc
-        self._sl.update(zr=slice(o, o + self.k), zi=slice(o + self.k, o + 2 * self.k),
-                        ur=slice(o + 2 * self.k, o + 2 * self.k + m), ui=slice(o + 2 * self.k + m, o + 2 * self.k + 2 * m))
+        o2 = o + 2 * self.k
+        self._sl.update(zr=slice(o, o + self.k), zi=slice(o + self.k, o2), ur=slice(o2, o2 + m),
+                        ui=slice(o2 + m, o2 + 2 * m))
         self.dim = o + 2 * self.k + 2 * m
         self.prior_mean = self.pack(np.array([self.s0]), np.array([self.theta0]), np.zeros((1, self.dc)),
                                     self.z0[None], self.u0[None])[0]

@@ -22,7 +22,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..data_synth.landmarks import simulate
-from ..filters import ALGORITHMS, make_filter
+from ..filters import make_filter
 from ..models.landmarks import Landmarks
 from ..particles import DegenerateWeightsWarning, ParticleSet
 
