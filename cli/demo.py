@@ -7,13 +7,15 @@ from pathlib import Path
 import click
 
 from vistrack.data_synth.contour import make_contour_clip
+from vistrack.data_synth.plate import make_plate_clip
 
 from .eval import eval_cmd
 from .run import run
 
 __all__ = ["demo"]
 
-DEMO_ALGOS = (("ls-n-ips", 30), ("lis", 30), ("bootstrap", 500))
+DEMO_ALGOS = (("ls-n-ips", 30), ("lis", 30), ("bootstrap", 300))
+PLATE_ALGOS = (("lis", 100), ("bootstrap", 750))
 
 
 @click.command()
@@ -25,8 +27,9 @@ DEMO_ALGOS = (("ls-n-ips", 30), ("lis", 30), ("bootstrap", 500))
 @click.option("--seed", default=0, show_default=True, type=int)
 @click.pass_context
 def demo(ctx, out_dir, frames, runs, seed):
-    """Generate a contour clip (clutter, distractor), track it with LS-N-IPS, LIS and
-    bootstrap, write annotated videos, track CSVs, a comparison table and plots.
+    """Generate a contour clip (clutter, distractor) and a road clip with plates, track them
+    with LS-N-IPS, LIS and bootstrap, write annotated videos, track CSVs, a comparison table
+    and plots.
 
     Everything goes into OUT (./vistrack-demo by default).
     """
@@ -36,9 +39,9 @@ def demo(ctx, out_dir, frames, runs, seed):
     except OSError as e:
         raise click.ClickException(f"cannot create {out}: {e.strerror}") from None
     clip = out / "clips" / "contour"
-    click.echo(f"1/3 generating a {frames}-frame 320x240 contour clip in {clip}")
+    click.echo(f"1/4 generating a {frames}-frame 320x240 contour clip in {clip}")
     make_contour_clip(clip, frames=frames, size=(320, 240), seed=seed + 1, clutter="high", distractor=True)
-    click.echo("2/3 tracking it once per algorithm (annotated video + track CSV)")
+    click.echo("2/4 tracking it once per algorithm (annotated video + track CSV)")
     made = []
     for algo, n in DEMO_ALGOS:
         video, track = out / f"contour-{algo}.mp4", out / f"contour-{algo}.csv"
@@ -46,8 +49,19 @@ def demo(ctx, out_dir, frames, runs, seed):
         ctx.invoke(run, video=str(clip), algo=algo, particles=n, seed=seed, init_gt="", out_path=str(video),
                    track_path=str(track), quiet=False, show_particles=10)
         made += [video, track]
-    click.echo(f"3/3 comparing them over {runs} runs (vistrack eval)")
-    ctx.invoke(eval_cmd, clips=(str(clip),), algos=[a for a, _ in DEMO_ALGOS], particles=[30, 500], runs=runs,
+    plate = out / "clips" / "plate"
+    plate_frames = min(frames, 120)
+    click.echo(f"3/4 generating a {plate_frames}-frame 640x480 road clip in {plate}; tracking its plates "
+               "without an initial box (acquired as cars enter)")
+    make_plate_clip(plate, frames=plate_frames, size=(640, 480), seed=seed + 1, cars=2)
+    for algo, n in PLATE_ALGOS:
+        video, track = out / f"plate-{algo}.mp4", out / f"plate-{algo}.csv"
+        click.echo(f"  {algo} N={n}:")
+        ctx.invoke(run, video=str(plate), algo=algo, particles=n, seed=seed, out_path=str(video),
+                   track_path=str(track), quiet=False, show_particles=10)
+        made += [video, track]
+    click.echo(f"4/4 comparing the contour trackers over {runs} runs (vistrack eval)")
+    ctx.invoke(eval_cmd, clips=(str(clip),), algos=[a for a, _ in DEMO_ALGOS], particles=[30, 300], runs=runs,
                seed=seed, equal_time=False, out_dir=str(out / "eval"), quiet=False, workers=1, in_process=True)
     click.echo("")
     click.echo(f"done. In {out}/:")

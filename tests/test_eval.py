@@ -111,10 +111,14 @@ def test_demo_writes_videos_tracks_and_report(tmp_path, capsys):
     out = tmp_path / "demo"
     code, stdout, err = run(["demo", "--out", str(out), "--frames", "12", "--runs", "1"], capsys)
     assert code == 0, err
-    for algo in ("ls-n-ips", "lis", "bootstrap"):
-        cap = cv2.VideoCapture(str(out / f"contour-{algo}.mp4"))
+    made = [f"contour-{a}" for a in ("ls-n-ips", "lis", "bootstrap")] + [f"plate-{a}" for a in ("lis", "bootstrap")]
+    for name in made:
+        cap = cv2.VideoCapture(str(out / f"{name}.mp4"))
         assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 12
-        with open(out / f"contour-{algo}.csv", newline="") as f:
-            assert len(list(csv.DictReader(f))) == 12
+        with open(out / f"{name}.csv", newline="") as f:
+            rows = list(csv.DictReader(f))
+        assert len(rows) == 12
+        if name.startswith("plate"):
+            assert {"x0", "y3", "visible"} <= set(rows[0])
     assert (out / "eval" / "report.md").is_file() and str(out) in stdout
     assert len(json.loads((out / "eval" / "results.json").read_text())["results"]) == 3 * 2
