@@ -42,14 +42,15 @@ def _client(scheduler, workers, timeout, in_process=False):
 
 
 def run_tasks(tasks, out, *, scheduler=None, workers=0, timeout=10, in_process=False, resume=False, quiet=False,
-              desc="tasks"):
-    """Execute ``tasks`` on Dask (a LocalCluster unless ``scheduler``) with a progress bar."""
+              desc="tasks", runner=None):
+    """Execute ``tasks`` on Dask (a LocalCluster unless ``scheduler``) with a progress bar
+    (``runner``: see :func:`vistrack.evaluation.execute`)."""
     if resume and all(task_done(t, out) for t in tasks):
         return
     client, cluster = _client(scheduler, workers, timeout, in_process)
     try:
         with tqdm(total=len(tasks), unit="task", desc=desc, disable=quiet) as bar:
-            execute(tasks, out, client, resume=resume, progress=bar.update)
+            execute(tasks, out, client, resume=resume, progress=bar.update, runner=runner)
     finally:
         client.close()
         if cluster is not None:

@@ -9,7 +9,8 @@ import click
 from tqdm import tqdm
 
 from vistrack.reproduce.bearings import DEFAULT_ALGOS, BearingsConfig, run_bearings
-from vistrack.reproduce.landmarks import LANDMARK_ALGOS, LandmarksConfig, run_landmarks
+from vistrack.reproduce.landmarks import (LANDMARK_ALGOS, LandmarksConfig, landmark_results, landmark_tasks,
+                                          run_landmark_task)
 from vistrack.reproduce.contour import ContourConfig, config_dict, contour_results, contour_tasks
 
 from .options import IntList, StrList, check_writable
@@ -231,17 +232,27 @@ def _landmarks_table(results):
               help="Particles N [default: the paper's, 50 for K=5 and 20 for K=8].")
 @click.option("--mt-dims", default=None, type=click.IntRange(min=0),
               help="PF-EIS-MT: trailing entries of c that are mode-tracked [default: 10 for K=8, 4 for K=5].")
+@click.option("--workers", default=0, show_default=True, type=click.IntRange(min=0),
+              help="LocalCluster worker processes (0: one per core).")
+@click.option("--scheduler", help="Address of a running Dask scheduler [default: a LocalCluster].")
+@click.option("--in-process", is_flag=True, help="LocalCluster workers as threads of this process.")
+@click.option("--out", "out_dir", default="landmarks-results", show_default=True, type=click.Path(file_okay=False),
+              help="Folder for the per-run result files (OUT/tasks).")
+@click.option("--resume", is_flag=True, help="Keep finished runs in --out and run only the rest.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False), help="Write mse_vs_time.png here.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
-def landmarks(k, runs, steps, seed, algos, particles, mt_dims, json_path, plots_dir, quiet):
+def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, scheduler, in_process, out_dir, resume,
+              json_path, plots_dir, quiet):
     """Landmark shape tracking (seed 000, §4, Fig. 2).
 
     Every run simulates a sequence from the known regular K-gon by the model
     (5)-(6) with the paper's parameters and tracks it with every algorithm.
     Prints the MSE of the configuration, Σ_k |ĥ_k - h_k|² with ĥ the
     weighted-mean configuration, averaged over runs and time steps, and the
-    CPU time per run.
+    CPU time per run. Each run is a task of the evaluation engine (Dask; one
+    file per run in OUT/tasks, --resume continues an interrupted reproduction;
+    run r draws from SeedSequence(seed).spawn(runs)[r] whatever the workers).
     """
     try:
         cfg = LandmarksConfig(k=int(k), runs=runs, steps=steps, seed=seed, particles=particles,
@@ -257,8 +268,22 @@ def landmarks(k, runs, steps, seed, algos, particles, mt_dims, json_path, plots_
         except OSError as e:
             raise click.ClickException(f"cannot create --plots folder {plots_dir}: {e.strerror}") from None
         check_writable(os.path.join(plots_dir, "mse_vs_time.png"), "plot")
-    with tqdm(total=runs, unit="run", desc=f"landmarks K={k}", disable=quiet, leave=False) as bar:
-        out = run_landmarks(cfg, progress=bar.update)
+    from pathlib import Path
+
+    from .eval import run_tasks
+
+    tasks = landmark_tasks(cfg)
+    out_path = Path(out_dir)
+    try:
+        out_path.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise click.ClickException(f"cannot create --out folder {out_dir}: {e.strerror}") from None
+    if not resume and (out_path / "tasks").is_dir():
+        for t in tasks:
+            (out_path / "tasks" / f"{t['name']}.json").unlink(missing_ok=True)
+    run_tasks(tasks, out_path, scheduler=scheduler, workers=workers, in_process=in_process, resume=resume,
+              quiet=quiet, desc=f"landmarks K={k}", runner=run_landmark_task)
+    out = landmark_results(cfg, tasks, out_path)
     click.echo(f"K = {k}, {runs} runs x {steps} steps")
     click.echo(_landmarks_table(out["results"]))
     if json_path:

@@ -142,3 +142,41 @@ def test_model_rejects_bad_parameters():
         make_filter("pf-eis-mt", Landmarks(5), mt_dims=6)
     with pytest.raises(ValueError, match="--k must be 5 or 8"):
         LandmarksConfig(k=6)
+
+
+def test_reproduce_landmarks_cli_json_plot_and_resume(tmp_path, capsys):
+    import json
+
+    import matplotlib.image as mpimg
+
+    from vistrack.cli import main
+
+    def cli(argv):
+        with pytest.raises(SystemExit) as e:
+            main(argv)
+        out = capsys.readouterr()
+        return e.value.code, out.out, out.err
+
+    base = ["reproduce", "landmarks", "--k", "8", "--runs", "3", "--steps", "6", "--seed", "2", "-q", "--in-process",
+            "--workers", "2", "--out", str(tmp_path / "res")]
+    code, out, err = cli(base + ["--json", str(tmp_path / "a.json"), "--plots", str(tmp_path / "p")])
+    assert code == 0, err
+    assert "pf-eis-mt" in out and "mean MSE" in out
+    data = json.loads((tmp_path / "a.json").read_text())
+    assert set(data) == {"config", "results"} and data["config"]["k"] == 8 and data["config"]["mt_dims"] == 10
+    assert [r["algo"] for r in data["results"]] == ["pf-eis-mt", "pf-eis", "pf-gordon"]
+    for r in data["results"]:
+        assert {"algo", "particles", "k", "mse_per_step", "mean_mse", "ms_per_run"} <= set(r)
+        assert r["particles"] == 20 and len(r["mse_per_step"]) == 6 and r["mean_mse"] > 0
+    png = tmp_path / "p" / "mse_vs_time.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and mpimg.imread(png).shape[0] > 100
+    # an interrupted reproduction resumed gives the same numbers
+    tasks = sorted((tmp_path / "res" / "tasks").glob("*.json"))
+    assert len(tasks) == 3
+    tasks[1].unlink()
+    code, _, err = cli(base + ["--resume", "--json", str(tmp_path / "b.json")])
+    assert code == 0, err
+    strip = lambda d: [{k: v for k, v in r.items() if k != "ms_per_run"} for r in d["results"]]  # noqa: E731
+    assert strip(json.loads((tmp_path / "b.json").read_text())) == strip(data)
+    code, _, err = cli(["reproduce", "landmarks", "--algos", "lis", "-q"])
+    assert code != 0 and "unknown algorithm 'lis' for landmarks" in err

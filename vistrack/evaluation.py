@@ -184,11 +184,17 @@ def run_task(task, out_dir):
         "ms": [float(v) for v in ms[:m]],
         "ess": [None if not np.isfinite(v) else float(v) for v in ess[:m]],
     }
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_suffix(f".tmp{os.getpid()}")
+    return write_task_result(out, result)
+
+
+def write_task_result(path, result):
+    """Write a task's result JSON atomically (temporary file, then rename); return the path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(f".tmp{os.getpid()}")
     tmp.write_text(json.dumps(result))
-    tmp.replace(out)
-    return str(out)
+    tmp.replace(path)
+    return str(path)
 
 
 def task_done(task, out_dir):
@@ -243,8 +249,11 @@ def summarize(results):
     return out
 
 
-def execute(tasks, out_dir, client, *, resume=False, progress=None, key_prefix="vistrack"):
+def execute(tasks, out_dir, client, *, resume=False, progress=None, key_prefix="vistrack", runner=None):
     """Run the tasks not yet done on a ``distributed.Client``; each writes its own file.
+
+    ``runner(task, out_dir)`` does one task (default :func:`run_task`, one tracking run
+    of a clip); it must write ``out_dir/tasks/<name>.json``.
 
     ``progress(k)`` is called as tasks finish (and once for those skipped on resume).
     """
@@ -253,7 +262,7 @@ def execute(tasks, out_dir, client, *, resume=False, progress=None, key_prefix="
     pending = [t for t in tasks if not (resume and task_done(t, out_dir))]
     if progress and len(tasks) > len(pending):
         progress(len(tasks) - len(pending))
-    futs = [client.submit(run_task, t, str(out_dir), key=f"{key_prefix}-{t['name']}", retries=2, pure=False)
+    futs = [client.submit(runner or run_task, t, str(out_dir), key=f"{key_prefix}-{t['name']}", retries=2, pure=False)
             for t in pending]
     for f in as_completed(futs):
         f.result()

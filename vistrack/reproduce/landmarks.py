@@ -15,9 +15,11 @@ runs are evaluated in or on which algorithms are chosen.
 
 from __future__ import annotations
 
+import json
 import time
 import warnings
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -26,7 +28,8 @@ from ..filters import make_filter
 from ..models.landmarks import Landmarks
 from ..particles import DegenerateWeightsWarning, ParticleSet
 
-__all__ = ["LandmarksConfig", "PAPER", "run_landmarks", "landmarks_run"]
+__all__ = ["LandmarksConfig", "PAPER", "run_landmarks", "landmarks_run", "landmark_tasks", "run_landmark_task",
+           "landmark_results"]
 
 LANDMARK_ALGOS = ("pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt")
 
@@ -94,40 +97,83 @@ def landmarks_run(model, filt, obs, n, rng):
     return est
 
 
+def _one_run(cfg, model, r, seed_seq):
+    """Run ``r``: simulate its sequence, track it with every algorithm.
+
+    Returns ``{algo: (squared error per step, seconds, degenerate steps)}``.
+    """
+    seq_ss, *algo_ss = seed_seq.spawn(1 + len(LANDMARK_ALGOS))
+    states, obs = simulate(model, cfg.steps, np.random.default_rng(seq_ss))
+    truth = model.configuration(states[1:])
+    out = {}
+    for a in cfg.algos:
+        rng = np.random.default_rng(algo_ss[LANDMARK_ALGOS.index(a)])
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", DegenerateWeightsWarning)
+            t0 = time.perf_counter()
+            est = landmarks_run(model, _filter(cfg, a, model), obs, cfg.particles, rng)
+            sec = time.perf_counter() - t0
+        deg = sum(issubclass(w.category, DegenerateWeightsWarning) for w in caught)
+        out[a] = (np.sum(np.abs(est - truth) ** 2, axis=1), sec, deg)
+    return out
+
+
+def landmark_tasks(cfg):
+    """One engine task per Monte-Carlo run (every algorithm inside, common random numbers)."""
+    cfg.validate()
+    seeds = np.random.SeedSequence(cfg.seed).spawn(cfg.runs)
+    tag = f"k{cfg.k}_N{cfg.particles}_T{cfg.steps}_s{cfg.seed}_mt{cfg.mt_dims}"
+    return [{"name": f"landmarks_{tag}_r{r:03d}", "run": r, "seed_seq": seeds[r], "config": asdict(cfg)}
+            for r in range(cfg.runs)]
+
+
+def run_landmark_task(task, out_dir):
+    """Engine runner: one run, written to ``out_dir/tasks/<name>.json``."""
+    from ..evaluation import write_task_result
+
+    cfg = LandmarksConfig(**task["config"])
+    res = _one_run(cfg, cfg.model(), task["run"], task["seed_seq"])
+    result = {"run": task["run"], "algos": {a: {"sq_error": [float(v) for v in sq], "seconds": sec, "degenerate": deg}
+                                            for a, (sq, sec, deg) in res.items()}}
+    return write_task_result(Path(out_dir) / "tasks" / f"{task['name']}.json", result)
+
+
+def landmark_results(cfg, tasks, out_dir):
+    """``{"config", "results", "curves"}`` from the task files of :func:`landmark_tasks`."""
+    runs = [json.loads((Path(out_dir) / "tasks" / f"{t['name']}.json").read_text()) for t in tasks]
+    per = {a: [(np.array(r["algos"][a]["sq_error"]), r["algos"][a]["seconds"], r["algos"][a]["degenerate"])
+               for r in runs] for a in cfg.algos}
+    return _summarize(cfg, per)
+
+
+def _summarize(cfg, per):
+    results, curves = [], {}
+    for a in cfg.algos:
+        sq = np.array([p[0] for p in per[a]])
+        curve = sq.mean(axis=0)
+        results.append({"algo": a, "particles": int(cfg.particles), "k": cfg.k,
+                        "mse_per_step": [float(v) for v in curve], "mean_mse": float(curve.mean()),
+                        "final_mse": float(curve[-1]), "median_run_mse": float(np.median(sq.mean(axis=1))),
+                        "ms_per_run": 1e3 * sum(p[1] for p in per[a]) / len(sq),
+                        "degenerate_steps": int(sum(p[2] for p in per[a]))})
+        curves[(a, int(cfg.particles))] = curve
+    return {"config": asdict(cfg), "results": results, "curves": curves}
+
+
 def run_landmarks(cfg, progress=None):
-    """Run the grid; return ``{"config", "results", "curves"}``.
+    """Run the grid in this process; return ``{"config", "results", "curves"}``.
 
     ``results`` rows: ``algo, particles, k, mse_per_step, mean_mse, ms_per_run``
-    (plus ``final_mse``, ``degenerate_steps``); ``curves[(algo, N)]`` is the MSE
-    per step. ``progress(1)`` is called after every run (all algorithms).
+    (plus ``final_mse``, ``median_run_mse``, ``degenerate_steps``);
+    ``curves[(algo, N)]`` is the MSE per step. ``progress(1)`` is called after
+    every run. The same numbers as the engine path (:func:`landmark_tasks`).
     """
     cfg.validate()
     model = cfg.model()
-    filters = {a: _filter(cfg, a, model) for a in cfg.algos}
-    sq = {a: np.empty((cfg.runs, cfg.steps)) for a in cfg.algos}
-    elapsed = dict.fromkeys(cfg.algos, 0.0)
-    degenerate = dict.fromkeys(cfg.algos, 0)
-    for r, ss in enumerate(np.random.SeedSequence(cfg.seed).spawn(cfg.runs)):
-        seq_ss, *algo_ss = ss.spawn(1 + len(LANDMARK_ALGOS))
-        states, obs = simulate(model, cfg.steps, np.random.default_rng(seq_ss))
-        truth = model.configuration(states[1:])
-        for a in cfg.algos:
-            rng = np.random.default_rng(algo_ss[LANDMARK_ALGOS.index(a)])
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always", DegenerateWeightsWarning)
-                t0 = time.perf_counter()
-                est = landmarks_run(model, filters[a], obs, cfg.particles, rng)
-                elapsed[a] += time.perf_counter() - t0
-            degenerate[a] += sum(issubclass(w.category, DegenerateWeightsWarning) for w in caught)
-            sq[a][r] = np.sum(np.abs(est - truth) ** 2, axis=1)
+    per = {a: [] for a in cfg.algos}
+    for task in landmark_tasks(cfg):
+        for a, v in _one_run(cfg, model, task["run"], task["seed_seq"]).items():
+            per[a].append(v)
         if progress:
             progress(1)
-    results, curves = [], {}
-    for a in cfg.algos:
-        curve = sq[a].mean(axis=0)
-        results.append({"algo": a, "particles": int(cfg.particles), "k": cfg.k,
-                        "mse_per_step": [float(v) for v in curve], "mean_mse": float(curve.mean()),
-                        "final_mse": float(curve[-1]), "median_run_mse": float(np.median(sq[a].mean(axis=1))),
-                        "ms_per_run": 1e3 * elapsed[a] / cfg.runs, "degenerate_steps": int(degenerate[a])})
-        curves[(a, int(cfg.particles))] = curve
-    return {"config": asdict(cfg), "results": results, "curves": curves}
+    return _summarize(cfg, per)
