@@ -66,10 +66,12 @@ def test_plate_likelihood_has_a_narrow_dominant_peak_at_the_plate(road):
         assert ll.max() - ll[dist > 0.15 * s].max() > 1.0
 
 
-def test_plate_lis_proposal_is_a_proper_density_on_the_window():
-    """§4.5.2 proposal q = q^h(W') q^v(U'|W') on the box window: E_q[1 / q(Z)] is the box's
-    area (2 s) × (2 s / aspect) — q integrates to one and log q is exact. (A textured frame
-    and a mild κ keep the importance estimate's variance small.)"""
+@pytest.mark.parametrize("entering", [True, False])
+def test_plate_lis_proposal_is_a_proper_density_on_the_window(entering):
+    """§4.5.2 proposal q = q^h(W') q^v(U'|W') on its box window g: E_q[g / q(Z)] = 1 —
+    q integrates to one on the box and log q is exact (the returned log q includes -log g). The box is twice the plate size for an entering
+    particle and 3 sigma of the AR(2) noise for a tracked one. (A textured frame and the mild
+    thesis weights keep the importance estimate's variance small.)"""
     import cv2
 
     from vistrack.features import FeatureMaps
@@ -78,16 +80,21 @@ def test_plate_lis_proposal_is_a_proper_density_on_the_window():
     g = np.random.default_rng(1)
     img = cv2.GaussianBlur((g.random((240, 320)) * 255).astype(np.uint8), (0, 0), 2)
     obs = FeatureMaps(cv2.cvtColor(img, cv2.COLOR_GRAY2BGR))
-    model = Plate((320, 240), kappa=0.5)
+    model = Plate((320, 240), kappa=0.5, weights="thesis")
     s = 50.0
-    x = np.array([[160.0, 120.0, 0.05, s, 159.0, 119.0, 0.05, s]])
-    xs = np.repeat(x, 3000, axis=0)
-    z, log_alpha, log_q = type(model.lis_proposal())(model, cells=12).sample(xs, obs, np.random.default_rng(0))
+    prev = (160.0, 120.0) if entering else (159.0, 119.0)
+    x = np.array([[160.0, 120.0, 0.05, s, *prev, 0.05, s]])
+    xs = np.repeat(x, 1500 if entering else 3000, axis=0)
+    prop = type(model.lis_proposal())(model, cells=12)
+    z, log_alpha, log_q = prop.sample(xs, obs, np.random.default_rng(0))
     assert np.all(log_alpha == 0)
-    area = (2 * s) * (2 * s / model.layout.aspect)
-    assert np.mean(np.exp(-log_q)) == pytest.approx(area, rel=0.05)
-    assert np.all(np.abs(z[:, 0] - 160) <= s + 1e-9) and np.all(np.abs(z[:, 1] - 120) <= s / 2 + 1e-9)
-    np.testing.assert_array_equal(z[:, 2:], xs[:, 2:])  # only the translation moves
+    half = np.array([s, s / model.layout.aspect])
+    if not entering:
+        half = np.minimum(half, prop.window_sigmas * model.sigma[:2])
+    assert np.mean(np.exp(-log_q)) == pytest.approx(1.0, rel=0.05)
+    assert np.all(np.abs(z[:, 0] - 160) <= half[0] + 1e-9) and np.all(np.abs(z[:, 1] - 120) <= half[1] + 1e-9)
+    np.testing.assert_array_equal(z[:, 2:4], xs[:, 2:4])  # only the translation moves
+    assert np.all(model.entering(z) == entering)
 
 
 def test_plate_dynamics_entering_branch(rng):
@@ -117,3 +124,57 @@ def test_run_plate_clip_default_model_writes_vertices(road, tmp_path, capsys):
     assert len(rows) == 6
     assert list(rows[0])[:8] == ["frame", "visible", "cx", "cy", "w", "h", "angle_deg", "scale"]
     assert {"x0", "y3", "ess", "ms"} <= set(rows[0]) and set(r["visible"] for r in rows) <= {"0", "1"}
+
+
+def test_plate_lis_weights_match_a_brute_force_posterior(road):
+    """Proper weighting on a real frame: one LIS step (from the entering-style start, where
+    the §4.5.2 window is twice the plate size) from a Gaussian prior on (u, w) about the plate,
+    angle and scale known. The mean weight estimates the evidence ∫ r p0 and the weighted mean
+    of (u, w) the posterior mean — both also computed by brute force on a grid."""
+    from vistrack.features import FeatureMaps
+    from vistrack.models.plate import Plate
+    from vistrack.particles import logsumexp
+
+    clip = load_clip(road)
+    t = clip.truth
+    vis = np.flatnonzero(t["visible"] > 0)
+    k = int(vis[len(vis) // 2])
+    obs = FeatureMaps(dict(clip.source)[k])
+    model = Plate(clip.source.size)
+    s = t["scale"][k]
+    su, sw = 0.4 * s, 0.2 * s  # the prior is broader than the window: the weights have finite variance
+    pose = np.array([t["cx"][k] + 0.05 * s, t["cy"][k] - 0.03 * s, np.deg2rad(t["angle_deg"][k]), s])
+    model.start = (pose, np.array([su, sw, 1e-9, 1e-9]))
+    n = 6000
+    rng = np.random.default_rng(0)
+    x = model.sample_prior(n, rng)
+    z, log_alpha, log_q = model.lis_proposal().sample(x, obs, rng)
+    lw = log_alpha + model.loglik(obs, z) - log_q + model.prior_logpdf(z) - model.prior_logpdf(x)
+    w = np.exp(lw - lw.max())
+    evidence = logsumexp(lw) - np.log(n)
+    du, dw = np.meshgrid(np.arange(-4 * su, 4 * su, 0.5), np.arange(-4 * sw, 4 * sw, 0.25), indexing="ij")
+    grid = np.tile(pose, (du.size, 1))
+    grid[:, 0] += du.ravel()
+    grid[:, 1] += dw.ravel()
+    lp = model.loglik(obs, grid) - 0.5 * ((du.ravel() / su) ** 2 + (dw.ravel() / sw) ** 2) \
+        - np.log(2 * np.pi * su * sw)
+    g = np.exp(lp - lp.max())
+    assert evidence == pytest.approx(logsumexp(lp) + np.log(0.5 * 0.25), abs=0.5)
+    np.testing.assert_allclose((w @ z[:, :2]) / w.sum(), (g @ grid[:, :2]) / g.sum(), atol=0.5)
+    # and the plate, not clutter, dominates this posterior
+    np.testing.assert_allclose((g @ grid[:, :2]) / g.sum(), [t["cx"][k], t["cy"][k]], atol=0.1 * s)
+
+
+def test_plate_run_same_seed_same_track_and_bad_layout(road, tmp_path, capsys):
+    tracks = []
+    for name in ("a.csv", "b.csv"):
+        with pytest.raises(SystemExit) as e:
+            main(["run", str(road), "--algo", "lis", "-n", "30", "--max-frames", "8", "--seed", "5",
+                  "--track", str(tmp_path / name), "-q"])
+        assert e.value.code == 0
+        rows = (tmp_path / name).read_text().splitlines()
+        tracks.append([",".join(r.split(",")[:-1]) for r in rows])  # all but the ms column
+    assert tracks[0] == tracks[1]
+    with pytest.raises(SystemExit) as e:
+        main(["run", str(road), "--layout", "us", "-q"])
+    assert e.value.code != 0 and "us" in capsys.readouterr().err

@@ -146,15 +146,21 @@ def _landmarks(clip, size, init_gt, template, params):
 
 
 def _plate(clip, size, init, init_gt, params):
-    """Plate model; without a start it acquires plates through the entering-car component."""
+    """Plate model; without a start it acquires plates through the entering-car component.
+    The layout is the given one, the clip's, the one nearest the start box's aspect ratio, or jp."""
     from .models.plate import Plate
 
-    layout = params.pop("layout", None) or (clip.meta or {}).get("layout") or "jp"
-    model = Plate(size, layout=layout, **params)
     box = init
     if box is None and init_gt is not None:
         row = initial_truth(clip, init_gt)
         box = (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"])
+    layout = params.pop("layout", None) or (clip.meta or {}).get("layout")
+    if layout is None and box is not None:  # the layout whose aspect ratio is nearest the box's
+        from .models.plate_layout import LAYOUTS
+
+        r = float(box[2]) / max(float(box[3]), 1e-9)
+        layout = min(LAYOUTS, key=lambda k: abs(np.log(LAYOUTS[k].aspect / r)))
+    model = Plate(size, layout=layout or "jp", **params)
     if box is not None:
         x, y, w, h = (float(v) for v in box)
         pose = np.array([x + w / 2, y + h / 2, 0.0, w])

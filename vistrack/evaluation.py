@@ -145,8 +145,16 @@ def _track_opencv(algo, clip, frames):
     return np.array(boxes, float), np.array(ms), np.full(len(boxes), np.nan)
 
 
+def single_threaded():
+    """One worker per core: keep OpenCV from starting threads of its own in the worker."""
+    import cv2
+
+    cv2.setNumThreads(1)
+
+
 def run_task(task, out_dir):
     """Track one clip once; write ``out_dir/tasks/<name>.json``; return its path."""
+    single_threaded()
     out = Path(out_dir) / "tasks" / f"{task['name']}.json"
     clip = load_clip(task["clip"])
     frames = list(clip.source)

@@ -24,7 +24,25 @@ import numpy as np
 from ..features import remap_points
 from .plate_layout import LAYOUTS, plate_points
 
-__all__ = ["PlateLikelihood"]
+__all__ = ["PlateLikelihood", "thesis_weights", "LEARNT_WEIGHTS"]
+
+
+def thesis_weights(kappa=2.0):
+    """The thesis's coefficients (§1.3.2): ``+κ`` on the edge bands and the character areas
+    (small characters on ``G_s``, large on ``G_l``), ``-κ`` on both DoGs over the free stripes."""
+    k = float(kappa)
+    return ({"h_edge": k, "h_free_s": -k, "h_free_l": -k, "v_edge": k, "v_free_s": -k, "v_free_l": -k,
+             "small_s": k, "big_l": k}, 0.0)
+
+
+#: coefficients fitted by ``python -m vistrack.models.plate_fit`` on 6 synthetic clips
+#: (seeds 101-106, 640x480, disjoint from the evaluation seeds 1-10), per layout
+#: (on ``log(1 + mean)`` of each pixel set, which keeps strong edges — headlights, sign borders — from
+#: outweighing the characters)
+LEARNT_WEIGHTS = {
+    "jp": ({"h_edge": 4.184, "h_free_s": -3.995, "h_free_l": 0.769, "v_edge": 3.547, "v_free_s": -6.876,
+            "v_free_l": -0.180, "small_s": 1.030, "small_l": 2.321, "big_s": 2.711, "big_l": 1.387}, -17.621),
+}
 
 _SETS = ("h_edge", "h_free", "v_edge", "v_free", "small", "big")
 
@@ -47,20 +65,42 @@ class PlateLikelihood:
     """The plate likelihood ``r(y | u, w, θ, s)`` for poses ``(N, 4)`` (or states whose first
     four columns are the pose).
 
+    ``log r`` is a weighted sum of the ten pixel-set means of :meth:`features`
+    plus a bias: ``log r^h`` takes the horizontal-edge band and the horizontal
+    free stripes, ``log r^v`` the vertical ones, ``log r^c`` the character
+    areas and the bias. ``weights="thesis"`` is the thesis's form above, every
+    coefficient ``±κ``; ``weights="learnt"`` (default where the layout has them)
+    are coefficients fitted on synthetic clips (:mod:`~vistrack.models.plate_fit`),
+    for which ``log r`` is the log-odds of a plate at the pose.
+
     Parameters
     ----------
     layout : str or PlateLayout
     kappa : float
-        Sharpness ``κ``.
+        Sharpness ``κ`` of the thesis weights.
+    weights : {"learnt", "thesis"} or (dict, float)
+        Coefficients per feature name and bias.
     per_unit : int
         Sample points per unit length of the plate square in each pixel set.
     """
 
-    def __init__(self, layout="jp", *, kappa=2.0, per_unit=24):
+    def __init__(self, layout="jp", *, kappa=2.0, weights="learnt", per_unit=24, scan_per_unit=8):
         self.layout = LAYOUTS[layout] if isinstance(layout, str) else layout
         self.kappa = float(kappa)
+        if isinstance(weights, str):
+            if weights not in ("learnt", "thesis"):
+                raise ValueError(f"weights must be 'learnt', 'thesis' or (dict, bias), got {weights!r}")
+            learnt = LEARNT_WEIGHTS.get(self.layout.name)
+            weights = learnt if weights == "learnt" and learnt is not None else thesis_weights(self.kappa)
+        coef, self.bias = weights
+        self.w = np.array([coef.get(n, 0.0) for n in self.FEATURES], float)
+        self.learnt = weights is not None and weights is LEARNT_WEIGHTS.get(self.layout.name)
+        #: learnt weights apply to ``log(1 + mean)``, the thesis's to the means themselves
+        self.transform = np.log1p if self.learnt else (lambda v: v)
         sets = self.layout.sets()
         self.points = {k: _grid_points(sets[k], per_unit) for k in _SETS}
+        #: sparser point sets for the proposal's scans (:meth:`scan`)
+        self.scan_points = {k: _grid_points(sets[k], scan_per_unit) for k in _SETS}
         self._all = np.concatenate([self.points[k] for k in _SETS])
         bounds = np.cumsum([0] + [len(self.points[k]) for k in _SETS])
         self._slices = {k: slice(bounds[i], bounds[i + 1]) for i, k in enumerate(_SETS)}
@@ -75,37 +115,68 @@ class PlateLikelihood:
             obs._plate_maps = m
         return m
 
+    #: names of the columns of :meth:`features`
+    FEATURES = ("h_edge", "h_free_s", "h_free_l", "v_edge", "v_free_s", "v_free_l", "small_s", "small_l",
+                "big_s", "big_l")
+
+    def features(self, obs, states):
+        """The Table 1.1 pixel-set means ``(N, 10)``: edge bands on their Sobel channel, the free
+        stripes and character areas on each DoG separately (columns :attr:`FEATURES`)."""
+        pose = np.atleast_2d(states)[:, :4]
+        pts = plate_points(pose, self._all, self.layout.aspect)
+        v = remap_points(self.maps(obs), pts[..., 0].astype(np.float32), pts[..., 1].astype(np.float32),
+                         border=(0.0, 0.0, 5.0, 5.0))
+        return self._set_means(v, self._slices)
+
+    @staticmethod
+    def _set_means(v, sl):
+        cols = [v[:, sl["h_edge"], 1], v[:, sl["h_free"], 2], v[:, sl["h_free"], 3], v[:, sl["v_edge"], 0],
+                v[:, sl["v_free"], 2], v[:, sl["v_free"], 3], v[:, sl["small"], 2], v[:, sl["small"], 3],
+                v[:, sl["big"], 2], v[:, sl["big"], 3]]
+        return np.stack([c.mean(axis=1) for c in cols], axis=1)
+
+    def loglik_sparse(self, obs, states, offsets):
+        """``log r`` from the sparser point sets of the scans (``scan_per_unit``) at every pose
+        shifted by ``offsets (N, C, 2)`` px: ``(N, C)``. The entering particles' coarse 2-D search of
+        the proposal (any exactly computed density will do)."""
+        if not hasattr(self, "_sparse"):
+            pts = [self.scan_points[k] for k in _SETS]
+            bounds = np.cumsum([0] + [len(p) for p in pts])
+            self._sparse = (np.concatenate(pts), {k: slice(bounds[i], bounds[i + 1]) for i, k in enumerate(_SETS)})
+        points, sl = self._sparse
+        base = plate_points(np.atleast_2d(states)[:, :4], points, self.layout.aspect)  # (N, P, 2)
+        mx = (base[:, None, :, 0] + offsets[:, :, None, 0]).astype(np.float32)  # (N, C, P)
+        my = (base[:, None, :, 1] + offsets[:, :, None, 1]).astype(np.float32)
+        n, c = mx.shape[:2]
+        v = remap_points(self.maps(obs), mx, my, border=(0.0, 0.0, 5.0, 5.0)).reshape(n * c, -1, 4)
+        return (self.transform(self._set_means(v, sl)) @ self.w + self.bias).reshape(n, c)
+
     def terms(self, obs, states):
-        """``(log r^h, log r^v, log r^c)`` as three ``(N,)`` arrays."""
+        """``(log r^h, log r^v, log r^c)`` as three ``(N,)`` arrays (the bias is in ``log r^c``)."""
+        f = self.transform(self.features(obs, states)) * self.w
+        return f[:, 0:3].sum(axis=1), f[:, 3:6].sum(axis=1), f[:, 6:].sum(axis=1) + self.bias
+
+    def scan(self, obs, states, which, offsets):
+        """``log r^h`` (``which="h"``) or ``log r^v`` at every pose shifted by ``offsets (N, k, 2)`` px.
+
+        The proposal's line scans (§4.5.2): the sample points of the two pixel
+        sets are placed once per particle and shifted, and the sets are sampled
+        more sparsely (``scan_per_unit``) than in :meth:`loglik` — the proposal
+        may be any density computed exactly; the weight uses the full ``r``.
+        Returns ``(N, k)``.
+        """
+        edge, free = ("h_edge", "h_free") if which == "h" else ("v_edge", "v_free")
         pose = np.atleast_2d(states)[:, :4]
-        pts = plate_points(pose, self._all, self.layout.aspect)  # (N, P, 2)
-        # outside the frame: no edges, and strong "lines" where stripes must be free of them
-        v = remap_points(self.maps(obs), pts[..., 0].astype(np.float32), pts[..., 1].astype(np.float32),
-                         border=(0.0, 0.0, 5.0, 5.0))
-        sl = self._slices
-
-        def mean(name, ch):
-            return v[:, sl[name], ch].mean(axis=1)
-
-        k = self.kappa
-        lines_h = mean("h_free", 2) + mean("h_free", 3)
-        lines_v = mean("v_free", 2) + mean("v_free", 3)
-        log_h = k * (mean("h_edge", 1) - lines_h)
-        log_v = k * (mean("v_edge", 0) - lines_v)
-        log_c = k * (mean("small", 2) + mean("big", 3))
-        return log_h, log_v, log_c
-
-    def term(self, obs, states, which):
-        """One factor, ``log r^h`` (``which="h"``) or ``log r^v`` (``"v"``), sampling only its two
-        pixel sets (what the §4.5.2 proposal needs along its lines)."""
-        edge, free, ch = ("h_edge", "h_free", 1) if which == "h" else ("v_edge", "v_free", 0)
-        pose = np.atleast_2d(states)[:, :4]
-        pts_e, pts_f = self.points[edge], self.points[free]
-        pts = plate_points(pose, np.concatenate([pts_e, pts_f]), self.layout.aspect)
-        v = remap_points(self.maps(obs), pts[..., 0].astype(np.float32), pts[..., 1].astype(np.float32),
-                         border=(0.0, 0.0, 5.0, 5.0))
+        pts_e, pts_f = self.scan_points[edge], self.scan_points[free]
+        base = plate_points(pose, np.concatenate([pts_e, pts_f]), self.layout.aspect)  # (N, P, 2)
+        mx = (base[:, None, :, 0] + offsets[:, :, None, 0]).astype(np.float32)  # (N, k, P)
+        my = (base[:, None, :, 1] + offsets[:, :, None, 1]).astype(np.float32)
+        (we, ws, wl), ch = (self.w[0:3], 1) if which == "h" else (self.w[3:6], 0)
+        v = remap_points(self.maps(obs), mx, my, border=(0.0, 0.0, 5.0, 5.0))
         ne = len(pts_e)
-        return self.kappa * (v[:, :ne, ch].mean(axis=1) - (v[:, ne:, 2] + v[:, ne:, 3]).mean(axis=1))
+        t = self.transform
+        return (we * t(v[..., :ne, ch].mean(axis=-1)) + ws * t(v[..., ne:, 2].mean(axis=-1))
+                + wl * t(v[..., ne:, 3].mean(axis=-1)))
 
     def loglik(self, obs, states):
         """``log r = log r^h + log r^v + log r^c`` ``(N,)``."""
@@ -130,37 +201,58 @@ class Plate:
     layout : str
     enter_weight : float
         Weight of the entering-car component (0.1).
+    enter_sides : float
+        Share of the entering component placed where cars come in — Gaussians at the
+        left and right borders (``u`` at 0.1 W and 0.9 W, sd 0.07 W), the rest the broad
+        Gaussian over the road (§1.3.2: "cars appear on one side of the image and
+        disappear at the other end").
     """
 
     dim = 8
     first_step = False
 
     def __init__(self, frame_size, layout="jp", *, enter_weight=0.1, damping=(0.8, 0.8, 0.5, 0.5), sigma=None,
-                 enter_mean=None, enter_std=None, kappa=2.0):
+                 enter_mean=None, enter_std=None, enter_sides=0.5, kappa=2.0, weights="learnt"):
         w, h = frame_size
         self.frame_size = (int(w), int(h))
-        self.lik = PlateLikelihood(layout, kappa=kappa)
+        self.lik = PlateLikelihood(layout, kappa=kappa, weights=weights)
+        #: the estimate is reported visible when ``log r`` at it exceeds this: the log-odds 0 of
+        #: the learnt coefficients; 10 for the thesis's (not calibrated)
+        self.visible_loglik = 0.0 if self.lik.learnt else 10.0
+        self.visible_margin = 4.0
         self.layout = self.lik.layout
         self.enter_weight = float(enter_weight)
         self.damping = np.asarray(damping, float)
-        self.sigma = np.asarray(sigma if sigma is not None else (0.012 * w, 0.008 * h, 0.02, 0.015 * w), float)
+        self.sigma = np.asarray(sigma if sigma is not None else (0.012 * w, 0.008 * h, 0.01, 0.004 * w), float)
         self.enter_mean = np.asarray(enter_mean if enter_mean is not None else (0.5 * w, 0.68 * h, 0.0, 0.13 * w),
                                      float)
         self.enter_std = np.asarray(enter_std if enter_std is not None else (0.35 * w, 0.1 * h, 0.1, 0.03 * w), float)
+        self.enter_sides = float(enter_sides)
+        #: entering components: (weight, mean, std) — the broad one and one per side
+        side_std = np.array([0.07 * w, self.enter_std[1], self.enter_std[2], self.enter_std[3]])
+        self._enter_parts = [(1.0 - self.enter_sides, self.enter_mean, self.enter_std)] + [
+            (self.enter_sides / 2, np.array([fx * w, *self.enter_mean[1:]]), side_std) for fx in (0.1, 0.9)]
         self.prior_mean = np.concatenate([self.enter_mean, self.enter_mean])
         #: plate widths (px) the model allows; the dynamics clip to it
         self.scale_range = (0.05 * w, 0.4 * w)
 
     # -- dynamics ----------------------------------------------------------------
     def _enter(self, n, rng):
-        z = self.enter_mean + self.enter_std * rng.standard_normal((n, 4))
+        weights = np.array([p[0] for p in self._enter_parts])
+        comp = rng.choice(len(weights), size=n, p=weights / weights.sum())
+        means = np.array([p[1] for p in self._enter_parts])[comp]
+        stds = np.array([p[2] for p in self._enter_parts])[comp]
+        z = means + stds * rng.standard_normal((n, 4))
         z[:, 3] = np.clip(z[:, 3], *self.scale_range)
         return np.concatenate([z, z], axis=1)
 
+    def enter_logpdf(self, z):
+        """Log density of the entering-car mixture at poses ``z (N, 4)``."""
+        parts = [np.log(wt) + self._logn(z, m, sd) for wt, m, sd in self._enter_parts if wt > 0]
+        return np.logaddexp.reduce(np.stack(parts), axis=0)
+
     #: optional ``(mean, std)`` of the first pose (``--init``); else the entering density
     start = None
-    #: the estimate is reported visible when ``log r`` at it exceeds this
-    visible_loglik = 10.0
 
     def sample_prior(self, n, rng):
         if self.start is None:
@@ -174,7 +266,9 @@ class Plate:
         return -0.5 * np.sum(e * e, axis=-1) - np.sum(np.log(std)) - 2 * np.log(2 * np.pi)
 
     def prior_logpdf(self, states):
-        mean, std = self.start if self.start is not None else (self.enter_mean, self.enter_std)
+        if self.start is None:
+            return self.enter_logpdf(states[:, :4])
+        mean, std = self.start
         return self._logn(states[:, :4], mean, std)
 
     def predict_mean(self, states):
@@ -199,7 +293,7 @@ class Plate:
     def transition_logpdf(self, new, old):
         """``log K(new|old)`` for the branch ``new`` came from (AR(2) or entering car)."""
         ar = np.log1p(-self.enter_weight) + self._logn(new[:, :4], self.predict_mean(old)[:, :4], self.sigma)
-        ent = np.log(self.enter_weight) + self._logn(new[:, :4], self.enter_mean, self.enter_std)
+        ent = np.log(self.enter_weight) + self.enter_logpdf(new[:, :4])
         return np.where(self.entering(new), ent, ar)
 
     # -- likelihood and output ------------------------------------------------------
@@ -220,9 +314,16 @@ class Plate:
         return np.concatenate([lo, hi - lo], axis=1)
 
     def visible(self, obs, state):
-        """Whether a plate is reported at ``state``: ``log r`` above :attr:`visible_loglik`
-        (provisional: to be calibrated on the synthetic suite)."""
-        return bool(self.loglik(obs, np.asarray(state, float).reshape(1, -1))[0] > self.visible_loglik)
+        """Whether a plate is reported at ``state``: ``log r`` above :attr:`visible_loglik` and the
+        whole parallelogram at least :attr:`visible_margin` px inside the frame (the ground truth
+        counts a plate as in view when it is wholly inside; an estimate at the border is as
+        likely a plate half gone)."""
+        s = np.asarray(state, float).reshape(1, -1)
+        v = self.vertices(s)[0]
+        w, h = self.frame_size
+        d = self.visible_margin
+        inside = bool(np.all((v[:, 0] >= d) & (v[:, 0] <= w - 1 - d) & (v[:, 1] >= d) & (v[:, 1] <= h - 1 - d)))
+        return inside and bool(self.loglik(obs, s)[0] > self.visible_loglik)
 
     def describe(self, state):
         s = np.asarray(state, float).reshape(1, -1)
@@ -264,15 +365,26 @@ class Plate:
 
 class PlateLISProposal:
     """The §4.5.2 proposal: ``W' ~ r^h(Y|U, ·, θ) g_1(W - ·)``, then ``U' ~ r^v(Y|·, W', θ) g_0(U - ·)``,
-    with ``g_0``, ``g_1`` boxes of half-width the plate's width and height (an interval of twice
-    the plate size). Both conditionals are sampled on a grid of cells (``cells`` per axis; the
-    density is piecewise constant, used exactly), so ``α = 1`` and the weight is
-    ``r(Z) / (q^h q^v) · K(Z)/K(X)`` (filters/lis.py computes ``α r / q · K/K``).
+    with ``g_0``, ``g_1`` boxes. For a particle of the entering-car component the boxes have
+    half-widths the plate's width and height (an interval of twice the plate size, over which
+    the entering density is nearly flat); for a tracked particle ``window_sigmas`` standard
+    deviations of the AR(2) noise (at most the plate size) — a box much wider than ``K``
+    spends its samples where ``K(Z)/K(X)`` kills them (ESS 2 of 100 with plate-size boxes).
+    An entering particle first draws a cell of its window from a coarse grid, ∝ the full
+    likelihood at the cell centres (sparsely sampled), then runs the line scans inside it
+    (:meth:`_search`). All conditionals are sampled on grids of cells (the density is
+    piecewise constant, used exactly). With ``g`` the box's uniform density the weight is
+    ``r(Z) g / (q^h q^v) · K(Z)/K(X)``: the ``log q`` returned includes ``-log g``, the log of
+    the box's area (filters/lis.py computes ``α r / q · K/K`` with ``α = 1``) — boxes of
+    different sizes would otherwise favour the particles with the larger box.
     """
 
-    def __init__(self, model, cells=32):
+    def __init__(self, model, cells=32, window_sigmas=3.0, coarse=(12, 6), fine=8):
         self.model = model
         self.cells = int(cells)
+        self.window_sigmas = float(window_sigmas)
+        self.coarse = tuple(int(c) for c in coarse)
+        self.fine = int(fine)
 
     def _conditional(self, log_vals, rng):
         """Draw a cell per row ∝ exp(log_vals) and return (index, log prob of the cell)."""
@@ -283,25 +395,57 @@ class PlateLISProposal:
         return j, log_vals[np.arange(len(j)), j] - lz
 
     def sample(self, x, obs, rng):
-        m, k = self.model, self.cells
+        m = self.model
         n = len(x)
-        half = m.plate_size(x)  # (N, 2): half-widths of the boxes = plate width, height
+        ent = m.entering(x)
+        uv, log_q = np.empty((n, 2)), np.zeros(n)
+        tr = ~ent
+        half = m.plate_size(x)
+        if tr.any():
+            half[tr] = np.minimum(half[tr], self.window_sigmas * m.sigma[:2])
+            uv[tr], log_q[tr] = self._line_scans(x[tr], obs, rng, x[tr, :2], half[tr], self.cells)
+        if ent.any():
+            uv[ent], log_q[ent] = self._search(x[ent], obs, rng)
+        # the window g is the box's uniform density, 1 / area: with boxes of different sizes
+        # (entering or not, plate scale) it must be in the weight, w = r g K(Z) / (K(X) q)
+        log_q += np.log(4 * half[:, 0] * half[:, 1])
+        return m.with_local(x, uv), np.zeros(n), log_q
+
+    def _line_scans(self, x, obs, rng, centre, half, k):
+        """§4.5.2: ``W'`` from ``r^h`` along the vertical line through ``centre`` (box ``± half[:, 1]``),
+        then ``U'`` from ``r^v`` along the horizontal line at ``W'`` (box ``± half[:, 0]``); ``k`` cells
+        per line. Returns the new ``(u, w)`` and their log density."""
+        m = self.model
+        n = len(x)
         frac = (np.arange(k) + 0.5) / k * 2 - 1  # cell centres in [-1, 1]
-        # 1. vertical: r^h along the vertical line through the predicted centre
-        cand = np.repeat(x, k, axis=0)
-        cand[:, 1] = (x[:, 1:2] + frac * half[:, 1:2]).ravel()
-        log_h = m.lik.term(obs, cand, "h").reshape(n, k)
-        jh, lqh = self._conditional(log_h, rng)
+        off = np.zeros((n, k, 2))
+        off[:, :, 0] = (centre[:, 0] - x[:, 0])[:, None]
+        off[:, :, 1] = (centre[:, 1] - x[:, 1])[:, None] + frac * half[:, 1:2]
+        jh, lqh = self._conditional(m.lik.scan(obs, x, "h", off), rng)
         cell_h = 2 * half[:, 1] / k
-        w_new = x[:, 1] + frac[jh] * half[:, 1] + cell_h * (rng.random(n) - 0.5)
-        # 2. horizontal: r^v along the horizontal line at the new height
-        cand = np.repeat(x, k, axis=0)
-        cand[:, 1] = np.repeat(w_new, k)
-        cand[:, 0] = (x[:, 0:1] + frac * half[:, 0:1]).ravel()
-        log_v = m.lik.term(obs, cand, "v").reshape(n, k)
-        jv, lqv = self._conditional(log_v, rng)
+        w_new = centre[:, 1] + frac[jh] * half[:, 1] + cell_h * (rng.random(n) - 0.5)
+        off[:, :, 0] = (centre[:, 0] - x[:, 0])[:, None] + frac * half[:, 0:1]
+        off[:, :, 1] = (w_new - x[:, 1])[:, None]
+        jv, lqv = self._conditional(m.lik.scan(obs, x, "v", off), rng)
         cell_v = 2 * half[:, 0] / k
-        u_new = x[:, 0] + frac[jv] * half[:, 0] + cell_v * (rng.random(n) - 0.5)
-        z = m.with_local(x, np.stack([u_new, w_new], axis=1))
-        log_q = lqh - np.log(cell_h) + lqv - np.log(cell_v)  # piecewise-constant densities
-        return z, np.zeros(n), log_q
+        u_new = centre[:, 0] + frac[jv] * half[:, 0] + cell_v * (rng.random(n) - 0.5)
+        return np.stack([u_new, w_new], axis=1), lqh - np.log(cell_h) + lqv - np.log(cell_v)
+
+    def _search(self, x, obs, rng):
+        """Entering particles: a coarse cell of the window (``coarse`` cells) drawn ∝ the sparse full
+        ``r`` at its centre — the line scans alone lock onto bumpers and grilles, which have the
+        plate's horizontal edges but no characters — then the line scans inside that cell."""
+        m = self.model
+        n = len(x)
+        cu, cw = self.coarse
+        half = m.plate_size(x)
+        gu = ((np.arange(cu) + 0.5) / cu * 2 - 1)
+        gw = ((np.arange(cw) + 0.5) / cw * 2 - 1)
+        du, dw = np.meshgrid(gu, gw, indexing="ij")
+        offs = np.stack([du.ravel(), dw.ravel()], axis=1)[None] * half[:, None, :]  # (n, C, 2) px
+        j, lqc = self._conditional(m.lik.loglik_sparse(obs, x, offs), rng)
+        cell_half = half / np.array([cu, cw])
+        centre = x[:, :2] + np.stack([du.ravel()[j], dw.ravel()[j]], axis=1) * half
+        uv, lq = self._line_scans(x, obs, rng, centre, cell_half, self.fine)
+        return uv, lqc + lq
+

@@ -1,0 +1,156 @@
+"""Learning the coefficients of the plate likelihood's terms (thesis 001, §1.3.2).
+
+The thesis's likelihood is a weighted sum of pixel-set means (Table 1.1) and
+notes that it "could be further refined by e.g. learning coefficients for each
+of the terms". This module does that on synthetic road clips: the ten means of
+:meth:`~vistrack.models.plate.PlateLikelihood.features` at true plate poses
+(jittered within tracking accuracy) are positives; negatives are random poses,
+near misses (shifted by 0.15–1 plate size or rescaled by up to ±35 %) and hard
+negatives — the best-scoring poses of a dense scan of each frame away from the
+plate, mined with the current weights and added in rounds. A class-balanced,
+L2-regularised logistic regression gives ``log r = w · φ + b``: the log-odds
+that a plate lies at the pose, so ``log r > 0`` is the visibility decision.
+
+    python -m vistrack.models.plate_fit --layout jp --clips CLIPS_DIR
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+from scipy import optimize
+
+from ..clips import load_clip
+from ..features import FeatureMaps
+from .plate import PlateLikelihood
+
+__all__ = ["truth_poses", "training_samples", "scan_poses", "fit_logistic", "fit_weights"]
+
+
+def truth_poses(truth, i):
+    """The true pose ``(u, w, θ, s)`` of frame ``i``, or ``None`` when no plate is in view."""
+    if not truth["visible"][i] > 0:
+        return None
+    return np.array([truth["cx"][i], truth["cy"][i], np.deg2rad(truth["angle_deg"][i]), truth["scale"][i]])
+
+
+def scan_poses(size, step=8, scales=(0.06, 0.08, 0.1, 0.13, 0.16, 0.2)):
+    """A dense grid of upright poses over the frame (``step`` px, widths ``scales × W``)."""
+    w, h = size
+    u, v = np.meshgrid(np.arange(step / 2, w, step), np.arange(step / 2, h, step))
+    out = []
+    for s in scales:
+        out.append(np.column_stack([u.ravel(), v.ravel(), np.zeros(u.size), np.full(u.size, s * w)]))
+    return np.concatenate(out)
+
+
+def _far(poses, pose):
+    """Poses not within half a plate of ``pose`` or with a scale more than 30 % off."""
+    if pose is None:
+        return np.ones(len(poses), bool)
+    s = pose[3]
+    near = (np.abs(poses[:, 0] - pose[0]) < 0.5 * s) & (np.abs(poses[:, 1] - pose[1]) < 0.25 * s)
+    return ~near | (np.abs(np.log(poses[:, 3] / s)) > np.log(1.3))
+
+
+def training_samples(clips, layout, rng, *, every=3, weights=None, hard_per_frame=20):
+    """Features ``X (M, 10)``, labels ``y (M,)`` and sample kinds from the clip folders ``clips``.
+
+    With ``weights`` (``(w, b)``), each frame also gives its ``hard_per_frame`` best-scoring
+    poses of :func:`scan_poses` away from the plate as negatives.
+    """
+    lik = PlateLikelihood(layout)
+    xs, ys, kinds = [], [], []
+
+    def add(x, label, kind):
+        xs.append(x)
+        ys.append(np.full(len(x), label))
+        kinds.append(np.full(len(x), kind))
+
+    for path in clips:
+        clip = load_clip(path)
+        size = clip.source.size
+        grid = scan_poses(size)
+        for i, frame in clip.source:
+            if i % every:
+                continue
+            maps = FeatureMaps(frame)
+            pose = truth_poses(clip.truth, i)
+            n = 40
+            rnd = np.column_stack([rng.uniform(0, size[0], n), rng.uniform(0, size[1], n), rng.normal(0, 0.1, n),
+                                   rng.uniform(0.05, 0.3, n) * size[0]])
+            add(lik.features(maps, rnd[_far(rnd, pose)]), 0, "random")
+            if pose is not None:
+                s = pose[3]
+                pos = np.tile(pose, (10, 1))
+                pos[:, 0] += rng.normal(0, 0.01 * s, 10)
+                pos[:, 1] += rng.normal(0, 0.005 * s, 10)
+                pos[:, 3] *= 1 + rng.normal(0, 0.01, 10)
+                add(lik.features(maps, pos), 1, "plate")
+                m = 20
+                near = np.tile(pose, (m, 1))
+                ang, r = rng.uniform(0, 2 * np.pi, m), rng.uniform(0.15, 1.0, m)
+                near[:, 0] += r * s * np.cos(ang)
+                near[:, 1] += r * s / 2 * np.sin(ang)
+                near[:, 3] *= np.exp(rng.uniform(-0.35, 0.35, m))
+                add(lik.features(maps, near), 0, "near")
+            if weights is not None:
+                g = grid[_far(grid, pose)]
+                f = lik.features(maps, g)
+                top = np.argsort(-(f @ weights[0]))[:hard_per_frame]
+                add(f[top], 0, "hard")
+    return np.concatenate(xs), np.concatenate(ys), np.concatenate(kinds)
+
+
+def fit_logistic(x, y, lam=1e-3):
+    """Class-balanced L2 logistic regression on standardised features; returns ``(w, b)``
+    in the original units (log-odds ``x · w + b``)."""
+    mu, sd = x.mean(axis=0), np.maximum(x.std(axis=0), 1e-9)
+    a = np.column_stack([(x - mu) / sd, np.ones(len(x))])
+    sw = np.where(y == 1, (y == 0).sum() / max((y == 1).sum(), 1), 1.0)
+
+    def f(beta):
+        z = a @ beta
+        loss = np.where(y == 1, np.logaddexp(0, -z), np.logaddexp(0, z))
+        grad = a.T @ (sw * (1 / (1 + np.exp(-z)) - y)) / len(y)
+        reg = np.r_[beta[:-1], 0.0]
+        return (sw * loss).mean() + lam * reg @ reg, grad + 2 * lam * reg
+
+    beta = optimize.minimize(f, np.zeros(a.shape[1]), jac=True, method="L-BFGS-B").x
+    w = beta[:-1] / sd
+    return w, float(beta[-1] - mu @ w)
+
+
+def fit_weights(clips, layout, *, rounds=2, seed=0, every=3):
+    """Fit, then refit ``rounds`` times with hard negatives mined by the current weights."""
+    rng = np.random.default_rng(seed)
+    x, y, kinds = training_samples(clips, layout, rng, every=every)
+    w = fit_logistic(x, y)
+    for _ in range(rounds):
+        xh, yh, kh = training_samples(clips, layout, rng, every=every, weights=w)
+        hard = kh == "hard"
+        x, y, kinds = np.concatenate([x, xh[hard]]), np.concatenate([y, yh[hard]]), np.concatenate([kinds, kh[hard]])
+        w = fit_logistic(x, y)
+    return w, (x, y, kinds)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description="Fit the plate likelihood's term coefficients on synthetic clips.")
+    ap.add_argument("--layout", default="jp")
+    ap.add_argument("--clips", required=True, help="folder of plate clip folders")
+    ap.add_argument("--rounds", type=int, default=2)
+    args = ap.parse_args(argv)
+    clips = sorted(p for p in Path(args.clips).iterdir() if (p / "groundtruth.csv").is_file())
+    (w, b), (x, y, kinds) = fit_weights(clips, args.layout, rounds=args.rounds)
+    score = x @ w + b
+    for k in np.unique(kinds):
+        v = score[kinds == k]
+        print(f"{k:>7}: n={len(v):6d}  log-odds 1/50/99 % {np.percentile(v, [1, 50, 99]).round(2)}  > 0: {np.mean(v > 0):.3f}")
+    print("weights = {" + ", ".join(f'"{n}": {v:.4f}' for n, v in zip(PlateLikelihood.FEATURES, w)) + "}")
+    print(f"bias = {b:.4f}")
+
+
+if __name__ == "__main__":
+    main()
