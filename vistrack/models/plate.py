@@ -84,7 +84,7 @@ class PlateLikelihood:
         Sample points per unit length of the plate square in each pixel set.
     """
 
-    def __init__(self, layout="jp", *, kappa=2.0, weights="learnt", per_unit=24, scan_per_unit=8):
+    def __init__(self, layout="jp", *, kappa=2.0, weights="learnt", per_unit=24, scan_per_unit=6):
         self.layout = LAYOUTS[layout] if isinstance(layout, str) else layout
         self.kappa = float(kappa)
         if isinstance(weights, str):
@@ -379,7 +379,7 @@ class PlateLISProposal:
     different sizes would otherwise favour the particles with the larger box.
     """
 
-    def __init__(self, model, cells=32, window_sigmas=3.0, coarse=(12, 6), fine=8):
+    def __init__(self, model, cells=24, window_sigmas=3.0, coarse=(12, 6), fine=8):
         self.model = model
         self.cells = int(cells)
         self.window_sigmas = float(window_sigmas)
