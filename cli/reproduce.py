@@ -114,6 +114,50 @@ class Entries(click.ParamType):
         return out
 
 
+def _check_entries(entries):
+    from vistrack.filters import ALGORITHMS
+
+    for algo, _ in entries:
+        if algo not in ALGORITHMS:
+            raise click.ClickException(f"unknown algorithm {algo!r}; choose from {', '.join(sorted(ALGORITHMS))}")
+
+
+def _clip_suite(clips_dir, default, make, frames, size, maker, prefix, quiet, **kw):
+    """The clip folders in ``clips_dir`` (or ``default``); ``make`` clips of seeds 1..make are
+    generated there with ``maker`` when it has none."""
+    from pathlib import Path
+
+    from .options import Size
+
+    base = Path(clips_dir) if clips_dir else Path(default)
+
+    def found():
+        return sorted(p for p in base.iterdir() if (p / "groundtruth.csv").is_file()) if base.is_dir() else []
+
+    if not found():
+        wh = Size().convert(size, None, None)
+        base.mkdir(parents=True, exist_ok=True)
+        with tqdm(total=make * frames, unit="frame", desc="making clips", disable=quiet, leave=False) as bar:
+            for s in range(1, make + 1):
+                maker(base / f"{prefix}-{s:02d}", frames=frames, size=wh, seed=s, progress=bar.update, **kw)
+    return found()
+
+
+def _fresh_out(out_dir, tasks, resume):
+    """``out_dir`` created; without ``resume`` the files of ``tasks`` removed."""
+    from pathlib import Path
+
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise click.ClickException(f"cannot create --out folder {out_dir}: {e.strerror}") from None
+    if not resume:
+        for t in tasks:
+            (out / "tasks" / f"{t['name']}.json").unlink(missing_ok=True)
+    return out
+
+
 def _contour_table(results):
     head = (f"{'algo':<10} {'N':>6} {'P(lost) final':>13} {'P(lost) mean':>12} {'mean err px':>11}"
             f" {'ms/frame':>9} {'frames/s':>9} {'mean ESS':>9}")
@@ -157,37 +201,17 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
     scaled) at the last frame and averaged over frames, the mean error of
     runs not lost, and the filter's time per frame.
     """
-    from pathlib import Path
+    from vistrack.data_synth.contour import make_contour_clip
 
-    from vistrack.filters import ALGORITHMS
+    from .eval import run_tasks
 
-    from .options import Size
-
-    for algo, _ in entries:
-        if algo not in ALGORITHMS:
-            raise click.ClickException(f"unknown algorithm {algo!r}; choose from {', '.join(sorted(ALGORITHMS))}")
+    _check_entries(entries)
     check_writable(json_path, "--json file")
-    base = Path(clips_dir) if clips_dir else Path("contour-clips")
-    clips = sorted(p for p in base.iterdir() if (p / "groundtruth.csv").is_file()) if base.is_dir() else []
-    if not clips:
-        from vistrack.data_synth.contour import make_contour_clip
-
-        wh = Size().convert(size, None, None)
-        base.mkdir(parents=True, exist_ok=True)
-        with tqdm(total=make * frames, unit="frame", desc="making clips", disable=quiet, leave=False) as bar:
-            for s in range(1, make + 1):
-                make_contour_clip(base / f"contour-{s:02d}", frames=frames, size=wh, seed=s, clutter="high",
-                                  distractor=True, progress=bar.update)
-        clips = sorted(p for p in base.iterdir() if (p / "groundtruth.csv").is_file())
+    clips = _clip_suite(clips_dir, "contour-clips", make, frames, size, make_contour_clip, "contour", quiet,
+                        clutter="high", distractor=True)
     cfg = ContourConfig(clips=clips, entries=entries, runs=runs, seed=seed)
     tasks = contour_tasks(cfg)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    if not resume and (out / "tasks").is_dir():
-        import shutil
-
-        shutil.rmtree(out / "tasks")
-    from .eval import run_tasks
+    out = _fresh_out(out_dir, tasks, resume)
 
     run_tasks(tasks, out, scheduler=scheduler, workers=workers, resume=resume, quiet=quiet, desc="contour")
     results = contour_results(tasks, out)
@@ -269,19 +293,10 @@ def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, schedule
         except OSError as e:
             raise click.ClickException(f"cannot create --plots folder {plots_dir}: {e.strerror}") from None
         check_writable(os.path.join(plots_dir, "mse_vs_time.png"), "plot")
-    from pathlib import Path
-
     from .eval import run_tasks
 
     tasks = landmark_tasks(cfg)
-    out_path = Path(out_dir)
-    try:
-        out_path.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise click.ClickException(f"cannot create --out folder {out_dir}: {e.strerror}") from None
-    if not resume and (out_path / "tasks").is_dir():
-        for t in tasks:
-            (out_path / "tasks" / f"{t['name']}.json").unlink(missing_ok=True)
+    out_path = _fresh_out(out_dir, tasks, resume)
     run_tasks(tasks, out_path, scheduler=scheduler, workers=workers, in_process=in_process, resume=resume,
               quiet=quiet, desc=f"landmarks K={k}", runner=run_landmark_task)
     out = landmark_results(cfg, tasks, out_path)
@@ -345,35 +360,16 @@ def plate(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler
     lost, false reports (a plate reported in a frame without one), the share of
     plate appearances acquired within 10 frames, and the time per frame.
     """
-    from pathlib import Path
-
-    from vistrack.filters import ALGORITHMS
+    from vistrack.data_synth.plate import make_plate_clip
 
     from .eval import run_tasks
-    from .options import Size
 
-    for algo, _ in entries:
-        if algo not in ALGORITHMS:
-            raise click.ClickException(f"unknown algorithm {algo!r}; choose from {', '.join(sorted(ALGORITHMS))}")
+    _check_entries(entries)
     check_writable(json_path, "--json file")
-    base = Path(clips_dir) if clips_dir else Path("plate-clips")
-    clips = sorted(p for p in base.iterdir() if (p / "groundtruth.csv").is_file()) if base.is_dir() else []
-    if not clips:
-        from vistrack.data_synth.plate import make_plate_clip
-
-        wh = Size().convert(size, None, None)
-        base.mkdir(parents=True, exist_ok=True)
-        with tqdm(total=make * frames, unit="frame", desc="making clips", disable=quiet, leave=False) as bar:
-            for s in range(1, make + 1):
-                make_plate_clip(base / f"plate-{s:02d}", frames=frames, size=wh, seed=s, progress=bar.update)
-        clips = sorted(p for p in base.iterdir() if (p / "groundtruth.csv").is_file())
+    clips = _clip_suite(clips_dir, "plate-clips", make, frames, size, make_plate_clip, "plate", quiet)
     cfg = PlateConfig(clips=clips, entries=entries, runs=runs, seed=seed)
     tasks = plate_tasks(cfg)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    if not resume:
-        for t in tasks:
-            (out / "tasks" / f"{t['name']}.json").unlink(missing_ok=True)
+    out = _fresh_out(out_dir, tasks, resume)
     run_tasks(tasks, out, scheduler=scheduler, workers=workers, in_process=in_process, resume=resume, quiet=quiet,
               desc="plate", runner=run_plate_task)
     results = plate_results(cfg, tasks, out)

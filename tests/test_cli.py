@@ -5,16 +5,11 @@ import json
 import matplotlib.image as mpimg
 import pytest
 
-from vistrack.cli import main
+from cli_helpers import run
 
 RESULT_KEYS = {"algo", "particles", "ships", "mean_error_final", "std_error_final", "mean_error", "ms_per_run"}
 
 
-def run(argv, capsys):
-    with pytest.raises(SystemExit) as e:
-        main(argv)
-    out = capsys.readouterr()
-    return e.value.code, out.out, out.err
 
 
 def test_version_and_help(capsys):

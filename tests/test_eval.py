@@ -7,18 +7,13 @@ import shutil
 import matplotlib.image as mpimg
 import pytest
 
-from vistrack.cli import main
 from vistrack.data_synth.contour import make_contour_clip
+from cli_helpers import run
 
 SUMMARY_KEYS = {"clip", "algo", "particles", "runs", "mean_error", "p_lost", "p_lost_final", "p_lost_per_frame",
                 "error_per_frame", "success_auc", "success_curve", "precision_20px", "frames_per_s", "mean_ess"}
 
 
-def run(argv, capsys):
-    with pytest.raises(SystemExit) as e:
-        main(argv)
-    out = capsys.readouterr()
-    return e.value.code, out.out, out.err
 
 
 @pytest.fixture(scope="module")

@@ -3,19 +3,14 @@
 import numpy as np
 import pytest
 
-from vistrack.cli import main
 from vistrack.clips import load_clip, read_groundtruth_csv
 from vistrack.data_synth.landmarks import draw_blob, make_landmark_clip
 from vistrack.features import FeatureMaps, blob_peaks
 from vistrack.metrics import landmark_error
 from vistrack.video import open_video
+from cli_helpers import run
 
 
-def run(argv, capsys):
-    with pytest.raises(SystemExit) as e:
-        main(argv)
-    out = capsys.readouterr()
-    return e.value.code, out.out, out.err
 
 
 @pytest.fixture(scope="module")

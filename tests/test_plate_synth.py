@@ -69,9 +69,10 @@ def test_plate_likelihood_has_a_narrow_dominant_peak_at_the_plate(road):
 @pytest.mark.parametrize("entering", [True, False])
 def test_plate_lis_proposal_is_a_proper_density_on_the_window(entering):
     """§4.5.2 proposal q = q^h(W') q^v(U'|W') on its box window g: E_q[g / q(Z)] = 1 —
-    q integrates to one on the box and log q is exact (the returned log q includes -log g). The box is twice the plate size for an entering
-    particle and 3 sigma of the AR(2) noise for a tracked one. (A textured frame and the mild
-    thesis weights keep the importance estimate's variance small.)"""
+    q integrates to one on the box and log q is exact (the returned log q includes -log g).
+    The box is twice the plate size for an entering particle and 3 sigma of the AR(2) noise
+    for a tracked one. (A textured frame and the mild thesis weights keep the importance
+    estimate's variance small.)"""
     import cv2
 
     from vistrack.features import FeatureMaps

@@ -8,15 +8,11 @@ import numpy as np
 import pytest
 
 from vistrack.cli import main
+from cli_helpers import run
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 
 
-def run(argv, capsys):
-    with pytest.raises(SystemExit) as e:
-        main(argv)
-    out = capsys.readouterr()
-    return e.value.code, out.out, out.err
 
 
 @pytest.fixture(scope="module")
