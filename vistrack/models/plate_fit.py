@@ -10,6 +10,8 @@ negatives — the best-scoring poses of a dense scan of each frame away from the
 plate, mined with the current weights and added in rounds. A class-balanced,
 L2-regularised logistic regression gives ``log r = w · φ + b``: the log-odds
 that a plate lies at the pose, so ``log r > 0`` is the visibility decision.
+The features are ``log(1 + mean)``, which keeps very strong edges (headlights,
+sign borders) from outweighing the characters.
 
     python -m vistrack.models.plate_fit --layout jp --clips CLIPS_DIR
 """
@@ -36,7 +38,7 @@ def truth_poses(truth, i):
     return np.array([truth["cx"][i], truth["cy"][i], np.deg2rad(truth["angle_deg"][i]), truth["scale"][i]])
 
 
-def scan_poses(size, step=8, scales=(0.06, 0.08, 0.1, 0.13, 0.16, 0.2)):
+def scan_poses(size, step=8, scales=(0.05, 0.065, 0.08, 0.1, 0.125, 0.15, 0.19, 0.24, 0.3)):
     """A dense grid of upright poses over the frame (``step`` px, widths ``scales × W``)."""
     w, h = size
     u, v = np.meshgrid(np.arange(step / 2, w, step), np.arange(step / 2, h, step))
@@ -55,14 +57,18 @@ def _far(poses, pose):
     return ~near | (np.abs(np.log(poses[:, 3] / s)) > np.log(1.3))
 
 
-def training_samples(clips, layout, rng, *, every=3, weights=None, hard_per_frame=20):
-    """Features ``X (M, 10)``, labels ``y (M,)`` and sample kinds from the clip folders ``clips``.
+def training_samples(clips, layout, rng, *, every=6, weights=None, hard_per_frame=20):
+    """Features ``X (M, 10)`` (``log(1 + mean)``, as the likelihood uses them), labels ``y (M,)``
+    and sample kinds from the clip folders ``clips``.
 
     With ``weights`` (``(w, b)``), each frame also gives its ``hard_per_frame`` best-scoring
     poses of :func:`scan_poses` away from the plate as negatives.
     """
     lik = PlateLikelihood(layout)
     xs, ys, kinds = [], [], []
+
+    def feats(maps, poses):
+        return np.log1p(lik.features(maps, poses))
 
     def add(x, label, kind):
         xs.append(x)
@@ -81,24 +87,24 @@ def training_samples(clips, layout, rng, *, every=3, weights=None, hard_per_fram
             n = 40
             rnd = np.column_stack([rng.uniform(0, size[0], n), rng.uniform(0, size[1], n), rng.normal(0, 0.1, n),
                                    rng.uniform(0.05, 0.3, n) * size[0]])
-            add(lik.features(maps, rnd[_far(rnd, pose)]), 0, "random")
+            add(feats(maps, rnd[_far(rnd, pose)]), 0, "random")
             if pose is not None:
                 s = pose[3]
                 pos = np.tile(pose, (10, 1))
                 pos[:, 0] += rng.normal(0, 0.01 * s, 10)
                 pos[:, 1] += rng.normal(0, 0.005 * s, 10)
                 pos[:, 3] *= 1 + rng.normal(0, 0.01, 10)
-                add(lik.features(maps, pos), 1, "plate")
+                add(feats(maps, pos), 1, "plate")
                 m = 20
                 near = np.tile(pose, (m, 1))
                 ang, r = rng.uniform(0, 2 * np.pi, m), rng.uniform(0.15, 1.0, m)
                 near[:, 0] += r * s * np.cos(ang)
                 near[:, 1] += r * s / 2 * np.sin(ang)
                 near[:, 3] *= np.exp(rng.uniform(-0.35, 0.35, m))
-                add(lik.features(maps, near), 0, "near")
+                add(feats(maps, near), 0, "near")
             if weights is not None:
                 g = grid[_far(grid, pose)]
-                f = lik.features(maps, g)
+                f = feats(maps, g)
                 top = np.argsort(-(f @ weights[0]))[:hard_per_frame]
                 add(f[top], 0, "hard")
     return np.concatenate(xs), np.concatenate(ys), np.concatenate(kinds)
@@ -123,7 +129,7 @@ def fit_logistic(x, y, lam=1e-3):
     return w, float(beta[-1] - mu @ w)
 
 
-def fit_weights(clips, layout, *, rounds=2, seed=0, every=3):
+def fit_weights(clips, layout, *, rounds=2, seed=0, every=6):
     """Fit, then refit ``rounds`` times with hard negatives mined by the current weights."""
     rng = np.random.default_rng(seed)
     x, y, kinds = training_samples(clips, layout, rng, every=every)
