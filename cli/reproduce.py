@@ -8,7 +8,7 @@ import os
 import click
 from tqdm import tqdm
 
-from vistrack.reproduce.bearings import DEFAULT_ALGOS, BearingsConfig, run_bearings
+from vistrack.reproduce.bearings import DEFAULT_ALGOS, BearingsConfig, bearing_results, bearing_tasks, run_bearing_task
 from vistrack.reproduce.landmarks import (LANDMARK_ALGOS, LandmarksConfig, landmark_results, landmark_tasks,
                                           run_landmark_task)
 from vistrack.reproduce.plate import PlateConfig, plate_results, plate_tasks, run_plate_task
@@ -52,14 +52,23 @@ def _table(results):
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
               help="Write PNGs of error vs time step and error vs N into this folder.")
+@click.option("--workers", default=0, show_default=True, type=click.IntRange(min=0),
+              help="LocalCluster worker processes (0: one per core).")
+@click.option("--scheduler", help="Address of a running Dask scheduler [default: a LocalCluster].")
+@click.option("--in-process", is_flag=True, help="LocalCluster workers as threads of this process.")
+@click.option("--out", "out_dir", default="bearings-results", show_default=True, type=click.Path(file_okay=False),
+              help="Folder for the per-sequence result files (OUT/tasks).")
+@click.option("--resume", is_flag=True, help="Keep finished sequences in --out and run only the rest.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def bearings(ships, sequences, runs, steps, algos, particles, seed, resample, ess_threshold, json_path,
-             plots_dir, quiet):
+             plots_dir, workers, scheduler, in_process, out_dir, resume, quiet):
     """Bearings-only ship tracking (thesis §1.3.3, §4.5.5).
 
     Runs every algorithm at every N on SEQUENCES fixed sequences, RUNS times
     each, and prints the final-step and time-averaged position error with the
-    CPU time per run (Table 4.3; with --ships 3, Table 4.4 / Fig. 4.22).
+    CPU time per run (Table 4.3; with --ships 3, Table 4.4 / Fig. 4.22). Each
+    sequence is a task of the evaluation engine (Dask; one file per sequence
+    in OUT/tasks, --resume continues an interrupted reproduction).
     """
     cfg = BearingsConfig(ships=ships, sequences=sequences, runs=runs, steps=steps, algos=algos,
                          particles=particles, seed=seed, resample=resample, ess_threshold=ess_threshold)
@@ -75,9 +84,13 @@ def bearings(ships, sequences, runs, steps, algos, particles, seed, resample, es
         check_writable(os.path.join(plots_dir, "error_vs_time.png"), "plot")
     check_writable(json_path, "--json file")
 
-    total = len(algos) * len(particles) * sequences * runs
-    with tqdm(total=total, unit="run", desc="bearings", disable=quiet, leave=False) as bar:
-        out = run_bearings(cfg, progress=bar.update)
+    from .eval import run_tasks
+
+    tasks = bearing_tasks(cfg)
+    out_path = _fresh_out(out_dir, tasks, resume)
+    run_tasks(tasks, out_path, scheduler=scheduler, workers=workers, in_process=in_process, resume=resume,
+              quiet=quiet, desc="bearings", runner=run_bearing_task)
+    out = bearing_results(cfg, tasks, out_path)
     click.echo(_table(out["results"]))
     if json_path:
         with open(json_path, "w") as f:
