@@ -93,9 +93,7 @@ def bearings(ships, sequences, runs, steps, algos, particles, seed, resample, es
     out = bearing_results(cfg, tasks, out_path)
     click.echo(_table(out["results"]))
     if json_path:
-        with open(json_path, "w") as f:
-            json.dump({"config": out["config"], "results": out["results"]}, f, indent=2)
-        click.echo(f"results written to {json_path}")
+        _write_json(json_path, out["config"], out["results"])
     if plots_dir:
         from vistrack.plots import plot_error_vs_n, plot_error_vs_time
 
@@ -125,6 +123,12 @@ class Entries(click.ParamType):
                 self.fail(f"number of particles must be positive in {item!r}", param, ctx)
             out.append((algo, n))
         return out
+
+
+def _write_json(json_path, config, results):
+    with open(json_path, "w") as f:
+        json.dump({"config": config, "results": results}, f, indent=2)
+    click.echo(f"results written to {json_path}")
 
 
 def _check_entries(entries):
@@ -231,9 +235,7 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
     click.echo(f"{len(clips)} clips x {runs} runs")
     click.echo(_contour_table(results))
     if json_path:
-        with open(json_path, "w") as f:
-            json.dump({"config": config_dict(cfg), "results": results}, f, indent=2)
-        click.echo(f"results written to {json_path}")
+        _write_json(json_path, config_dict(cfg), results)
     if plots_dir:
         from vistrack.plots import plot_per_frame
 
@@ -316,9 +318,7 @@ def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, schedule
     click.echo(f"K = {k}, {runs} runs x {steps} steps")
     click.echo(_landmarks_table(out["results"]))
     if json_path:
-        with open(json_path, "w") as f:
-            json.dump({"config": out["config"], "results": out["results"]}, f, indent=2)
-        click.echo(f"results written to {json_path}")
+        _write_json(json_path, out["config"], out["results"])
     if plots_dir:
         from vistrack.plots import plot_error_vs_time
 
@@ -389,11 +389,9 @@ def plate(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler
     click.echo(f"{len(clips)} clips x {runs} runs")
     click.echo(_plate_table(results))
     if json_path:
-        from vistrack.reproduce.plate import config_dict
+        from vistrack.reproduce.plate import config_dict as plate_config
 
-        with open(json_path, "w") as f:
-            json.dump({"config": config_dict(cfg), "results": results}, f, indent=2)
-        click.echo(f"results written to {json_path}")
+        _write_json(json_path, plate_config(cfg), results)
     if plots_dir:
         from vistrack.plots import plot_per_frame
 

@@ -438,7 +438,6 @@ class PlateLISProposal:
         ``r`` at its centre — the line scans alone lock onto bumpers and grilles, which have the
         plate's horizontal edges but no characters — then the line scans inside that cell."""
         m = self.model
-        n = len(x)
         cu, cw = self.coarse
         half = m.plate_size(x)
         gu = ((np.arange(cu) + 0.5) / cu * 2 - 1)
