@@ -152,6 +152,16 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         err = landmark_error(rows, clip.truth, model.k)
         click.echo(f"vs ground truth: mean landmark error {err.mean():.2f} px (per frame: median "
                    f"{np.median(err):.2f}, max {err.max():.2f})")
+    if clip.truth is not None and name == "plate" and "x0" in clip.truth:
+        from vistrack.reproduce.plate import plate_frame_measures
+
+        rec = {"reported": [r["visible"] for r in rows],
+               "vertices": [[r[f"{c}{i}"] for i in range(4) for c in "xy"] for r in rows]}
+        has, err, lost, false = plate_frame_measures(rec, clip.truth, model.layout.aspect)
+        ok = has & ~lost
+        click.echo(f"vs ground truth: plate lost in {int(lost.sum())} of {int(has.sum())} plate frames; mean vertex "
+                   f"error {np.nanmean(err[ok]) if ok.any() else float('nan'):.2f} px when tracked; "
+                   f"{int(false.sum())} frames reported a plate where there was none")
     if clip.truth is not None and name == "contour":
         t = clip.truth
         k = np.array([r["frame"] for r in rows], int)

@@ -176,6 +176,10 @@ def test_plate_run_same_seed_same_track_and_bad_layout(road, tmp_path, capsys):
         rows = (tmp_path / name).read_text().splitlines()
         tracks.append([",".join(r.split(",")[:-1]) for r in rows])  # all but the ms column
     assert tracks[0] == tracks[1]
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as e:
+        main(["run", str(road), "--algo", "lis", "-n", "30", "--max-frames", "8"])
+    assert e.value.code == 0 and "vs ground truth: plate lost in" in capsys.readouterr().out
     with pytest.raises(SystemExit) as e:
         main(["run", str(road), "--layout", "us", "-q"])
     assert e.value.code != 0 and "us" in capsys.readouterr().err
