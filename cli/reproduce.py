@@ -19,6 +19,26 @@ from .options import IntList, StrList, check_writable
 __all__ = ["reproduce"]
 
 
+def engine_options(default_out):
+    """The evaluation engine's options, shared by every ``reproduce`` command."""
+    opts = [
+        click.option("--workers", default=0, show_default=True, type=click.IntRange(min=0),
+                     help="LocalCluster worker processes (0: one per core)."),
+        click.option("--scheduler", help="Address of a running Dask scheduler [default: a LocalCluster]."),
+        click.option("--in-process", is_flag=True, help="LocalCluster workers as threads of this process."),
+        click.option("--out", "out_dir", default=default_out, show_default=True, type=click.Path(file_okay=False),
+                     help="Folder for the per-task result files (OUT/tasks)."),
+        click.option("--resume", is_flag=True, help="Keep finished tasks in --out and run only the rest."),
+    ]
+
+    def deco(f):
+        for opt in reversed(opts):
+            f = opt(f)
+        return f
+
+    return deco
+
+
 @click.group()
 def reproduce():
     """Reproduce the experiments of the seeds (tables and figures)."""
@@ -52,13 +72,7 @@ def _table(results):
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
               help="Write PNGs of error vs time step and error vs N into this folder.")
-@click.option("--workers", default=0, show_default=True, type=click.IntRange(min=0),
-              help="LocalCluster worker processes (0: one per core).")
-@click.option("--scheduler", help="Address of a running Dask scheduler [default: a LocalCluster].")
-@click.option("--in-process", is_flag=True, help="LocalCluster workers as threads of this process.")
-@click.option("--out", "out_dir", default="bearings-results", show_default=True, type=click.Path(file_okay=False),
-              help="Folder for the per-sequence result files (OUT/tasks).")
-@click.option("--resume", is_flag=True, help="Keep finished sequences in --out and run only the rest.")
+@engine_options("bearings-results")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def bearings(ships, sequences, runs, steps, algos, particles, seed, resample, ess_threshold, json_path,
              plots_dir, workers, scheduler, in_process, out_dir, resume, quiet):
@@ -198,18 +212,13 @@ def _contour_table(results):
               help="ALGO:N pairs (bootstrap, ls-n-ips, lls, lis, avpf).")
 @click.option("--runs", default=10, show_default=True, type=click.IntRange(min=1), help="Runs per clip.")
 @click.option("--seed", default=0, show_default=True, type=int)
-@click.option("--workers", default=0, show_default=True, type=click.IntRange(min=0),
-              help="LocalCluster worker processes (0: one per core).")
-@click.option("--scheduler", help="Address of a running Dask scheduler [default: a LocalCluster].")
-@click.option("--out", "out_dir", default="contour-results", show_default=True, type=click.Path(file_okay=False),
-              help="Folder for the per-task result files (OUT/tasks).")
-@click.option("--resume", is_flag=True, help="Keep finished tasks in --out and run only the rest.")
+@engine_options("contour-results")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
               help="Write P(lost) vs frame and error vs frame PNGs here.")
 @click.option("--quiet", "-q", is_flag=True)
-def contour(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler, out_dir, resume, json_path,
-            plots_dir, quiet):
+def contour(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler, in_process, out_dir, resume,
+            json_path, plots_dir, quiet):
     """Contour tracking in clutter with a distractor (thesis §4.3.2, Table 4.1).
 
     Tracks every clip RUNS times with every ALGO:N from the first frame's
@@ -230,7 +239,8 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
     tasks = contour_tasks(cfg)
     out = _fresh_out(out_dir, tasks, resume)
 
-    run_tasks(tasks, out, scheduler=scheduler, workers=workers, resume=resume, quiet=quiet, desc="contour")
+    run_tasks(tasks, out, scheduler=scheduler, workers=workers, in_process=in_process, resume=resume, quiet=quiet,
+              desc="contour")
     results = contour_results(tasks, out)
     click.echo(f"{len(clips)} clips x {runs} runs")
     click.echo(_contour_table(results))
@@ -272,13 +282,7 @@ def _landmarks_table(results):
               help="Particles N [default: the paper's, 50 for K=5 and 20 for K=8].")
 @click.option("--mt-dims", default=None, type=click.IntRange(min=0),
               help="PF-EIS-MT: trailing entries of c that are mode-tracked [default: 10 for K=8, 4 for K=5].")
-@click.option("--workers", default=0, show_default=True, type=click.IntRange(min=0),
-              help="LocalCluster worker processes (0: one per core).")
-@click.option("--scheduler", help="Address of a running Dask scheduler [default: a LocalCluster].")
-@click.option("--in-process", is_flag=True, help="LocalCluster workers as threads of this process.")
-@click.option("--out", "out_dir", default="landmarks-results", show_default=True, type=click.Path(file_okay=False),
-              help="Folder for the per-run result files (OUT/tasks).")
-@click.option("--resume", is_flag=True, help="Keep finished runs in --out and run only the rest.")
+@engine_options("landmarks-results")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False), help="Write mse_vs_time.png here.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
@@ -351,13 +355,7 @@ def _plate_table(results):
               help="ALGO:N pairs (lis, bootstrap, lls, avpf).")
 @click.option("--runs", default=20, show_default=True, type=click.IntRange(min=1), help="Runs per clip.")
 @click.option("--seed", default=0, show_default=True, type=int)
-@click.option("--workers", default=0, show_default=True, type=click.IntRange(min=0),
-              help="LocalCluster worker processes (0: one per core).")
-@click.option("--scheduler", help="Address of a running Dask scheduler [default: a LocalCluster].")
-@click.option("--in-process", is_flag=True, help="LocalCluster workers as threads of this process.")
-@click.option("--out", "out_dir", default="plate-results", show_default=True, type=click.Path(file_okay=False),
-              help="Folder for the per-task result files (OUT/tasks).")
-@click.option("--resume", is_flag=True, help="Keep finished tasks in --out and run only the rest.")
+@engine_options("plate-results")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False), help="Write P(lost) vs frame PNG here.")
 @click.option("--quiet", "-q", is_flag=True)
@@ -398,6 +396,7 @@ def plate(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler
         os.makedirs(plots_dir, exist_ok=True)
         curves = {f"{r['algo']}, N={r['particles']}": [float("nan") if v is None else v for v in r["p_lost_per_frame"]]
                   for r in results if r["p_lost_per_frame"] is not None}
-        a = plot_per_frame(curves, os.path.join(plots_dir, "p_lost_vs_frame.png"), ylabel="P(lost), frames with a plate",
+        a = plot_per_frame(curves, os.path.join(plots_dir, "p_lost_vs_frame.png"),
+                           ylabel="P(lost), frames with a plate",
                            title="Plates: probability of losing the plate (Fig. 4.15)")
         click.echo(f"plot written to {a}")
