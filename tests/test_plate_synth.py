@@ -183,3 +183,44 @@ def test_plate_run_same_seed_same_track_and_bad_layout(road, tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
         main(["run", str(road), "--layout", "us", "-q"])
     assert e.value.code != 0 and "us" in capsys.readouterr().err
+
+
+def test_reproduce_plate_and_eval_plate_on_a_tiny_suite(road, tmp_path, capsys):
+    import json
+    import shutil
+
+    from cli_helpers import run
+
+    suite = tmp_path / "suite"
+    shutil.copytree(road, suite / "road")
+    js = tmp_path / "p.json"
+    code, out, err = run(["reproduce", "plate", "--clips", str(suite), "--runs", "2", "--algos", "lis:30,bootstrap:60",
+                          "--in-process", "--workers", "2", "--out", str(tmp_path / "res"), "--json", str(js),
+                          "--plots", str(tmp_path / "plots"), "-q"], capsys)
+    assert code == 0, err
+    assert "P(lost)" in out and "false rep." in out
+    data = json.loads(js.read_text())
+    assert [(r["algo"], r["particles"]) for r in data["results"]] == [("lis", 30), ("bootstrap", 60)]
+    for r in data["results"]:
+        assert r["runs"] == 2 and 0.0 <= r["p_lost"] <= 1.0 and r["frames_per_s"] > 0
+        assert r["appearances"] > 0 and r["false_reports"] >= 0
+    assert (tmp_path / "plots" / "p_lost_vs_frame.png").read_bytes()[:4] == b"\x89PNG"
+    code, _, err = run(["eval", str(suite), "--model", "plate", "--algos", "lis", "--particles", "30", "--runs", "1",
+                        "--in-process", "--workers", "1", "--out", str(tmp_path / "ev"), "-q"], capsys)
+    assert code == 0, err
+    res = json.loads((tmp_path / "ev" / "results.json").read_text())
+    assert res["config"]["model"] == "plate" and res["results"][0]["success_auc"] > 0
+
+
+@pytest.mark.parametrize("kind, model", [("plate", "plate"), ("landmarks", "landmarks")])
+def test_synth_suite_makes_every_kind(kind, model, tmp_path, capsys):
+    import json
+
+    from cli_helpers import run
+
+    code, _, err = run(["synth-suite", "--kind", kind, "--clips", "2", "--seed", "4", "--frames", "3",
+                        "--out", str(tmp_path / "s"), "-q"], capsys)
+    assert code == 0, err
+    metas = sorted((tmp_path / "s").glob("*/meta.json"))
+    assert [m.parent.name for m in metas] == [f"{kind}-04", f"{kind}-05"]
+    assert all(json.loads(m.read_text())["model"] == model for m in metas)
