@@ -12,7 +12,8 @@ from vistrack.reproduce.bearings import DEFAULT_ALGOS, BearingsConfig, bearing_r
 from vistrack.reproduce.landmarks import (LANDMARK_ALGOS, LandmarksConfig, landmark_results, landmark_tasks,
                                           run_landmark_task)
 from vistrack.reproduce.plate import PlateConfig, plate_results, plate_tasks, run_plate_task
-from vistrack.reproduce.contour import ContourConfig, config_dict, contour_results, contour_tasks
+from vistrack.evaluation import entries_config
+from vistrack.reproduce.contour import ContourConfig, contour_results, contour_tasks
 
 from .options import IntList, StrList, check_writable
 
@@ -245,7 +246,7 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
     click.echo(f"{len(clips)} clips x {runs} runs")
     click.echo(_contour_table(results))
     if json_path:
-        _write_json(json_path, config_dict(cfg), results)
+        _write_json(json_path, entries_config(cfg), results)
     if plots_dir:
         from vistrack.plots import plot_per_frame
 
@@ -387,9 +388,7 @@ def plate(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler
     click.echo(f"{len(clips)} clips x {runs} runs")
     click.echo(_plate_table(results))
     if json_path:
-        from vistrack.reproduce.plate import config_dict as plate_config
-
-        _write_json(json_path, plate_config(cfg), results)
+        _write_json(json_path, entries_config(cfg), results)
     if plots_dir:
         from vistrack.plots import plot_per_frame
 

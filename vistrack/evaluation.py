@@ -34,7 +34,7 @@ from .metrics import center_error, contour_lost_threshold, iou, summarize_runs
 from .tracking import track
 from .video import VideoError
 
-__all__ = ["EvalConfig", "find_clips", "task_list", "run_task", "execute", "summarize", "pooled_summary",
+__all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_config", "run_task", "execute", "summarize", "pooled_summary",
            "OPENCV_TRACKERS", "check_algos"]
 
 #: OpenCV trackers by name -> constructor attribute (contrib ones may be missing)
@@ -119,6 +119,24 @@ def task_list(cfg, clips):
                               "seed_seq": seqs[r], "model": cfg.model,
                               "name": f"{ci:03d}_{_name(clip)}__{algo}__N{n}__r{r}"})
     return tasks
+
+
+def entry_tasks(cfg, model):
+    """The tasks of an experiment config with ``clips``, ``entries`` (algo, N), ``runs`` and
+    ``seed`` (the contour and plate reproductions) on ``model``."""
+    ev = EvalConfig(clips=list(cfg.clips), entries=[tuple(e) for e in cfg.entries], runs=cfg.runs, seed=cfg.seed,
+                    model=model)
+    return task_list(ev, list(cfg.clips))
+
+
+def entries_config(cfg):
+    """Such a config as a JSON-ready dict."""
+    from dataclasses import asdict
+
+    d = asdict(cfg)
+    d["clips"] = [str(c) for c in cfg.clips]
+    d["entries"] = [list(e) for e in cfg.entries]
+    return d
 
 
 def _truth_boxes(t):

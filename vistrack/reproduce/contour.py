@@ -9,11 +9,11 @@ for every algorithm (common random numbers).
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
-from ..evaluation import EvalConfig, load_task_results, pooled_summary, task_list
+from ..evaluation import entry_tasks, load_task_results, pooled_summary
 
-__all__ = ["ContourConfig", "contour_tasks", "contour_results", "config_dict"]
+__all__ = ["ContourConfig", "contour_tasks", "contour_results"]
 
 
 @dataclass
@@ -26,18 +26,10 @@ class ContourConfig:
 
 def contour_tasks(cfg):
     """The experiment's tasks (see :func:`vistrack.evaluation.task_list`)."""
-    ev = EvalConfig(clips=list(cfg.clips), entries=[tuple(e) for e in cfg.entries], runs=cfg.runs, seed=cfg.seed,
-                    model="contour")
-    return task_list(ev, list(cfg.clips))
+    return entry_tasks(cfg, "contour")
 
 
 def contour_results(tasks, out_dir):
     """Pooled summaries per (algo, N) over clips and runs, in the order of the entries."""
     return pooled_summary(load_task_results(tasks, out_dir))
 
-
-def config_dict(cfg):
-    d = asdict(cfg)
-    d["clips"] = [str(c) for c in cfg.clips]
-    d["entries"] = [list(e) for e in cfg.entries]
-    return d

@@ -20,14 +20,14 @@ from __future__ import annotations
 
 import json
 import warnings
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..builders import build_model
 from ..clips import load_clip
-from ..evaluation import EvalConfig, single_threaded, task_list, write_task_result
+from ..evaluation import entry_tasks, single_threaded, write_task_result
 from ..filters import make_filter
 from ..particles import DegenerateWeightsWarning
 from ..tracking import track
@@ -46,9 +46,7 @@ class PlateConfig:
 
 def plate_tasks(cfg):
     """The experiment's tasks (see :func:`vistrack.evaluation.task_list`)."""
-    ev = EvalConfig(clips=list(cfg.clips), entries=[tuple(e) for e in cfg.entries], runs=cfg.runs, seed=cfg.seed,
-                    model="plate")
-    return task_list(ev, list(cfg.clips))
+    return entry_tasks(cfg, "plate")
 
 
 def run_plate_task(task, out_dir):
@@ -151,9 +149,3 @@ def plate_results(cfg, tasks, out_dir):
         })
     return results
 
-
-def config_dict(cfg):
-    d = asdict(cfg)
-    d["clips"] = [str(c) for c in cfg.clips]
-    d["entries"] = [list(e) for e in cfg.entries]
-    return d
