@@ -30,7 +30,7 @@ Local search ``LS_λ`` (§4.3, eq. 4.1; LMS of §4.3.1)
     The best translation on a grid within ``λ`` (from one set of long lines),
     then an LMS fit of the nearest edges for scale and rotation
     (:meth:`Contour.local_search`); the move is rejected when ``|ẑ - z| > λ`` in
-    any coordinate, ``λ = (7, 7, 0.1, 0.15)`` for (cx, cy, a, b) with the
+    any coordinate, ``λ = (7, 7, 0.15, 0.1)`` (§4.3.2) for (cx, cy, a, b) with the
     translation part scaled by frame width / 240. The plain LMS step at the
     support points, ``ẑ = W⁺ (q̂ - q0)`` with ``W⁺ = (WᵀUW)⁻¹WᵀU`` and
     ``U = diag(B, B)`` the spline norm, search length ``l = l0 · (size/60) · scale``
@@ -178,7 +178,7 @@ class Contour:
     def __init__(self, template, init_pose, frame_size, *, sigma_xy=None, sigma_a=0.02, sigma_b=0.03,
                  damping=0.8, prior_std=None, sigma_edge=None, half_line=None, q_miss=0.1,
                  clutter_density=0.05, edge_threshold=2.0, cos_min=0.85, search_length=16.0,
-                 search_iterations=1, search_lambda=(7.0, 7.0, 0.1, 0.15), search_grid_step=1.5,
+                 search_iterations=1, search_lambda=(7.0, 7.0, 0.15, 0.1), search_grid_step=1.5,
                  search_check=False, measure_per_segment=2, polarity=None):
         q0 = np.asarray(template, dtype=float)
         if q0.ndim != 2 or q0.shape[1] != 2 or len(q0) < 4:
