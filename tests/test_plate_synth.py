@@ -112,6 +112,27 @@ def test_plate_dynamics_entering_branch(rng):
     np.testing.assert_array_equal(model.entering(moved), model.entering(new))
 
 
+def test_plate_estimate_is_the_main_mode_not_the_mean_of_two(rng):
+    """A posterior split between a plate and a plate-like sign: the estimate is the weighted
+    mean of the heavier cluster (within half a plate of the best particle), not a point between."""
+    from vistrack.models.plate import Plate
+    from vistrack.particles import ParticleSet
+
+    model = Plate((640, 480))
+    plate = np.array([300.0, 320.0, 0.0, 80.0])
+    sign = np.array([500.0, 150.0, 0.0, 70.0])
+    a = plate + rng.normal(0, [2, 1, 0.01, 2], (60, 4))
+    b = sign + rng.normal(0, [2, 1, 0.01, 2], (40, 4))
+    x = np.concatenate([np.hstack([a, a]), np.hstack([b, b])])
+    logw = np.log(np.r_[np.full(60, 0.9 / 60), np.full(40, 0.1 / 40)])
+    logw[0] += 0.5  # the best particle is in the plate cluster
+    ps = ParticleSet(x, logw)
+    est = model.estimate(ps)
+    w = ps.weights[:60]
+    np.testing.assert_allclose(est, (w @ x[:60]) / w.sum())
+    assert np.hypot(*(est[:2] - plate[:2])) < 3 and np.hypot(*(ps.mean()[:2] - plate[:2])) > 15
+
+
 def test_run_plate_clip_default_model_writes_vertices(road, tmp_path, capsys):
     import csv
 

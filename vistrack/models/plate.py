@@ -298,6 +298,17 @@ class Plate:
         ent = np.log(self.enter_weight) + self.enter_logpdf(new[:, :4])
         return np.where(self.entering(new), ent, ar)
 
+    def estimate(self, particles):
+        """The weighted mean of the particles about the posterior's main mode: those within half
+        a plate (centre) and 25 % (scale) of the highest-weight particle. With one plate in the
+        model a posterior split between the plate and a plate-like sign would otherwise put the
+        mean between them."""
+        x, w = particles.states, particles.weights
+        best = x[np.argmax(w)]
+        near = (np.hypot(x[:, 0] - best[0], x[:, 1] - best[1]) <= 0.5 * best[3]) & \
+            (np.abs(x[:, 3] - best[3]) <= 0.25 * best[3])
+        return (w[near] @ x[near]) / w[near].sum()
+
     # -- likelihood and output ------------------------------------------------------
     def loglik(self, obs, states):
         return self.lik.loglik(obs, states)
