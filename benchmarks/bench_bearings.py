@@ -17,6 +17,7 @@ from vistrack.data_synth.bearings import simulate
 from vistrack.filters import filter_steps, make_filter
 from vistrack.models import Bearings
 from vistrack.particles import ParticleSet
+from vistrack.runtime import keep_freed_memory
 
 
 def main():
@@ -78,4 +79,5 @@ def main():
 
 
 if __name__ == "__main__":
+    keep_freed_memory()  # as the CLI does
     main()

@@ -14,6 +14,7 @@ import numpy as np
 from vistrack.data_synth.bearings import simulate
 from vistrack.filters import Bootstrap
 from vistrack.models import Bearings
+from vistrack.runtime import keep_freed_memory
 
 
 def time_step(filt, particles, obs, rng, repeats):
@@ -46,4 +47,5 @@ def main():
 
 
 if __name__ == "__main__":
+    keep_freed_memory()  # as the CLI does
     main()

@@ -18,6 +18,7 @@ from vistrack.clips import load_clip
 from vistrack.data_synth.contour import make_contour_clip
 from vistrack.filters import make_filter
 from vistrack.tracking import track
+from vistrack.runtime import keep_freed_memory
 
 
 def main():
@@ -48,4 +49,5 @@ def main():
 
 
 if __name__ == "__main__":
+    keep_freed_memory()  # as the CLI does
     main()

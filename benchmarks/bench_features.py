@@ -9,6 +9,7 @@ import time
 import numpy as np
 
 from vistrack.features import FeatureMaps
+from vistrack.runtime import keep_freed_memory
 
 
 def main():
@@ -39,4 +40,5 @@ def main():
 
 
 if __name__ == "__main__":
+    keep_freed_memory()  # as the CLI does
     main()

@@ -23,6 +23,7 @@ from vistrack.features import FeatureMaps
 from vistrack.filters import make_filter
 from vistrack.particles import ParticleSet
 from vistrack.reproduce.landmarks import LandmarksConfig
+from vistrack.runtime import keep_freed_memory
 
 
 def sim_part(rounds):
@@ -87,4 +88,5 @@ def main():
 
 
 if __name__ == "__main__":
+    keep_freed_memory()  # as the CLI does
     main()

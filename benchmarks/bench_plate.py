@@ -22,6 +22,7 @@ from vistrack.data_synth.plate import make_plate_clip
 from vistrack.features import FeatureMaps
 from vistrack.filters import make_filter
 from vistrack.models.plate import PlateLikelihood
+from vistrack.runtime import keep_freed_memory
 
 
 class Timer:
@@ -119,4 +120,5 @@ def main():
 
 
 if __name__ == "__main__":
+    keep_freed_memory()  # as the CLI does
     main()

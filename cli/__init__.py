@@ -11,6 +11,7 @@ import sys
 import click
 
 from vistrack import __version__
+from vistrack.runtime import keep_freed_memory
 
 from .demo import demo
 from .eval import eval_cmd
@@ -37,6 +38,7 @@ def cli():
       vistrack reproduce bearings --runs 20          # thesis §4.5.5, one ship
       vistrack reproduce bearings --ships 3 --particles 10,100
     """
+    keep_freed_memory()
 
 
 cli.add_command(reproduce)

@@ -117,3 +117,15 @@ def test_demo_writes_videos_tracks_and_report(tmp_path, capsys):
             assert {"x0", "y3", "visible"} <= set(rows[0])
     assert (out / "eval" / "report.md").is_file() and str(out) in stdout
     assert len(json.loads((out / "eval" / "results.json").read_text())["results"]) == 3 * 2
+
+
+def test_engine_workers_keep_freed_memory():
+    """Under glibc the engine's workers turn glibc's fresh-mmap-per-array behaviour (set off by
+    Dask's MALLOC_TRIM_THRESHOLD_) back into heap reuse; elsewhere it is a no-op."""
+    import platform
+
+    from vistrack.runtime import keep_freed_memory
+
+    if platform.libc_ver()[0] != "glibc":
+        pytest.skip("no glibc: keep_freed_memory is a no-op")
+    assert keep_freed_memory() is True

@@ -31,6 +31,7 @@ from .builders import build_model
 from .clips import load_clip
 from .filters import ALGORITHMS, make_filter
 from .metrics import center_error, contour_lost_threshold, iou, summarize_runs
+from .runtime import keep_freed_memory
 from .tracking import track
 from .video import VideoError
 
@@ -164,10 +165,12 @@ def _track_opencv(algo, clip, frames):
 
 
 def single_threaded():
-    """One worker per core: keep OpenCV from starting threads of its own in the worker."""
+    """Prepare an engine worker: one worker per core, so keep OpenCV from starting threads of its
+    own; and let ``malloc`` reuse freed memory (:func:`keep_freed_memory`)."""
     import cv2
 
     cv2.setNumThreads(1)
+    keep_freed_memory()
 
 
 def run_task(task, out_dir):
