@@ -129,8 +129,11 @@ def plate_results(cfg, tasks, out_dir):
         lost_all = np.concatenate(lost_frames)
         err_all = np.concatenate(errs)
         acquired = [d for d in delays if d is not None]
-        curve = np.nanmean(np.concatenate([np.array(v) for v in lost_curve.values()]), axis=0) \
-            if len({len(v[0]) for v in lost_curve.values()}) == 1 else None
+        curve = None
+        if len({len(v[0]) for v in lost_curve.values()}) == 1:  # clips of one length: P(lost) per frame
+            a = np.concatenate([np.array(v) for v in lost_curve.values()])
+            has_plate = np.sum(~np.isnan(a), axis=0)
+            curve = np.where(has_plate > 0, np.nansum(a, axis=0) / np.maximum(has_plate, 1), np.nan)
         results.append({
             "algo": algo, "particles": int(n), "runs": n_runs, "clips": len(lost_curve),
             "p_lost": float(lost_all.mean()) if len(lost_all) else 0.0,
