@@ -52,6 +52,8 @@ def run_once(path, algo, n, seed, timer):
     orig = [(PlateLikelihood, "loglik", timer.wrap(PlateLikelihood, "loglik", "likelihood"))]
     if hasattr(filt, "proposal"):
         orig.append((filt.proposal, "sample", timer.wrap(filt.proposal, "sample", "proposal")))
+    if algo == "lls":  # LLS's proposal is its grid of sparse likelihoods
+        orig.append((model, "loglik_local_grid", timer.wrap(model, "loglik_local_grid", "proposal")))
     filt.resample_scheme = _timed_scheme(filt.resample_scheme, timer)
     rng = np.random.default_rng(seed)
     p, buffers, frames = None, {}, 0

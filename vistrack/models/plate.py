@@ -369,6 +369,13 @@ class Plate:
     def lis_proposal(self):
         return PlateLISProposal(self)
 
+    def loglik_local_grid(self, obs, states, offsets):
+        """LLS's grid (:class:`~vistrack.filters.lls.LLS`): ``log r`` at every pose shifted by the
+        translation ``offsets (G, 2)``, from the sparse point sets of the LIS scans — ``(N, G)``.
+        Only LLS's proposal uses it; its weight takes the full ``r`` at the drawn pose."""
+        off = np.broadcast_to(np.asarray(offsets, float)[None], (len(states),) + np.shape(offsets))
+        return self.lik.loglik_sparse(obs, states, off)
+
     def lls_window(self):
         from ..filters.lls import Window
 
