@@ -153,6 +153,29 @@ def test_plate_lls_grid_finds_the_plate_and_lls_tracks_it(road):
     assert len(errs) >= 10 and np.mean(errs) < 1.0
 
 
+def test_plate_sharpness_scales_log_r_but_not_the_report(road):
+    """``sharpness`` multiplies ``log r`` (the learnt log-odds) everywhere the filters read it —
+    full, sparse and line-scan evaluations — while ``visible`` still thresholds the log-odds."""
+    from vistrack.features import FeatureMaps
+    from vistrack.models.plate import Plate
+
+    clip = load_clip(road)
+    t = clip.truth
+    k = int(np.flatnonzero(t["visible"] > 0)[0]) + 3
+    obs = FeatureMaps(dict(clip.source)[k])
+    pose = np.array([t["cx"][k], t["cy"][k], np.deg2rad(t["angle_deg"][k]), t["scale"][k]])
+    x = np.concatenate([pose, pose])[None] + np.array([[0, 0, 0, 0, 0, 0, 0, 0], [9, 4, 0, 0, 9, 4, 0, 0]])
+    m1, m3 = Plate(clip.source.size), Plate(clip.source.size, sharpness=3.0)
+    off = np.zeros((2, 3, 2))
+    off[:, 1, 0], off[:, 2, 1] = 5.0, -3.0
+    np.testing.assert_allclose(m3.loglik(obs, x), 3 * m1.loglik(obs, x), rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(m3.lik.loglik_sparse(obs, x, off), 3 * m1.lik.loglik_sparse(obs, x, off), rtol=1e-6,
+                               atol=1e-9)
+    np.testing.assert_allclose(m3.lik.scan(obs, x, "h", off), 3 * m1.lik.scan(obs, x, "h", off), rtol=1e-6, atol=1e-9)
+    for row in x:
+        assert m3.visible(obs, row) == m1.visible(obs, row)
+
+
 def test_plate_estimate_is_the_main_mode_not_the_mean_of_two(rng):
     """A posterior split between a plate and a plate-like sign: the estimate is the weighted
     mean of the heavier cluster (within half a plate of the best particle), not a point between."""
