@@ -40,6 +40,29 @@ def engine_options(default_out):
     return deco
 
 
+def suite_options(clips_help, size, algos, algos_help, runs):
+    """A clip suite's options (``--clips --make --frames --size --algos --runs --seed``), shared by
+    the ``reproduce`` commands that track synthetic clips."""
+    opts = [
+        click.option("--clips", "clips_dir", type=click.Path(file_okay=False), help=clips_help),
+        click.option("--make", "make", default=10, show_default=True, type=click.IntRange(min=1),
+                     help="Clips to generate (seeds 1..MAKE) when --clips has none."),
+        click.option("--frames", default=300, show_default=True, type=click.IntRange(min=2),
+                     help="Frames per made clip."),
+        click.option("--size", default=size, show_default=True, help="Frame size of made clips."),
+        click.option("--algos", "entries", default=algos, show_default=True, type=Entries(), help=algos_help),
+        click.option("--runs", default=runs, show_default=True, type=click.IntRange(min=1), help="Runs per clip."),
+        click.option("--seed", default=0, show_default=True, type=int),
+    ]
+
+    def deco(f):
+        for opt in reversed(opts):
+            f = opt(f)
+        return f
+
+    return deco
+
+
 @click.group()
 def reproduce():
     """Reproduce the experiments of the seeds (tables and figures)."""
@@ -202,17 +225,9 @@ def _contour_table(results):
 
 
 @reproduce.command()
-@click.option("--clips", "clips_dir", type=click.Path(file_okay=False),
-              help="Folder of contour clip folders (each with video.mp4, groundtruth.csv, meta.json); "
-                   "made there with --make if missing.")
-@click.option("--make", "make", default=10, show_default=True, type=click.IntRange(min=1),
-              help="Clips to generate (seeds 1..MAKE) when --clips has none.")
-@click.option("--frames", default=300, show_default=True, type=click.IntRange(min=2), help="Frames per made clip.")
-@click.option("--size", default="320x240", show_default=True, help="Frame size of made clips.")
-@click.option("--algos", "entries", default="ls-n-ips:30,bootstrap:2000", show_default=True, type=Entries(),
-              help="ALGO:N pairs (bootstrap, ls-n-ips, lls, lis, avpf).")
-@click.option("--runs", default=10, show_default=True, type=click.IntRange(min=1), help="Runs per clip.")
-@click.option("--seed", default=0, show_default=True, type=int)
+@suite_options("Folder of contour clip folders (each with video.mp4, groundtruth.csv, meta.json); "
+               "made there with --make if missing.", "320x240", "ls-n-ips:30,bootstrap:2000",
+               "ALGO:N pairs (bootstrap, ls-n-ips, lls, lis, avpf).", 10)
 @engine_options("contour-results")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
@@ -346,16 +361,8 @@ def _plate_table(results):
 
 
 @reproduce.command()
-@click.option("--clips", "clips_dir", type=click.Path(file_okay=False),
-              help="Folder of plate clip folders; made there with --make if missing [default: plate-clips].")
-@click.option("--make", "make", default=10, show_default=True, type=click.IntRange(min=1),
-              help="Clips to generate (seeds 1..MAKE) when --clips has none.")
-@click.option("--frames", default=300, show_default=True, type=click.IntRange(min=2), help="Frames per made clip.")
-@click.option("--size", default="640x480", show_default=True, help="Frame size of made clips.")
-@click.option("--algos", "entries", default="lis:100,bootstrap:750", show_default=True, type=Entries(),
-              help="ALGO:N pairs (lis, bootstrap, lls, avpf).")
-@click.option("--runs", default=20, show_default=True, type=click.IntRange(min=1), help="Runs per clip.")
-@click.option("--seed", default=0, show_default=True, type=int)
+@suite_options("Folder of plate clip folders; made there with --make if missing [default: plate-clips].",
+               "640x480", "lis:100,bootstrap:750", "ALGO:N pairs (lis, bootstrap, lls, avpf).", 20)
 @engine_options("plate-results")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False), help="Write P(lost) vs frame PNG here.")
