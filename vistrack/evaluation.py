@@ -164,7 +164,7 @@ def _track_opencv(algo, clip, frames):
     return np.array(boxes, float), np.array(ms), np.full(len(boxes), np.nan)
 
 
-def single_threaded():
+def prepare_worker():
     """Prepare an engine worker: one worker per core, so keep OpenCV from starting threads of its
     own; and let ``malloc`` reuse freed memory (:func:`keep_freed_memory`)."""
     import cv2
@@ -175,7 +175,7 @@ def single_threaded():
 
 def run_task(task, out_dir):
     """Track one clip once; write ``out_dir/tasks/<name>.json``; return its path."""
-    single_threaded()
+    prepare_worker()
     out = Path(out_dir) / "tasks" / f"{task['name']}.json"
     clip = load_clip(task["clip"])
     frames = list(clip.source)

@@ -102,9 +102,9 @@ def bearing_tasks(cfg):
 
 def run_bearing_task(task, out_dir):
     """Engine runner: sequence ``task["sequence"]``, written to ``out_dir/tasks/<name>.json``."""
-    from ..evaluation import single_threaded, write_task_result
+    from ..evaluation import prepare_worker, write_task_result
 
-    single_threaded()
+    prepare_worker()
 
     cfg = BearingsConfig(**task["config"])
     res = _sequence_runs(cfg, Bearings(cfg.ships), task["sequence"])

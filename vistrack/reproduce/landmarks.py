@@ -129,9 +129,9 @@ def landmark_tasks(cfg):
 
 def run_landmark_task(task, out_dir):
     """Engine runner: one run, written to ``out_dir/tasks/<name>.json``."""
-    from ..evaluation import single_threaded, write_task_result
+    from ..evaluation import prepare_worker, write_task_result
 
-    single_threaded()
+    prepare_worker()
 
     cfg = LandmarksConfig(**task["config"])
     res = _one_run(cfg, cfg.model(), task["run"], task["seed_seq"])

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..builders import build_model
 from ..clips import load_clip
-from ..evaluation import entry_tasks, single_threaded, write_task_result
+from ..evaluation import entry_tasks, prepare_worker, write_task_result
 from ..filters import make_filter
 from ..particles import DegenerateWeightsWarning
 from ..tracking import track
@@ -51,7 +51,7 @@ def plate_tasks(cfg):
 
 def run_plate_task(task, out_dir):
     """Engine runner: track one plate clip once (no initial box); write the per-frame record."""
-    single_threaded()
+    prepare_worker()
     clip = load_clip(task["clip"])
     model = build_model("plate", clip)
     filt = make_filter(task["algo"], model)
