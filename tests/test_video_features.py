@@ -60,6 +60,32 @@ def test_maps_are_computed_once(monkeypatch):
     assert len(calls) == 2  # gx, then gy for the magnitude; never again
 
 
+
+def test_smoothed_gradient_keeps_a_ramp_and_evens_out_blurred_edges():
+    # Gaussian smoothing leaves a linear ramp alone: Sobel of a·x is 8a inside
+    ramp = np.tile(np.arange(60, dtype=np.float32) * 2.0, (40, 1))
+    fm = FeatureMaps(ramp)
+    g, _ = fm.gradient(1.5)
+    assert g[10:30, 10:50, 0] == pytest.approx(16.0, abs=1e-3)
+    assert g[10:30, 10:50, 1] == pytest.approx(0.0, abs=1e-3)
+    assert fm.gradient(0)[0] is fm.gxy and fm.gradient(1.5)[0] is g  # raw maps; cached per sigma
+
+    # a step edge blurred over 5 px (motion blur) loses less of its peak after smoothing
+    sharp = np.zeros((20, 60), np.float32)
+    sharp[:, 30:] = 100.0
+    blurred = cv2.blur(sharp, (5, 1), borderType=cv2.BORDER_REFLECT)
+
+    def ratio(sigma):
+        return FeatureMaps(blurred).gradient(sigma)[0][10, :, 0].max() / FeatureMaps(sharp).gradient(sigma)[0][10, :, 0].max()
+
+    assert ratio(0) == pytest.approx(0.4, abs=1e-4)  # a 2-px difference: 40 of the ramp vs the whole step of 100
+    assert ratio(1.0) == pytest.approx(0.6, abs=0.02)  # (a pure Gaussian derivative: 1/sqrt(1 + 25/12) = 0.57)
+    assert ratio(2.0) > ratio(1.0) + 0.15  # ... wider smoothing, evener still
+
+    # sampled at pixel centres it is the map itself
+    y, x = np.mgrid[5:8, 20:24].astype(np.float32)
+    assert fm.sample_gradient(x, y, 1.5) == pytest.approx(g[5:8, 20:24])
+
 def test_box_means_from_integral_images_match_direct_means(rng):
     fm = FeatureMaps(rng.integers(0, 255, (50, 70, 3)).astype(np.uint8))
     x0, y0 = rng.integers(0, 30, 20), rng.integers(0, 20, 20)

@@ -17,7 +17,9 @@ Likelihood (Blake and Isard; §1.3.1)
     Along the outward unit normal ``n_i`` at each measurement point (two per
     spline segment) the
     gradient component along the normal, ``g · n_i``, is sampled bilinearly at
-    offsets ``ν_k = k`` px, ``|k| <= half_line``. Edge features are the local
+    offsets ``ν_k = k`` px, ``|k| <= half_line`` (``g``: Sobel of the frame
+    smoothed by a Gaussian of std ``gradient_sigma`` = 1 px, which damps sensor
+    noise and the loss of motion-blurred edges). Edge features are the local
     maxima of ``|g · n_i|`` above ``τ = edge_threshold · mean|∇I|`` of the
     frame whose direction is within ~32° of the contour's (``|g · n| >= 0.85 |g|``). With non-detection probability ``q`` and clutter density ``λ``
     (features per pixel of line), each line contributes
@@ -170,6 +172,9 @@ class Contour:
     polarity : {None, 1, -1}
         Edge polarity along the outward normal (see :meth:`learn_polarity`);
         ``None`` for unsigned edges.
+    gradient_sigma : float
+        Std (px) of the Gaussian that smooths the image before the Sobel gradient
+        that every measurement line reads (0: the raw Sobel maps).
     """
 
     dim = 8
@@ -178,8 +183,8 @@ class Contour:
     def __init__(self, template, init_pose, frame_size, *, sigma_xy=None, sigma_a=0.02, sigma_b=0.03,
                  damping=0.8, prior_std=None, sigma_edge=None, half_line=None, q_miss=0.1,
                  clutter_density=0.05, edge_threshold=2.0, cos_min=0.85, search_length=16.0,
-                 search_iterations=1, search_lambda=(7.0, 7.0, 0.15, 0.1), search_grid_step=1.5,
-                 search_check=False, measure_per_segment=2, polarity=None):
+                 search_lambda=(7.0, 7.0, 0.15, 0.1), search_grid_step=1.5,
+                 search_check=False, measure_per_segment=2, polarity=None, gradient_sigma=1.0):
         q0 = np.asarray(template, dtype=float)
         if q0.ndim != 2 or q0.shape[1] != 2 or len(q0) < 4:
             raise ValueError("template must be an (n, 2) array of at least 4 support points")
@@ -212,6 +217,7 @@ class Contour:
         self.W_meas_plus = np.linalg.pinv(w_m)
         self.dense_matrix = self.spline.dense()
         self.polarity = polarity
+        self.gradient_sigma = float(gradient_sigma)
 
         self.init_pose = np.asarray(init_pose, dtype=float).reshape(4)
         self.sigma = np.array([sigma_xy if sigma_xy is not None else 0.08 * self.size,
@@ -228,7 +234,6 @@ class Contour:
         self.edge_threshold = float(edge_threshold)
         self.cos_min = float(cos_min)
         self.search_length = float(search_length) * ref
-        self.search_iterations = int(search_iterations)
         self.grid_step = float(search_grid_step)
         self.search_check = bool(search_check)
         frame_ref = self.frame_size[0] / 240.0
@@ -343,7 +348,7 @@ class Contour:
         nrm = nrm.astype(np.float32)
         off = np.asarray(offsets, dtype=np.float32)
         nx, ny = nrm[..., 0:1], nrm[..., 1:2]
-        g = obs.sample_gradient(q[..., 0:1] + nx * off, q[..., 1:2] + ny * off)
+        g = obs.sample_gradient(q[..., 0:1] + nx * off, q[..., 1:2] + ny * off, self.gradient_sigma)
         gx, gy = g[..., 0], g[..., 1]
         gn = gx * nx
         gn += gy * ny
@@ -367,7 +372,8 @@ class Contour:
         z = self.init_pose[None]
         off = np.arange(-2.0, 2.5, 0.5)
         q, nrm = self.measurement_lines(z)
-        g = obs.sample_gradient(q[..., 0:1] + nrm[..., 0:1] * off, q[..., 1:2] + nrm[..., 1:2] * off)
+        g = obs.sample_gradient(q[..., 0:1] + nrm[..., 0:1] * off, q[..., 1:2] + nrm[..., 1:2] * off,
+                                self.gradient_sigma)
         gn = (g[..., 0] * nrm[..., 0:1] + g[..., 1] * nrm[..., 1:2])[0]  # (M, L)
         best = np.take_along_axis(gn, np.argmax(np.abs(gn), axis=1)[:, None], 1)[:, 0]
         strong = np.abs(best) > self._threshold(obs)
@@ -382,7 +388,7 @@ class Contour:
         return self.polarity
 
     def _threshold(self, obs):
-        return self.edge_threshold * max(obs.mean_mag, 1e-6)
+        return self.edge_threshold * max(obs.gradient(self.gradient_sigma)[1], 1e-6)
 
     def loglik(self, obs, states):
         """Blake–Isard measurement-line log-likelihood (module docstring) ``(N,)``."""
