@@ -165,8 +165,8 @@ class Contour:
         Spacing of the local search's translation grid, in units of ``sigma_edge``.
     search_check : bool
         Keep a local-search move only if the exact likelihood does not drop
-        (costs N more likelihood evaluations; the grid maximises the grid
-        likelihood, which is nearly always enough).
+        (eq. 4.1's ``r(y|LS_λ(x, y)) >= r(y|x)``; ``r(y|x)`` comes from the search's
+        own measurement lines, so the check costs no extra likelihood evaluation).
     measure_per_segment : int
         Measurement lines per spline segment (2: ``M = 2n`` lines).
     polarity : {None, 1, -1}
@@ -184,7 +184,7 @@ class Contour:
                  damping=0.8, prior_std=None, sigma_edge=None, half_line=None, q_miss=0.1,
                  clutter_density=0.05, edge_threshold=2.0, cos_min=0.85, search_length=16.0,
                  search_lambda=(7.0, 7.0, 0.15, 0.1), search_grid_step=1.5,
-                 search_check=False, measure_per_segment=2, polarity=None, gradient_sigma=1.0):
+                 search_check=True, measure_per_segment=2, polarity=None, gradient_sigma=1.0):
         q0 = np.asarray(template, dtype=float)
         if q0.ndim != 2 or q0.shape[1] != 2 or len(q0) < 4:
             raise ValueError("template must be an (n, 2) array of at least 4 support points")
@@ -354,13 +354,15 @@ class Contour:
         gn += gy * ny
         if self.polarity:
             gn *= self.polarity
+            np.maximum(gn, 0.0, out=gn)
         else:
             np.abs(gn, out=gn)
         gx *= gx
         gy *= gy
         gx += gy
-        gx *= self.cos_min**2
-        gn[(gn * gn < gx) | (gn < 0)] = 0.0
+        gx *= self.cos_min**2  # cos² · |g|²
+        gy = np.multiply(gn, gn, out=gy)  # (g · n)²
+        np.copyto(gn, 0.0, where=gy < gx)
         return gn
 
     def learn_polarity(self, obs, agree=0.75):
@@ -393,7 +395,11 @@ class Contour:
     def loglik(self, obs, states):
         """Blake–Isard measurement-line log-likelihood (module docstring) ``(N,)``."""
         gn = self._profiles(obs, states[:, :4], self.line_offsets)
-        peaks = _edge_peaks(gn, self._threshold(obs))
+        return self._loglik_from_profiles(gn, self._threshold(obs))
+
+    def _loglik_from_profiles(self, gn, thresh):
+        """``log r`` from edge strengths ``(N, M, L)`` sampled at :attr:`line_offsets`."""
+        peaks = _edge_peaks(gn, thresh)
         kern = np.exp(-0.5 * (self.line_offsets / self.sigma_edge) ** 2)
         return np.sum(np.log1p(np.exp(self.log_c) * (peaks @ kern)), axis=1)
 
@@ -433,7 +439,6 @@ class Contour:
         kept only if it raises the exact likelihood, so ``r(y|LS_λ(x, y)) >= r(y|x)``.
         Returns the states and their log-likelihoods.
         """
-        n = len(states)
         z = states[:, :4]
         lx, ly = self.search_lambda[:2]
         step = max(1.0, self.grid_step * self.sigma_edge)
@@ -442,7 +447,7 @@ class Contour:
         grid = np.stack(np.meshgrid(gx, gy), axis=-1).reshape(-1, 2)
         scale, _ = pose_params(z)
         reach_lms = step
-        off, peaks = self._peaks_wide(obs, z, np.hypot(lx, ly) + reach_lms)
+        off, peaks, ll_x = self._peaks_wide(obs, z, np.hypot(lx, ly) + reach_lms, loglik=self.search_check)
         pts, nrm = self.measurement_lines(z)
         ll_grid = self._grid_from_peaks(off, peaks, nrm, grid)
         delta = grid[np.argmax(ll_grid, axis=1)]  # (N, 2)
@@ -462,12 +467,12 @@ class Contour:
         near = np.all(np.abs(z_hat - z) <= self.search_lambda, axis=1)
         cand = states.copy()
         cand[:, :4] = np.where(near[:, None], z_hat, z_t)  # the grid step is within λ by construction
+        ll = self.loglik(obs, cand)
         if not self.search_check:
-            return cand, self.loglik(obs, cand)
-        allc = np.stack([states, cand])  # (2, N, 8)
-        ll = self.loglik(obs, allc.reshape(-1, self.dim)).reshape(2, n)
-        best = np.argmax(ll, axis=0)
-        return allc[best, np.arange(n)], ll[best, np.arange(n)]
+            return cand, ll
+        keep = ll < ll_x  # the move lowered r: stay at the prediction
+        cand[keep] = states[keep]
+        return cand, np.where(keep, ll_x, ll)
 
     def lms_step(self, obs, states, samples=33):
         """The plain LMS step of §4.3.1 at the support points: the edge nearest to the
@@ -498,12 +503,19 @@ class Contour:
         """Window std on translation: the spread of ``K`` (or of ``p_0`` on the first step)."""
         return self.prior_std[:2] if self.first_step else self.sigma[:2]
 
-    def _peaks_wide(self, obs, z, reach):
-        """Edge features on lines long enough for shifts up to ``reach`` px."""
-        h = int(np.ceil(reach)) + self.half_line
+    def _peaks_wide(self, obs, z, reach, loglik=False):
+        """Edge features on lines long enough for shifts up to ``reach`` px; with
+        ``loglik=True`` also ``log r`` at ``z`` itself, exactly as :meth:`loglik`
+        (its lines are the middle samples of these)."""
+        r = int(np.ceil(reach))
+        h = r + self.half_line
         off = np.arange(-h, h + 1, dtype=float)
         gn = self._profiles(obs, z, off)
-        return off, _edge_peaks(gn, self._threshold(obs))
+        thresh = self._threshold(obs)
+        peaks = _edge_peaks(gn, thresh)
+        if not loglik:
+            return off, peaks
+        return off, peaks, self._loglik_from_profiles(gn[..., r:r + len(self.line_offsets)], thresh)
 
     def loglik_local_grid(self, obs, states, offsets):
         """``log r`` at ``states`` translated by each of ``offsets (G, 2)``: ``(N, G)``.
@@ -519,13 +531,16 @@ class Contour:
     def _grid_from_peaks(self, off, peaks, nrm, offsets):
         kern = np.exp(-0.5 * ((off[:, None] - off[None, :]) / self.sigma_edge) ** 2).astype(np.float32)
         smooth = peaks.astype(np.float32) @ kern  # (N, M, L): S_i(ν') at ν' = off
-        shift = nrm @ np.asarray(offsets, float).T  # (N, M, G): n_i · δ
-        # nearest line sample (1 px apart): one flat gather
-        idx = np.clip(np.rint(shift - off[0]).astype(np.intp), 0, len(off) - 1)
+        shift = nrm.astype(np.float32) @ np.asarray(offsets, np.float32).T  # (N, M, G): n_i · δ
+        # nearest line sample (1 px apart; index = floor(n_i · δ - off[0] + 0.5)): one flat gather
+        shift -= off[0] - 0.5
+        np.clip(shift, 0, len(off) - 1, out=shift)
+        idx = shift.astype(np.intp)
         n, m, L = smooth.shape
         idx += (np.arange(n * m) * L).reshape(n, m, 1)
         val = smooth.reshape(-1)[idx]
-        return np.sum(np.log1p(np.exp(self.log_c) * val), axis=1)
+        val *= np.float32(np.exp(self.log_c))
+        return np.sum(np.log1p(val, out=val), axis=1)
 
     def local_mixture(self, obs, states, defensive=0.2):
         """LIS proposal on translation: a Gaussian from the edges nearest to the predicted
