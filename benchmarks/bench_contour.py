@@ -1,8 +1,12 @@
 """Contour tracking speed, side by side in one process (thesis Table 4.1).
 
-Makes one 320x240 synthetic clip, decodes it once, then alternates the
-algorithms frame-block by frame-block so that machine noise hits all of them
-alike; prints ms per frame (features + filter step) and the ratio to the first.
+Makes one 320x240 synthetic clip and runs the algorithms interleaved round by
+round, so that machine noise hits all of them alike. Prints ms per frame split
+into decode, feature maps (gray, the smoothed Sobel map and its mean
+magnitude), likelihood (``Contour.loglik``), proposal (LS-N-IPS's local search,
+LIS's and LLS's translation moves, excluding the likelihood calls inside them)
+and resampling; the total (decode excluded, as in ``vistrack reproduce
+contour``) and its ratio to the first entry.
 
     python benchmarks/bench_contour.py [--entries ls-n-ips:30,bootstrap:2000,lis:30,lls:30] [--rounds 3]
 """
@@ -10,15 +14,59 @@ alike; prints ms per frame (features + filter step) and the ratio to the first.
 import argparse
 import tempfile
 import time
+import warnings
 
 import numpy as np
 
 from vistrack.builders import build_model
 from vistrack.clips import load_clip
 from vistrack.data_synth.contour import make_contour_clip
+from vistrack.features import FeatureMaps
 from vistrack.filters import make_filter
-from vistrack.tracking import track
+from vistrack.models.contour import Contour
 from vistrack.runtime import keep_freed_memory
+
+from _timing import Timer
+
+PARTS = ["decode", "features", "likelihood", "proposal", "resampling"]
+
+
+def run_once(path, algo, n, seed, timer, frames=None):
+    clip = load_clip(path)
+    model = build_model("contour", clip, init_gt="")
+    filt = make_filter(algo, model)
+    orig = [(Contour, "loglik", timer.wrap(Contour, "loglik", "likelihood"))]
+    for name in ("local_search", "loglik_local_grid", "local_mixture"):
+        orig.append((Contour, name, timer.wrap(Contour, name, "proposal")))
+    if hasattr(filt, "proposal"):
+        filt.proposal.sample = timer.timed(filt.proposal.sample, "proposal")
+    filt.resample_scheme = timer.timed(filt.resample_scheme, "resampling")
+    rng = np.random.default_rng(seed)
+    p, buffers, count = None, {}, 0
+    it = iter(clip.source)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            while frames is None or count < frames:
+                t0 = time.perf_counter()
+                try:
+                    _, frame = next(it)
+                except StopIteration:
+                    break
+                t1 = time.perf_counter()
+                maps = FeatureMaps(frame, buffers=buffers)
+                maps.gradient(model.gradient_sigma)
+                t2 = time.perf_counter()
+                p = filt.first_step(maps, n, rng) if p is None else filt.step(p, maps, rng)
+                t3 = time.perf_counter()
+                timer.t["decode"] += t1 - t0
+                timer.t["features"] += t2 - t1
+                timer.t["filter"] += t3 - t2
+                count += 1
+    finally:
+        for owner, name, fn in orig:
+            setattr(owner, name, fn)
+    return count
 
 
 def main():
@@ -28,24 +76,24 @@ def main():
     ap.add_argument("--frames", type=int, default=100)
     args = ap.parse_args()
     entries = [(e.split(":")[0], int(e.split(":")[1])) for e in args.entries.split(",")]
+    timers = {e: Timer() for e in entries}
+    frames = dict.fromkeys(entries, 0)
     with tempfile.TemporaryDirectory() as d:
         make_contour_clip(d, frames=args.frames, size=(320, 240), seed=1)
-        clip = load_clip(d)
-        frames = list(clip.source)
-        model = build_model("contour", clip, init_gt="")
-    times = {e: [] for e in entries}
-    for r in range(args.rounds):
-        for algo, n in entries:
-            filt = make_filter(algo, model)
-            t0 = time.perf_counter()
-            for _ in track(frames, filt, n, np.random.default_rng(r)):
-                pass
-            times[(algo, n)].append((time.perf_counter() - t0) * 1e3 / len(frames))
-    base = np.median(times[entries[0]])
-    print(f"{'algo':<10} {'N':>6} {'ms/frame':>9} {'frames/s':>9} {'x first':>8}")
-    for (algo, n), t in times.items():
-        m = float(np.median(t))
-        print(f"{algo:<10} {n:>6} {m:>9.2f} {1e3 / m:>9.0f} {m / base:>8.2f}")
+        for r in range(args.rounds):
+            for e in entries:
+                frames[e] += run_once(d, e[0], e[1], r, timers[e])
+    totals = {e: (tm.t["features"] + tm.t["filter"]) * 1e3 / frames[e] for e, tm in timers.items()}
+    base = totals[entries[0]]
+    print(f"ms per frame at 320x240 ({args.frames}-frame clip, {args.rounds} rounds interleaved)")
+    print(f"{'algo':<10} {'N':>5} " + " ".join(f"{p:>10}" for p in PARTS)
+          + f" {'other':>7} {'total':>7} {'frames/s':>9} {'x first':>8}")
+    for e, tm in timers.items():
+        k = 1e3 / frames[e]
+        other = tm.t["filter"] * k - (tm.t["likelihood"] + tm.t["proposal"] + tm.t["resampling"]) * k
+        print(f"{e[0]:<10} {e[1]:>5} " + " ".join(f"{tm.t[p] * k:>10.2f}" for p in PARTS)
+              + f" {other:>7.2f} {totals[e]:>7.2f} {1e3 / totals[e]:>9.0f} {totals[e] / base:>8.2f}")
+    print("total = features + filter step (decode excluded); x first = total / the first entry's")
 
 
 if __name__ == "__main__":

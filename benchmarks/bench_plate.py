@@ -12,7 +12,6 @@ import argparse
 import tempfile
 import time
 import warnings
-from collections import defaultdict
 
 import numpy as np
 
@@ -24,25 +23,7 @@ from vistrack.filters import make_filter
 from vistrack.models.plate import PlateLikelihood
 from vistrack.runtime import keep_freed_memory
 
-
-class Timer:
-    """Accumulates seconds per part; ``wrap`` times a method of an object or class."""
-
-    def __init__(self):
-        self.t = defaultdict(float)
-
-    def wrap(self, owner, name, part):
-        fn = getattr(owner, name)
-
-        def timed(*a, **k):
-            t0 = time.perf_counter()
-            try:
-                return fn(*a, **k)
-            finally:
-                self.t[part] += time.perf_counter() - t0
-
-        setattr(owner, name, timed)
-        return fn
+from _timing import Timer
 
 
 def run_once(path, algo, n, seed, timer):
@@ -54,7 +35,7 @@ def run_once(path, algo, n, seed, timer):
         orig.append((filt.proposal, "sample", timer.wrap(filt.proposal, "sample", "proposal")))
     if algo == "lls":  # LLS's proposal is its grid of sparse likelihoods
         orig.append((model, "loglik_local_grid", timer.wrap(model, "loglik_local_grid", "proposal")))
-    filt.resample_scheme = _timed_scheme(filt.resample_scheme, timer)
+    filt.resample_scheme = timer.timed(filt.resample_scheme, "resampling")
     rng = np.random.default_rng(seed)
     p, buffers, frames = None, {}, 0
     it = iter(clip.source)
@@ -83,17 +64,6 @@ def run_once(path, algo, n, seed, timer):
             if owner is PlateLikelihood:
                 setattr(owner, name, fn)
     return frames
-
-
-def _timed_scheme(scheme, timer):
-    def timed(*a, **k):
-        t0 = time.perf_counter()
-        try:
-            return scheme(*a, **k)
-        finally:
-            timer.t["resampling"] += time.perf_counter() - t0
-
-    return timed
 
 
 def main():
