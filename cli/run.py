@@ -84,6 +84,11 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         raise click.UsageError("give either --init or --init-gt, not both")
     try:
         clip = load_clip(video)
+        if init is not None:
+            x, y, w, h = init
+            fw, fh = clip.source.size
+            if x >= fw or y >= fh or x + w <= 0 or y + h <= 0:
+                raise click.UsageError(f"--init box {x:g},{y:g},{w:g},{h:g} lies outside the {fw}x{fh} frame")
         name = model_name or clip.model_name or "plate"
         if name not in MODELS:
             raise click.ClickException(f"{video}: meta.json names model {name!r}, which this version cannot track")

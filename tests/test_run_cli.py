@@ -112,6 +112,9 @@ def test_run_bad_inputs(tmp_path, clip, capsys):
     assert code != 0 and "no groundtruth" in err
     code, _, err = run(["run", str(clip), "--init-gt", "--track", str(tmp_path / "nodir" / "t.csv")], capsys)
     assert code != 0 and "does not exist" in err
+    for box in ("400,10,20,20", "-30,10,20,20", "10,300,20,20"):  # the clip is 160x120
+        code, _, err = run(["run", str(clip), "--model", "contour", "--init", box], capsys)
+        assert code != 0 and "lies outside the 160x120 frame" in err and "Traceback" not in err
 
 
 def test_synth_bad_size(tmp_path, capsys):
