@@ -13,8 +13,6 @@ contour``) and its ratio to the first entry.
 
 import argparse
 import tempfile
-import time
-import warnings
 
 import numpy as np
 
@@ -26,12 +24,10 @@ from vistrack.filters import make_filter
 from vistrack.models.contour import Contour
 from vistrack.runtime import keep_freed_memory
 
-from _timing import Timer
-
-PARTS = ["decode", "features", "likelihood", "proposal", "resampling"]
+from _timing import Timer, run_timed, split_table
 
 
-def run_once(path, algo, n, seed, timer, frames=None):
+def run_once(path, algo, n, seed, timer):
     clip = load_clip(path)
     model = build_model("contour", clip, init_gt="")
     filt = make_filter(algo, model)
@@ -42,31 +38,22 @@ def run_once(path, algo, n, seed, timer, frames=None):
         filt.proposal.sample = timer.timed(filt.proposal.sample, "proposal")
     filt.resample_scheme = timer.timed(filt.resample_scheme, "resampling")
     rng = np.random.default_rng(seed)
-    p, buffers, count = None, {}, 0
-    it = iter(clip.source)
+    buffers, state = {}, {"p": None}
+
+    def features(frame):
+        maps = FeatureMaps(frame, buffers=buffers)
+        maps.gradient(model.gradient_sigma)
+        return maps
+
+    def step(maps):
+        p = state["p"]
+        state["p"] = filt.first_step(maps, n, rng) if p is None else filt.step(p, maps, rng)
+
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            while frames is None or count < frames:
-                t0 = time.perf_counter()
-                try:
-                    _, frame = next(it)
-                except StopIteration:
-                    break
-                t1 = time.perf_counter()
-                maps = FeatureMaps(frame, buffers=buffers)
-                maps.gradient(model.gradient_sigma)
-                t2 = time.perf_counter()
-                p = filt.first_step(maps, n, rng) if p is None else filt.step(p, maps, rng)
-                t3 = time.perf_counter()
-                timer.t["decode"] += t1 - t0
-                timer.t["features"] += t2 - t1
-                timer.t["filter"] += t3 - t2
-                count += 1
+        return run_timed(clip.source, timer, features, step)
     finally:
         for owner, name, fn in orig:
             setattr(owner, name, fn)
-    return count
 
 
 def main():
@@ -83,18 +70,9 @@ def main():
         for r in range(args.rounds):
             for e in entries:
                 frames[e] += run_once(d, e[0], e[1], r, timers[e])
-    totals = {e: (tm.t["features"] + tm.t["filter"]) * 1e3 / frames[e] for e, tm in timers.items()}
-    base = totals[entries[0]]
     print(f"ms per frame at 320x240 ({args.frames}-frame clip, {args.rounds} rounds interleaved)")
-    print(f"{'algo':<10} {'N':>5} " + " ".join(f"{p:>10}" for p in PARTS)
-          + f" {'other':>7} {'total':>7} {'frames/s':>9} {'x first':>8}")
-    for e, tm in timers.items():
-        k = 1e3 / frames[e]
-        other = tm.t["filter"] * k - (tm.t["likelihood"] + tm.t["proposal"] + tm.t["resampling"]) * k
-        print(f"{e[0]:<10} {e[1]:>5} " + " ".join(f"{tm.t[p] * k:>10.2f}" for p in PARTS)
-              + f" {other:>7.2f} {totals[e]:>7.2f} {1e3 / totals[e]:>9.0f} {totals[e] / base:>8.2f}")
-    print("total = features + filter step (decode excluded); x first = total / the first entry's")
-
+    print("\n".join(split_table(timers, frames, decode_in_total=False)))
+    print("total = features + filter step (decode excluded, as in reproduce contour); x first = total / the first's")
 
 if __name__ == "__main__":
     keep_freed_memory()  # as the CLI does

@@ -10,8 +10,6 @@ normalised maps), likelihood, proposal (LIS/LLS moves) and resampling.
 
 import argparse
 import tempfile
-import time
-import warnings
 
 import numpy as np
 
@@ -23,7 +21,7 @@ from vistrack.filters import make_filter
 from vistrack.models.plate import PlateLikelihood
 from vistrack.runtime import keep_freed_memory
 
-from _timing import Timer
+from _timing import Timer, run_timed, split_table
 
 
 def run_once(path, algo, n, seed, timer):
@@ -37,33 +35,24 @@ def run_once(path, algo, n, seed, timer):
         orig.append((model, "loglik_local_grid", timer.wrap(model, "loglik_local_grid", "proposal")))
     filt.resample_scheme = timer.timed(filt.resample_scheme, "resampling")
     rng = np.random.default_rng(seed)
-    p, buffers, frames = None, {}, 0
-    it = iter(clip.source)
+    buffers, state = {}, {"p": None}
+
+    def features(frame):
+        maps = FeatureMaps(frame, buffers=buffers)
+        model.lik.maps(maps)
+        maps.gx, maps.gy, maps.dog_small, maps.dog_large  # noqa: B018 - computed here, timed as features
+        return maps
+
+    def step(maps):
+        p = state["p"]
+        state["p"] = filt.first_step(maps, n, rng) if p is None else filt.step(p, maps, rng)
+
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            while True:
-                t0 = time.perf_counter()
-                try:
-                    _, frame = next(it)
-                except StopIteration:
-                    break
-                t1 = time.perf_counter()
-                maps = FeatureMaps(frame, buffers=buffers)
-                model.lik.maps(maps)
-                maps.gx, maps.gy, maps.dog_small, maps.dog_large  # noqa: B018 - computed here, timed as features
-                t2 = time.perf_counter()
-                p = filt.first_step(maps, n, rng) if p is None else filt.step(p, maps, rng)
-                t3 = time.perf_counter()
-                timer.t["decode"] += t1 - t0
-                timer.t["features"] += t2 - t1
-                timer.t["filter"] += t3 - t2
-                frames += 1
+        return run_timed(clip.source, timer, features, step)
     finally:
         for owner, name, fn in orig:
             if owner is PlateLikelihood:
                 setattr(owner, name, fn)
-    return frames
 
 
 def main():
@@ -80,16 +69,9 @@ def main():
         for r in range(args.rounds):
             for e in entries:
                 frames[e] += run_once(d, e[0], e[1], r, timers[e])
-    parts = ["decode", "features", "likelihood", "proposal", "resampling"]
     print(f"ms per frame at 640x480 ({args.frames}-frame clip, {args.rounds} rounds interleaved)")
-    print(f"{'algo':<10} {'N':>5} " + " ".join(f"{p:>10}" for p in parts) + f" {'other':>8} {'total':>8} {'frames/s':>9}")
-    for e, tm in timers.items():
-        k = 1e3 / frames[e]
-        total = (tm.t["decode"] + tm.t["features"] + tm.t["filter"]) * k
-        other = tm.t["filter"] * k - (tm.t["likelihood"] + tm.t["proposal"] + tm.t["resampling"]) * k
-        print(f"{e[0]:<10} {e[1]:>5} " + " ".join(f"{tm.t[p] * k:>10.2f}" for p in parts)
-              + f" {other:>8.2f} {total:>8.2f} {1e3 / total:>9.0f}")
-
+    print("\n".join(split_table(timers, frames)))
+    print("total = decode + features + filter step; x first = total / the first entry's")
 
 if __name__ == "__main__":
     keep_freed_memory()  # as the CLI does
