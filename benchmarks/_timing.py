@@ -62,6 +62,17 @@ def run_timed(source, timer, features, step):
             frames += 1
 
 
+def stepper(filt, n, rng):
+    """``step(maps)``: the filter's first step on the first call, its ordinary step after."""
+    state = {"p": None}
+
+    def step(maps):
+        p = state["p"]
+        state["p"] = filt.first_step(maps, n, rng) if p is None else filt.step(p, maps, rng)
+
+    return step
+
+
 def split_table(timers, frames, decode_in_total=True):
     """Rows of ms per frame per part, ``other`` (the rest of the filter step), total and frames/s;
     the last column is the total over the first entry's."""

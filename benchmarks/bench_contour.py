@@ -24,7 +24,7 @@ from vistrack.filters import make_filter
 from vistrack.models.contour import Contour
 from vistrack.runtime import keep_freed_memory
 
-from _timing import Timer, run_timed, split_table
+from _timing import Timer, run_timed, split_table, stepper
 
 
 def run_once(path, algo, n, seed, timer):
@@ -38,19 +38,15 @@ def run_once(path, algo, n, seed, timer):
         filt.proposal.sample = timer.timed(filt.proposal.sample, "proposal")
     filt.resample_scheme = timer.timed(filt.resample_scheme, "resampling")
     rng = np.random.default_rng(seed)
-    buffers, state = {}, {"p": None}
+    buffers = {}
 
     def features(frame):
         maps = FeatureMaps(frame, buffers=buffers)
         maps.gradient(model.gradient_sigma)
         return maps
 
-    def step(maps):
-        p = state["p"]
-        state["p"] = filt.first_step(maps, n, rng) if p is None else filt.step(p, maps, rng)
-
     try:
-        return run_timed(clip.source, timer, features, step)
+        return run_timed(clip.source, timer, features, stepper(filt, n, rng))
     finally:
         for owner, name, fn in orig:
             setattr(owner, name, fn)

@@ -21,7 +21,7 @@ from vistrack.filters import make_filter
 from vistrack.models.plate import PlateLikelihood
 from vistrack.runtime import keep_freed_memory
 
-from _timing import Timer, run_timed, split_table
+from _timing import Timer, run_timed, split_table, stepper
 
 
 def run_once(path, algo, n, seed, timer):
@@ -35,7 +35,7 @@ def run_once(path, algo, n, seed, timer):
         orig.append((model, "loglik_local_grid", timer.wrap(model, "loglik_local_grid", "proposal")))
     filt.resample_scheme = timer.timed(filt.resample_scheme, "resampling")
     rng = np.random.default_rng(seed)
-    buffers, state = {}, {"p": None}
+    buffers = {}
 
     def features(frame):
         maps = FeatureMaps(frame, buffers=buffers)
@@ -43,12 +43,8 @@ def run_once(path, algo, n, seed, timer):
         maps.gx, maps.gy, maps.dog_small, maps.dog_large  # noqa: B018 - computed here, timed as features
         return maps
 
-    def step(maps):
-        p = state["p"]
-        state["p"] = filt.first_step(maps, n, rng) if p is None else filt.step(p, maps, rng)
-
     try:
-        return run_timed(clip.source, timer, features, step)
+        return run_timed(clip.source, timer, features, stepper(filt, n, rng))
     finally:
         for owner, name, fn in orig:
             if owner is PlateLikelihood:
