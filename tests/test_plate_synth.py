@@ -251,6 +251,51 @@ def test_plate_lis_weights_match_a_brute_force_posterior(road):
     np.testing.assert_allclose((g @ grid[:, :2]) / g.sum(), [t["cx"][k], t["cy"][k]], atol=0.1 * s)
 
 
+def test_plate_lis_dynamics_window_weights_match_a_brute_force_posterior(road):
+    """Proper weighting of the tracked-particle proposal (window = the AR(2) kernel's own (u, w)
+    factors about the predicted mean): one LIS step from a particle that follows the plate, with
+    the angle and scale known. The mean weight is the evidence ∫ r N_uw and the weighted mean of
+    (u, w) the posterior mean, both also by brute force on a grid; the box window agrees too."""
+    from vistrack.features import FeatureMaps
+    from vistrack.models.plate import Plate, PlateLISProposal
+    from vistrack.particles import logsumexp
+
+    clip = load_clip(road)
+    t = clip.truth
+    vis = np.flatnonzero(t["visible"] > 0)
+    k = int(vis[len(vis) // 2])
+    obs = FeatureMaps(dict(clip.source)[k])
+    s = t["scale"][k]
+    model = Plate(clip.source.size, enter_weight=1e-300)  # no entering draws
+    model.sigma = np.array([0.1 * s, 0.05 * s, 1e-9, 1e-9])
+    pose = np.array([t["cx"][k] + 0.05 * s, t["cy"][k] - 0.03 * s, np.deg2rad(t["angle_deg"][k]), s])
+    n = 6000
+    prev = np.tile(np.concatenate([pose, pose]), (n, 1))  # at rest: the predicted mean is `pose`
+    su, sw = model.sigma[:2]
+    du, dw = np.meshgrid(np.arange(-6 * su, 6 * su, 0.25), np.arange(-6 * sw, 6 * sw, 0.25), indexing="ij")
+    grid = np.tile(pose, (du.size, 1))
+    grid[:, 0] += du.ravel()
+    grid[:, 1] += dw.ravel()
+    lp = model.loglik(obs, grid) - 0.5 * ((du.ravel() / su) ** 2 + (dw.ravel() / sw) ** 2) - np.log(2 * np.pi * su * sw)
+    g = np.exp(lp - lp.max())
+    evidence_grid = logsumexp(lp) + np.log(0.25 * 0.25)
+    mean_grid = (g @ grid[:, :2]) / g.sum()
+    ess = {}
+    for window, tol_mean, tol_evidence in (("dynamics", 0.15, 0.1), ("box", 1.0, 0.5)):
+        rng = np.random.default_rng(1)
+        x = model.predict(prev, rng)
+        assert not model.entering(x).any()
+        z, log_alpha, log_q = PlateLISProposal(model, window=window).sample(x, obs, rng, prev)
+        lw = log_alpha + model.loglik(obs, z) - log_q
+        lw += model.transition_logpdf(z, prev) - model.transition_logpdf(x, prev)
+        w = np.exp(lw - lw.max())
+        assert logsumexp(lw) - np.log(n) == pytest.approx(evidence_grid, abs=tol_evidence), window
+        np.testing.assert_allclose((w @ z[:, :2]) / w.sum(), mean_grid, atol=tol_mean)
+        ess[window] = w.sum() ** 2 / (w @ w)
+    # integrating out the prediction's translation noise: most particles count (box: a few %)
+    assert ess["dynamics"] > 0.5 * n and ess["dynamics"] > 5 * ess["box"]
+
+
 def test_plate_run_same_seed_same_track_and_bad_layout(road, tmp_path, capsys):
     tracks = []
     for name in ("a.csv", "b.csv"):

@@ -5,9 +5,10 @@ Predict ``X_t ~ K(.|Z_{t-1})``, perturb ``Z_t ~ q_{X,Y}(.) g(X_t - .) / alpha_t`
 ``alpha_t r(Y_t|Z_t) / q_{X,Y}(Z_t) · K(Z_t|Z_{t-1}) / K(X_t|Z_{t-1})`` (Prop. 4.5.1).
 
 The local proposal is model-supplied: any object with
-``sample(x, obs, rng) -> (z, log_alpha, log_q)`` where ``z (N, d)`` was drawn from
-``q g / alpha``. :class:`GaussMixtureProposal` is the closed form of Fig. 4.17:
-a Gauss-mixture ``q`` times a Gaussian window is again a Gauss mixture (App. D).
+``sample(x, obs, rng, prev) -> (z, log_alpha, log_q)`` where ``z (N, d)`` was drawn from
+``q g / alpha`` (``prev``, the resampled ``Z_{t-1}``, lets a window follow ``K`` itself).
+:class:`GaussMixtureProposal` is the closed form of Fig. 4.17: a Gauss-mixture ``q``
+times a Gaussian window is again a Gauss mixture (App. D).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ class GaussMixtureProposal:
         self.model = model
         self.window_cov = np.asarray(window_cov, dtype=float)
 
-    def sample(self, x, obs, rng):
+    def sample(self, x, obs, rng, prev=None):
         model = self.model
         log_p, mu, cov = model.local_mixture(obs, x)
         n, b, _, k = mu.shape
@@ -73,7 +74,7 @@ class LIS(ParticleFilter):
     Parameters
     ----------
     proposal : object or None
-        Local proposal with ``sample(x, obs, rng) -> (z, log_alpha, log_q)``;
+        Local proposal with ``sample(x, obs, rng, prev) -> (z, log_alpha, log_q)``;
         ``None`` asks the model (``model.lis_proposal()``).
     """
 
@@ -87,7 +88,7 @@ class LIS(ParticleFilter):
     def propose(self, prev, obs, rng):
         model = self.model
         x = model.predict(prev, rng)
-        z, log_alpha, log_q = self.proposal.sample(x, obs, rng)
+        z, log_alpha, log_q = self.proposal.sample(x, obs, rng, prev)
         log_incr = (
             log_alpha
             + model.loglik(obs, z)
