@@ -102,6 +102,9 @@ def test_local_search_moves_towards_the_edges(rng):
     assert np.all(ll >= m.loglik(obs, x) - 1e-9)
     np.testing.assert_allclose(ll, m.loglik(obs, out))
     np.testing.assert_array_equal(out[:, 4:], x[:, 4:])  # only z_t moves
+    m.search_check = False  # unchecked: the moves as found, with their exact r
+    out, ll = m.local_search(obs, x)
+    np.testing.assert_allclose(ll, m.loglik(obs, out))
 
 
 @pytest.fixture(scope="module")

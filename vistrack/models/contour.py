@@ -447,7 +447,9 @@ class Contour:
         grid = np.stack(np.meshgrid(gx, gy), axis=-1).reshape(-1, 2)
         scale, _ = pose_params(z)
         reach_lms = step
-        off, peaks, ll_x = self._peaks_wide(obs, z, np.hypot(lx, ly) + reach_lms, loglik=self.search_check)
+        off, gn = self._profiles_wide(obs, z, np.hypot(lx, ly) + reach_lms)
+        thresh = self._threshold(obs)
+        peaks = _edge_peaks(gn, thresh)
         pts, nrm = self.measurement_lines(z)
         ll_grid = self._grid_from_peaks(off, peaks, nrm, grid)
         delta = grid[np.argmax(ll_grid, axis=1)]  # (N, 2)
@@ -470,6 +472,9 @@ class Contour:
         ll = self.loglik(obs, cand)
         if not self.search_check:
             return cand, ll
+        # r at the prediction, exactly as loglik: its lines are the middle samples of the long ones
+        r = (len(off) - len(self.line_offsets)) // 2
+        ll_x = self._loglik_from_profiles(gn[..., r:r + len(self.line_offsets)], thresh)
         keep = ll < ll_x  # the move lowered r: stay at the prediction
         cand[keep] = states[keep]
         return cand, np.where(keep, ll_x, ll)
@@ -503,19 +508,17 @@ class Contour:
         """Window std on translation: the spread of ``K`` (or of ``p_0`` on the first step)."""
         return self.prior_std[:2] if self.first_step else self.sigma[:2]
 
-    def _peaks_wide(self, obs, z, reach, loglik=False):
-        """Edge features on lines long enough for shifts up to ``reach`` px; with
-        ``loglik=True`` also ``log r`` at ``z`` itself, exactly as :meth:`loglik`
-        (its lines are the middle samples of these)."""
-        r = int(np.ceil(reach))
-        h = r + self.half_line
+    def _profiles_wide(self, obs, z, reach):
+        """Offsets and edge strengths on lines long enough for shifts up to ``reach`` px
+        (:attr:`line_offsets` are their middle samples)."""
+        h = int(np.ceil(reach)) + self.half_line
         off = np.arange(-h, h + 1, dtype=float)
-        gn = self._profiles(obs, z, off)
-        thresh = self._threshold(obs)
-        peaks = _edge_peaks(gn, thresh)
-        if not loglik:
-            return off, peaks
-        return off, peaks, self._loglik_from_profiles(gn[..., r:r + len(self.line_offsets)], thresh)
+        return off, self._profiles(obs, z, off)
+
+    def _peaks_wide(self, obs, z, reach):
+        """Edge features on lines long enough for shifts up to ``reach`` px."""
+        off, gn = self._profiles_wide(obs, z, reach)
+        return off, _edge_peaks(gn, self._threshold(obs))
 
     def loglik_local_grid(self, obs, states, offsets):
         """``log r`` at ``states`` translated by each of ``offsets (G, 2)``: ``(N, G)``.

@@ -277,8 +277,9 @@ class Plate:
         return np.concatenate([z, z], axis=1)
 
     def _logn(self, x, mean, std):
+        """``log N(x; mean, diag(std²))`` over the last axis."""
         e = (x - mean) / std
-        return -0.5 * np.sum(e * e, axis=-1) - np.sum(np.log(std)) - 2 * np.log(2 * np.pi)
+        return -0.5 * np.sum(e * e, axis=-1) - np.sum(np.log(std)) - 0.5 * x.shape[-1] * np.log(2 * np.pi)
 
     def prior_logpdf(self, states):
         if self.start is None:
@@ -396,12 +397,6 @@ class Plate:
         return Window("box", (size, size / self.layout.aspect), grid=9)
 
 
-def _log_normal2(x, mean, std):
-    """``log N(x; mean, diag(std²))`` over the last axis of 2-vectors."""
-    e = (x - mean) / std
-    return -0.5 * np.sum(e * e, axis=-1) - np.sum(np.log(std)) - np.log(2 * np.pi)
-
-
 class PlateLISProposal:
     """The §4.5.2 proposal: ``W' ~ r^h(Y|U, ·, θ) g_1(·)``, then ``U' ~ r^v(Y|·, W', θ) g_0(·)``.
 
@@ -461,7 +456,7 @@ class PlateLISProposal:
             half[dyn] = np.minimum(half[dyn], self.window_sigmas * sig)
             uv[dyn], lq = self._line_scans(x[dyn], obs, rng, mean, half[dyn], self.cells, prior=(mean, sig))
             # LIS adds K(Z)/K(X) = N_uw(Z)/N_uw(X) (same θ, s): take N_uw(X) out of q
-            log_q[dyn] = lq - _log_normal2(x[dyn, :2], mean, sig)
+            log_q[dyn] = lq - m._logn(x[dyn, :2], mean, sig)
         if box.any():
             half[box] = np.minimum(half[box], self.window_sigmas * m.sigma[:2])
             uv[box], log_q[box] = self._line_scans(x[box], obs, rng, x[box, :2], half[box], self.cells)
