@@ -66,12 +66,69 @@ def test_plate_likelihood_has_a_narrow_dominant_peak_at_the_plate(road):
         assert ll.max() - ll[dist > 0.15 * s].max() > 1.0
 
 
+def test_plate_line_scans_read_the_terms_the_weight_uses(road):
+    """The LIS scans of ``r^h`` and ``r^v`` (§4.5.2) sum the same features as ``terms`` — the
+    extra pixel sets of a term included — so with the scans' point density equal to the full
+    one they agree exactly; every feature is in exactly one term."""
+    from vistrack.features import FeatureMaps
+    from vistrack.models.plate import PlateLikelihood
+
+    clip = load_clip(road)
+    t = clip.truth
+    k = int(np.flatnonzero(t["visible"] > 0)[0]) + 2
+    obs = FeatureMaps(dict(clip.source)[k])
+    lik = PlateLikelihood("jp", per_unit=12, scan_per_unit=12)
+    assert sorted(np.concatenate(list(lik._terms.values())).tolist()) == list(range(len(lik.FEATURES)))
+    assert {"h_edge_gx", "v_edge_gy"} <= set(lik.FEATURES)  # the learnt extra sets are in use
+    pose = np.array([t["cx"][k], t["cy"][k], np.deg2rad(t["angle_deg"][k]), t["scale"][k]])
+    x = pose + np.array([[0, 0, 0, 0], [6, -3, 0.02, 2], [-20, 9, 0, -4]])
+    h, v, _ = lik.terms(obs, x)
+    zero = np.zeros((3, 1, 2))
+    np.testing.assert_allclose(lik.scan(obs, x, "h", zero)[:, 0], h, rtol=1e-5, atol=1e-5)
+    np.testing.assert_allclose(lik.scan(obs, x, "v", zero)[:, 0], v, rtol=1e-5, atol=1e-5)
+
+
+@pytest.fixture(scope="module")
+def road640(tmp_path_factory):
+    """One car at the evaluation suite's frame size (its plates are ~70 px wide, twice ``road``'s)."""
+    out = tmp_path_factory.mktemp("road640")
+    with pytest.raises(SystemExit) as e:
+        main(["synth", "plate", "--out", str(out), "--frames", "50", "--cars", "1", "--seed", "5", "-q"])
+    assert e.value.code == 0
+    return out
+
+
+def test_plate_log_odds_separate_plates_from_clutter(road640):
+    """The learnt log-odds is above the report threshold at every plate wholly in view (its
+    best within 2 px and 4 % of the true pose, where a tracker's estimate sits) and below 0 at
+    every pose of a dense scan of the frames without a plate (signs, lane marks, grilles,
+    headlights): the likelihood's side of "no plate reported where there is none"."""
+    from vistrack.features import FeatureMaps
+    from vistrack.models.plate import Plate
+    from vistrack.models.plate_fit import scan_poses
+
+    clip = load_clip(road640)
+    t = clip.truth
+    frames = dict(clip.source)
+    model = Plate(clip.source.size)
+    vis = np.flatnonzero(t["visible"] > 0)
+    assert len(vis) >= 10
+    d = np.stack(np.meshgrid([-2.0, 0, 2], [-2.0, 0, 2], [0.96, 1.0, 1.04], indexing="ij"), -1).reshape(-1, 3)
+    for k in vis[2:-2]:  # wholly in view, not just touching the border
+        pose = np.array([t["cx"][k], t["cy"][k], np.deg2rad(t["angle_deg"][k]), t["scale"][k]])
+        near = np.column_stack([pose[0] + d[:, 0], pose[1] + d[:, 1], np.full(len(d), pose[2]), pose[3] * d[:, 2]])
+        assert model.lik.loglik(FeatureMaps(frames[k]), near).max() > model.visible_loglik
+    grid = scan_poses(clip.source.size, step=4)
+    for k in np.flatnonzero(t["visible"] == 0)[::12]:
+        assert model.lik.loglik(FeatureMaps(frames[k]), grid).max() < 0
+
+
 @pytest.mark.parametrize("entering", [True, False])
 def test_plate_lis_proposal_is_a_proper_density_on_the_window(entering):
     """§4.5.2 proposal q = q^h(W') q^v(U'|W') on its box window g: E_q[g / q(Z)] = 1 —
     q integrates to one on the box and log q is exact (the returned log q includes -log g).
-    The box is twice the plate size for an entering particle and 3 sigma of the AR(2) noise
-    for a tracked one. (A textured frame and the mild thesis weights keep the importance
+    The box is twice the plate size for an entering particle, which also searches log s, and
+    3 sigma of the AR(2) noise for a tracked one. (A textured frame and the mild thesis weights keep the importance
     estimate's variance small.)"""
     import cv2
 
@@ -92,9 +149,13 @@ def test_plate_lis_proposal_is_a_proper_density_on_the_window(entering):
     half = np.array([s, s / model.layout.aspect])
     if not entering:
         half = np.minimum(half, prop.window_sigmas * model.sigma[:2])
-    assert np.mean(np.exp(-log_q)) == pytest.approx(1.0, rel=0.05)
+    # an entering particle also draws log s on ± span about X's; g's density of s_X is 1 / (2 span s_X),
+    # so over Z the mean of g / q is ∫ ds_Z / (2 span s_X) = sinh(span) / span
+    span = prop.scale_span if entering else 0.0
+    assert np.mean(np.exp(-log_q)) == pytest.approx(np.sinh(span) / span if span else 1.0, rel=0.05)
     assert np.all(np.abs(z[:, 0] - 160) <= half[0] + 1e-9) and np.all(np.abs(z[:, 1] - 120) <= half[1] + 1e-9)
-    np.testing.assert_array_equal(z[:, 2:4], xs[:, 2:4])  # only the translation moves
+    np.testing.assert_array_equal(z[:, 2], xs[:, 2])  # the angle never moves
+    assert np.all(np.abs(np.log(z[:, 3] / s)) <= span + 1e-9)  # the scale only for an entering particle
     assert np.all(model.entering(z) == entering)
 
 
@@ -213,10 +274,10 @@ def test_run_plate_clip_default_model_writes_vertices(road, tmp_path, capsys):
 
 
 def test_plate_lis_weights_match_a_brute_force_posterior(road):
-    """Proper weighting on a real frame: one LIS step (from the entering-style start, where
-    the §4.5.2 window is twice the plate size) from a Gaussian prior on (u, w) about the plate,
-    angle and scale known. The mean weight estimates the evidence ∫ r p0 and the weighted mean
-    of (u, w) the posterior mean — both also computed by brute force on a grid."""
+    """Proper weighting on a real frame: one LIS step from the entering-style start (the §4.5.2
+    window twice the plate size, plus the search over log s) from a Gaussian prior on (u, w, s)
+    about the plate, the angle known. The mean weight estimates the evidence ∫ r p0 and the
+    weighted mean of (u, w, s) the posterior mean — both also computed by brute force on a grid."""
     from vistrack.features import FeatureMaps
     from vistrack.models.plate import Plate
     from vistrack.particles import logsumexp
@@ -228,25 +289,36 @@ def test_plate_lis_weights_match_a_brute_force_posterior(road):
     obs = FeatureMaps(dict(clip.source)[k])
     model = Plate(clip.source.size)
     s = t["scale"][k]
-    su, sw = 0.4 * s, 0.2 * s  # the prior is broader than the window: the weights have finite variance
-    pose = np.array([t["cx"][k] + 0.05 * s, t["cy"][k] - 0.03 * s, np.deg2rad(t["angle_deg"][k]), s])
-    model.start = (pose, np.array([su, sw, 1e-9, 1e-9]))
+    # the prior is broader than the window: the weights have finite variance
+    su, sw, ss = 0.4 * s, 0.2 * s, 0.1 * s
+    pose = np.array([t["cx"][k] + 0.05 * s, t["cy"][k] - 0.03 * s, np.deg2rad(t["angle_deg"][k]), 1.05 * s])
+    model.start = (pose, np.array([su, sw, 1e-9, ss]))
     n = 6000
     rng = np.random.default_rng(0)
     x = model.sample_prior(n, rng)
     z, log_alpha, log_q = model.lis_proposal().sample(x, obs, rng)
+    assert np.ptp(z[:, 3] - x[:, 3]) > 0.2 * s  # the scale is searched
     lw = log_alpha + model.loglik(obs, z) - log_q + model.prior_logpdf(z) - model.prior_logpdf(x)
     w = np.exp(lw - lw.max())
     evidence = logsumexp(lw) - np.log(n)
-    du, dw = np.meshgrid(np.arange(-4 * su, 4 * su, 0.5), np.arange(-4 * sw, 4 * sw, 0.25), indexing="ij")
+    steps = (1.0, 0.5, 0.25 * ss)
+    du, dw, ds = np.meshgrid(np.arange(-4 * su, 4 * su, steps[0]), np.arange(-4 * sw, 4 * sw, steps[1]),
+                             np.arange(-4 * ss, 4 * ss, steps[2]), indexing="ij")
     grid = np.tile(pose, (du.size, 1))
     grid[:, 0] += du.ravel()
     grid[:, 1] += dw.ravel()
-    lp = model.loglik(obs, grid) - 0.5 * ((du.ravel() / su) ** 2 + (dw.ravel() / sw) ** 2) \
-        - np.log(2 * np.pi * su * sw)
+    grid[:, 3] += ds.ravel()
+    ll = np.concatenate([model.loglik(obs, grid[i:i + 10000]) for i in range(0, len(grid), 10000)])
+    lp = ll - 0.5 * ((du.ravel() / su) ** 2 + (dw.ravel() / sw) ** 2 + (ds.ravel() / ss) ** 2) \
+        - np.log((2 * np.pi) ** 1.5 * su * sw * ss)
     g = np.exp(lp - lp.max())
-    assert evidence == pytest.approx(logsumexp(lp) + np.log(0.5 * 0.25), abs=0.5)
-    np.testing.assert_allclose((w @ z[:, :2]) / w.sum(), (g @ grid[:, :2]) / g.sum(), atol=0.5)
+    assert evidence == pytest.approx(logsumexp(lp) + np.log(np.prod(steps)), abs=0.5)
+    cols = [0, 1, 3]
+    mean = (g @ grid[:, cols]) / g.sum()
+    sd = np.sqrt((g @ (grid[:, cols] - mean) ** 2) / g.sum())
+    ess = w.sum() ** 2 / (w @ w)
+    # the importance estimate's error is about sd / sqrt(ESS): 4 of those (ESS ~ 40 here)
+    assert np.all(np.abs((w @ z[:, cols]) / w.sum() - mean) < 4 * sd / np.sqrt(ess))
     # and the plate, not clutter, dominates this posterior
     np.testing.assert_allclose((g @ grid[:, :2]) / g.sum(), [t["cx"][k], t["cy"][k]], atol=0.1 * s)
 
@@ -293,7 +365,7 @@ def test_plate_lis_dynamics_window_weights_match_a_brute_force_posterior(road):
         np.testing.assert_allclose((w @ z[:, :2]) / w.sum(), mean_grid, atol=tol_mean)
         ess[window] = w.sum() ** 2 / (w @ w)
     # integrating out the prediction's translation noise: most particles count (box: a few %)
-    assert ess["dynamics"] > 0.5 * n and ess["dynamics"] > 5 * ess["box"]
+    assert ess["dynamics"] > 0.4 * n and ess["dynamics"] > 5 * ess["box"]
 
 
 def test_plate_run_same_seed_same_track_and_bad_layout(road, tmp_path, capsys):

@@ -35,16 +35,27 @@ def thesis_weights(kappa=2.0):
              "small_s": k, "big_l": k}, 0.0)
 
 
-#: coefficients fitted by ``python -m vistrack.models.plate_fit`` on 6 synthetic clips
-#: (seeds 101-106, 640x480, disjoint from the evaluation seeds 1-10), per layout
-#: (on ``log(1 + mean)`` of each pixel set, which keeps strong edges — headlights, sign borders — from
-#: outweighing the characters)
+#: coefficients fitted by ``python -m vistrack.models.plate_fit`` on 12 synthetic clips
+#: (seeds 101-108 at 640x480 and 109-112 at 320x240, disjoint from the evaluation seeds 1-10), per
+#: layout (on ``log(1 + mean)`` of each pixel set, which keeps strong edges — headlights, sign
+#: borders — from outweighing the characters); the JP layout's extra pixel sets included
 LEARNT_WEIGHTS = {
-    "jp": ({"h_edge": 4.184, "h_free_s": -3.995, "h_free_l": 0.769, "v_edge": 3.547, "v_free_s": -6.876,
-            "v_free_l": -0.180, "small_s": 1.030, "small_l": 2.321, "big_s": 2.711, "big_l": 1.387}, -17.621),
+    "jp": ({"h_edge": 3.4152, "h_free_s": -2.0216, "h_free_l": 1.2245, "v_edge": 2.9463, "v_free_s": -2.3454,
+            "v_free_l": 0.5973, "small_s": 0.7883, "small_l": -1.6939, "big_s": -0.1434, "big_l": -0.9185,
+            "top_s": 1.0906, "top_l": -1.0315, "glyph_s": 1.0639, "glyph_l": 0.0247, "above_s": 0.9854,
+            "above_l": -0.4443, "below_s": -1.0098, "below_l": -0.4455, "sides_s": -1.6330, "sides_l": -1.3659,
+            "big_gx": 1.1024, "big_gy": 2.0434, "top_gx": 0.7835, "h_edge_gx": -0.0088, "v_edge_gy": -4.2272},
+           -11.2465),
 }
 
 _SETS = ("h_edge", "h_free", "v_edge", "v_free", "small", "big")
+
+#: Table 1.1's features: (name, pixel set, map channel, term) — channels 0 |∇_x I|, 1 |∇_y I|,
+#: 2 the small DoG, 3 the large DoG; the term is r^h, r^v or r^c
+_BASE_SPEC = (("h_edge", "h_edge", 1, "h"), ("h_free_s", "h_free", 2, "h"), ("h_free_l", "h_free", 3, "h"),
+              ("v_edge", "v_edge", 0, "v"), ("v_free_s", "v_free", 2, "v"), ("v_free_l", "v_free", 3, "v"),
+              ("small_s", "small", 2, "c"), ("small_l", "small", 3, "c"), ("big_s", "big", 2, "c"),
+              ("big_l", "big", 3, "c"))
 
 
 def _grid_points(rects, per_unit=24):
@@ -65,10 +76,12 @@ class PlateLikelihood:
     """The plate likelihood ``r(y | u, w, θ, s)`` for poses ``(N, 4)`` (or states whose first
     four columns are the pose).
 
-    ``log r`` is a weighted sum of the ten pixel-set means of :meth:`features`
+    ``log r`` is a weighted sum of the pixel-set means of :meth:`features`
     plus a bias: ``log r^h`` takes the horizontal-edge band and the horizontal
     free stripes, ``log r^v`` the vertical ones, ``log r^c`` the character
-    areas and the bias. ``weights="thesis"`` is the thesis's form above, every
+    areas and the bias — Table 1.1's ten means, plus the layout's extra pixel
+    sets that have a coefficient, each in the term its layout entry names.
+    ``weights="thesis"`` is the thesis's form above, every
     coefficient ``±κ``; ``weights="learnt"`` (default where the layout has them)
     are coefficients fitted on synthetic clips (:mod:`~vistrack.models.plate_fit`),
     for which ``log r`` is the log-odds of a plate at the pose.
@@ -81,10 +94,12 @@ class PlateLikelihood:
     weights : {"learnt", "thesis"} or (dict, float)
         Coefficients per feature name and bias.
     per_unit : int
-        Sample points per unit length of the plate square in each pixel set.
+        Sample points per unit length of the plate square in each pixel set (half that in the
+        extra sets, which are larger and smoother).
     sharpness : float
         ``log r`` is this times the weighted sum (the thesis's ``κ`` for the learnt log-odds).
-        On 10 clips × 10 runs, 1 / 2 / 3 gave LIS-100 P(lost) 0.245 / 0.176 / 0.156 and
+        On 10 clips × 10 runs (Table 1.1's ten features, box window), 1 / 2 / 3 gave LIS-100 P(lost)
+        0.245 / 0.176 / 0.156 and
         bootstrap-750 0.377 / 0.451 / 0.520: a sharper ``r`` helps LIS and hurts bootstrap
         (vertex error LIS 5.95 / 5.97 / 6.73, bootstrap 4.31 / 5.42 / 6.58 px). 1 keeps
         ``log r`` the calibrated log-odds.
@@ -99,6 +114,19 @@ class PlateLikelihood:
             learnt = LEARNT_WEIGHTS.get(self.layout.name)
             weights = learnt if weights == "learnt" and learnt is not None else thesis_weights(self.kappa)
         coef, self.bias = weights
+        #: the layout's extra pixel sets that have a coefficient (see ``PlateLayout.extra``)
+        self.extra = tuple(e for e in self.layout.extra if coef.get(e[0], 0.0) != 0.0)
+        # extra features on the same rectangles share one pixel set (named after the first)
+        set_of = {}
+        for name, rects, _, _ in self.extra:
+            set_of.setdefault(tuple(map(tuple, rects)), name)
+        self._extra_sets = {k: np.array(r, float) for r, k in set_of.items()}
+        #: (name, pixel set, channel, term) of each column of :meth:`features`
+        self.spec = _BASE_SPEC + tuple((name, set_of[tuple(map(tuple, rects))], ch, term)
+                                       for name, rects, ch, term in self.extra)
+        #: names of the columns of :meth:`features`: Table 1.1's ten, then the extra sets
+        self.FEATURES = tuple(f[0] for f in self.spec)
+        self._terms = {t: np.array([i for i, f in enumerate(self.spec) if f[3] == t], int) for t in "hvc"}
         self.w = np.array([coef.get(n, 0.0) for n in self.FEATURES], float)
         self.learnt = weights is not None and weights is LEARNT_WEIGHTS.get(self.layout.name)
         #: learnt weights apply to ``log(1 + mean)``, the thesis's to the means themselves
@@ -108,12 +136,21 @@ class PlateLikelihood:
         self.w *= self.sharpness
         self.bias *= self.sharpness
         sets = self.layout.sets()
+        extra_sets = self._extra_sets
+        # the extra sets are larger and smoother: half the density
         self.points = {k: _grid_points(sets[k], per_unit) for k in _SETS}
+        self.points.update({k: _grid_points(r, per_unit // 2) for k, r in extra_sets.items()})
         #: sparser point sets for the proposal's scans (:meth:`scan`)
         self.scan_points = {k: _grid_points(sets[k], scan_per_unit) for k in _SETS}
-        self._all = np.concatenate([self.points[k] for k in _SETS])
-        bounds = np.cumsum([0] + [len(self.points[k]) for k in _SETS])
-        self._slices = {k: slice(bounds[i], bounds[i + 1]) for i, k in enumerate(_SETS)}
+        self.scan_points.update({k: _grid_points(r, max(2, scan_per_unit // 2)) for k, r in extra_sets.items()})
+        self._all, self._slices = self._stack(self.points)
+
+    def _stack(self, points, names=None):
+        """The sample points of pixel sets ``names`` (default all) in one array, and each set's slice."""
+        names = names or _SETS + tuple(self._extra_sets)
+        bounds = np.cumsum([0] + [len(points[k]) for k in names])
+        return np.concatenate([points[k] for k in names]), {k: slice(bounds[i], bounds[i + 1])
+                                                           for i, k in enumerate(names)}
 
     def maps(self, obs):
         """The 4-channel map ``(|∇_x I|, |∇_y I|, |G_s I|, |G_l I|)``, each over its frame mean (cached)."""
@@ -125,9 +162,9 @@ class PlateLikelihood:
             obs._plate_maps = m
         return m
 
-    #: names of the columns of :meth:`features`
-    FEATURES = ("h_edge", "h_free_s", "h_free_l", "v_edge", "v_free_s", "v_free_l", "small_s", "small_l",
-                "big_s", "big_l")
+    #: the Table 1.1 columns of :meth:`features` (``FEATURES`` adds the layout's extra sets)
+    BASE_FEATURES = FEATURES = ("h_edge", "h_free_s", "h_free_l", "v_edge", "v_free_s", "v_free_l",
+                                "small_s", "small_l", "big_s", "big_l")
 
     def features(self, obs, states):
         """The Table 1.1 pixel-set means ``(N, 10)``: edge bands on their Sobel channel, the free
@@ -138,21 +175,15 @@ class PlateLikelihood:
                          border=(0.0, 0.0, 5.0, 5.0))
         return self._set_means(v, self._slices)
 
-    @staticmethod
-    def _set_means(v, sl):
-        cols = [v[:, sl["h_edge"], 1], v[:, sl["h_free"], 2], v[:, sl["h_free"], 3], v[:, sl["v_edge"], 0],
-                v[:, sl["v_free"], 2], v[:, sl["v_free"], 3], v[:, sl["small"], 2], v[:, sl["small"], 3],
-                v[:, sl["big"], 2], v[:, sl["big"], 3]]
-        return np.stack([c.mean(axis=1) for c in cols], axis=1)
+    def _set_means(self, v, sl):
+        return np.stack([v[:, sl[ps], ch].mean(axis=1) for _, ps, ch, _ in self.spec], axis=1)
 
     def loglik_sparse(self, obs, states, offsets):
         """``log r`` from the sparser point sets of the scans (``scan_per_unit``) at every pose
         shifted by ``offsets (N, C, 2)`` px: ``(N, C)``. The entering particles' coarse 2-D search of
         the proposal (any exactly computed density will do)."""
         if not hasattr(self, "_sparse"):
-            pts = [self.scan_points[k] for k in _SETS]
-            bounds = np.cumsum([0] + [len(p) for p in pts])
-            self._sparse = (np.concatenate(pts), {k: slice(bounds[i], bounds[i + 1]) for i, k in enumerate(_SETS)})
+            self._sparse = self._stack(self.scan_points)
         points, sl = self._sparse
         base = plate_points(np.atleast_2d(states)[:, :4], points, self.layout.aspect)  # (N, P, 2)
         mx = (base[:, None, :, 0] + offsets[:, :, None, 0]).astype(np.float32)  # (N, C, P)
@@ -164,29 +195,32 @@ class PlateLikelihood:
     def terms(self, obs, states):
         """``(log r^h, log r^v, log r^c)`` as three ``(N,)`` arrays (the bias is in ``log r^c``)."""
         f = self.transform(self.features(obs, states)) * self.w
-        return f[:, 0:3].sum(axis=1), f[:, 3:6].sum(axis=1), f[:, 6:].sum(axis=1) + self.bias
+        h, v, c = (f[:, self._terms[t]].sum(axis=1) for t in "hvc")
+        return h, v, c + self.bias
 
     def scan(self, obs, states, which, offsets):
         """``log r^h`` (``which="h"``) or ``log r^v`` at every pose shifted by ``offsets (N, k, 2)`` px.
 
-        The proposal's line scans (§4.5.2): the sample points of the two pixel
+        The proposal's line scans (§4.5.2): the sample points of the term's pixel
         sets are placed once per particle and shifted, and the sets are sampled
         more sparsely (``scan_per_unit``) than in :meth:`loglik` — the proposal
         may be any density computed exactly; the weight uses the full ``r``.
         Returns ``(N, k)``.
         """
-        edge, free = ("h_edge", "h_free") if which == "h" else ("v_edge", "v_free")
-        pose = np.atleast_2d(states)[:, :4]
-        pts_e, pts_f = self.scan_points[edge], self.scan_points[free]
-        base = plate_points(pose, np.concatenate([pts_e, pts_f]), self.layout.aspect)  # (N, P, 2)
+        if not hasattr(self, "_scan_sets"):
+            self._scan_sets = {}
+            for t in "hv":
+                idx = self._terms[t]
+                names = tuple(dict.fromkeys(self.spec[i][1] for i in idx))
+                pts, sl = self._stack(self.scan_points, names)
+                self._scan_sets[t] = (pts, [(sl[self.spec[i][1]], self.spec[i][2], i) for i in idx])
+        pts, cols = self._scan_sets[which]
+        base = plate_points(np.atleast_2d(states)[:, :4], pts, self.layout.aspect)  # (N, P, 2)
         mx = (base[:, None, :, 0] + offsets[:, :, None, 0]).astype(np.float32)  # (N, k, P)
         my = (base[:, None, :, 1] + offsets[:, :, None, 1]).astype(np.float32)
-        (we, ws, wl), ch = (self.w[0:3], 1) if which == "h" else (self.w[3:6], 0)
         v = remap_points(self.maps(obs), mx, my, border=(0.0, 0.0, 5.0, 5.0))
-        ne = len(pts_e)
         t = self.transform
-        return (we * t(v[..., :ne, ch].mean(axis=-1)) + ws * t(v[..., ne:, 2].mean(axis=-1))
-                + wl * t(v[..., ne:, 3].mean(axis=-1)))
+        return sum(self.w[i] * t(v[..., sl, ch].mean(axis=-1)) for sl, ch, i in cols)
 
     def loglik(self, obs, states):
         """``log r = log r^h + log r^v + log r^c`` ``(N,)``."""
@@ -202,8 +236,8 @@ class Plate:
     0.9 a factored AR(2), ``z_t = z_{t-1} + d (z_{t-1} - z_{t-2}) + σ ε``; with
     probability 0.1 a new car entering, ``z_t ~ N(m_e, diag(σ_e²))`` with zero
     velocity (previous = current). Likelihood: :class:`PlateLikelihood`.
-    Local moves act on translation ``(u, w)`` only (§4.5.2); an entering
-    particle moves its previous pose along (it stays a zero-velocity start).
+    Local moves act on translation ``(u, w)`` (§4.5.2), and for an entering particle also on
+    the scale; an entering particle moves its previous pose along (it stays a zero-velocity start).
 
     Parameters
     ----------
@@ -230,8 +264,8 @@ class Plate:
         self.frame_size = (int(w), int(h))
         self.lik = PlateLikelihood(layout, kappa=kappa, weights=weights, sharpness=sharpness)
         #: the estimate is reported visible when ``log r`` at it exceeds this: log-odds 1 with the
-        #: learnt coefficients (a compromise: on the 10 evaluation clips 0 / 1 / 2 give LIS-100
-        #: P(lost) 0.237 / 0.258 / 0.317 and 3.9 / 2.4 / 1.4 false reports per run); 10 for the
+        #: learnt coefficients (on the 10 evaluation clips × 20 runs 0 / 1 / 2 give LIS-100
+        #: P(lost) 0.113 / 0.113 / 0.116 and 1.18 / 0.58 / 0.15 false reports per run); 10 for the
         #: thesis's coefficients (not calibrated)
         self.visible_loglik = 1.0 if self.lik.learnt else 10.0
         self.visible_margin = 4.0
@@ -416,18 +450,23 @@ class PlateLISProposal:
       nearly flat), with ``g`` the box's uniform density in the weight
       ``r(Z) g / (q^h q^v) · K(Z)/K(X)`` — boxes of different sizes would otherwise favour the
       particles with the larger box. An entering particle first draws a cell of its window from
-      a coarse grid, ∝ the full likelihood at the cell centres (sparsely sampled), then runs the
-      line scans inside it (:meth:`_search`).
+      a coarse grid in (u, w, log s), ∝ the full likelihood at the cell centres (sparsely
+      sampled), then runs the line scans inside it (:meth:`_search`).
 
     All conditionals are sampled on grids of ``cells`` cells per line (the density is piecewise
     constant and used exactly). ``filters/lis.py`` computes ``α r / q · K(Z)/K(X)`` with
     ``α = 1``; the returned ``log q`` is set so that this is the weight above.
     """
 
-    def __init__(self, model, cells=24, window_sigmas=3.0, coarse=(12, 6), fine=8, window="dynamics"):
+    def __init__(self, model, cells=24, window_sigmas=3.0, coarse=(12, 6), fine=8, window="dynamics",
+                 scale_cells=5, scale_span=0.35):
         if window not in ("dynamics", "box"):
             raise ValueError(f"window must be 'dynamics' or 'box', got {window!r}")
         self.model = model
+        #: entering particles also search the scale: ``scale_cells`` cells of ``log s`` over
+        #: ``± scale_span`` about the drawn scale (1 cell, or span 0: translation only)
+        self.scale_cells = int(scale_cells)
+        self.scale_span = float(scale_span) if self.scale_cells > 1 else 0.0
         self.cells = int(cells)
         self.window = window
         self.window_sigmas = float(window_sigmas)
@@ -460,12 +499,15 @@ class PlateLISProposal:
         if box.any():
             half[box] = np.minimum(half[box], self.window_sigmas * m.sigma[:2])
             uv[box], log_q[box] = self._line_scans(x[box], obs, rng, x[box, :2], half[box], self.cells)
+        scale = x[:, 3].copy()
         if ent.any():
-            uv[ent], log_q[ent] = self._search(x[ent], obs, rng)
+            uv[ent], scale[ent], log_q[ent] = self._search(x[ent], obs, rng)
         # a box window g is the box's uniform density, 1 / area: with boxes of different sizes
         # (entering or not, plate scale) it must be in the weight, w = r g K(Z) / (K(X) q)
         log_q[~dyn] += np.log(4 * half[~dyn, 0] * half[~dyn, 1])
-        return m.with_local(x, uv), np.zeros(n), log_q
+        z = m.with_local(x, uv)
+        z[ent, 3] = z[ent, 7] = scale[ent]  # an entering particle stays a zero-velocity start
+        return z, np.zeros(n), log_q
 
     def _line_scans(self, x, obs, rng, centre, half, k, prior=None):
         """§4.5.2: ``W'`` from ``r^h`` along the vertical line through ``centre`` (``± half[:, 1]``),
@@ -498,19 +540,43 @@ class PlateLISProposal:
         return np.stack([u_new, w_new], axis=1), lqh - np.log(cell_h) + lqv - np.log(cell_v)
 
     def _search(self, x, obs, rng):
-        """Entering particles: a coarse cell of the window (``coarse`` cells) drawn ∝ the sparse full
-        ``r`` at its centre — the line scans alone lock onto bumpers and grilles, which have the
-        plate's horizontal edges but no characters — then the line scans inside that cell."""
+        """Entering particles: a coarse cell of the window drawn ∝ the sparse full ``r`` at its
+        centre — the line scans alone lock onto bumpers and grilles, which have the plate's
+        horizontal edges but no characters — then the line scans inside that cell.
+
+        The cells are ``coarse`` in (u, w) about ``X`` (± the plate size at ``X``'s scale); then
+        one of ``scale_cells`` cells of ``log s`` (± ``scale_span`` about ``X``'s) is drawn ∝ the
+        sparse ``r`` at the (u, w) cell's centre: an entering scale 20 % off the plate's scores far
+        below it (the entering density's scale sd is 23 %). On 10 clips × 10 runs this gave LIS-100
+        P(lost) 0.108 vs 0.117 and 0.54 vs 0.83 false reports per run; a joint (u, w, log s) grid
+        doubled the proposal's time (7.3 vs 3.6 ms per frame). The scale is uniform inside its
+        cell. For the weight, the backward window ``g(X|Z)`` is the box of the plate size at
+        ``X``'s scale about ``Z`` times the uniform density of ``log s_X`` on
+        ``log s_Z ± scale_span`` (``1 / (2 span s_X)`` in ``s_X``).
+        Returns ``(u, w)``, the scale and ``log q(Z|X) - log g_s(X|Z)``."""
         m = self.model
         cu, cw = self.coarse
+        n = len(x)
         half = m.plate_size(x)
         gu = ((np.arange(cu) + 0.5) / cu * 2 - 1)
         gw = ((np.arange(cw) + 0.5) / cw * 2 - 1)
         du, dw = np.meshgrid(gu, gw, indexing="ij")
         offs = np.stack([du.ravel(), dw.ravel()], axis=1)[None] * half[:, None, :]  # (n, C, 2) px
         j, lqc = self._conditional(m.lik.loglik_sparse(obs, x, offs), rng)
+        centre = x[:, :2] + offs[np.arange(n), j]
+        xz = x.copy()
+        k, span = self.scale_cells, self.scale_span
+        if k > 1:
+            gs = ((np.arange(k) + 0.5) / k * 2 - 1) * span  # log-scale cell centres
+            xs = np.repeat(x, k, axis=0)
+            xs[:, 3] *= np.tile(np.exp(gs), n)
+            at = np.repeat(centre - x[:, :2], k, axis=0)[:, None]  # (n k, 1, 2)
+            js, lqs = self._conditional(m.lik.loglik_sparse(obs, xs, at).reshape(n, k), rng)
+            cell = 2 * span / k
+            log_s = np.log(x[:, 3]) + gs[js] + cell * (rng.random(n) - 0.5)
+            xz[:, 3] = np.exp(log_s)
+            # q's density of s_Z in its cell over g's density of s_X: (1 / (cell s_Z)) / (1 / (2 span s_X))
+            lqc = lqc + lqs - np.log(cell) - log_s + np.log(2 * span) + np.log(x[:, 3])
         cell_half = half / np.array([cu, cw])
-        centre = x[:, :2] + np.stack([du.ravel()[j], dw.ravel()[j]], axis=1) * half
-        uv, lq = self._line_scans(x, obs, rng, centre, cell_half, self.fine)
-        return uv, lqc + lq
-
+        uv, lq = self._line_scans(xz, obs, rng, centre, cell_half, self.fine)
+        return uv, xz[:, 3], lqc + lq

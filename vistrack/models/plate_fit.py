@@ -27,8 +27,9 @@ from scipy import optimize
 from ..clips import load_clip
 from ..features import FeatureMaps
 from .plate import PlateLikelihood
+from .plate_layout import LAYOUTS
 
-__all__ = ["truth_poses", "training_samples", "scan_poses", "fit_logistic", "fit_weights"]
+__all__ = ["feature_likelihood", "truth_poses", "training_samples", "scan_poses", "fit_logistic", "fit_weights"]
 
 
 def truth_poses(truth, i):
@@ -57,6 +58,14 @@ def _far(poses, pose):
     return ~near | (np.abs(np.log(poses[:, 3] / s)) > np.log(1.3))
 
 
+def feature_likelihood(layout):
+    """A :class:`PlateLikelihood` whose :meth:`~PlateLikelihood.features` has every pixel set of the
+    layout, Table 1.1's and the extra ones (the coefficients are what is being fitted)."""
+    lay = LAYOUTS[layout] if isinstance(layout, str) else layout
+    names = PlateLikelihood.BASE_FEATURES + tuple(e[0] for e in lay.extra)
+    return PlateLikelihood(lay, weights=(dict.fromkeys(names, 1.0), 0.0))
+
+
 def training_samples(clips, layout, rng, *, every=6, weights=None, hard_per_frame=20):
     """Features ``X (M, 10)`` (``log(1 + mean)``, as the likelihood uses them), labels ``y (M,)``
     and sample kinds from the clip folders ``clips``.
@@ -64,7 +73,7 @@ def training_samples(clips, layout, rng, *, every=6, weights=None, hard_per_fram
     With ``weights`` (``(w, b)``), each frame also gives its ``hard_per_frame`` best-scoring
     poses of :func:`scan_poses` away from the plate as negatives.
     """
-    lik = PlateLikelihood(layout)
+    lik = feature_likelihood(layout)
     xs, ys, kinds = [], [], []
 
     def feats(maps, poses):
@@ -154,7 +163,8 @@ def main(argv=None):
     for k in np.unique(kinds):
         v = score[kinds == k]
         print(f"{k:>7}: n={len(v):6d}  log-odds 1/50/99 % {np.percentile(v, [1, 50, 99]).round(2)}  > 0: {np.mean(v > 0):.3f}")
-    print("weights = {" + ", ".join(f'"{n}": {v:.4f}' for n, v in zip(PlateLikelihood.FEATURES, w)) + "}")
+    names = feature_likelihood(args.layout).FEATURES
+    print("weights = {" + ", ".join(f'"{n}": {v:.4f}' for n, v in zip(names, w)) + "}")
     print(f"bias = {b:.4f}")
 
 

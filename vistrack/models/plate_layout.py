@@ -17,6 +17,14 @@ sets of Table 1.1:
 - ``v_edge``: bands across the left and right borders (vertical edges);
 - ``v_free``: vertical stripes free of edges and lines;
 - ``small``: the small characters; ``big``: the large characters.
+
+A layout may add ``extra`` pixel sets ``(name, rectangles, channel, term)``, each a
+mean of one feature map (``0`` |∇_x I|, ``1`` |∇_y I|, ``2`` the small DoG,
+``3`` the large DoG) that enters ``r^h``, ``r^v`` or ``r^c`` (``term`` "h", "v",
+"c") with a learnt coefficient: the two
+character areas apart, the Sobel maps over the characters, edges of the wrong
+orientation in the border bands, and bands just outside the plate (the
+thesis's "could be further refined", §1.3.2).
 """
 
 from __future__ import annotations
@@ -38,6 +46,7 @@ class PlateLayout:
     v_free: tuple
     small: tuple
     big: tuple
+    extra: tuple = ()
 
     def sets(self):
         return {k: np.array(getattr(self, k), float) for k in ("h_edge", "h_free", "v_edge", "v_free", "small", "big")}
@@ -58,6 +67,18 @@ JP = PlateLayout(
     v_free=((0.03, 0.15, 0.07, 0.85), (0.93, 0.15, 0.97, 0.85), (0.18, 0.52, 0.22, 0.88)),
     small=((0.28, 0.15, 0.72, 0.41), (0.08, 0.55, 0.17, 0.85)),
     big=((0.24, 0.51, 0.92, 0.89),),
+    extra=(
+        ("top_s", ((0.28, 0.15, 0.72, 0.41),), 2, "c"), ("top_l", ((0.28, 0.15, 0.72, 0.41),), 3, "c"),
+        ("glyph_s", ((0.08, 0.55, 0.17, 0.85),), 2, "c"), ("glyph_l", ((0.08, 0.55, 0.17, 0.85),), 3, "c"),
+        ("above_s", ((0.1, -0.45, 0.9, -0.15),), 2, "c"), ("above_l", ((0.1, -0.45, 0.9, -0.15),), 3, "c"),
+        ("below_s", ((0.1, 1.15, 0.9, 1.45),), 2, "c"), ("below_l", ((0.1, 1.15, 0.9, 1.45),), 3, "c"),
+        ("sides_s", ((-0.3, 0.1, -0.08, 0.9), (1.08, 0.1, 1.3, 0.9)), 2, "c"),
+        ("sides_l", ((-0.3, 0.1, -0.08, 0.9), (1.08, 0.1, 1.3, 0.9)), 3, "c"),
+        ("big_gx", ((0.24, 0.51, 0.92, 0.89),), 0, "c"), ("big_gy", ((0.24, 0.51, 0.92, 0.89),), 1, "c"),
+        ("top_gx", ((0.28, 0.15, 0.72, 0.41),), 0, "c"),
+        ("h_edge_gx", ((0.08, -0.04, 0.92, 0.08), (0.08, 0.92, 0.92, 1.04)), 0, "h"),
+        ("v_edge_gy", ((-0.02, 0.1, 0.06, 0.9), (0.94, 0.1, 1.02, 0.9)), 1, "v"),
+    ),
 )
 
 #: single-row plate (European / Indian style): one row of characters, aspect ~4.7
