@@ -98,9 +98,9 @@ class PlateLikelihood:
         extra sets, which are larger and smoother).
     sharpness : float
         ``log r`` is this times the weighted sum (the thesis's ``κ`` for the learnt log-odds).
-        On 10 clips × 10 runs (Table 1.1's ten features, box window), 1 / 2 / 3 gave LIS-100 P(lost)
-        0.245 / 0.176 / 0.156 and
-        bootstrap-750 0.377 / 0.451 / 0.520: a sharper ``r`` helps LIS and hurts bootstrap
+        On 10 clips × 10 runs (Table 1.1's ten features, box window), 1 / 2 / 3 gave LIS-100
+        P(lost) 0.245 / 0.176 / 0.156 and bootstrap-750 0.377 / 0.451 / 0.520: a sharper ``r``
+        helps LIS and hurts bootstrap
         (vertex error LIS 5.95 / 5.97 / 6.73, bootstrap 4.31 / 5.42 / 6.58 px). 1 keeps
         ``log r`` the calibrated log-odds.
     """
@@ -167,8 +167,9 @@ class PlateLikelihood:
                                 "small_s", "small_l", "big_s", "big_l")
 
     def features(self, obs, states):
-        """The Table 1.1 pixel-set means ``(N, 10)``: edge bands on their Sobel channel, the free
-        stripes and character areas on each DoG separately (columns :attr:`FEATURES`)."""
+        """The pixel-set means ``(N, len(FEATURES))``: Table 1.1's edge bands on their Sobel channel,
+        free stripes and character areas on each DoG separately, then the layout's extra sets
+        (columns :attr:`FEATURES`)."""
         pose = np.atleast_2d(states)[:, :4]
         pts = plate_points(pose, self._all, self.layout.aspect)
         v = remap_points(self.maps(obs), pts[..., 0].astype(np.float32), pts[..., 1].astype(np.float32),
@@ -450,8 +451,8 @@ class PlateLISProposal:
       nearly flat), with ``g`` the box's uniform density in the weight
       ``r(Z) g / (q^h q^v) · K(Z)/K(X)`` — boxes of different sizes would otherwise favour the
       particles with the larger box. An entering particle first draws a cell of its window from
-      a coarse grid in (u, w, log s), ∝ the full likelihood at the cell centres (sparsely
-      sampled), then runs the line scans inside it (:meth:`_search`).
+      a coarse grid, ∝ the full likelihood at the cell centres (sparsely sampled), then a cell
+      of ``log s`` ∝ the same at that centre, then runs the line scans inside it (:meth:`_search`).
 
     All conditionals are sampled on grids of ``cells`` cells per line (the density is piecewise
     constant and used exactly). ``filters/lis.py`` computes ``α r / q · K(Z)/K(X)`` with
@@ -465,7 +466,7 @@ class PlateLISProposal:
         self.model = model
         #: entering particles also search the scale: ``scale_cells`` cells of ``log s`` over
         #: ``± scale_span`` about the drawn scale (1 cell, or span 0: translation only)
-        self.scale_cells = int(scale_cells)
+        self.scale_cells = int(scale_cells) if scale_span > 0 else 1
         self.scale_span = float(scale_span) if self.scale_cells > 1 else 0.0
         self.cells = int(cells)
         self.window = window
