@@ -162,9 +162,9 @@ class PlateLikelihood:
             obs._plate_maps = m
         return m
 
-    #: the Table 1.1 columns of :meth:`features` (``FEATURES`` adds the layout's extra sets)
-    BASE_FEATURES = FEATURES = ("h_edge", "h_free_s", "h_free_l", "v_edge", "v_free_s", "v_free_l",
-                                "small_s", "small_l", "big_s", "big_l")
+    #: the Table 1.1 columns of :meth:`features` (an instance's ``FEATURES`` adds the layout's extra sets)
+    BASE_FEATURES = ("h_edge", "h_free_s", "h_free_l", "v_edge", "v_free_s", "v_free_l", "small_s", "small_l",
+                     "big_s", "big_l")
 
     def features(self, obs, states):
         """The pixel-set means ``(N, len(FEATURES))``: Table 1.1's edge bands on their Sobel channel,

@@ -67,7 +67,8 @@ def feature_likelihood(layout):
 
 
 def training_samples(clips, layout, rng, *, every=6, weights=None, hard_per_frame=20):
-    """Features ``X (M, 10)`` (``log(1 + mean)``, as the likelihood uses them), labels ``y (M,)``
+    """Features ``X (M, F)`` (every feature of :func:`feature_likelihood`, ``log(1 + mean)`` as the
+    likelihood uses them), labels ``y (M,)``
     and sample kinds from the clip folders ``clips``.
 
     With ``weights`` (``(w, b)``), each frame also gives its ``hard_per_frame`` best-scoring

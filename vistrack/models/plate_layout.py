@@ -21,10 +21,9 @@ sets of Table 1.1:
 A layout may add ``extra`` pixel sets ``(name, rectangles, channel, term)``, each a
 mean of one feature map (``0`` |∇_x I|, ``1`` |∇_y I|, ``2`` the small DoG,
 ``3`` the large DoG) that enters ``r^h``, ``r^v`` or ``r^c`` (``term`` "h", "v",
-"c") with a learnt coefficient: the two
-character areas apart, the Sobel maps over the characters, edges of the wrong
-orientation in the border bands, and bands just outside the plate (the
-thesis's "could be further refined", §1.3.2).
+"c") with a learnt coefficient: the two character areas apart, the Sobel maps
+over the characters, edges of the wrong orientation in the border bands, and
+bands just outside the plate (the thesis's "could be further refined", §1.3.2).
 """
 
 from __future__ import annotations
