@@ -2,7 +2,7 @@
 
 The thesis's likelihood is a weighted sum of pixel-set means (Table 1.1) and
 notes that it "could be further refined by e.g. learning coefficients for each
-of the terms". This module does that on synthetic road clips: the ten means of
+of the terms". This module does that on synthetic road clips: the pixel-set means of
 :meth:`~vistrack.models.plate.PlateLikelihood.features` at true plate poses
 (jittered within tracking accuracy) are positives; negatives are random poses,
 near misses (shifted by 0.15–1 plate size or rescaled by up to ±35 %) and hard
@@ -13,7 +13,14 @@ that a plate lies at the pose, so ``log r > 0`` is the visibility decision.
 The features are ``log(1 + mean)``, which keeps very strong edges (headlights,
 sign borders) from outweighing the characters.
 
-    python -m vistrack.models.plate_fit --layout jp --clips CLIPS_DIR
+With ``--scales S0,S1`` the coefficients are scale-banded: one set at plate width
+``S0`` px and one at ``S1``, interpolated in log s (:func:`design`). The DoGs and
+Sobel filters have a fixed size in pixels, so a pixel set's mean on a 35-px plate
+is not the same feature as on an 80-px one: a single set fitted on both sizes
+let text signs at 640×480 score like plates, one fitted at 640×480 alone scored
+35-px plates below 0.
+
+    python -m vistrack.models.plate_fit --layout jp --clips CLIPS_DIR --scales 40,80
 """
 
 from __future__ import annotations
@@ -29,7 +36,8 @@ from ..features import FeatureMaps
 from .plate import PlateLikelihood
 from .plate_layout import LAYOUTS
 
-__all__ = ["feature_likelihood", "truth_poses", "training_samples", "scan_poses", "fit_logistic", "fit_weights"]
+__all__ = ["feature_likelihood", "truth_poses", "training_samples", "scan_poses", "design", "split_weights",
+           "fit_logistic", "fit_weights"]
 
 
 def truth_poses(truth, i):
@@ -66,19 +74,37 @@ def feature_likelihood(layout):
     return PlateLikelihood(lay, weights=(dict.fromkeys(names, 1.0), 0.0))
 
 
-def training_samples(clips, layout, rng, *, every=6, weights=None, hard_per_frame=20):
-    """Features ``X (M, F)`` (every feature of :func:`feature_likelihood`, ``log(1 + mean)`` as the
-    likelihood uses them), labels ``y (M,)``
+def design(f, s, scales=None):
+    """The regression's inputs from features ``f (M, F)`` at plate widths ``s (M,)``: ``f`` itself,
+    or with scale-banded weights (``scales = (s_0, s_1)``) ``[(1 - a) f, a f, a]`` with
+    ``a = log(s / s_0) / log(s_1 / s_0)`` clipped to [0, 1] — a linear model whose coefficients
+    are interpolated in log s between their values at ``s_0`` and ``s_1``."""
+    if scales is None:
+        return f
+    a = np.clip(np.log(s / scales[0]) / np.log(scales[1] / scales[0]), 0.0, 1.0)[:, None]
+    return np.column_stack([(1 - a) * f, a * f, a])
+
+
+def split_weights(w, b, n_features, scales=None):
+    """``(coef (F,) or (2, F), bias float or (2,))`` from the regression's ``(w, b)`` (see :func:`design`)."""
+    if scales is None:
+        return w, b
+    return np.stack([w[:n_features], w[n_features:2 * n_features]]), np.array([b, b + w[-1]])
+
+
+def training_samples(clips, layout, rng, *, every=6, weights=None, hard_per_frame=20, scales=None):
+    """Regression inputs ``X`` (:func:`design` of every feature of :func:`feature_likelihood`,
+    ``log(1 + mean)`` as the likelihood uses them), labels ``y (M,)``
     and sample kinds from the clip folders ``clips``.
 
-    With ``weights`` (``(w, b)``), each frame also gives its ``hard_per_frame`` best-scoring
-    poses of :func:`scan_poses` away from the plate as negatives.
+    With ``weights`` (``(w, b)`` on ``X``), each frame also gives its ``hard_per_frame``
+    best-scoring poses of :func:`scan_poses` away from the plate as negatives.
     """
     lik = feature_likelihood(layout)
     xs, ys, kinds = [], [], []
 
     def feats(maps, poses):
-        return np.log1p(lik.features(maps, poses))
+        return design(np.log1p(lik.features(maps, poses)), poses[:, 3], scales)
 
     def add(x, label, kind):
         xs.append(x)
@@ -139,13 +165,14 @@ def fit_logistic(x, y, lam=1e-3):
     return w, float(beta[-1] - mu @ w)
 
 
-def fit_weights(clips, layout, *, rounds=2, seed=0, every=6):
-    """Fit, then refit ``rounds`` times with hard negatives mined by the current weights."""
+def fit_weights(clips, layout, *, rounds=2, seed=0, every=6, scales=None):
+    """Fit, then refit ``rounds`` times with hard negatives mined by the current weights.
+    Returns ``(w, b)`` on :func:`design`'s inputs and the samples."""
     rng = np.random.default_rng(seed)
-    x, y, kinds = training_samples(clips, layout, rng, every=every)
+    x, y, kinds = training_samples(clips, layout, rng, every=every, scales=scales)
     w = fit_logistic(x, y)
     for _ in range(rounds):
-        xh, yh, kh = training_samples(clips, layout, rng, every=every, weights=w)
+        xh, yh, kh = training_samples(clips, layout, rng, every=every, weights=w, scales=scales)
         hard = kh == "hard"
         x, y, kinds = np.concatenate([x, xh[hard]]), np.concatenate([y, yh[hard]]), np.concatenate([kinds, kh[hard]])
         w = fit_logistic(x, y)
@@ -157,16 +184,25 @@ def main(argv=None):
     ap.add_argument("--layout", default="jp")
     ap.add_argument("--clips", required=True, help="folder of plate clip folders")
     ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--scales", default=None, metavar="S0,S1",
+                    help="scale-banded weights: fit the coefficients at these two plate widths (px), "
+                         "interpolated in log s between them")
     args = ap.parse_args(argv)
+    scales = tuple(float(v) for v in args.scales.split(",")) if args.scales else None
     clips = sorted(p for p in Path(args.clips).iterdir() if (p / "groundtruth.csv").is_file())
-    (w, b), (x, y, kinds) = fit_weights(clips, args.layout, rounds=args.rounds)
+    (w, b), (x, y, kinds) = fit_weights(clips, args.layout, rounds=args.rounds, scales=scales)
     score = x @ w + b
     for k in np.unique(kinds):
         v = score[kinds == k]
         print(f"{k:>7}: n={len(v):6d}  log-odds 1/50/99 % {np.percentile(v, [1, 50, 99]).round(2)}  > 0: {np.mean(v > 0):.3f}")
     names = feature_likelihood(args.layout).FEATURES
-    print("weights = {" + ", ".join(f'"{n}": {v:.4f}' for n, v in zip(names, w)) + "}")
-    print(f"bias = {b:.4f}")
+    coef, bias = split_weights(w, b, len(names), scales)
+    if scales is None:
+        print("weights = {" + ", ".join(f'"{n}": {v:.4f}' for n, v in zip(names, coef)) + "}")
+        print(f"bias = {bias:.4f}")
+    else:
+        print("weights = {" + ", ".join(f'"{n}": ({a:.4f}, {c:.4f})' for n, a, c in zip(names, *coef)) + "}")
+        print(f"bias = ({bias[0]:.4f}, {bias[1]:.4f}), scales = {scales}")
 
 
 if __name__ == "__main__":
