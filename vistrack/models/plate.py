@@ -24,7 +24,7 @@ import numpy as np
 from ..features import remap_points
 from .plate_layout import LAYOUTS, plate_points
 
-__all__ = ["PlateLikelihood", "thesis_weights", "LEARNT_WEIGHTS"]
+__all__ = ["PlateLikelihood", "thesis_weights", "scale_band", "LEARNT_WEIGHTS"]
 
 
 def thesis_weights(kappa=2.0):
@@ -54,6 +54,14 @@ LEARNT_WEIGHTS = {
             "v_edge_gy": (-3.6481, -3.7614)},
            (-9.3638, -10.7008), (40.0, 80.0)),
 }
+
+def scale_band(s, scales):
+    """Where plate widths ``s`` lie between the two widths ``scales = (s_0, s_1)`` of scale-banded
+    coefficients: ``a = log(s / s_0) / log(s_1 / s_0)`` clipped to [0, 1] (the coefficients are
+    ``(1 - a) w_0 + a w_1``)."""
+    s0, s1 = scales
+    return np.clip(np.log(np.asarray(s, float) / s0) / np.log(s1 / s0), 0.0, 1.0)
+
 
 _SETS = ("h_edge", "h_free", "v_edge", "v_free", "small", "big")
 
@@ -174,8 +182,7 @@ class PlateLikelihood:
         n = len(np.atleast_2d(states))
         if self.scales is None:
             return np.broadcast_to(self.w[0], (n, self.w.shape[1])), np.full(n, self.bias[0])
-        s0, s1 = self.scales
-        a = np.clip(np.log(np.atleast_2d(states)[:, 3] / s0) / np.log(s1 / s0), 0.0, 1.0)
+        a = scale_band(np.atleast_2d(states)[:, 3], self.scales)
         return (1 - a)[:, None] * self.w[0] + a[:, None] * self.w[1], (1 - a) * self.bias[0] + a * self.bias[1]
 
     def maps(self, obs):
@@ -216,9 +223,9 @@ class PlateLikelihood:
         mx = (base[:, None, :, 0] + offsets[:, :, None, 0]).astype(np.float32)  # (N, C, P)
         my = (base[:, None, :, 1] + offsets[:, :, None, 1]).astype(np.float32)
         n, c = mx.shape[:2]
-        v = remap_points(self.maps(obs), mx, my, border=(0.0, 0.0, 5.0, 5.0)).reshape(n, c, -1, 4)
+        v = remap_points(self.maps(obs), mx, my, border=(0.0, 0.0, 5.0, 5.0)).reshape(n * c, -1, 4)
         w, b = self.coef(states)
-        f = self.transform(np.stack([v[..., sl[ps], ch].mean(axis=-1) for _, ps, ch, _ in self.spec], axis=-1))
+        f = self.transform(self._set_means(v, sl)).reshape(n, c, -1)
         return np.einsum("ncf,nf->nc", f, w) + b[:, None]
 
     def terms(self, obs, states):

@@ -33,7 +33,7 @@ from scipy import optimize
 
 from ..clips import load_clip
 from ..features import FeatureMaps
-from .plate import PlateLikelihood
+from .plate import PlateLikelihood, scale_band
 from .plate_layout import LAYOUTS
 
 __all__ = ["feature_likelihood", "truth_poses", "training_samples", "scan_poses", "design", "split_weights",
@@ -77,11 +77,11 @@ def feature_likelihood(layout):
 def design(f, s, scales=None):
     """The regression's inputs from features ``f (M, F)`` at plate widths ``s (M,)``: ``f`` itself,
     or with scale-banded weights (``scales = (s_0, s_1)``) ``[(1 - a) f, a f, a]`` with
-    ``a = log(s / s_0) / log(s_1 / s_0)`` clipped to [0, 1] — a linear model whose coefficients
-    are interpolated in log s between their values at ``s_0`` and ``s_1``."""
+    ``a`` from :func:`~vistrack.models.plate.scale_band` — a linear model whose coefficients are
+    interpolated in log s between their values at ``s_0`` and ``s_1``."""
     if scales is None:
         return f
-    a = np.clip(np.log(s / scales[0]) / np.log(scales[1] / scales[0]), 0.0, 1.0)[:, None]
+    a = scale_band(s, scales)[:, None]
     return np.column_stack([(1 - a) * f, a * f, a])
 
 
