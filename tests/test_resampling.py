@@ -5,6 +5,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from vistrack.filters import ParticleFilter
+from vistrack.particles import ParticleSet
 from vistrack.resampling import SCHEMES, get_scheme, needs_resampling
 
 ALL = sorted(SCHEMES)
@@ -90,3 +92,71 @@ def test_policy_and_registry():
     assert not needs_resampling(60.0, 100, 0.5)
     with pytest.raises(ValueError, match="unknown resampling scheme 'nope'"):
         get_scheme("nope")
+
+
+# -- birth reserve (ParticleFilter.resampling_probs) ---------------------------------------
+
+
+class _Births:
+    """A model whose births are the particles with a positive first coordinate."""
+
+    def __init__(self, birth_reserve=0.0):
+        self.birth_reserve = birth_reserve
+
+    @staticmethod
+    def entering(states):
+        return states[:, 0] > 0
+
+
+def _births_set(n=40, n_born=8, w_born=1e-6, seed=3):
+    """Particles ``(±index, ...)``: the last ``n_born`` are births holding ``w_born`` of the weight."""
+    w = np.random.default_rng(seed).gamma(0.7, size=n)
+    born = np.arange(n) >= n - n_born
+    w[~born] *= (1 - w_born) / w[~born].sum()
+    w[born] *= w_born / w[born].sum()
+    states = np.where(born, 1.0, -1.0)[:, None] * np.arange(1, n + 1)[:, None]
+    return ParticleSet(states, np.log(w)), w, born
+
+
+@pytest.mark.parametrize("name", ["multinomial", "systematic"])
+def test_birth_reserve_keeps_offspring_weights_unbiased(name):
+    """With ε of the draws reserved for births, every parent's offspring carry its weight in
+    expectation (E Σ_offspring w' = w_i), and the births get n (ε + (1 - ε) W_B) draws."""
+    eps, reps = 0.1, 4000
+    ps, w, born = _births_set()
+    n = ps.n
+    filt = ParticleFilter(_Births(eps), resample=name)
+    rng = np.random.default_rng(11)
+    carried, n_born = np.zeros(n), 0
+    for _ in range(reps):
+        states, log_w = filt._resampled(ps, rng)
+        parent = np.abs(states[:, 0]).astype(int) - 1
+        carried += np.bincount(parent, weights=np.exp(log_w), minlength=n)
+        n_born += born[parent].sum()
+    pi, _ = filt.resampling_probs(ps)
+    assert np.isclose(pi.sum(), 1.0)
+    assert np.isclose(pi[born].sum(), eps + (1 - eps) * w[born].sum())
+    # each offspring of i carries w_i / (n π_i); its count has variance at most n π_i (1 - π_i)
+    se = w / (n * pi) * np.sqrt(n * pi * (1 - pi) / reps)
+    assert np.all(np.abs(carried / reps - w) < 5 * se + 1e-12)
+    p_born = pi[born].sum()
+    assert abs(n_born / reps - n * p_born) < 5 * np.sqrt(n * p_born * (1 - p_born) / reps)
+    # without the reserve the births, at 1e-6 of the weight, are all but never drawn
+    assert n * w[born].sum() < 1e-4
+
+
+def test_no_birth_reserve_is_plain_resampling():
+    ps, w, born = _births_set()
+    for model, kw in ((_Births(0.0), {}), (_Births(0.2), {"birth_reserve": 0.0}), (object(), {"birth_reserve": 0.2})):
+        filt = ParticleFilter(model, **kw)
+        states, log_w = filt._resampled(ps, np.random.default_rng(5))
+        idx = SCHEMES["systematic"](w, ps.n, np.random.default_rng(5))
+        assert np.array_equal(states, ps.states[idx])
+        assert np.allclose(log_w, -np.log(ps.n))
+    # the model's reserve is the default; an explicit one overrides it
+    assert ParticleFilter(_Births(0.2)).birth_reserve == 0.2
+    assert ParticleFilter(_Births(0.2), birth_reserve=0.05).birth_reserve == 0.05
+    # all the weight on births (the first step draws every particle from p_0): plain resampling
+    one = ParticleSet(np.arange(1.0, 11.0)[:, None])
+    pi, log_w = ParticleFilter(_Births(0.3)).resampling_probs(one)
+    assert np.allclose(pi, one.weights) and np.all(log_w == 0)

@@ -58,16 +58,22 @@ class ParticleFilter:
     ess_threshold : float or None
         Resample every step when ``None`` (or ``>= 1``), else when
         ``ESS < ess_threshold * N``.
+    birth_reserve : float or None
+        Share ``ε`` of the resampled particles kept for the newest births
+        (``model.entering(states)``, e.g. a car entering the scene), drawn ∝
+        their weights; ``None`` takes ``model.birth_reserve`` (default 0). See
+        :meth:`resampling_probs`.
     """
 
     name = "base"
     #: parts whose default the model supplies: attribute -> model method name
     model_parts = {}
 
-    def __init__(self, model, *, resample="systematic", ess_threshold=None):
+    def __init__(self, model, *, resample="systematic", ess_threshold=None, birth_reserve=None):
         self.model = model
         self.resample_scheme = get_scheme(resample)
         self.ess_threshold = ess_threshold
+        self._birth_reserve = birth_reserve
         self._from_model = set()
 
     def _set_part(self, attr, value):
@@ -104,12 +110,44 @@ class ParticleFilter:
             raise ValueError(f"number of particles must be positive, got {n}")
         return ParticleSet(self.model.sample_prior(n, rng))
 
+    @property
+    def birth_reserve(self):
+        if self._birth_reserve is not None:
+            return float(self._birth_reserve)
+        return float(getattr(self.model, "birth_reserve", 0.0))
+
+    def resampling_probs(self, particles):
+        """Resampling probabilities ``π`` and the log-weights ``log(w / π)`` the offspring carry.
+
+        Plain resampling has ``π = w``. With a birth reserve ``ε`` the births ``B``
+        (``model.entering``) get ``ε`` of the draws on top, ∝ their weights:
+        ``π_i = (1 - ε) w_i + ε w_i 1_B(i) / W_B``. Every particle with ``w_i > 0``
+        keeps ``π_i > 0`` and its offspring carry ``w_i / π_i``, so the expected
+        weight of its offspring is ``w_i`` (the resampled set stays properly weighted).
+        A birth on a new object that the tracked particles outweigh — by the
+        entering density's small mass at that pose — then survives resampling
+        with a small weight, and takes over when the next frames confirm it.
+        """
+        w = particles.weights
+        eps = self.birth_reserve
+        flat = np.zeros(particles.n)
+        if eps > 0 and hasattr(self.model, "entering"):
+            born = self.model.entering(particles.states)
+            w_b = float(w[born].sum())
+            if 0.0 < w_b < 1.0:
+                # log(1 - ε + ε / W_B) without overflow for a tiny W_B
+                lift = np.log(eps) - np.log(w_b) + np.log1p((1 - eps) * w_b / eps)
+                flat = np.where(born, -lift, -np.log1p(-eps))
+                return np.where(born, (1 - eps) * w + eps * w / w_b, (1 - eps) * w), flat
+        return w, flat
+
     def _resampled(self, particles, rng):
         """States and log-weights after the resampling policy."""
         n = particles.n
         if needs_resampling(particles.ess, n, self.ess_threshold):
-            idx = self.resample_scheme(particles.weights, n, rng)
-            return particles.states[idx], np.full(n, -np.log(n))
+            pi, log_w = self.resampling_probs(particles)
+            idx = self.resample_scheme(pi, n, rng)
+            return particles.states[idx], log_w[idx] - np.log(n)
         return particles.states, particles.log_weights
 
     def propose(self, prev, obs, rng):
