@@ -156,6 +156,8 @@ def test_no_birth_reserve_is_plain_resampling():
     # the model's reserve is the default; an explicit one overrides it
     assert ParticleFilter(_Births(0.2)).birth_reserve == 0.2
     assert ParticleFilter(_Births(0.2), birth_reserve=0.05).birth_reserve == 0.05
+    with pytest.raises(ValueError, match=r"birth_reserve must be in \[0, 1\), got 1.0"):
+        ParticleFilter(_Births(0.2), birth_reserve=1.0).resampling_probs(ps)
     # all the weight on births (the first step draws every particle from p_0): plain resampling
     one = ParticleSet(np.arange(1.0, 11.0)[:, None])
     pi, log_w = ParticleFilter(_Births(0.3)).resampling_probs(one)

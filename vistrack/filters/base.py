@@ -112,9 +112,10 @@ class ParticleFilter:
 
     @property
     def birth_reserve(self):
-        if self._birth_reserve is not None:
-            return float(self._birth_reserve)
-        return float(getattr(self.model, "birth_reserve", 0.0))
+        eps = self._birth_reserve if self._birth_reserve is not None else getattr(self.model, "birth_reserve", 0.0)
+        if not 0.0 <= eps < 1.0:  # ε = 1 would leave the tracked particles no draws (π_i = 0 < w_i)
+            raise ValueError(f"birth_reserve must be in [0, 1), got {eps}")
+        return float(eps)
 
     def resampling_probs(self, particles):
         """Resampling probabilities ``π`` and the log-weights ``log(w / π)`` the offspring carry.
