@@ -131,16 +131,16 @@ class ParticleFilter:
         """
         w = particles.weights
         eps = self.birth_reserve
-        flat = np.zeros(particles.n)
+        log_carry = np.zeros(particles.n)
         if eps > 0 and hasattr(self.model, "entering"):
             born = self.model.entering(particles.states)
             w_b = float(w[born].sum())
             if 0.0 < w_b < 1.0:
                 # log(1 - ε + ε / W_B) without overflow for a tiny W_B
                 lift = np.log(eps) - np.log(w_b) + np.log1p((1 - eps) * w_b / eps)
-                flat = np.where(born, -lift, -np.log1p(-eps))
-                return np.where(born, (1 - eps) * w + eps * w / w_b, (1 - eps) * w), flat
-        return w, flat
+                log_carry = np.where(born, -lift, -np.log1p(-eps))
+                return np.where(born, (1 - eps) * w + eps * w / w_b, (1 - eps) * w), log_carry
+        return w, log_carry
 
     def _resampled(self, particles, rng):
         """States and log-weights after the resampling policy."""
