@@ -55,6 +55,7 @@ LEARNT_WEIGHTS = {
            (-9.3638, -10.7008), (40.0, 80.0)),
 }
 
+
 def scale_band(s, scales):
     """Where plate widths ``s`` lie between the two widths ``scales = (s_0, s_1)`` of scale-banded
     coefficients: ``a = log(s / s_0) / log(s_1 / s_0)`` clipped to [0, 1] (the coefficients are
@@ -212,6 +213,14 @@ class PlateLikelihood:
     def _set_means(self, v, sl):
         return np.stack([v[:, sl[ps], ch].mean(axis=1) for _, ps, ch, _ in self.spec], axis=1)
 
+    def _shifted_samples(self, obs, states, points, offsets):
+        """The 4 maps at the plate points ``points`` of every pose shifted by ``offsets (N, C, 2)``
+        px: ``(N, C, P, 4)`` (the points are placed once per pose, then shifted)."""
+        base = plate_points(np.atleast_2d(states)[:, :4], points, self.layout.aspect)  # (N, P, 2)
+        mx = (base[:, None, :, 0] + offsets[:, :, None, 0]).astype(np.float32)  # (N, C, P)
+        my = (base[:, None, :, 1] + offsets[:, :, None, 1]).astype(np.float32)
+        return remap_points(self.maps(obs), mx, my, border=(0.0, 0.0, 5.0, 5.0))
+
     def loglik_sparse(self, obs, states, offsets):
         """``log r`` from the sparser point sets of the scans (``scan_per_unit``) at every pose
         shifted by ``offsets (N, C, 2)`` px: ``(N, C)``. The entering particles' coarse 2-D search of
@@ -219,11 +228,8 @@ class PlateLikelihood:
         if not hasattr(self, "_sparse"):
             self._sparse = self._stack(self.scan_points)
         points, sl = self._sparse
-        base = plate_points(np.atleast_2d(states)[:, :4], points, self.layout.aspect)  # (N, P, 2)
-        mx = (base[:, None, :, 0] + offsets[:, :, None, 0]).astype(np.float32)  # (N, C, P)
-        my = (base[:, None, :, 1] + offsets[:, :, None, 1]).astype(np.float32)
-        n, c = mx.shape[:2]
-        v = remap_points(self.maps(obs), mx, my, border=(0.0, 0.0, 5.0, 5.0)).reshape(n * c, -1, 4)
+        n, c = offsets.shape[:2]
+        v = self._shifted_samples(obs, states, points, offsets).reshape(n * c, -1, 4)
         w, b = self.coef(states)
         f = self.transform(self._set_means(v, sl)).reshape(n, c, -1)
         return np.einsum("ncf,nf->nc", f, w) + b[:, None]
@@ -252,10 +258,7 @@ class PlateLikelihood:
                 pts, sl = self._stack(self.scan_points, names)
                 self._scan_sets[t] = (pts, [(sl[self.spec[i][1]], self.spec[i][2], i) for i in idx])
         pts, cols = self._scan_sets[which]
-        base = plate_points(np.atleast_2d(states)[:, :4], pts, self.layout.aspect)  # (N, P, 2)
-        mx = (base[:, None, :, 0] + offsets[:, :, None, 0]).astype(np.float32)  # (N, k, P)
-        my = (base[:, None, :, 1] + offsets[:, :, None, 1]).astype(np.float32)
-        v = remap_points(self.maps(obs), mx, my, border=(0.0, 0.0, 5.0, 5.0))
+        v = self._shifted_samples(obs, states, pts, offsets)
         t, w = self.transform, self.coef(states)[0]
         return sum(w[:, i, None] * t(v[..., sl, ch].mean(axis=-1)) for sl, ch, i in cols)
 
