@@ -167,7 +167,7 @@ def test_plate_log_odds_separate_plates_from_clutter(road640):
 def test_plate_lis_proposal_is_a_proper_density_on_the_window(entering):
     """§4.5.2 proposal q = q^h(W') q^v(U'|W') on its box window g: E_q[g / q(Z)] = 1 —
     q integrates to one on the box and log q is exact (the returned log q includes -log g).
-    The box is twice the plate size for an entering particle, which also searches log s, and
+    The box is twice the plate size for an entering particle, which also searches log s and θ, and
     3 sigma of the AR(2) noise for a tracked one. (A textured frame and the mild thesis weights keep the importance
     estimate's variance small.)"""
     import cv2
@@ -182,7 +182,7 @@ def test_plate_lis_proposal_is_a_proper_density_on_the_window(entering):
     s = 50.0
     prev = (160.0, 120.0) if entering else (159.0, 119.0)
     x = np.array([[160.0, 120.0, 0.05, s, *prev, 0.05, s]])
-    xs = np.repeat(x, 1500 if entering else 3000, axis=0)
+    xs = np.repeat(x, 8000 if entering else 3000, axis=0)
     prop = type(model.lis_proposal())(model, cells=12)
     z, log_alpha, log_q = prop.sample(xs, obs, np.random.default_rng(0))
     assert np.all(log_alpha == 0)
@@ -192,10 +192,16 @@ def test_plate_lis_proposal_is_a_proper_density_on_the_window(entering):
     # an entering particle also draws log s on ± span about X's; g's density of s_X is 1 / (2 span s_X),
     # so over Z the mean of g / q is ∫ ds_Z / (2 span s_X) = sinh(span) / span
     span = prop.scale_span if entering else 0.0
-    assert np.mean(np.exp(-log_q)) == pytest.approx(np.sinh(span) / span if span else 1.0, rel=0.05)
+    # within 4 standard errors (the entering search's tempered draws, r², widen the spread), which
+    # must themselves be small enough for the check to mean something
+    ratio = np.exp(-log_q)
+    se = ratio.std() / np.sqrt(len(ratio))
+    assert se < 0.03
+    assert np.mean(ratio) == pytest.approx(np.sinh(span) / span if span else 1.0, abs=4 * se)
     assert np.all(np.abs(z[:, 0] - 160) <= half[0] + 1e-9) and np.all(np.abs(z[:, 1] - 120) <= half[1] + 1e-9)
-    np.testing.assert_array_equal(z[:, 2], xs[:, 2])  # the angle never moves
-    assert np.all(np.abs(np.log(z[:, 3] / s)) <= span + 1e-9)  # the scale only for an entering particle
+    # the angle and the scale move only for an entering particle, within their spans
+    assert np.all(np.abs(z[:, 2] - xs[:, 2]) <= (prop.angle_span if entering else 0.0) + 1e-9)
+    assert np.all(np.abs(np.log(z[:, 3] / s)) <= span + 1e-9)
     assert np.all(model.entering(z) == entering)
 
 
@@ -204,13 +210,58 @@ def test_plate_dynamics_entering_branch(rng):
 
     model = Plate((640, 480))
     prev = model.sample_prior(4000, rng)
-    prev[:, 4:] -= 1.0  # moving plates
+    assert np.all(prev[:, 8] == 0)  # every prior draw is a new lineage
+    prev[:, 4:8] -= 1.0  # moving plates
+    prev[:, 8] = rng.integers(0, 9, len(prev))
     new = model.predict(prev, rng)
-    assert model.entering(new).mean() == pytest.approx(0.1, abs=0.02)
+    born = model.entering(new)
+    assert born.mean() == pytest.approx(0.1, abs=0.02)
+    # the lineage age: 0 for a birth, one more than the parent's otherwise
+    np.testing.assert_array_equal(new[:, 8], np.where(born, 0, prev[:, 8] + 1))
     lp = model.transition_logpdf(new, prev)
     assert np.all(np.isfinite(lp))
     moved = model.with_local(new, new[:, :2] + 5.0)
-    np.testing.assert_array_equal(model.entering(moved), model.entering(new))
+    np.testing.assert_array_equal(model.entering(moved), born)
+    # the resampling reserve keeps the lineages younger than reserve_age frames
+    from vistrack.particles import ParticleSet
+
+    np.testing.assert_array_equal(model.reserved(ParticleSet(new)), new[:, 8] < model.reserve_age)
+    assert model.reserved(ParticleSet(new)).any() and not model.reserved(ParticleSet(new)).all()
+
+
+def test_plate_entering_search_lands_births_on_the_plate(road640):
+    """The entering particles' search (§4.5.2 scans inside a coarse cell, then the angle and the
+    fine scale, a second scan, tempered draws) puts births on the plate far more often than
+    the translation-and-coarse-scale search alone: births drawn about a plate (25 px, 12 px,
+    0.1 rad, 20 % off) end within a third of the plate height (the 'not lost' tolerance) at
+    least 1.5 times as often, and are never outside their window."""
+    from vistrack.features import FeatureMaps
+    from vistrack.models.plate import Plate, PlateLISProposal
+
+    clip = load_clip(road640)
+    t = clip.truth
+    frames = dict(clip.source)
+    model = Plate(clip.source.size)
+    vis = np.flatnonzero(t["visible"] > 0)
+    hits = {"search": 0, "coarse": 0}
+    for k in vis[[len(vis) // 4, len(vis) // 2, 3 * len(vis) // 4]]:
+        obs = FeatureMaps(frames[k])
+        truth = np.array([t["cx"][k], t["cy"][k], np.deg2rad(t["angle_deg"][k]), t["scale"][k]])
+        tv = np.array([[t[f"x{i}"][k], t[f"y{i}"][k]] for i in range(4)])
+        g = np.random.default_rng(int(k))
+        n = 600
+        x = np.tile(np.r_[truth, truth, 0.0], (n, 1))
+        x[:, :4] += g.normal(0, 1, (n, 4)) * [25, 12, 0.1, 0]
+        x[:, 3] *= np.exp(0.2 * g.standard_normal(n))
+        x[:, 4:8] = x[:, :4]
+        for name, kw in (("search", {}),
+                         ("coarse", dict(angle_cells=1, scale_fine=1, rescan=False, birth_beta=1.0))):
+            prop = PlateLISProposal(model, **kw)
+            z, _, log_q = prop.sample(x, obs, np.random.default_rng(1))
+            assert np.all(np.isfinite(log_q)) and np.all(model.entering(z))
+            err = np.linalg.norm(model.vertices(z) - tv, axis=2).sum(axis=1)
+            hits[name] += int(np.sum(err < t["scale"][k] / model.layout.aspect / 3))
+    assert hits["search"] >= 1.5 * hits["coarse"] and hits["search"] > 0.1 * 3 * 600, hits
 
 
 def test_plate_lls_grid_finds_the_plate_and_lls_tracks_it(road):
@@ -336,7 +387,10 @@ def test_plate_lis_weights_match_a_brute_force_posterior(road):
     n = 6000
     rng = np.random.default_rng(0)
     x = model.sample_prior(n, rng)
-    z, log_alpha, log_q = model.lis_proposal().sample(x, obs, rng)
+    # the angle is known here (prior sd 1e-9): the search's angle cells are off. Untempered draws
+    # (birth_beta=1): with r² the weights are heavy-tailed and 6000 of them do not pin the evidence
+    # to 0.5 nats; log q is exact for any β (test_plate_lis_proposal_is_a_proper_density_on_the_window)
+    z, log_alpha, log_q = type(model.lis_proposal())(model, angle_cells=1, birth_beta=1.0).sample(x, obs, rng)
     assert np.ptp(z[:, 3] - x[:, 3]) > 0.2 * s  # the scale is searched
     lw = log_alpha + model.loglik(obs, z) - log_q + model.prior_logpdf(z) - model.prior_logpdf(x)
     w = np.exp(lw - lw.max())

@@ -162,3 +162,26 @@ def test_no_birth_reserve_is_plain_resampling():
     one = ParticleSet(np.arange(1.0, 11.0)[:, None])
     pi, log_w = ParticleFilter(_Births(0.3)).resampling_probs(one)
     assert np.allclose(pi, one.weights) and np.all(log_w == 0)
+
+
+class _Young(_Births):
+    """A model whose reserve is a set it computes from the particle set (``reserved``), here the
+    particles with a positive first coordinate; its ``entering`` marks none."""
+
+    def reserved(self, particles):
+        return particles.states[:, 0] > 0
+
+    @staticmethod
+    def entering(states):
+        return np.zeros(len(states), bool)
+
+
+def test_the_reserve_takes_the_models_reserved_set():
+    """A model's ``reserved(particles)`` (e.g. lineages a few frames old) replaces ``entering`` as
+    the reserve's set: the same probabilities as for births at those particles."""
+    ps, w, born = _births_set()
+    pi_young, carry_young = ParticleFilter(_Young(0.1)).resampling_probs(ps)
+    pi_born, carry_born = ParticleFilter(_Births(0.1)).resampling_probs(ps)
+    np.testing.assert_allclose(pi_young, pi_born)
+    np.testing.assert_allclose(carry_young, carry_born)
+    assert np.isclose(pi_young[born].sum(), 0.1 + 0.9 * w[born].sum())

@@ -164,7 +164,7 @@ def _plate(clip, size, init, init_gt, params):
     if box is not None:
         x, y, w, h = (float(v) for v in box)
         pose = np.array([x + w / 2, y + h / 2, 0.0, w])
-        model.prior_mean = np.concatenate([pose, pose])
+        model.prior_mean = np.concatenate([pose, pose, [0.0]])
         model.start = (pose, np.array([0.05 * w, 0.05 * h, 0.03, 0.05 * w]))
     return model
 

@@ -60,9 +60,10 @@ class ParticleFilter:
         ``ESS < ess_threshold * N``.
     birth_reserve : float or None
         Share ``ε`` of the resampled particles kept for the newest births
-        (``model.entering(states)``, e.g. a car entering the scene), drawn ∝
-        their weights; ``None`` takes ``model.birth_reserve`` (default 0). See
-        :meth:`resampling_probs`.
+        (``model.reserved(particles)`` if the model has it, e.g. lineages a few
+        frames old, else ``model.entering(states)``, e.g. a car entering the
+        scene), drawn ∝ their weights; ``None`` takes ``model.birth_reserve``
+        (default 0). See :meth:`resampling_probs`.
     """
 
     name = "base"
@@ -121,7 +122,8 @@ class ParticleFilter:
         """Resampling probabilities ``π`` and the log-weights ``log(w / π)`` the offspring carry.
 
         Plain resampling has ``π = w``. With a birth reserve ``ε`` the births ``B``
-        (``model.entering``) get ``ε`` of the draws on top, ∝ their weights:
+        (``model.reserved(particles)``, else ``model.entering(states)``) get ``ε`` of
+        the draws on top, ∝ their weights:
         ``π_i = (1 - ε) w_i + ε w_i 1_B(i) / W_B``. Every particle with ``w_i > 0``
         keeps ``π_i > 0`` and its offspring carry ``w_i / π_i``, so the expected
         weight of its offspring is ``w_i`` (the resampled set stays properly weighted).
@@ -132,8 +134,9 @@ class ParticleFilter:
         w = particles.weights
         eps = self.birth_reserve
         log_carry = np.zeros(particles.n)
-        if eps > 0 and hasattr(self.model, "entering"):
-            born = self.model.entering(particles.states)
+        if eps > 0 and (hasattr(self.model, "reserved") or hasattr(self.model, "entering")):
+            reserved = getattr(self.model, "reserved", None)
+            born = reserved(particles) if reserved else self.model.entering(particles.states)
             w_b = float(w[born].sum())
             if 0.0 < w_b < 1.0:
                 # log(1 - ε + ε / W_B) without overflow for a tiny W_B
