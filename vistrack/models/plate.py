@@ -660,11 +660,11 @@ class PlateLISProposal:
         (25 px, 12 px, 0.1 rad, 20 % off) on 15 suite frames ended within a third of the plate
         height 11 % of the time, and 22 % with the whole search. Every step draws a cell of a
         fixed partition, so ``q`` is exact: the product of the cells' probabilities over their
-        sizes (``1 / s_Z`` for the uniform density in ``log s``). For the weight, the backward window ``g(X|Z)`` is the box
-        of the plate size at ``X``'s scale about ``Z`` times the uniform densities of ``log s_X``
-        on ``log s_Z ± scale_span`` (``1 / (2 span s_X)`` in ``s_X``) and of ``θ_X`` on
-        ``θ_Z ± angle_span``. Returns ``(u, w)``, the angle, the scale and
-        ``log q(Z|X) - log g_{θ,s}(X|Z)``."""
+        sizes (``1 / s_Z`` for the uniform density in ``log s``). For the weight, the backward
+        window ``g(X|Z)`` is the box of the plate size at ``X``'s scale about ``Z`` times the
+        uniform densities of ``log s_X`` on ``log s_Z ± scale_span`` (``1 / (2 span s_X)`` in
+        ``s_X``) and of ``θ_X`` on ``θ_Z ± angle_span``. Returns ``(u, w)``, the angle, the scale
+        and ``log q(Z|X) - log g_{θ,s}(X|Z)``."""
         m = self.model
         cu, cw = self.coarse
         n = len(x)
@@ -688,7 +688,8 @@ class PlateLISProposal:
             log_s = log_s + gs[js]
             xz[:, 3] = np.exp(log_s)
             log_q += lqs
-        uv, lq = self._line_scans(xz, obs, rng, centre, half / np.array([cu, cw]), self.fine, beta=self.birth_beta)
+        cell_half = half / np.array([cu, cw])
+        uv, lq = self._line_scans(xz, obs, rng, centre, cell_half, self.fine, beta=self.birth_beta)
         if not self.rescan:
             log_q += lq
         xz[:, :2] = uv
@@ -714,7 +715,7 @@ class PlateLISProposal:
             # q's density of s_Z in its sub-cell over g's density of s_X: (1 / (sub s_Z)) / (1 / (2 span s_X))
             log_q += lqf - np.log(sub) - log_s + np.log(2 * span) + np.log(x[:, 3])
         if self.rescan:
-            uv, lq = self._line_scans(xz, obs, rng, centre, half / np.array([cu, cw]), self.fine, beta=self.birth_beta)
+            uv, lq = self._line_scans(xz, obs, rng, centre, cell_half, self.fine, beta=self.birth_beta)
             log_q += lq
             xz[:, :2] = uv
         return xz[:, :2], xz[:, 2], xz[:, 3], log_q
