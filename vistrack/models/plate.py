@@ -424,15 +424,10 @@ class Plate:
         model a posterior split between the plate and a plate-like sign would otherwise put the
         mean between them."""
         x, w = particles.states, particles.weights
-        near = self.main_mode(particles)
-        return (w[near] @ x[near]) / w[near].sum()
-
-    def main_mode(self, particles):
-        """Particles within half a plate (centre) and 25 % (scale) of the highest-weight one."""
-        x = particles.states
-        best = x[np.argmax(particles.log_weights)]
-        return (np.hypot(x[:, 0] - best[0], x[:, 1] - best[1]) <= 0.5 * best[3]) & \
+        best = x[np.argmax(w)]
+        near = (np.hypot(x[:, 0] - best[0], x[:, 1] - best[1]) <= 0.5 * best[3]) & \
             (np.abs(x[:, 3] - best[3]) <= 0.25 * best[3])
+        return (w[near] @ x[near]) / w[near].sum()
 
     # -- likelihood and output ------------------------------------------------------
     def loglik(self, obs, states):
@@ -629,9 +624,15 @@ class PlateLISProposal:
         u_new = uc[rows, jv] + cell_v * (rng.random(n) - 0.5)
         return np.stack([u_new, w_new], axis=1), lqh - np.log(cell_h) + lqv - np.log(cell_v)
 
-    def _sparse_here(self, obs, states):
-        """The sparse ``r`` at the poses themselves, ``(N,)``."""
-        return self.model.lik.loglik_sparse(obs, states, np.zeros((len(states), 1, 2)))[:, 0]
+    def _draw_cell(self, obs, x, col, values, rng, offsets=None):
+        """For each pose of ``x``, one of ``values (n, k)`` of its state column ``col``, drawn ∝ the
+        sparse ``r^β`` with that value (at ``offsets (n, 2)`` px from the pose, if given).
+        Returns (index, log prob of the cell)."""
+        n, k = values.shape
+        xs = np.repeat(x, k, axis=0)
+        xs[:, col] = values.ravel()
+        at = np.zeros((n * k, 1, 2)) if offsets is None else np.repeat(offsets, k, axis=0)[:, None]
+        return self._conditional(self.model.lik.loglik_sparse(obs, xs, at).reshape(n, k), rng, self.birth_beta)
 
     def _search(self, x, obs, rng):
         """Entering particles: a coarse cell of the window drawn ∝ the sparse full ``r`` at its
@@ -681,10 +682,7 @@ class PlateLISProposal:
         log_s = np.log(x[:, 3])
         if k > 1:
             gs = ((np.arange(k) + 0.5) / k * 2 - 1) * span  # log-scale cell centres
-            xs = np.repeat(x, k, axis=0)
-            xs[:, 3] *= np.tile(np.exp(gs), n)
-            at = np.repeat(centre - x[:, :2], k, axis=0)[:, None]  # (n k, 1, 2)
-            js, lqs = self._conditional(m.lik.loglik_sparse(obs, xs, at).reshape(n, k), rng, self.birth_beta)
+            js, lqs = self._draw_cell(obs, x, 3, x[:, 3:4] * np.exp(gs), rng, centre - x[:, :2])
             log_s = log_s + gs[js]
             xz[:, 3] = np.exp(log_s)
             log_q += lqs
@@ -696,9 +694,7 @@ class PlateLISProposal:
         if self.angle_cells > 1:
             ka, span_a = self.angle_cells, self.angle_span
             ga = ((np.arange(ka) + 0.5) / ka * 2 - 1) * span_a
-            xa = np.repeat(xz, ka, axis=0)
-            xa[:, 2] += np.tile(ga, n)
-            ja, lqa = self._conditional(self._sparse_here(obs, xa).reshape(n, ka), rng, self.birth_beta)
+            ja, lqa = self._draw_cell(obs, xz, 2, xz[:, 2:3] + ga, rng)
             cell = 2 * span_a / ka
             xz[:, 2] += ga[ja] + cell * (rng.random(n) - 0.5)
             log_q += lqa - np.log(cell) + np.log(2 * span_a)
@@ -706,9 +702,7 @@ class PlateLISProposal:
             cell = 2 * span / k  # the scale cell about log_s, in kf sub-cells
             kf = self.scale_fine
             gf = ((np.arange(kf) + 0.5) / kf - 0.5) * cell
-            xf = np.repeat(xz, kf, axis=0)
-            xf[:, 3] = np.exp(np.repeat(log_s, kf) + np.tile(gf, n))
-            jf, lqf = self._conditional(self._sparse_here(obs, xf).reshape(n, kf), rng, self.birth_beta)
+            jf, lqf = self._draw_cell(obs, xz, 3, np.exp(log_s[:, None] + gf), rng)
             sub = cell / kf
             log_s = log_s + gf[jf] + sub * (rng.random(n) - 0.5)
             xz[:, 3] = np.exp(log_s)
