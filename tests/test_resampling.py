@@ -108,22 +108,27 @@ class _Births:
         return states[:, 0] > 0
 
 
-def _births_set(n=40, n_born=8, w_born=1e-6, seed=3):
-    """Particles ``(±index, ...)``: the last ``n_born`` are births holding ``w_born`` of the weight."""
-    w = np.random.default_rng(seed).gamma(0.7, size=n)
+def _births_set(n=40, n_born=8, w_born=1e-6, seed=3, loglik=False):
+    """Particles ``(±index, ...)``: the last ``n_born`` are births holding ``w_born`` of the weight
+    (with ``loglik``, each particle has a log-likelihood, drawn independently of its weight)."""
+    rng = np.random.default_rng(seed)
+    w = rng.gamma(0.7, size=n)
     born = np.arange(n) >= n - n_born
     w[~born] *= (1 - w_born) / w[~born].sum()
     w[born] *= w_born / w[born].sum()
     states = np.where(born, 1.0, -1.0)[:, None] * np.arange(1, n + 1)[:, None]
-    return ParticleSet(states, np.log(w)), w, born
+    ll = 3 * rng.standard_normal(n) if loglik else None
+    return ParticleSet(states, np.log(w), loglik=ll), w, born
 
 
+@pytest.mark.parametrize("loglik", [False, True], ids=["by-weight", "by-likelihood"])
 @pytest.mark.parametrize("name", ["multinomial", "systematic"])
-def test_birth_reserve_keeps_offspring_weights_unbiased(name):
+def test_birth_reserve_keeps_offspring_weights_unbiased(name, loglik):
     """With ε of the draws reserved for births, every parent's offspring carry its weight in
-    expectation (E Σ_offspring w' = w_i), and the births get n (ε + (1 - ε) W_B) draws."""
+    expectation (E Σ_offspring w' = w_i), and the births get n (ε + (1 - ε) W_B) draws — whether
+    the reserve goes ∝ the weights or ∝ the likelihoods."""
     eps, reps = 0.1, 4000
-    ps, w, born = _births_set()
+    ps, w, born = _births_set(loglik=loglik)
     n = ps.n
     filt = ParticleFilter(_Births(eps), resample=name)
     rng = np.random.default_rng(11)
@@ -185,3 +190,31 @@ def test_the_reserve_takes_the_models_reserved_set():
     np.testing.assert_allclose(pi_young, pi_born)
     np.testing.assert_allclose(carry_young, carry_born)
     assert np.isclose(pi_young[born].sum(), 0.1 + 0.9 * w[born].sum())
+
+
+def test_the_reserve_goes_by_likelihood_when_the_filter_gives_it():
+    """With ``particles.loglik`` the reserve's share of each birth is ∝ its likelihood ``r``, not
+    its weight: a birth on the narrow peak of a plate coming into view outweighed by births in a
+    broad empty region (their weight is the likelihood's mass in their search windows) keeps the
+    reserve's draws."""
+    eps = 0.05
+    ps, w, born = _births_set(loglik=True)
+    ll = ps.loglik
+    pi, carry = ParticleFilter(_Births(eps)).resampling_probs(ps)
+    rho = np.where(born, np.exp(ll - ll[born].max()), 0.0)
+    np.testing.assert_allclose(pi, (1 - eps) * w + eps * rho / rho.sum())
+    np.testing.assert_allclose(carry, np.log(w / pi))
+    # the likeliest birth has the least weight of the births: still the most draws
+    i = np.flatnonzero(born)
+    lw = np.log(w)
+    lw[i] = np.log(1e-6 / len(i)) - (ll[i] - ll[i].min())  # the likelier, the less weight
+    ps2 = ParticleSet(ps.states, lw, loglik=ll)
+    pi2, _ = ParticleFilter(_Births(eps)).resampling_probs(ps2)
+    best = i[np.argmax(ll[i])]
+    assert np.argmax(np.where(born, pi2, -1)) == best and ps2.weights[best] == ps2.weights[i].min()
+    assert pi2[best] > 1e3 * ps2.weights[best]
+    # a loglik without a finite value on the births: back to the weights
+    ps3 = ParticleSet(ps.states, ps.log_weights, loglik=np.where(born, -np.inf, 0.0))
+    pi3, _ = ParticleFilter(_Births(eps)).resampling_probs(ps3)
+    by_weight = ParticleFilter(_Births(eps)).resampling_probs(ParticleSet(ps.states, ps.log_weights))[0]
+    np.testing.assert_allclose(pi3, by_weight)

@@ -68,11 +68,16 @@ class ParticleSet:
     degenerate : bool
         True when the step that produced this set met all-zero/NaN weights
         and recovered by re-drawing from the prediction.
+    loglik : ndarray of shape (N,) or None
+        ``log r(Y_t | X_t)`` of each particle at the observation that weighted
+        it, where the filter computed it (the birth reserve of
+        :meth:`~vistrack.filters.base.ParticleFilter.resampling_probs` draws ∝ it).
     """
 
     states: np.ndarray
     log_weights: np.ndarray = None
     degenerate: bool = field(default=False, compare=False)
+    loglik: np.ndarray = field(default=None, compare=False)
 
     def __post_init__(self):
         self.states = np.asarray(self.states, dtype=np.float64)
@@ -122,7 +127,7 @@ class ParticleSet:
 
     def normalized(self):
         """The same set with log-weights shifted so that the weights sum to one."""
-        return ParticleSet(self.states, self.log_weights - logsumexp(self.log_weights), self.degenerate)
+        return ParticleSet(self.states, self.log_weights - logsumexp(self.log_weights), self.degenerate, self.loglik)
 
     def resample(self, idx):
         """Equally weighted set ``states[idx]``."""

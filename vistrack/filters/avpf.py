@@ -55,6 +55,6 @@ class AVPF(ParticleFilter):
             loglik_mu = np.zeros(m)
         k = self.resample_scheme(lam, n, rng)
         x = self.model.predict(prev[k], rng)
-        log_w = self.model.loglik(obs, x) - loglik_mu[k]
-        log_w, degenerate = checked_weights(log_w, self.name)
-        return ParticleSet(x, log_w, degenerate)
+        ll = self.model.loglik(obs, x)
+        log_w, degenerate = checked_weights(ll - loglik_mu[k], self.name)
+        return ParticleSet(x, log_w, degenerate, None if degenerate else ll)

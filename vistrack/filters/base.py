@@ -17,7 +17,7 @@ import copy
 
 import numpy as np
 
-from ..particles import ParticleSet, checked_weights
+from ..particles import ParticleSet, checked_weights, logsumexp
 from ..resampling import get_scheme, needs_resampling
 
 __all__ = ["ParticleFilter", "filter_steps", "prior_as_kernel"]
@@ -62,7 +62,7 @@ class ParticleFilter:
         Share ``ε`` of the resampled particles kept for the newest births
         (``model.reserved(particles)`` if the model has it, e.g. lineages a few
         frames old, else ``model.entering(states)``, e.g. a car entering the
-        scene), drawn ∝ their weights; ``None`` takes ``model.birth_reserve``
+        scene), drawn ∝ their likelihood; ``None`` takes ``model.birth_reserve``
         (default 0). See :meth:`resampling_probs`.
     """
 
@@ -123,27 +123,37 @@ class ParticleFilter:
 
         Plain resampling has ``π = w``. With a birth reserve ``ε`` the births ``B``
         (``model.reserved(particles)``, else ``model.entering(states)``) get ``ε`` of
-        the draws on top, ∝ their weights:
-        ``π_i = (1 - ε) w_i + ε w_i 1_B(i) / W_B``. Every particle with ``w_i > 0``
-        keeps ``π_i > 0`` and its offspring carry ``w_i / π_i``, so the expected
-        weight of its offspring is ``w_i`` (the resampled set stays properly weighted).
-        A birth on a new object that the tracked particles outweigh — by the
-        entering density's small mass at that pose — then survives resampling
-        with a small weight, and takes over when the next frames confirm it.
+        the draws on top: ``π_i = (1 - ε) w_i + ε ρ_i``, with ``ρ`` on ``B`` ∝ the
+        likelihood ``r`` each had at its frame (``particles.loglik``), or ∝ the weights
+        where the filter gave none. Every particle with ``w_i > 0`` keeps ``π_i > 0`` and
+        its offspring carry ``w_i / π_i``, so the expected weight of its offspring is
+        ``w_i`` (the resampled set stays properly weighted).
+
+        A birth on a new object that the tracked particles outweigh — by the entering
+        density's small mass at that pose — then survives resampling with a small weight,
+        and takes over when the next frames confirm it. The reserve goes ∝ ``r`` rather
+        than ∝ ``w``: a birth's weight is about the likelihood's mass in its search window,
+        so a birth in a broad plate-less region (``log r`` −10 over the whole window)
+        outweighs one on the narrow peak of a plate coming into view (``log r`` −0.6) —
+        and would take the reserve's draws.
         """
         w = particles.weights
         eps = self.birth_reserve
-        log_carry = np.zeros(particles.n)
         if eps > 0 and (hasattr(self.model, "reserved") or hasattr(self.model, "entering")):
             reserved = getattr(self.model, "reserved", None)
             born = reserved(particles) if reserved else self.model.entering(particles.states)
             w_b = float(w[born].sum())
             if 0.0 < w_b < 1.0:
-                # log(1 - ε + ε / W_B) without overflow for a tiny W_B
-                lift = np.log(eps) - np.log(w_b) + np.log1p((1 - eps) * w_b / eps)
-                log_carry = np.where(born, -lift, -np.log1p(-eps))
-                return np.where(born, (1 - eps) * w + eps * w / w_b, (1 - eps) * w), log_carry
-        return w, log_carry
+                ll = None if particles.loglik is None else np.where(born, particles.loglik, -np.inf)
+                if ll is not None and np.isfinite(ll.max()):
+                    rho = np.exp(ll - ll.max())
+                else:
+                    rho = np.where(born, w, 0.0)
+                pi = (1 - eps) * w + eps * rho / rho.sum()
+                log_w = particles.log_weights - logsumexp(particles.log_weights)
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    return pi, np.where(pi > 0, log_w - np.log(pi), -np.inf)
+        return w, np.zeros(particles.n)
 
     def _resampled(self, particles, rng):
         """States and log-weights after the resampling policy."""
@@ -165,17 +175,19 @@ class ParticleFilter:
             Log weight increment.
         predicted : ndarray (N, d)
             The plain prediction ``X_t ~ K(.|prev)`` used if the step degenerates.
+        loglik : ndarray (N,) or None
+            ``log r(Y_t|Z_t)`` of the new states where the filter computed it.
         """
         raise NotImplementedError
 
     def step(self, particles, obs, rng):
         """One filtering step ``S_{t-1} -> S_t``."""
         prev, log_w = self._resampled(particles, rng)
-        new, log_incr, predicted = self.propose(prev, obs, rng)
+        new, log_incr, predicted, loglik = self.propose(prev, obs, rng)
         log_w, degenerate = checked_weights(log_w + log_incr, self.name)
         if degenerate:
-            new = predicted
-        return ParticleSet(new, log_w, degenerate)
+            new, loglik = predicted, None
+        return ParticleSet(new, log_w, degenerate, loglik)
 
 
 def filter_steps(filt, observations, n, rng, particles=None):

@@ -17,4 +17,5 @@ class Bootstrap(ParticleFilter):
 
     def propose(self, prev, obs, rng):
         x = self.model.predict(prev, rng)
-        return x, self.model.loglik(obs, x), x
+        ll = self.model.loglik(obs, x)
+        return x, ll, x, ll

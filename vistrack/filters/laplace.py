@@ -40,4 +40,5 @@ class LaplaceFilter(ParticleFilter):
         if n < 1:
             raise ValueError(f"number of particles must be positive, got {n}")
         x = self.model.sample_prior(n, rng)
-        return ParticleSet(x, self.model.loglik(obs, x))
+        ll = self.model.loglik(obs, x)
+        return ParticleSet(x, ll, loglik=ll)

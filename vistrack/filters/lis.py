@@ -89,12 +89,13 @@ class LIS(ParticleFilter):
         model = self.model
         x = model.predict(prev, rng)
         z, log_alpha, log_q = self.proposal.sample(x, obs, rng, prev)
+        ll = model.loglik(obs, z)
         log_incr = (
             log_alpha
-            + model.loglik(obs, z)
+            + ll
             - log_q
             + model.transition_logpdf(z, prev)
             - model.transition_logpdf(x, prev)
         )
         log_incr = np.where(np.isfinite(log_alpha), log_incr, -np.inf)
-        return z, log_incr, x
+        return z, log_incr, x, ll

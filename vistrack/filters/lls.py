@@ -117,13 +117,14 @@ class LLS(ParticleFilter):
         j = _categorical_rows(log_rg, rng)
         z_u = u + win.offsets[j] + win.cell * (rng.random(u.shape) - 0.5)
         z = model.with_local(x, z_u)
+        ll = model.loglik(obs, z)
         log_incr = (
             log_alpha
-            + model.loglik(obs, z)
+            + ll
             + win.logpdf(u - z_u)
             - log_rg[np.arange(n), j]
             + model.transition_logpdf(z, prev)
             - model.transition_logpdf(x, prev)
         )
         log_incr = np.where(ok, log_incr, -np.inf)
-        return z, log_incr, x
+        return z, log_incr, x, ll

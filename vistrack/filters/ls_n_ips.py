@@ -42,4 +42,4 @@ class LSNIPS(ParticleFilter):
             z, ll = z
         else:
             ll = self.model.loglik(obs, z)
-        return z, ll, x
+        return z, ll, x, ll

@@ -23,5 +23,5 @@ class PFDoucet(LaplaceFilter):
         mode, hess, u = model.laplace(obs, prev, free="all")
         x, log_q = sample_laplace(mode, hess, rng)
         new = model.advance(prev, x[:, 0], x[:, 1], x[:, 2:], u=u)
-        log_incr = model.loglik(obs, new) + model.transition_logpdf(new, prev) - log_q
-        return new, log_incr, new
+        ll = model.loglik(obs, new)
+        return new, ll + model.transition_logpdf(new, prev) - log_q, new, ll

@@ -29,5 +29,5 @@ class PFEIS(LaplaceFilter):
         mode, hess, u = model.laplace(obs, prev, free="c", motion=(s, theta))
         c, log_q = self.sample_c(mode, hess, rng)
         new = model.advance(prev, s, theta, c, u=u)
-        log_incr = model.loglik(obs, new) + model.c_logpdf(c, prev) - log_q
-        return new, log_incr, new
+        ll = model.loglik(obs, new)
+        return new, ll + model.c_logpdf(c, prev) - log_q, new, ll

@@ -32,9 +32,6 @@ class SIR(ParticleFilter):
 
     def propose(self, prev, obs, rng):
         x = self.proposal.sample(prev, obs, rng)
-        log_incr = (
-            self.model.loglik(obs, x)
-            + self.model.transition_logpdf(x, prev)
-            - self.proposal.logpdf(x, prev, obs)
-        )
-        return x, log_incr, self.model.predict(prev, rng)
+        ll = self.model.loglik(obs, x)
+        log_incr = ll + self.model.transition_logpdf(x, prev) - self.proposal.logpdf(x, prev, obs)
+        return x, log_incr, self.model.predict(prev, rng), ll
