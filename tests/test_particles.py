@@ -42,6 +42,8 @@ def test_weighted_moments_match_numpy(rng):
 def test_shape_validation():
     with pytest.raises(ValueError, match="log_weights must have shape"):
         ParticleSet(np.zeros((4, 2)), np.zeros(3))
+    with pytest.raises(ValueError, match=r"loglik must have shape \(4,\), got \(3,\)"):
+        ParticleSet(np.zeros((4, 2)), loglik=np.zeros(3))
     assert ParticleSet(np.zeros(5)).states.shape == (5, 1)
 
 
@@ -83,3 +85,17 @@ def test_ess_threshold_zero_never_resamples(rng):
     x = q.states
     expect = p.log_weights + filt.model.loglik(None, x)
     assert q.log_weights == pytest.approx(expect)
+
+
+@pytest.mark.parametrize("algo", ["bootstrap", "lis", "lls", "avpf"])
+def test_a_step_hands_on_the_likelihood_of_its_particles(algo, rng):
+    """``ParticleSet.loglik`` (what the birth reserve draws by) is ``log r`` at the new states."""
+    from vistrack.filters import make_filter
+
+    model = GaussMixtureToy()
+    filt = make_filter(algo, model)
+    p = filt.first_step(None, 200, rng)
+    for _ in range(2):
+        assert p.loglik is not None
+        np.testing.assert_allclose(p.loglik, model.loglik(None, p.states))
+        p = filt.step(p, None, rng)

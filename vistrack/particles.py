@@ -93,6 +93,10 @@ class ParticleSet:
             raise ValueError(
                 f"log_weights must have shape ({n},), got {self.log_weights.shape}"
             )
+        if self.loglik is not None:
+            self.loglik = np.asarray(self.loglik, dtype=np.float64)
+            if self.loglik.shape != (n,):
+                raise ValueError(f"loglik must have shape ({n},), got {self.loglik.shape}")
 
     @property
     def n(self):
