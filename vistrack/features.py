@@ -17,7 +17,102 @@ from functools import cached_property
 import cv2
 import numpy as np
 
-__all__ = ["FeatureMaps", "box_dog", "remap_points", "blob_peaks"]
+__all__ = ["FeatureMaps", "box_dog", "remap_points", "blob_peaks", "is_grey", "colour_bins", "n_colour_bins",
+           "bin_integrals", "box_sums"]
+
+#: colour binning (hue x saturation for chromatic pixels, value for the rest; grey levels for grey video)
+HUE_BINS, SAT_BINS, VALUE_BINS, GREY_BINS = 8, 3, 4, 16
+#: a pixel is chromatic when its HSV saturation and value are at least these (of 255)
+MIN_SATURATION, MIN_VALUE = 48, 40
+
+
+def is_grey(frame, tol=6.0):
+    """Whether a frame carries no colour: one channel, or BGR channels that differ by
+    less than ``tol`` grey levels on average (a grey video stored as colour)."""
+    f = np.asarray(frame)
+    if f.ndim == 2 or f.shape[2] == 1:
+        return True
+    small = f[:: max(1, f.shape[0] // 64), :: max(1, f.shape[1] // 64)].astype(np.int16)
+    spread = small.max(axis=2) - small.min(axis=2)
+    return float(spread.mean()) < tol
+
+
+def n_colour_bins(grey):
+    """Number of bins of :func:`colour_bins`."""
+    return GREY_BINS if grey else HUE_BINS * SAT_BINS + VALUE_BINS
+
+
+def colour_bins(image, grey=False, dst=None):
+    """Quantised colour of every pixel, ``uint8`` labels in ``[0, n_colour_bins(grey))``.
+
+    Colour (``grey=False``; BGR input): HSV, robust to lighting through hue and
+    saturation. A chromatic pixel (saturation >= 48 and value >= 40 of 255) gets one of
+    ``8 x 3`` hue-saturation bins; the others (grey, white, black: hue is noise there)
+    one of 4 value bins after them. Grey (``grey=True``): 16 grey-level bins.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3) uint8 BGR, or (H, W) uint8 grey
+    grey : bool
+    dst : ndarray of shape (H, W) uint8, optional
+        Output buffer.
+
+    Returns
+    -------
+    ndarray of shape (H, W) uint8
+    """
+    if grey:
+        g = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+        return np.floor_divide(g, 256 // GREY_BINS, out=dst, dtype=np.uint8, casting="unsafe")
+    hsv = cv2.cvtColor(image, cv2.COLOR_BGR2HSV)
+    h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
+    hue = (h.astype(np.uint16) * HUE_BINS // 180).astype(np.uint8)
+    sat = ((s.astype(np.uint16) - MIN_SATURATION).clip(0) * SAT_BINS // (256 - MIN_SATURATION)).astype(np.uint8)
+    chroma = (s >= MIN_SATURATION) & (v >= MIN_VALUE)
+    out = np.where(chroma, hue * SAT_BINS + sat, HUE_BINS * SAT_BINS + v // (256 // VALUE_BINS))
+    if dst is None:
+        return out.astype(np.uint8)
+    dst[...] = out
+    return dst
+
+
+def bin_integrals(labels, n_bins):
+    """Per-bin integral images of a label map: ``ii[y, x, b]`` counts the pixels of bin
+    ``b`` in ``[0, x) x [0, y)``, so the histogram of any upright box is four lookups of
+    ``n_bins`` values (:func:`box_sums`).
+
+    Parameters
+    ----------
+    labels : ndarray of shape (H, W) uint8
+    n_bins : int (at most 512, OpenCV's channel limit)
+
+    Returns
+    -------
+    ndarray of shape (H + 1, W + 1, n_bins) int32
+    """
+    onehot = np.eye(n_bins, dtype=np.uint8)[labels]
+    return cv2.integral(onehot, sdepth=cv2.CV_32S)
+
+
+def box_sums(ii, x0, y0, x1, y1):
+    """Sums over the boxes ``[x0, x1) x [y0, y1)`` of the map whose integral image is ``ii``.
+
+    Parameters
+    ----------
+    ii : ndarray of shape (H + 1, W + 1) or (H + 1, W + 1, C)
+    x0, y0, x1, y1 : array_like of int, broadcastable to one shape ``S``
+        Box corners in pixels, clipped to the map.
+
+    Returns
+    -------
+    ndarray of shape ``S`` or ``S + (C,)``
+    """
+    h, w = ii.shape[0] - 1, ii.shape[1] - 1
+    x0 = np.clip(x0, 0, w)
+    x1 = np.clip(x1, 0, w)
+    y0 = np.clip(y0, 0, h)
+    y1 = np.clip(y1, 0, h)
+    return ii[y1, x1] - ii[y0, x1] - ii[y1, x0] + ii[y0, x0]
 
 
 def box_dog(gray, inner, outer):

@@ -52,12 +52,15 @@ def track(frames, filt, n, rng, *, estimator=None):
     estimate (default: the model's ``estimate`` if it has one, else the weighted
     mean). A model with an ``observe(maps, previous_particles)`` method turns
     each frame's maps into its observation ``Y_t`` (landmarks: blob detection
-    and association); otherwise the maps are the observation. The feature maps of a frame live in
+    and association); otherwise the maps are the observation. A model with an
+    ``adapt(obs, estimate)`` method (the box model's appearance) is told each frame's
+    estimate after the step. The feature maps of a frame live in
     buffers that the next frame overwrites: use them before asking for the next.
     """
     particles = None
     estimator = estimator or getattr(filt.model, "estimate", None)
     observe = getattr(filt.model, "observe", None)
+    adapt = getattr(filt.model, "adapt", None)
     buffers = {}  # feature-map buffers reused from frame to frame
     for i, frame in frames:
         t0 = time.perf_counter()
@@ -68,5 +71,7 @@ def track(frames, filt, n, rng, *, estimator=None):
         else:
             particles = filt.step(particles, obs, rng)
         est = estimator(particles) if estimator else particles.mean()
+        if adapt:
+            adapt(obs, est)
         ms = (time.perf_counter() - t0) * 1e3
         yield FrameResult(i, frame, particles, est, ms, maps)

@@ -1,0 +1,284 @@
+"""Appearance of an object learned from its first box (for real footage; beyond the seeds).
+
+Working resolution
+    Everything is computed on the frame's region of interest (the boxes the particles can
+    reach), resized so that the object is about ``work_size`` px across
+    (:class:`AppearanceFrame`). A box ``(cx, cy, w, h)`` in frame pixels maps to
+    ``((cx - x0) f, (cy - y0) f, w f, h f)`` there.
+Colour term (Pérez, Hue, Vermaak and Gangnet 2002)
+    Histograms over :func:`~vistrack.features.colour_bins` (hue x saturation, value for
+    achromatic pixels; grey levels for grey video), from per-bin integral images. The
+    target's histogram ``q`` and every candidate's are weighted by Comaniciu's background
+    weights ``v_u = min(1, b* / b_u)`` (``b``: the histogram of the ring around the first
+    box, ``b*`` its smallest non-zero bin), so colours the background also has count less.
+    With ``d²(p, q) = 1 - Σ_u sqrt(p_u q_u)`` (squared Bhattacharyya distance),
+
+        log r_c = -λ_c [d²(h_in, q) + κ (1 - d²(h_ring, q))],
+
+    ``h_in`` inside the box and ``h_ring`` in the ring around it (width ``ring`` times the
+    mean side): a box inside the object sees the object in its ring as well, so the
+    second part keeps the scale from shrinking.
+Template term (spatial layout; grey levels)
+    The grey image sampled bilinearly on an ``m_x x m_y`` grid over the box (about
+    ``template_points`` points, the grid's aspect the box's), zero-mean and unit-norm:
+    ``log r_t = λ_t (ncc - 1)`` with ``ncc`` its correlation with the template. Normalised
+    cross-correlation is invariant to gain and offset of the grey levels (lighting).
+Likelihood
+    ``log r = log r_c + log r_t`` (grey video: the colour term runs on grey-level bins).
+Adaptation (optional, on by default)
+    After a frame whose estimate has ``ncc >= adapt_min_ncc``, the template moves towards
+    the estimate's patch, ``t <- unit((1 - α) t + α v)`` with ``α = adapt_rate``, and the
+    histogram ``q <- (1 - α/2) q + (α/2) h_in``. Frames below the bar (occlusion, drift)
+    leave the model as it is.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from ..features import bin_integrals, box_sums, colour_bins, is_grey, n_colour_bins, remap_points
+
+__all__ = ["Appearance", "AppearanceFrame"]
+
+
+def _unit_rows(v):
+    """Rows of ``v (..., M)`` made zero-mean and unit-norm (a flat row stays zero)."""
+    v = v - v.mean(axis=-1, keepdims=True)
+    norm = np.sqrt(np.einsum("...i,...i->...", v, v))[..., None]
+    return v / np.maximum(norm, 1e-6)
+
+
+class AppearanceFrame:
+    """One frame's maps over a region of interest at the working resolution.
+
+    Parameters
+    ----------
+    frame : ndarray of shape (H, W, 3) uint8 BGR, or (H, W)
+    roi : tuple of int
+        ``(x0, y0, x1, y1)`` in frame pixels.
+    f : float
+        Working scale (``<= 1``: the region is shrunk by ``f``).
+    grey : bool
+        Grey-level bins instead of colour.
+    """
+
+    def __init__(self, frame, roi, f, grey):
+        x0, y0, x1, y1 = roi
+        self.x0, self.y0, self.f = x0, y0, f
+        crop = frame[y0:y1, x0:x1]
+        if f < 1.0:
+            size = (max(1, int(round((x1 - x0) * f))), max(1, int(round((y1 - y0) * f))))
+            crop = cv2.resize(crop, size, interpolation=cv2.INTER_AREA)
+        self.image = crop
+        self.grey = crop if crop.ndim == 2 else cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY)
+        self.grey_f = self.grey.astype(np.float32)
+        gx = cv2.Sobel(self.grey_f, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT)
+        gy = cv2.Sobel(self.grey_f, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REFLECT)
+        self.texture = cv2.merge([self.grey_f, gx, gy])  # grey level and its gradient, for the template
+        self.labels = colour_bins(crop, grey)
+        self.n_bins = n_colour_bins(grey)
+        self.ii = bin_integrals(self.labels, self.n_bins)
+
+    def to_work(self, x, y):
+        """Frame pixel coordinates to working coordinates (same continuous convention)."""
+        return (np.asarray(x) - self.x0) * self.f, (np.asarray(y) - self.y0) * self.f
+
+    def histograms(self, cx, cy, w, h, grow=None):
+        """Bin counts ``(..., B)`` of boxes centred at ``(cx, cy)`` with sides ``(w, h)``
+        (frame px), and of the ring of width ``grow`` px around them (``None``: no ring)."""
+        u, v = self.to_work(cx, cy)
+        hw, hh = 0.5 * self.f * np.asarray(w), 0.5 * self.f * np.asarray(h)
+        inner = box_sums(self.ii, *(np.rint(a).astype(np.intp) for a in (u - hw, v - hh, u + hw, v + hh)))
+        if grow is None:
+            return inner, None
+        g = self.f * np.asarray(grow)
+        outer = box_sums(self.ii, *(np.rint(a).astype(np.intp)
+                                    for a in (u - hw - g, v - hh - g, u + hw + g, v + hh + g)))
+        return inner, outer - inner
+
+    def sample_texture(self, x, y):
+        """Bilinear grey level and gradient ``(..., 3)`` at frame coordinates ``x, y`` (pixel
+        centres at ``k + 0.5``); zero outside the frame."""
+        u, v = self.to_work(x, y)
+        return remap_points(self.texture, u - 0.5, v - 0.5)
+
+
+class Appearance:
+    """Colour histogram + grey template of one object, learned from the first frame.
+
+    Parameters
+    ----------
+    frame : ndarray of shape (H, W, 3) uint8 BGR, or (H, W)
+    box : tuple of float
+        ``(x, y, w, h)`` of the object in ``frame``.
+    work_size : float
+        The object's size ``sqrt(w h)`` at the working resolution (px); the frame is
+        never enlarged.
+    lambda_colour, kappa, ring : float
+        ``λ_c``, ``κ`` and the ring's width as a share of the mean side (module docstring).
+    lambda_template : float
+        ``λ_t``.
+    template_points : int
+        About this many grid points for the template.
+    adapt_rate, adapt_min_ncc : float
+        Adaptation rate ``α`` (0: never adapt) and the confidence bar.
+    grey : bool or None
+        Force grey-level bins; ``None``: from :func:`~vistrack.features.is_grey`.
+    """
+
+    def __init__(self, frame, box, *, work_size=32.0, lambda_colour=25.0, kappa=0.5, ring=0.3,
+                 lambda_template=12.0, template_points=256, adapt_rate=0.05, adapt_min_ncc=0.6, grey=None):
+        x, y, w, h = (float(v) for v in box)
+        if not (w > 0 and h > 0 and np.isfinite([x, y, w, h]).all()):
+            raise ValueError(f"the box needs a finite position and positive size, got {box}")
+        self.grey = is_grey(frame) if grey is None else bool(grey)
+        self.size = np.array([w, h])
+        self.f = min(1.0, work_size / np.sqrt(w * h))
+        self.lambda_colour, self.kappa, self.ring = lambda_colour, kappa, ring
+        self.lambda_template = lambda_template
+        self.adapt_rate, self.adapt_min_ncc = adapt_rate, adapt_min_ncc
+        a = w / h
+        mx = int(np.clip(round(np.sqrt(template_points * a)), 4, 64))
+        my = int(np.clip(round(template_points / mx), 4, 64))
+        self.grid = np.stack(np.meshgrid((np.arange(mx) + 0.5) / mx - 0.5, (np.arange(my) + 0.5) / my - 0.5),
+                             axis=-1).reshape(-1, 2)  # (M, 2) offsets in box units
+        self.grid_shape = (my, mx)
+        cx, cy = x + w / 2, y + h / 2
+        obs = self.frame(frame, self.roi(np.array([[cx, cy, w, h]]), margin=1.5 * (w + h)))
+        inner, ring_counts = obs.histograms(np.array([cx]), np.array([cy]), w, h, grow=0.75 * (w + h))
+        b = ring_counts[0].astype(float)
+        b_min = b[b > 0].min() if (b > 0).any() else 1.0
+        self.bg_weight = np.where(b > 0, np.minimum(1.0, b_min / np.maximum(b, 1e-12)), 1.0)
+        self.q = self._normalise(inner[0])
+        self.q_first = self.q.copy()
+        self.template = self.patches(obs, np.array([[cx, cy, w, h]]))[0]
+        self.template_first = self.template.copy()
+        # log-odds of the target against its surroundings per bin (the back-projection)
+        q_raw = inner[0] / max(inner[0].sum(), 1)
+        b_raw = b / max(b.sum(), 1)
+        self.backprojection = (q_raw / (q_raw + b_raw + 1e-3)).astype(np.float32)
+
+    # -- per frame ---------------------------------------------------------------------
+    def roi(self, boxes, margin):
+        """``(x0, y0, x1, y1)``: the bounding box of ``boxes (N, 4)`` (cx, cy, w, h) grown by
+        ``margin`` px and by the ring, as integers (unclipped: :meth:`frame` clips)."""
+        b = np.asarray(boxes, float)
+        g = margin + self.ring * 0.5 * (b[:, 2] + b[:, 3]).max()
+        x0 = np.min(b[:, 0] - b[:, 2] / 2) - g
+        x1 = np.max(b[:, 0] + b[:, 2] / 2) + g
+        y0 = np.min(b[:, 1] - b[:, 3] / 2) - g
+        y1 = np.max(b[:, 1] + b[:, 3] / 2) + g
+        return tuple(int(v) for v in (np.floor(x0), np.floor(y0), np.ceil(x1), np.ceil(y1)))
+
+    def frame(self, frame, roi):
+        """The :class:`AppearanceFrame` of ``frame`` over ``roi`` clipped to the frame."""
+        h, w = frame.shape[:2]
+        x0, y0, x1, y1 = roi
+        x0, x1 = min(max(x0, 0), w - 1), min(max(x1, 1), w)
+        y0, y1 = min(max(y0, 0), h - 1), min(max(y1, 1), h)
+        return AppearanceFrame(frame, (x0, y0, max(x1, x0 + 1), max(y1, y0 + 1)), self.f, self.grey)
+
+    # -- the likelihood ------------------------------------------------------------------
+    def _normalise(self, counts):
+        p = counts * self.bg_weight
+        s = p.sum(axis=-1, keepdims=True)
+        return p / np.where(s > 0, s, 1.0)
+
+    def _d2(self, counts):
+        """``d²(h, q)`` for bin counts ``(..., B)``; an empty box is at distance 1."""
+        p = self._normalise(counts)
+        return 1.0 - np.sqrt(p * self.q).sum(axis=-1)
+
+    def patches(self, obs, boxes):
+        """Template vectors ``(N, 3M)`` of ``boxes (N, 4)`` (cx, cy, w, h): the grey levels on the
+        grid and the gradient ``(gx, gy)`` there, each part unit-norm and scaled by ``1/√2``,
+        so that a dot product is the mean of the grey and the gradient correlations."""
+        b = np.asarray(boxes, float)
+        x = b[:, None, 0] + self.grid[None, :, 0] * b[:, None, 2]
+        y = b[:, None, 1] + self.grid[None, :, 1] * b[:, None, 3]
+        t = obs.sample_texture(x, y).astype(float)  # (N, M, 3)
+        grey = _unit_rows(t[..., 0])
+        grad = t[..., 1:].reshape(len(b), -1)
+        grad = grad / np.maximum(np.linalg.norm(grad, axis=1, keepdims=True), 1e-6)
+        return np.concatenate([grey, grad], axis=1) * np.sqrt(0.5)
+
+    def terms(self, obs, boxes):
+        """``(log r_c, log r_t, ncc)`` of ``boxes (N, 4)``, each of shape ``(N,)``."""
+        b = np.asarray(boxes, float)
+        grow = self.ring * 0.5 * (b[:, 2] + b[:, 3])
+        inner, ring = obs.histograms(b[:, 0], b[:, 1], b[:, 2], b[:, 3], grow=grow)
+        log_rc = -self.lambda_colour * (self._d2(inner) + self.kappa * (1.0 - self._d2(ring)))
+        ncc = self.patches(obs, b) @ self.template
+        return log_rc, self.lambda_template * (ncc - 1.0), ncc
+
+    def loglik(self, obs, boxes):
+        """``log r`` of ``boxes (N, 4)`` (cx, cy, w, h), shape ``(N,)``."""
+        log_rc, log_rt, _ = self.terms(obs, boxes)
+        return log_rc + log_rt
+
+    def adapt(self, obs, box):
+        """Move the template and histogram towards the estimate ``box (4,)`` on a
+        confident frame; returns whether it adapted."""
+        if self.adapt_rate <= 0:
+            return False
+        b = np.asarray(box, float)[None]
+        v = self.patches(obs, b)[0]
+        if not float(v @ self.template) >= self.adapt_min_ncc:
+            return False
+        a = self.adapt_rate
+        t = (1 - a) * self.template + a * v
+        m = len(self.grid)
+        self.template = np.concatenate([_unit_rows(t[:m]), t[m:] / max(np.linalg.norm(t[m:]), 1e-6)]) * np.sqrt(0.5)
+        inner, _ = obs.histograms(b[:, 0], b[:, 1], b[:, 2], b[:, 3])
+        if inner[0].sum() > 0:
+            self.q = (1 - a / 2) * self.q + (a / 2) * self._normalise(inner[0])
+        return True
+
+    # -- maps for local moves ------------------------------------------------------------
+    def proposal_map(self, obs, w, h):
+        """``log q̃`` over the working region for a box of size ``(w, h)`` (frame px) centred at
+        each working pixel: ``λ_t (ncc - 1)`` from ``cv2.matchTemplate`` of the template plus
+        ``λ_c`` times the back-projection's contrast between the box and its ring. Returns
+        ``(map (H', W'), u0, v0)`` with map pixel ``(i, j)`` at working centre ``(u0 + j, v0 + i)``."""
+        f = obs.f
+        tw, th = max(2, int(round(w * f))), max(2, int(round(h * f)))
+        gh, gw = obs.grey.shape
+        if tw >= gw or th >= gh:
+            return None
+        my, mx = self.grid_shape
+        m = my * mx
+        img = np.dstack([self.template[:m].reshape(my, mx), self.template[m:].reshape(my, mx, 2)])
+        t = cv2.resize(img.astype(np.float32), (tw, th), interpolation=cv2.INTER_LINEAR)
+        ncc = cv2.matchTemplate(obs.texture, t, cv2.TM_CCOEFF_NORMED)
+        bp = self.backprojection[obs.labels]
+        g = max(1, int(round(self.ring * 0.5 * (tw + th))))
+        s_in = cv2.boxFilter(bp, -1, (tw, th), normalize=False, anchor=(0, 0), borderType=cv2.BORDER_CONSTANT)
+        s_out = cv2.boxFilter(bp, -1, (tw + 2 * g, th + 2 * g), normalize=False, anchor=(0, 0),
+                              borderType=cv2.BORDER_CONSTANT)
+        hh, ww = ncc.shape
+        inside = s_in[:hh, :ww] / (tw * th)
+        # the ring box of the template at (i, j) starts at (i - g, j - g): pad to align
+        out_pad = np.pad(s_out, ((g, 0), (g, 0)))[:hh, :ww]
+        ring = (out_pad - s_in[:hh, :ww]) / ((tw + 2 * g) * (th + 2 * g) - tw * th)
+        log_q = self.lambda_template * (np.nan_to_num(ncc) - 1.0) + self.lambda_colour * (inside - ring)
+        return log_q.astype(np.float32), tw / 2.0, th / 2.0
+
+    def mean_shift(self, obs, boxes, iterations=3):
+        """Mean shift of box centres on the back-projection (Comaniciu, Ramesh and Meer 2000):
+        each step moves the centre to the back-projection's centroid inside the box. All boxes
+        at once through integral images of ``bp``, ``bp u`` and ``bp v``. Returns ``(N, 2)``
+        centres in frame px."""
+        bp = self.backprojection[obs.labels].astype(np.float64)
+        hh, ww = bp.shape
+        vv, uu = np.mgrid[0:hh, 0:ww]
+        ii = cv2.integral(np.dstack([bp, bp * (uu + 0.5), bp * (vv + 0.5)]), sdepth=cv2.CV_64F)
+        b = np.asarray(boxes, float)
+        u, v = obs.to_work(b[:, 0], b[:, 1])
+        hw, hh2 = 0.5 * obs.f * b[:, 2], 0.5 * obs.f * b[:, 3]
+        for _ in range(iterations):
+            s = box_sums(ii, *(np.rint(a).astype(np.intp) for a in (u - hw, v - hh2, u + hw, v + hh2)))
+            ok = s[:, 0] > 1e-6
+            u = np.where(ok, s[:, 1] / np.where(ok, s[:, 0], 1.0), u)
+            v = np.where(ok, s[:, 2] / np.where(ok, s[:, 0], 1.0), v)
+        return np.stack([u / obs.f + obs.x0, v / obs.f + obs.y0], axis=1)

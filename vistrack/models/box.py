@@ -1,0 +1,221 @@
+"""A generic box model for any object started from an ``--init`` box (real footage; beyond the seeds).
+
+State
+    ``(cx, cy, l, cx', cy', l')``, shape ``(N, 6)``: the box centre (px) and its log-scale
+    ``l`` relative to the first box (``w = w_0 e^l``, ``h = h_0 e^l``), and the previous
+    frame's values.
+Dynamics (AR(2), as the contour and plate models)
+    ``c_t = c_{t-1} + d (c_{t-1} - c_{t-2}) + σ_c e^{l_{t-1}} ε`` on the centre (``d = 0.5``,
+    ``σ_c = sigma_xy · sqrt(w_0 h_0)``), a random walk ``l_t = l_{t-1} + σ_l ε`` on the
+    log-scale. The prior ``p_0`` is a Gaussian about the first box with zero velocity.
+Likelihood
+    :class:`~vistrack.models.appearance.Appearance`: colour histogram against the ring
+    around the box (Bhattacharyya) + normalised cross-correlation with a grey template,
+    learned from the first frame and adapted on confident frames.
+Local moves (thesis 001, §4.3–4.5)
+    ``ls-n-ips``: ``LS_λ`` = mean shift on the back-projection of the target histogram
+    (:meth:`Appearance.mean_shift`), the move rejected when it goes further than ``λ``
+    (half the box's mean side) or lowers ``r`` (eq. 4.1). ``lis``: a grid of translations
+    about the prediction with ``q`` from one per-frame map
+    (:meth:`Appearance.proposal_map`; :class:`~vistrack.proposals.MapProposal`).
+    ``lls``: the exact ``r`` on a grid of the window (:class:`~vistrack.filters.lls.Window`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..features import remap_points
+from ..proposals import MapProposal
+from .appearance import Appearance
+
+__all__ = ["Box"]
+
+_LOG2PI = np.log(2 * np.pi)
+
+
+class Box:
+    """Box tracking model with appearance learned from the first frame.
+
+    Parameters
+    ----------
+    frame : ndarray of shape (H, W, 3) uint8 BGR, or (H, W)
+        The first frame.
+    box : tuple of float
+        ``(x, y, w, h)`` of the object in ``frame``.
+    sigma_xy : float
+        Std of the centre's innovation per frame, as a share of ``sqrt(w_0 h_0)``.
+    sigma_scale : float
+        Std of the log-scale's innovation per frame.
+    damping : float
+        ``d``: share of the last frame's velocity carried over.
+    prior_std : tuple of float
+        Std of ``p_0`` on the centre (share of ``sqrt(w_0 h_0)``) and on the log-scale.
+    window : float
+        LIS/LLS window std as a multiple of the innovation's std.
+    **appearance
+        Passed to :class:`~vistrack.models.appearance.Appearance`.
+    """
+
+    dim = 6
+    first_step = False
+
+    def __init__(self, frame, box, *, sigma_xy=0.12, sigma_scale=0.02, damping=0.5, prior_std=(0.04, 0.02),
+                 window=1.5, **appearance):
+        x, y, w, h = (float(v) for v in box)
+        if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
+            raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
+        self.frame_size = (frame.shape[1], frame.shape[0])
+        self.size0 = np.array([w, h])
+        self.app = Appearance(frame, (x, y, w, h), **appearance)
+        side = float(np.sqrt(w * h))
+        self.sigma = np.array([sigma_xy * side, sigma_xy * side, sigma_scale])
+        self.damping = np.array([damping, damping, 0.0])
+        self.prior_std = np.array([prior_std[0] * side, prior_std[0] * side, prior_std[1]])
+        self.init_pose = np.array([x + w / 2, y + h / 2, 0.0])
+        self.prior_mean = np.concatenate([self.init_pose, self.init_pose])
+        self.window = float(window)
+
+    # -- geometry ---------------------------------------------------------------------
+    def boxes(self, states):
+        """``(N, 4)`` boxes ``(cx, cy, w, h)`` of ``states``."""
+        s = np.atleast_2d(states)
+        wh = self.size0 * np.exp(s[:, 2:3])
+        return np.concatenate([s[:, :2], wh], axis=1)
+
+    def box(self, states):
+        """``(N, 4)`` boxes ``(x, y, w, h)`` (top-left corner) of ``states``."""
+        b = self.boxes(states)
+        return np.concatenate([b[:, :2] - b[:, 2:] / 2, b[:, 2:]], axis=1)
+
+    def outline(self, states):
+        """Box corners ``(N, 4, 2)`` for drawing."""
+        x, y, w, h = self.box(states).T
+        return np.stack([np.stack([x, y], 1), np.stack([x + w, y], 1), np.stack([x + w, y + h], 1),
+                         np.stack([x, y + h], 1)], axis=1)
+
+    def describe(self, state):
+        """Track-file fields of one state: ``cx, cy, w, h, angle_deg, scale``."""
+        cx, cy, w, h = self.boxes(state)[0]
+        return {"cx": cx, "cy": cy, "w": w, "h": h, "angle_deg": 0.0, "scale": float(np.exp(np.ravel(state)[2]))}
+
+    # -- dynamics ---------------------------------------------------------------------
+    def _std(self, old):
+        """Innovation std ``(N, 3)``: the centre's scales with the old box."""
+        sd = np.broadcast_to(self.sigma, (len(old), 3)).copy()
+        sd[:, :2] *= np.exp(old[:, 2:3])
+        return sd
+
+    @staticmethod
+    def _logn(x, mean, std):
+        e = (x - mean) / std
+        return -0.5 * np.sum(e * e, axis=1) - np.sum(np.log(std), axis=-1) - 0.5 * x.shape[1] * _LOG2PI
+
+    def sample_prior(self, n, rng):
+        z = self.init_pose + self.prior_std * rng.standard_normal((n, 3))
+        return np.concatenate([z, z], axis=1)
+
+    def prior_logpdf(self, states):
+        return self._logn(states[:, :3], self.init_pose, self.prior_std)
+
+    def predict_mean(self, states):
+        z1, z2 = states[:, :3], states[:, 3:]
+        return np.concatenate([z1 + self.damping * (z1 - z2), z1], axis=1)
+
+    def predict(self, states, rng):
+        out = self.predict_mean(states)
+        out[:, :3] += self._std(states) * rng.standard_normal((len(states), 3))
+        return out
+
+    def transition_logpdf(self, new, old):
+        """``log K(new|old)``: Gaussian in the current values; the previous values of ``new``
+        are the current values of ``old``."""
+        return self._logn(new[:, :3], self.predict_mean(old)[:, :3], self._std(old))
+
+    # -- observation --------------------------------------------------------------------
+    def observe(self, maps, particles):
+        """The frame's :class:`~vistrack.models.appearance.AppearanceFrame` over the region the
+        particles can reach: their predicted boxes grown by 4 innovation stds, the LIS window's
+        reach and the velocity (the first box and the prior's spread on the first frame)."""
+        if particles is None:
+            states = self.prior_mean[None]
+            reach = 4 * self.prior_std[0] * (1 + self.window)
+        else:
+            states = self.predict_mean(particles.states)
+            reach = 4 * self.sigma[0] * np.exp(states[:, 2].max()) * (1 + self.window)
+        return self.app.frame(maps.frame, self.app.roi(self.boxes(states), reach))
+
+    def loglik(self, obs, states):
+        """``log r`` of ``states (N, 6)``, shape ``(N,)``."""
+        return self.app.loglik(obs, self.boxes(states))
+
+    def estimate(self, particles):
+        """The weighted mean state."""
+        return particles.mean()
+
+    def adapt(self, obs, estimate):
+        """Adapt the appearance to the estimate on a confident frame (:meth:`Appearance.adapt`)."""
+        return self.app.adapt(obs, self.boxes(estimate)[0])
+
+    # -- local moves ------------------------------------------------------------------
+    def local_coords(self, states):
+        return states[:, :2]
+
+    def with_local(self, states, u):
+        """Move the current centre to ``u`` (the previous values stay)."""
+        out = states.copy()
+        out[:, :2] = u
+        return out
+
+    def with_local_prior(self, states, u):
+        """First step: move both centres (zero initial velocity, as ``p_0`` has)."""
+        out = self.with_local(states, u)
+        out[:, 3:5] = u
+        return out
+
+    def window_std(self, states=None):
+        """Window std on the centre (px): ``window`` innovation stds (of ``p_0`` on the first
+        step), per particle ``(N,)`` with ``states``, else the scalar at scale 1."""
+        base = self.window * (self.prior_std[0] if self.first_step else self.sigma[0])
+        return base if states is None else base * np.exp(states[:, 2])
+
+    def proposal_log_q(self, obs, states, points):
+        """The map's ``log q`` at centres ``points (N, G, 2)`` (frame px), for the LIS proposal:
+        :meth:`Appearance.proposal_map` at the particles' mean size, tempered by one half and
+        mixed with 5 % of a flat floor (a defensive share)."""
+        key = "_qmap"
+        if getattr(obs, key, None) is None:
+            w, h = self.size0 * np.exp(np.mean(states[:, 2]))
+            setattr(obs, key, self.app.proposal_map(obs, w, h) or ())
+        qmap = getattr(obs, key)
+        n, g, _ = points.shape
+        if not qmap:
+            return np.zeros((n, g))
+        m, u0, v0 = qmap
+        u, v = obs.to_work(points[..., 0], points[..., 1])
+        lo = float(m.min())
+        val = remap_points(m, u - u0, v - v0, border=lo).astype(float)
+        val = 0.5 * (val - val.max(axis=1, keepdims=True))
+        return np.logaddexp(val + np.log(0.95), np.log(0.05))
+
+    def lis_proposal(self):
+        return MapProposal(self)
+
+    def lls_window(self):
+        from ..filters.lls import Window
+
+        return Window("gaussian", [self.window_std()] * 2, grid=5, truncate=2.5)
+
+    def local_search(self, obs, states):
+        """``LS_λ``: mean shift of the centres on the back-projection; a move longer than ``λ``
+        (half the box's mean side) or one that lowers ``r`` is rejected (eq. 4.1). Returns the
+        states and their ``log r``."""
+        b = self.boxes(states)
+        c = self.app.mean_shift(obs, b)
+        lam = 0.25 * (b[:, 2] + b[:, 3])
+        moved = self.with_local(states, c)
+        ok = np.all(np.abs(c - states[:, :2]) <= lam[:, None], axis=1)
+        ll_x = self.loglik(obs, states)
+        ll_z = np.where(ok, self.loglik(obs, moved), -np.inf)
+        keep = ll_z >= ll_x
+        return np.where(keep[:, None], moved, states), np.where(keep, ll_z, ll_x)
