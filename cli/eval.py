@@ -166,8 +166,9 @@ def _equal_time(cfg, clips, frames=30):
 @click.option("--particles", default="100,750", show_default=True, type=IntList(), help="Particle counts N.")
 @click.option("--runs", default=20, show_default=True, type=click.IntRange(min=1), help="Runs per clip × algo × N.")
 @click.option("--seed", default=0, show_default=True, type=int)
-@click.option("--model", default="contour", show_default=True, type=click.Choice(["contour", "plate"]),
-              help="Tracking model; plate runs start from the first ground-truth box (layout from its aspect).")
+@click.option("--model", default="contour", show_default=True, type=click.Choice(["contour", "plate", "box"]),
+              help="Tracking model, started from the first ground-truth box (box: any object, appearance "
+                   "learned from the first frame; plate: layout from the box's aspect).")
 @click.option("--equal-time", is_flag=True, help="Pick N per algorithm for equal CPU time per frame.")
 @click.option("--scheduler", help="Address of a running Dask scheduler (tcp://host:8786) [default: a LocalCluster].")
 @click.option("--workers", default=0, show_default=True, type=click.IntRange(min=0),

@@ -12,6 +12,7 @@ from tqdm import tqdm
 from vistrack.builders import MODELS, build_model, read_support_points
 from vistrack.clips import load_clip, write_track_csv
 from vistrack.filters import make_filter
+from vistrack.models.registry import get_model_spec
 from vistrack.metrics import center_error, contour_lost_threshold, landmark_error
 from vistrack.particles import DegenerateWeightsWarning
 from vistrack.render import annotate
@@ -24,16 +25,14 @@ __all__ = ["run"]
 
 RUN_ALGOS = ("bootstrap", "ls-n-ips", "lls", "lis", "avpf", "condensation",
              "pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt")
-#: the algorithms each model supports, default first
-MODEL_ALGOS = {"contour": ("lis", "bootstrap", "condensation", "ls-n-ips", "lls", "avpf"),
-               "plate": ("lis", "bootstrap", "condensation", "lls", "avpf"),
-               "landmarks": ("pf-eis-mt", "pf-eis", "pf-doucet", "pf-gordon", "bootstrap")}
 
 
 @click.command()
 @click.argument("video", type=click.Path(exists=True))
 @click.option("--model", "model_name", type=click.Choice(MODELS), default=None,
-              help="Tracking model [default: the clip's meta.json model, else plate].")
+              help="Tracking model [default: the clip's meta.json model; else box when --init or --init-gt "
+                   "is given (any object: colour and template learned from the first frame); else plate, "
+                   "which finds plates by itself].")
 @click.option("--layout", type=click.Choice(["jp", "single-row"]), default=None,
               help="Plate layout [default: the clip's, else jp].")
 @click.option("--algo", default=None, type=click.Choice(RUN_ALGOS),
@@ -41,7 +40,8 @@ MODEL_ALGOS = {"contour": ("lis", "bootstrap", "condensation", "ls-n-ips", "lls"
 @click.option("-n", "--particles", default=100, show_default=True, type=click.IntRange(min=1),
               help="Number of particles N.")
 @click.option("--seed", default=0, show_default=True, type=int, help="Random seed (same seed, same track).")
-@click.option("--init", type=Box(), help="Start from this box (x,y,w,h); the contour is the ellipse in it.")
+@click.option("--init", type=Box(), help="Start from this box (x,y,w,h) in the first frame; the contour is the "
+                                        "ellipse in it.")
 @click.option("--init-gt", "init_gt", is_flag=False, flag_value="", default=None, metavar="[FILE]",
               help="Start from the first ground-truth frame: the clip's own (groundtruth.csv with meta.json "
                    "template, or OTB groundtruth_rect.txt), or FILE.")
@@ -89,19 +89,20 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
             fw, fh = clip.source.size
             if x >= fw or y >= fh or x + w <= 0 or y + h <= 0:
                 raise click.UsageError(f"--init box {x:g},{y:g},{w:g},{h:g} lies outside the {fw}x{fh} frame")
-        name = model_name or clip.model_name or "plate"
+        name = model_name or clip.model_name or ("box" if init is not None or init_gt is not None else "plate")
         if name not in MODELS:
             raise click.ClickException(f"{video}: meta.json names model {name!r}, which this version cannot track")
         template = read_support_points(template_path) if template_path else None
-        extra = {"layout": layout} if name == "plate" else {"template": template}
-        if name == "plate" and template is not None:
+        extra = {"layout": layout} if name == "plate" else {} if name == "box" else {"template": template}
+        if name in ("plate", "box") and template is not None:
             raise click.UsageError("--template is for the contour and landmarks models")
         if name == "landmarks" and init is not None:
             raise click.UsageError("--init is a box; the landmarks model starts from --template FILE or --init-gt")
-        algo = algo or MODEL_ALGOS[name][0]
-        if algo not in MODEL_ALGOS[name]:
+        spec = get_model_spec(name)
+        algo = algo or spec.default_algo
+        if algo not in spec.algos:
             raise click.UsageError(f"--algo {algo} does not run on the {name} model; "
-                                   f"choose from {', '.join(MODEL_ALGOS[name])}")
+                                   f"choose from {', '.join(spec.algos)}")
         model = build_model(name, clip, init=init, init_gt=init_gt, **extra)
     except (VideoError, ValueError) as e:
         raise click.ClickException(str(e)) from None
@@ -167,7 +168,7 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         click.echo(f"vs ground truth: plate lost in {int(lost.sum())} of {int(has.sum())} plate frames; mean vertex "
                    f"error {np.nanmean(err[ok]) if ok.any() else float('nan'):.2f} px when tracked; "
                    f"{int(false.sum())} frames reported a plate where there was none")
-    if clip.truth is not None and name == "contour":
+    if clip.truth is not None and name in ("contour", "box"):
         t = clip.truth
         k = np.array([r["frame"] for r in rows], int)
         k = k[k < len(t["cx"])]

@@ -6,10 +6,11 @@ The library never prints, parses argv or draws progress bars; see ``vistrack.cli
 from importlib.metadata import PackageNotFoundError, version
 
 from .particles import DegenerateWeightsWarning, ParticleSet, ess, logsumexp, normalized_weights
+from .tracker import Tracker
 
 try:
     __version__ = version("vistrack")
 except PackageNotFoundError:  # running from a source tree
     __version__ = "0.0.0+src"
 
-__all__ = ["ParticleSet", "DegenerateWeightsWarning", "ess", "logsumexp", "normalized_weights", "__version__"]
+__all__ = ["Tracker", "ParticleSet", "DegenerateWeightsWarning", "ess", "logsumexp", "normalized_weights", "__version__"]

@@ -12,11 +12,12 @@ import numpy as np
 from .clips import read_groundtruth_csv
 from .features import FeatureMaps
 from .models.contour import Contour
+from .models.registry import MODELS as _REGISTRY
 from .video import VideoError, read_rects
 
-__all__ = ["MODELS", "initial_truth", "build_model", "read_support_points"]
+__all__ = ["MODELS", "initial_truth", "build_model", "model_from_box", "read_support_points"]
 
-MODELS = ("contour", "plate", "landmarks")
+MODELS = tuple(_REGISTRY)
 
 
 def initial_truth(clip, init_gt):
@@ -88,6 +89,43 @@ def _first_frame(clip):
     raise VideoError(f"{clip.source.path}: no frame could be decoded")
 
 
+def model_from_box(name, frame, box, **params):
+    """Model ``name`` started from ``box`` ``(x, y, w, h)`` in the first ``frame`` (BGR or grey):
+    the one place where ``vistrack run --init`` and :class:`vistrack.Tracker` build a model.
+
+    ``box``: the appearance learned from the frame; ``contour``: the ellipse in the box, its
+    edge polarity learned from the frame; ``plate``: a plate in the box (layout: ``layout``
+    or the one nearest the box's aspect ratio).
+    """
+    frame = np.asarray(frame)
+    size = (frame.shape[1], frame.shape[0])
+    if name == "box":
+        from .models.box import Box
+
+        return Box(frame, box, **params)
+    if name == "contour":
+        polarity = params.pop("polarity", "auto")
+        template = params.pop("template", None)
+        model = _fit_template(template, box, size, params) if template is not None else \
+            Contour.from_box(box, size, **params)
+        if polarity == "auto":
+            model.learn_polarity(FeatureMaps(frame))
+        else:
+            model.polarity = polarity
+        return model
+    if name == "plate":
+        return _plate_from_box(size, box, params.pop("layout", None), params)
+    raise VideoError(f"model {name!r} does not start from a box; choose from box, contour, plate")
+
+
+def _start_box(clip, init, init_gt):
+    """The start box ``(x, y, w, h)``: ``init``, or the first ground-truth row."""
+    if init is not None:
+        return tuple(float(v) for v in init)
+    row = initial_truth(clip, init_gt)
+    return (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"])
+
+
 def build_model(name, clip, *, init=None, init_gt=None, template=None, polarity="auto", **params):
     """The model ``name`` for ``clip`` started from ``init`` (x, y, w, h) or the ground truth.
 
@@ -99,7 +137,13 @@ def build_model(name, clip, *, init=None, init_gt=None, template=None, polarity=
     the first frame (:meth:`Contour.learn_polarity`); ``None`` keeps edges unsigned.
     """
     size = clip.source.size
+    if name == "box":
+        if init is None and init_gt is None:
+            raise VideoError("the box model needs a start: --init x,y,w,h or --init-gt")
+        return model_from_box("box", _first_frame(clip), _start_box(clip, init, init_gt), **params)
     if name == "contour":
+        if init is not None:
+            return model_from_box("contour", _first_frame(clip), init, template=template, polarity=polarity, **params)
         model = _contour(clip, size, init, init_gt, template, params)
         if polarity == "auto":
             model.learn_polarity(FeatureMaps(_first_frame(clip)))
@@ -155,6 +199,12 @@ def _plate(clip, size, init, init_gt, params):
         row = initial_truth(clip, init_gt)
         box = (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"])
     layout = params.pop("layout", None) or (clip.meta or {}).get("layout")
+    return _plate_from_box(size, box, layout, params)
+
+
+def _plate_from_box(size, box, layout, params):
+    from .models.plate import Plate
+
     if layout is None and box is not None:  # the layout whose aspect ratio is nearest the box's
         from .models.plate_layout import LAYOUTS
 

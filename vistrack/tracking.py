@@ -15,7 +15,7 @@ import numpy as np
 from .features import FeatureMaps
 from .particles import ParticleSet
 
-__all__ = ["FrameResult", "track", "top_particles"]
+__all__ = ["FrameResult", "FrameStepper", "track", "top_particles"]
 
 
 @dataclass
@@ -44,34 +44,50 @@ def top_particles(particles, k):
     return particles.states[idx]
 
 
+class FrameStepper:
+    """One filter step per frame: frame -> feature maps -> observation -> step -> estimate.
+
+    The one loop body behind :func:`track`, ``vistrack run``, ``eval`` and
+    :class:`vistrack.Tracker`. The first frame observes ``X_1 ~ p_0``
+    (``filt.first_step``). ``estimator(particles)`` gives the point estimate (default: the
+    model's ``estimate`` if it has one, else the weighted mean). A model with an
+    ``observe(maps, previous_particles)`` method turns each frame's maps into its
+    observation ``Y_t`` (landmarks: blob detection and association; box: the appearance
+    maps over the region the particles can reach); otherwise the maps are the observation.
+    A model with an ``adapt(obs, estimate)`` method (the box model's appearance) is told
+    each frame's estimate after the step. The feature maps of a frame live in buffers that
+    the next frame overwrites: use them before stepping again.
+    """
+
+    def __init__(self, filt, n, rng, *, estimator=None):
+        self.filt, self.n, self.rng = filt, n, rng
+        self.particles = None
+        self.estimator = estimator or getattr(filt.model, "estimate", None)
+        self._observe = getattr(filt.model, "observe", None)
+        self._adapt = getattr(filt.model, "adapt", None)
+        self._buffers = {}  # feature-map buffers reused from frame to frame
+
+    def step(self, index, frame):
+        """Track one BGR (or grey) ``frame``; returns its :class:`FrameResult`."""
+        t0 = time.perf_counter()
+        maps = FeatureMaps(frame, buffers=self._buffers)
+        obs = self._observe(maps, self.particles) if self._observe else maps
+        if self.particles is None:
+            self.particles = self.filt.first_step(obs, self.n, self.rng)
+        else:
+            self.particles = self.filt.step(self.particles, obs, self.rng)
+        est = self.estimator(self.particles) if self.estimator else self.particles.mean()
+        if self._adapt:
+            self._adapt(obs, est)
+        ms = (time.perf_counter() - t0) * 1e3
+        return FrameResult(index, frame, self.particles, est, ms, maps)
+
+
 def track(frames, filt, n, rng, *, estimator=None):
     """Run ``filt`` with ``n`` particles over ``frames`` (an iterable of ``(index, BGR frame)``).
 
-    Yields a :class:`FrameResult` per frame. The first frame observes
-    ``X_1 ~ p_0`` (``filt.first_step``). ``estimator(particles)`` gives the point
-    estimate (default: the model's ``estimate`` if it has one, else the weighted
-    mean). A model with an ``observe(maps, previous_particles)`` method turns
-    each frame's maps into its observation ``Y_t`` (landmarks: blob detection
-    and association); otherwise the maps are the observation. A model with an
-    ``adapt(obs, estimate)`` method (the box model's appearance) is told each frame's
-    estimate after the step. The feature maps of a frame live in
-    buffers that the next frame overwrites: use them before asking for the next.
+    Yields a :class:`FrameResult` per frame (:class:`FrameStepper`).
     """
-    particles = None
-    estimator = estimator or getattr(filt.model, "estimate", None)
-    observe = getattr(filt.model, "observe", None)
-    adapt = getattr(filt.model, "adapt", None)
-    buffers = {}  # feature-map buffers reused from frame to frame
+    stepper = FrameStepper(filt, n, rng, estimator=estimator)
     for i, frame in frames:
-        t0 = time.perf_counter()
-        maps = FeatureMaps(frame, buffers=buffers)
-        obs = observe(maps, particles) if observe else maps
-        if particles is None:
-            particles = filt.first_step(obs, n, rng)
-        else:
-            particles = filt.step(particles, obs, rng)
-        est = estimator(particles) if estimator else particles.mean()
-        if adapt:
-            adapt(obs, est)
-        ms = (time.perf_counter() - t0) * 1e3
-        yield FrameResult(i, frame, particles, est, ms, maps)
+        yield stepper.step(i, frame)

@@ -1,0 +1,106 @@
+"""``vistrack.Tracker``: the OpenCV tracker shape over vistrack's particle filters.
+
+    t = vistrack.Tracker(model="box", algo="lis", particles=100, seed=0)
+    t.init(frame, (x, y, w, h))
+    ok, box = t.update(frame)
+
+Frames are numpy BGR (or grey) arrays, as ``cv2.VideoCapture`` gives them, so it drops into
+code written for ``cv2.TrackerMIL``. It runs the same code as ``vistrack run``
+(:func:`~vistrack.builders.model_from_box`, :class:`~vistrack.tracking.FrameStepper`): the
+same options and seed give the same track.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .builders import model_from_box
+from .filters import make_filter
+from .models.registry import get_model_spec
+from .tracking import FrameStepper
+
+__all__ = ["Tracker"]
+
+
+class Tracker:
+    """A particle-filter tracker with OpenCV's ``init`` / ``update`` interface.
+
+    Parameters
+    ----------
+    model : {"box", "contour", "plate"}
+        What to track (``box``: any object, appearance learned from the first frame).
+    algo : str or None
+        Particle filter (``lis``, ``bootstrap``, ``ls-n-ips``, ``lls``, ``avpf``); ``None``:
+        the model's default.
+    particles : int
+        Number of particles ``N``.
+    seed : int or numpy.random.Generator
+        Random seed: the same seed gives the same track.
+    resample : str
+        Resampling scheme.
+    ess_threshold : float or None
+        Resample when ``ESS < threshold N`` (``None``: every frame).
+    **model_options
+        Passed to the model (e.g. ``layout`` for plates, ``lambda_template`` for boxes).
+
+    Attributes
+    ----------
+    particles : ParticleSet or None
+        The particle set after the last frame.
+    result : FrameResult or None
+        The last frame's result (estimate, ESS, milliseconds).
+    """
+
+    def __init__(self, model="box", algo=None, particles=100, seed=0, *, resample="systematic",
+                 ess_threshold=None, **model_options):
+        spec = get_model_spec(model)
+        if not spec.box_init:
+            raise ValueError(f"the {model} model does not start from a box")
+        self.algo = algo or spec.default_algo
+        if self.algo not in spec.algos:
+            raise ValueError(f"algorithm {self.algo!r} does not run on the {model} model; "
+                             f"choose from {', '.join(spec.algos)}")
+        if int(particles) < 1:
+            raise ValueError(f"particles must be a positive integer, got {particles}")
+        self.model_name, self.n, self.seed = model, int(particles), seed
+        self.filter_options = {"resample": resample, "ess_threshold": ess_threshold}
+        self.model_options = model_options
+        self.model = None
+        self.result = None
+        self._stepper = None
+
+    @property
+    def particles(self):
+        return None if self._stepper is None else self._stepper.particles
+
+    def init(self, frame, box):
+        """Start on ``frame`` with the object in ``box`` ``(x, y, w, h)``; the first filter step
+        observes this frame. Returns ``True``."""
+        frame = np.asarray(frame)
+        if frame.ndim not in (2, 3) or frame.size == 0:
+            raise ValueError(f"a frame must be an (H, W) or (H, W, 3) array, got shape {frame.shape}")
+        self.model = model_from_box(self.model_name, frame, box, **self.model_options)
+        filt = make_filter(self.algo, self.model, **self.filter_options)
+        self._stepper = FrameStepper(filt, self.n, np.random.default_rng(self.seed))
+        self._index = 0
+        self.result = self._stepper.step(0, frame)
+        return True
+
+    def update(self, frame):
+        """Track ``frame``; returns ``(ok, (x, y, w, h))`` with ``ok`` whether the model reports
+        the object as visible."""
+        if self._stepper is None:
+            raise RuntimeError("call init(frame, box) before update(frame)")
+        self._index += 1
+        self.result = self._stepper.step(self._index, np.asarray(frame))
+        return self.visible, self.box
+
+    @property
+    def box(self):
+        """The last estimate as ``(x, y, w, h)`` floats."""
+        return tuple(float(v) for v in self.model.box(self.result.estimate)[0])
+
+    @property
+    def visible(self):
+        vis = getattr(self.model, "visible", None)
+        return bool(vis(self.result.maps, self.result.estimate)) if vis else True
