@@ -27,6 +27,7 @@ import numpy as np
 
 from ..features import remap_points
 from ..proposals import MapProposal
+from ..proposals.translation import TranslationMoves
 from .appearance import Appearance
 
 __all__ = ["Box"]
@@ -34,7 +35,7 @@ __all__ = ["Box"]
 _LOG2PI = np.log(2 * np.pi)
 
 
-class Box:
+class Box(TranslationMoves):
     """Box tracking model with appearance learned from the first frame.
 
     Parameters
@@ -158,21 +159,6 @@ class Box:
         return self.app.adapt(obs, self.boxes(estimate)[0])
 
     # -- local moves ------------------------------------------------------------------
-    def local_coords(self, states):
-        return states[:, :2]
-
-    def with_local(self, states, u):
-        """Move the current centre to ``u`` (the previous values stay)."""
-        out = states.copy()
-        out[:, :2] = u
-        return out
-
-    def with_local_prior(self, states, u):
-        """First step: move both centres (zero initial velocity, as ``p_0`` has)."""
-        out = self.with_local(states, u)
-        out[:, 3:5] = u
-        return out
-
     def window_std(self, states=None):
         """Window std on the centre (px): ``window`` innovation stds (of ``p_0`` on the first
         step), per particle ``(N,)`` with ``states``, else the scalar at scale 1."""

@@ -50,6 +50,7 @@ import numpy as np
 
 from ..filters.lis import GaussMixtureProposal
 from ..filters.lls import Window
+from ..proposals.translation import TranslationMoves
 
 __all__ = ["BSpline", "Contour", "ellipse_template", "pose_from", "pose_params"]
 
@@ -129,7 +130,7 @@ def _edge_peaks(gn, thresh):
     return peak
 
 
-class Contour:
+class Contour(TranslationMoves):
     """Contour tracking model with similarity pose and AR(2) dynamics.
 
     Parameters
@@ -488,22 +489,6 @@ class Contour:
         return out
 
     # -- local moves on translation (LLS / LIS, §4.4.3) ---------------------------
-    def local_coords(self, states):
-        return states[:, :2]
-
-    def with_local(self, states, u):
-        """Move the current translation to ``u`` (the previous pose stays)."""
-        out = states.copy()
-        out[:, :2] = u
-        return out
-
-    def with_local_prior(self, states, u):
-        """First step: move both poses (zero initial velocity, as ``p_0`` has)."""
-        out = states.copy()
-        out[:, :2] = u
-        out[:, 4:6] = u
-        return out
-
     def window_std(self):
         """Window std on translation: the spread of ``K`` (or of ``p_0`` on the first step)."""
         return self.prior_std[:2] if self.first_step else self.sigma[:2]
