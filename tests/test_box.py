@@ -127,7 +127,10 @@ def test_box_lis_weights_match_a_brute_force_posterior():
     particle at rest, scale known; the mean weight is the evidence ∫ r K and the weighted mean
     of the centre the posterior mean, both also by brute force on a 0.25-px grid."""
     bg = background(np.random.default_rng(5), False)
-    model = Box(draw_object(bg, 150, 110), obj_box(150, 110), sigma_scale=1e-9, adapt_rate=0)
+    # a flatter likelihood than the default: the weights are heavy-tailed (the map proposal is
+    # coarser than r), and 6000 of them pin the evidence only for a flat r
+    model = Box(draw_object(bg, 150, 110), obj_box(150, 110), sigma_xy=0.1, sigma_scale=1e-9, adapt_rate=0,
+                lambda_colour=10, lambda_template=6)
     frame = draw_object(bg, 153, 108)
     pose = np.array([150.0, 110.0, 0.0])
     n = 6000
@@ -140,8 +143,8 @@ def test_box_lis_weights_match_a_brute_force_posterior():
         - model.transition_logpdf(x, prev)
     w = np.exp(lw - lw.max())
     sd = model.sigma[0]
-    step = 0.25
-    du, dv = np.meshgrid(np.arange(-5 * sd, 5 * sd, step), np.arange(-5 * sd, 5 * sd, step), indexing="ij")
+    step = 0.1
+    du, dv = np.meshgrid(np.arange(-6 * sd, 6 * sd, step), np.arange(-6 * sd, 6 * sd, step), indexing="ij")
     grid = np.tile(np.concatenate([pose, pose]), (du.size, 1))
     grid[:, 0] += du.ravel()
     grid[:, 1] += dv.ravel()
@@ -149,7 +152,7 @@ def test_box_lis_weights_match_a_brute_force_posterior():
     lp = model.loglik(obs, grid) - 0.5 * (du.ravel() ** 2 + dv.ravel() ** 2) / sd**2 - np.log(2 * np.pi * sd**2)
     assert logsumexp(lw) - np.log(n) == pytest.approx(logsumexp(lp) + 2 * np.log(step), abs=0.3)
     g = np.exp(lp - lp.max())
-    np.testing.assert_allclose((w @ z[:, :2]) / w.sum(), (g @ grid[:, :2]) / g.sum(), atol=0.3)
+    np.testing.assert_allclose((w @ z[:, :2]) / w.sum(), (g @ grid[:, :2]) / g.sum(), atol=0.2)
 
 
 # -- tracking ---------------------------------------------------------------------------

@@ -127,8 +127,8 @@ class Appearance:
         Force grey-level bins; ``None``: from :func:`~vistrack.features.is_grey`.
     """
 
-    def __init__(self, frame, box, *, work_size=32.0, lambda_colour=25.0, kappa=0.5, ring=0.3,
-                 lambda_template=12.0, template_points=256, adapt_rate=0.05, adapt_min_ncc=0.6, grey=None):
+    def __init__(self, frame, box, *, work_size=32.0, lambda_colour=35.0, kappa=1.0, ring=0.3,
+                 lambda_template=25.0, template_points=256, adapt_rate=0.1, adapt_min_ncc=0.6, grey=None):
         x, y, w, h = (float(v) for v in box)
         if not (w > 0 and h > 0 and np.isfinite([x, y, w, h]).all()):
             raise ValueError(f"the box needs a finite position and positive size, got {box}")

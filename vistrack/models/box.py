@@ -61,7 +61,7 @@ class Box(TranslationMoves):
     dim = 6
     first_step = False
 
-    def __init__(self, frame, box, *, sigma_xy=0.12, sigma_scale=0.02, damping=0.5, prior_std=(0.04, 0.02),
+    def __init__(self, frame, box, *, sigma_xy=0.06, sigma_scale=0.003, damping=0.5, prior_std=(0.04, 0.02),
                  window=1.5, **appearance):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
