@@ -1,4 +1,4 @@
-"""vistrack's box model beside OpenCV's trackers on the real clips, in one run.
+"""vistrack's box, contour and plate models beside OpenCV's trackers on the real clips, in one run.
 
 For every real clip with ground truth (``../shared/data/real``) each tracker starts from the
 first ground-truth box; frames are decoded once and held in memory, so only tracking is
@@ -7,7 +7,11 @@ Prints success AUC (IoU thresholds 0, 0.05, .., 1), precision at 20 px, the mean
 error over all frames (a failed OpenCV update holds its last box) and frames/s, then the
 box model's time split at 640x480 (car4 resized) beside the OpenCV trackers on the same frames.
 
-    python benchmarks/bench_real.py [--entries lis:100,bootstrap:100,ls-n-ips:100] [--seeds 3]
+    python benchmarks/bench_real.py [--entries lis:100,bootstrap:100,contour/lis:100,plate/lis:100] [--seeds 3]
+
+Entries are ``[model/]algo:N``: the box model by default; ``contour/`` (colour term on for
+colour video) and ``plate/`` (the plate clip only, ``--layout single-row``, its appearance
+learned from the first box) as ``vistrack run --model ...`` runs them.
 
 OpenCV's MIL is in opencv-python-headless; KCF and CSRT need opencv-contrib-python-headless
 (a drop-in replacement); missing ones are skipped with a note. Both run single-threaded
@@ -56,8 +60,9 @@ def load(name, size=None):
     return frames, gt
 
 
-def run_vistrack(frames, box, algo, n, seed):
-    t = vistrack.Tracker(model="box", algo=algo, particles=n, seed=seed)
+def run_vistrack(frames, box, algo, n, seed, model="box"):
+    opts = {"layout": "single-row"} if model == "plate" else {}
+    t = vistrack.Tracker(model=model, algo=algo, particles=n, seed=seed, **opts)
     t0 = time.perf_counter()
     t.init(frames[0], box)
     out = [t.box]
@@ -107,12 +112,18 @@ def split(frames, box, n, timer):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--entries", default="lis:100,bootstrap:100,ls-n-ips:100")
+    ap.add_argument("--entries", default="lis:100,bootstrap:100,ls-n-ips:100,contour/lis:100,plate/lis:100",
+                    help="[model/]algo:N, model box (default), contour or plate (the plate clip only, "
+                         "single-row layout)")
     ap.add_argument("--opencv", default="MIL,KCF,CSRT")
     ap.add_argument("--seeds", type=int, default=3)
     args = ap.parse_args()
     cv2.setNumThreads(1)
-    entries = [(e.split(":")[0], int(e.split(":")[1])) for e in args.entries.split(",")]
+    entries = []
+    for e in args.entries.split(","):
+        spec, n = e.split(":")
+        model, algo = spec.split("/") if "/" in spec else ("box", spec)
+        entries.append((model, algo, int(n)))
     cvs = [c for c in args.opencv.split(",") if opencv_tracker(c) is not None]
     missing = sorted(set(args.opencv.split(",")) - set(cvs))
     if missing:
@@ -125,10 +136,13 @@ def main():
             continue
         frames, gt = load(clip)
         rows = []
-        for algo, n in entries:
-            runs = [run_vistrack(frames, gt[0], algo, n, s) for s in range(args.seeds)]
+        for model, algo, n in entries:
+            if model == "plate" and not clip.startswith("plate"):
+                continue
+            runs = [run_vistrack(frames, gt[0], algo, n, s, model) for s in range(args.seeds)]
             sc = np.mean([scores(b, gt) for b, _ in runs], axis=0)
-            rows.append((f"{algo}-{n}", sc, len(frames) / np.median([t for _, t in runs])))
+            name = f"{algo}-{n}" if model == "box" else f"{model}/{algo}-{n}"
+            rows.append((name, sc, len(frames) / np.median([t for _, t in runs])))
         for name in cvs:
             b, t = run_opencv(frames, gt[0], name)
             rows.append((name, scores(b, gt), len(frames) / t))

@@ -13,7 +13,7 @@ from vistrack.builders import MODELS, build_model, read_support_points
 from vistrack.clips import load_clip, write_track_csv
 from vistrack.filters import make_filter
 from vistrack.models.registry import get_model_spec
-from vistrack.metrics import center_error, contour_lost_threshold, landmark_error
+from vistrack.metrics import center_error, contour_lost_threshold, iou, landmark_error, success_auc
 from vistrack.particles import DegenerateWeightsWarning
 from vistrack.render import annotate
 from vistrack.tracking import top_particles, track
@@ -168,17 +168,21 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         click.echo(f"vs ground truth: plate lost in {int(lost.sum())} of {int(has.sum())} plate frames; mean vertex "
                    f"error {np.nanmean(err[ok]) if ok.any() else float('nan'):.2f} px when tracked; "
                    f"{int(false.sum())} frames reported a plate where there was none")
-    if clip.truth is not None and name in ("contour", "box"):
+    elif clip.truth is not None and name in ("contour", "box", "plate") and "w" in clip.truth:
         t = clip.truth
         k = np.array([r["frame"] for r in rows], int)
-        k = k[k < len(t["cx"])]
-        err = center_error([rows[i]["cx"] for i in range(len(k))], [rows[i]["cy"] for i in range(len(k))],
-                           t["cx"][k], t["cy"][k])
+        m = int(np.sum(k < len(t["cx"])))
+        k = k[:m]
+        est = np.array([[rows[i]["cx"], rows[i]["cy"], rows[i]["w"], rows[i]["h"]] for i in range(m)], float)
+        err = center_error(est[:, 0], est[:, 1], t["cx"][k], t["cy"][k])
+        ious = iou(np.column_stack([est[:, :2] - est[:, 2:] / 2, est[:, 2:]]),
+                   np.column_stack([t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k]]))
         thr = contour_lost_threshold(src.size[0])
         lost = err > thr
         mean_ok = err[~lost].mean() if (~lost).any() else float("nan")
-        click.echo(f"vs ground truth: mean centre error {mean_ok:.2f} px over tracked frames; "
-                   f"lost (> {thr:.0f} px) in {int(lost.sum())} of {len(k)} frames")
+        click.echo(f"vs ground truth ({m} frames): success AUC {success_auc(ious):.3f}, precision@20px "
+                   f"{np.mean(err <= 20):.3f}, mean centre error {err.mean():.2f} px "
+                   f"({mean_ok:.2f} px over tracked frames); lost (> {thr:.0f} px) in {int(lost.sum())} frames")
     if track_path:
         click.echo(f"track: {track_path}")
     if out_path:

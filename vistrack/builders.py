@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from .clips import read_groundtruth_csv
-from .features import FeatureMaps
+from .features import FeatureMaps, is_grey
 from .models.contour import Contour
 from .models.registry import MODELS as _REGISTRY
 from .video import VideoError, read_rects
@@ -94,8 +94,10 @@ def model_from_box(name, frame, box, **params):
     the one place where ``vistrack run --init`` and :class:`vistrack.Tracker` build a model.
 
     ``box``: the appearance learned from the frame; ``contour``: the ellipse in the box, its
-    edge polarity learned from the frame; ``plate``: a plate in the box (layout: ``layout``
-    or the one nearest the box's aspect ratio).
+    edge polarity and (colour video; ``colour="auto"``) its colour term learned from the
+    frame; ``plate``: a plate in the box (layout: ``layout``
+    or the one nearest the box's aspect ratio), its appearance learned from the frame
+    (``appearance=False``: the plate likelihood alone).
     """
     frame = np.asarray(frame)
     size = (frame.shape[1], frame.shape[0])
@@ -105,17 +107,30 @@ def model_from_box(name, frame, box, **params):
         return Box(frame, box, **params)
     if name == "contour":
         polarity = params.pop("polarity", "auto")
+        colour = params.pop("colour", "auto")
         template = params.pop("template", None)
         model = _fit_template(template, box, size, params) if template is not None else \
             Contour.from_box(box, size, **params)
-        if polarity == "auto":
-            model.learn_polarity(FeatureMaps(frame))
-        else:
-            model.polarity = polarity
-        return model
+        return _learn_contour(model, frame, polarity, colour)
     if name == "plate":
-        return _plate_from_box(size, box, params.pop("layout", None), params)
+        appearance = params.pop("appearance", True)
+        return _plate_from_box(size, box, params.pop("layout", None), params, frame if appearance else None)
     raise VideoError(f"model {name!r} does not start from a box; choose from box, contour, plate")
+
+
+def _learn_contour(model, frame, polarity, colour):
+    """What the contour learns from the first frame: the edge polarity (``"auto"``: learned,
+    :meth:`Contour.learn_polarity`; else as given) and the colour term (``"auto"``: on for
+    colour video, :meth:`Contour.learn_colour`; ``True``/``False``)."""
+    if polarity == "auto":
+        model.learn_polarity(FeatureMaps(frame))
+    else:
+        model.polarity = polarity
+    if colour == "auto":
+        colour = not is_grey(frame)
+    if colour:
+        model.learn_colour(frame)
+    return model
 
 
 def _start_box(clip, init, init_gt):
@@ -142,14 +157,14 @@ def build_model(name, clip, *, init=None, init_gt=None, template=None, polarity=
             raise VideoError("the box model needs a start: --init x,y,w,h or --init-gt")
         return model_from_box("box", _first_frame(clip), _start_box(clip, init, init_gt), **params)
     if name == "contour":
+        colour = params.pop("colour", "auto")
+        if colour == "auto" and (clip.meta or {}).get("model"):
+            colour = False  # a rendered clip: the thesis's edge likelihood, as its experiments
         if init is not None:
-            return model_from_box("contour", _first_frame(clip), init, template=template, polarity=polarity, **params)
+            return model_from_box("contour", _first_frame(clip), init, template=template, polarity=polarity,
+                                  colour=colour, **params)
         model = _contour(clip, size, init, init_gt, template, params)
-        if polarity == "auto":
-            model.learn_polarity(FeatureMaps(_first_frame(clip)))
-        else:
-            model.polarity = polarity
-        return model
+        return _learn_contour(model, _first_frame(clip), polarity, colour)
     if name == "plate":
         return _plate(clip, size, init, init_gt, params)
     if name == "landmarks":
@@ -192,17 +207,21 @@ def _landmarks(clip, size, init_gt, template, params):
 def _plate(clip, size, init, init_gt, params):
     """Plate model; without a start it acquires plates through the entering-car component.
     The layout is the given one, the clip's, the one nearest the start box's aspect ratio, or jp."""
-    from .models.plate import Plate
-
     box = init
     if box is None and init_gt is not None:
         row = initial_truth(clip, init_gt)
         box = (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"])
     layout = params.pop("layout", None) or (clip.meta or {}).get("layout")
-    return _plate_from_box(size, box, layout, params)
+    appearance = params.pop("appearance", "auto")
+    if appearance == "auto":  # a rendered clip: the plate likelihood alone, as the thesis experiments
+        appearance = not (clip.meta or {}).get("model")
+    frame = _first_frame(clip) if appearance and box is not None else None
+    return _plate_from_box(size, box, layout, params, frame)
 
 
-def _plate_from_box(size, box, layout, params):
+def _plate_from_box(size, box, layout, params, frame=None):
+    """A plate model started at ``box`` (or acquiring when ``None``); with the first ``frame``,
+    the appearance of the plate in the box is learned too (:meth:`Plate.learn_appearance`)."""
     from .models.plate import Plate
 
     if layout is None and box is not None:  # the layout whose aspect ratio is nearest the box's
@@ -216,6 +235,8 @@ def _plate_from_box(size, box, layout, params):
         pose = np.array([x + w / 2, y + h / 2, 0.0, w])
         model.prior_mean = np.concatenate([pose, pose, [0.0]])
         model.start = (pose, np.array([0.05 * w, 0.05 * h, 0.03, 0.05 * w]))
+        if frame is not None:
+            model.learn_appearance(frame, (x, y, w, h))
     return model
 
 

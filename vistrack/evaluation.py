@@ -30,7 +30,7 @@ import numpy as np
 from .builders import build_model
 from .clips import load_clip
 from .filters import ALGORITHMS, make_filter
-from .metrics import center_error, contour_lost_threshold, iou, summarize_runs
+from .metrics import IOU_THRESHOLDS, center_error, contour_lost_threshold, iou, summarize_runs
 from .runtime import keep_freed_memory
 from .tracking import track
 from .video import VideoError
@@ -41,7 +41,6 @@ __all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_conf
 #: OpenCV trackers by name -> constructor attribute (contrib ones may be missing)
 OPENCV_TRACKERS = {"opencv-mil": "TrackerMIL_create", "opencv-kcf": "TrackerKCF_create",
                    "opencv-csrt": "TrackerCSRT_create"}
-IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
 
 
 @dataclass

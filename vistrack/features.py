@@ -198,7 +198,10 @@ class FeatureMaps:
         self.dog_sizes = {"small": tuple(dog_small), "large": tuple(dog_large)}
         self._integrals = {}
         self._gradients = {}
+        self._labels = {}
         self._buffers = buffers
+        #: a model's own maps of this frame (the plate's appearance maps), set by its ``observe``
+        self.appearance = None
 
     def _buf(self, name, shape, dtype=np.float32):
         """A reusable output array (fresh arrays cost a page fault per 4 KiB, DESIGN.md);
@@ -281,6 +284,13 @@ class FeatureMaps:
         of the image smoothed with std ``sigma`` (:meth:`gradient`); zero outside the
         frame. Returns an array of shape ``x.shape + (2,)``."""
         return remap_points(self.gradient(sigma)[0], x, y)
+
+    def colour_labels(self, grey=False):
+        """:func:`colour_bins` of the frame, ``(H, W) uint8`` (cached per ``grey``)."""
+        grey = bool(grey) or self.frame.ndim == 2
+        if grey not in self._labels:
+            self._labels[grey] = colour_bins(self.frame, grey, dst=self._buf(f"labels{int(grey)}", self.shape, np.uint8))
+        return self._labels[grey]
 
     @cached_property
     def dog_small(self):

@@ -10,7 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["center_error", "contour_lost_threshold", "summarize_runs", "landmark_error", "iou"]
+__all__ = ["center_error", "contour_lost_threshold", "summarize_runs", "landmark_error", "iou", "success_auc",
+           "IOU_THRESHOLDS"]
+
+#: IoU thresholds of the success plot (OTB protocol)
+IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
 
 
 def center_error(est_cx, est_cy, true_cx, true_cy):
@@ -69,3 +73,10 @@ def iou(a, b):
     union = a[..., 2] * a[..., 3] + b[..., 2] * b[..., 3] - inter
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(union > 0, inter / union, 0.0)
+
+
+def success_auc(ious):
+    """Area under the success plot (OTB): the mean over :data:`IOU_THRESHOLDS` of the share of
+    frames whose IoU ``(frames,)`` exceeds the threshold."""
+    ious = np.nan_to_num(np.asarray(ious, float))
+    return float(np.mean([(ious > t).mean() for t in IOU_THRESHOLDS])) if ious.size else float("nan")

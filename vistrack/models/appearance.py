@@ -17,7 +17,12 @@ Colour term (Pérez, Hue, Vermaak and Gangnet 2002)
 
     ``h_in`` inside the box and ``h_ring`` in the ring around it (width ``ring`` times the
     mean side): a box inside the object sees the object in its ring as well, so the
-    second part keeps the scale from shrinking.
+    second part keeps the scale from shrinking. Plus the back-projection contrast
+    ``+ λ_c (mean_in β - mean_ring β)``, with ``β_u = q_u / (q_u + b_u + 10⁻³)`` per bin
+    (the target's share of each colour in the first frame, ``b`` the ring's histogram):
+    the same contrast the LIS proposal map scores (:meth:`Appearance.proposal_map`), so
+    proposal and likelihood agree (4 seeds on the real clips: hand_vot2013 AUC
+    0.27 -> 0.45, mean of the four 0.66 -> 0.70; ``docs/experiments.md``).
 Template term (spatial layout; grey levels)
     The grey image sampled bilinearly on an ``m_x x m_y`` grid over the box (about
     ``template_points`` points, the grid's aspect the box's), zero-mean and unit-norm:
@@ -39,7 +44,7 @@ import numpy as np
 
 from ..features import bin_integrals, box_sums, colour_bins, is_grey, n_colour_bins, remap_points
 
-__all__ = ["Appearance", "AppearanceFrame"]
+__all__ = ["Appearance", "AppearanceFrame", "TargetColour"]
 
 
 def _unit_rows(v):
@@ -47,6 +52,64 @@ def _unit_rows(v):
     v = v - v.mean(axis=-1, keepdims=True)
     norm = np.sqrt(np.einsum("...i,...i->...", v, v))[..., None]
     return v / np.maximum(norm, 1e-6)
+
+
+class TargetColour:
+    """The target's colour histogram against its background, and the colour term of a region.
+
+    Parameters
+    ----------
+    inner, ring : array_like of shape (B,)
+        Bin counts inside the target and in the ring (background) around it, first frame.
+    lambda_colour, kappa : float
+        ``λ_c`` and ``κ`` of :meth:`loglik` (module docstring).
+
+    Attributes
+    ----------
+    q : ndarray of shape (B,)
+        Target histogram, background-weighted and normalised.
+    bg_weight : ndarray of shape (B,)
+        Comaniciu's background weights ``v_u = min(1, b* / b_u)``.
+    backprojection : ndarray of shape (B,) float32
+        ``β_u = q_u / (q_u + b_u + 10⁻³)`` of the raw normalised histograms.
+    """
+
+    def __init__(self, inner, ring, *, lambda_colour=35.0, kappa=1.0):
+        inner = np.asarray(inner, float)
+        b = np.asarray(ring, float)
+        b_min = b[b > 0].min() if (b > 0).any() else 1.0
+        self.bg_weight = np.where(b > 0, np.minimum(1.0, b_min / np.maximum(b, 1e-12)), 1.0)
+        self.lambda_colour, self.kappa = float(lambda_colour), float(kappa)
+        self.q = self.normalise(inner)
+        self.q_first = self.q.copy()
+        q_raw = inner / max(inner.sum(), 1)
+        b_raw = b / max(b.sum(), 1)
+        self.backprojection = (q_raw / (q_raw + b_raw + 1e-3)).astype(np.float32)
+        self._bp = self.backprojection.astype(float)
+
+    def normalise(self, counts):
+        """Background-weighted, normalised histograms of bin counts ``(..., B)``."""
+        p = counts * self.bg_weight
+        s = p.sum(axis=-1, keepdims=True)
+        return p / np.where(s > 0, s, 1.0)
+
+    def d2(self, counts):
+        """``d²(h, q) = 1 - Σ_u sqrt(h_u q_u)`` for bin counts ``(..., B)``; empty: 1."""
+        return 1.0 - np.sqrt(self.normalise(counts) * self.q).sum(axis=-1)
+
+    def loglik(self, inner, ring):
+        """``log r_c (...)`` of regions with bin counts ``inner`` and ``ring`` ``(..., B)``:
+        ``-λ_c [d²(h_in, q) + κ (1 - d²(h_ring, q))] + λ_c (mean_in β - mean_ring β)``."""
+        inner = np.asarray(inner, float)
+        ring = np.asarray(ring, float)
+        d = self.d2(inner) + self.kappa * (1.0 - self.d2(ring))
+        contrast = (inner @ self._bp) / np.maximum(inner.sum(-1), 1) - (ring @ self._bp) / np.maximum(ring.sum(-1), 1)
+        return self.lambda_colour * (contrast - d)
+
+    def adapt(self, counts, rate):
+        """``q <- (1 - rate) q + rate h`` for the bin counts ``(B,)`` of the estimate."""
+        if np.sum(counts) > 0:
+            self.q = (1 - rate) * self.q + rate * self.normalise(np.asarray(counts, float))
 
 
 class AppearanceFrame:
@@ -147,17 +210,14 @@ class Appearance:
         cx, cy = x + w / 2, y + h / 2
         obs = self.frame(frame, self.roi(np.array([[cx, cy, w, h]]), margin=1.5 * (w + h)))
         inner, ring_counts = obs.histograms(np.array([cx]), np.array([cy]), w, h, grow=0.75 * (w + h))
-        b = ring_counts[0].astype(float)
-        b_min = b[b > 0].min() if (b > 0).any() else 1.0
-        self.bg_weight = np.where(b > 0, np.minimum(1.0, b_min / np.maximum(b, 1e-12)), 1.0)
-        self.q = self._normalise(inner[0])
-        self.q_first = self.q.copy()
+        self.colour = TargetColour(inner[0], ring_counts[0], lambda_colour=lambda_colour, kappa=kappa)
         self.template = self.patches(obs, np.array([[cx, cy, w, h]]))[0]
         self.template_first = self.template.copy()
-        # log-odds of the target against its surroundings per bin (the back-projection)
-        q_raw = inner[0] / max(inner[0].sum(), 1)
-        b_raw = b / max(b.sum(), 1)
-        self.backprojection = (q_raw / (q_raw + b_raw + 1e-3)).astype(np.float32)
+
+    @property
+    def backprojection(self):
+        """``β (B,)``: the target's share of each colour bin in the first frame."""
+        return self.colour.backprojection
 
     # -- per frame ---------------------------------------------------------------------
     def roi(self, boxes, margin):
@@ -180,16 +240,6 @@ class Appearance:
         return AppearanceFrame(frame, (x0, y0, max(x1, x0 + 1), max(y1, y0 + 1)), self.f, self.grey)
 
     # -- the likelihood ------------------------------------------------------------------
-    def _normalise(self, counts):
-        p = counts * self.bg_weight
-        s = p.sum(axis=-1, keepdims=True)
-        return p / np.where(s > 0, s, 1.0)
-
-    def _d2(self, counts):
-        """``d²(h, q)`` for bin counts ``(..., B)``; an empty box is at distance 1."""
-        p = self._normalise(counts)
-        return 1.0 - np.sqrt(p * self.q).sum(axis=-1)
-
     def patches(self, obs, boxes):
         """Template vectors ``(N, 3M)`` of ``boxes (N, 4)`` (cx, cy, w, h): the grey levels on the
         grid and the gradient ``(gx, gy)`` there, each part unit-norm and scaled by ``1/√2``,
@@ -208,7 +258,7 @@ class Appearance:
         b = np.asarray(boxes, float)
         grow = self.ring * 0.5 * (b[:, 2] + b[:, 3])
         inner, ring = obs.histograms(b[:, 0], b[:, 1], b[:, 2], b[:, 3], grow=grow)
-        log_rc = -self.lambda_colour * (self._d2(inner) + self.kappa * (1.0 - self._d2(ring)))
+        log_rc = self.colour.loglik(inner, ring)
         ncc = self.patches(obs, b) @ self.template
         return log_rc, self.lambda_template * (ncc - 1.0), ncc
 
@@ -231,8 +281,7 @@ class Appearance:
         m = len(self.grid)
         self.template = np.concatenate([_unit_rows(t[:m]), t[m:] / max(np.linalg.norm(t[m:]), 1e-6)]) * np.sqrt(0.5)
         inner, _ = obs.histograms(b[:, 0], b[:, 1], b[:, 2], b[:, 3])
-        if inner[0].sum() > 0:
-            self.q = (1 - a / 2) * self.q + (a / 2) * self._normalise(inner[0])
+        self.colour.adapt(inner[0], a / 2)
         return True
 
     # -- maps for local moves ------------------------------------------------------------

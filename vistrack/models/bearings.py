@@ -23,8 +23,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize, special
 
-from ..filters.lis import GaussMixtureProposal
-from ..filters.lls import Window
+from ..proposals import GaussMixtureProposal, Window
 
 __all__ = ["Bearings", "wrapped_cauchy_logpdf", "gaussian_fit_to_cauchy"]
 

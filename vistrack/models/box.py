@@ -18,7 +18,7 @@ Local moves (thesis 001, §4.3–4.5)
     (half the box's mean side) or lowers ``r`` (eq. 4.1). ``lis``: a grid of translations
     about the prediction with ``q`` from one per-frame map
     (:meth:`Appearance.proposal_map`; :class:`~vistrack.proposals.MapProposal`).
-    ``lls``: the exact ``r`` on a grid of the window (:class:`~vistrack.filters.lls.Window`).
+    ``lls``: the exact ``r`` on a grid of the window (:class:`~vistrack.proposals.Window`).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..features import remap_points
-from ..proposals import MapProposal
+from ..proposals import MapProposal, Window
 from ..proposals.translation import TranslationMoves
 from .appearance import Appearance
 
@@ -61,7 +61,7 @@ class Box(TranslationMoves):
     dim = 6
     first_step = False
 
-    def __init__(self, frame, box, *, sigma_xy=0.06, sigma_scale=0.003, damping=0.5, prior_std=(0.04, 0.02),
+    def __init__(self, frame, box, *, sigma_xy=0.06, sigma_scale=0.002, damping=0.5, prior_std=(0.04, 0.02),
                  window=1.5, **appearance):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
@@ -188,8 +188,6 @@ class Box(TranslationMoves):
         return MapProposal(self)
 
     def lls_window(self):
-        from ..filters.lls import Window
-
         return Window("gaussian", [self.window_std()] * 2, grid=5, truncate=2.5)
 
     def local_search(self, obs, states):

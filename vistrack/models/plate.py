@@ -22,6 +22,7 @@ import cv2
 import numpy as np
 
 from ..features import remap_points
+from ..proposals import Window
 from .plate_layout import LAYOUTS, plate_points
 
 __all__ = ["PlateLikelihood", "thesis_weights", "scale_band", "LEARNT_WEIGHTS"]
@@ -440,9 +441,47 @@ class Plate:
             (np.abs(x[:, 3] - best[3]) <= 0.25 * best[3])
         return (w[near] @ x[near]) / w[near].sum()
 
+    # -- appearance learned from an --init box (real footage) -------------------------
+    #: :class:`~vistrack.models.appearance.Appearance` of the plate in the first frame
+    #: (:meth:`learn_appearance`); ``None``: the plate likelihood alone
+    app = None
+
+    def learn_appearance(self, frame, box, **params):
+        """Add the box model's appearance term, learned from the plate at ``box (x, y, w, h)``
+        in the first ``frame``: ``log r = log r_plate + log r_app`` on the parallelogram's
+        bounding box. The plate likelihood was fitted to rendered plates; the learned colour
+        and template follow a plate of any colour and font (a yellow plate, a white plate on
+        a white car). Returns the :class:`~vistrack.models.appearance.Appearance`."""
+        from .appearance import Appearance
+
+        self.app = Appearance(frame, box, **params)
+        return self.app
+
+    def observe(self, maps, particles):
+        """The feature maps, with (when the model has an appearance) the appearance maps of the
+        whole frame at the appearance's working resolution as ``maps.appearance`` (entering
+        cars can be anywhere)."""
+        if self.app is not None:
+            h, w = maps.shape
+            maps.appearance = self.app.frame(maps.frame, (0, 0, w, h))
+        return maps
+
+    def _app_boxes(self, states):
+        x, y, w, h = self.box(states).T
+        return np.stack([x + w / 2, y + h / 2, w, h], axis=1)
+
+    def adapt(self, obs, estimate):
+        """Adapt the appearance on a confident frame (:meth:`Appearance.adapt`)."""
+        if self.app is None:
+            return False
+        return self.app.adapt(obs.appearance, self._app_boxes(estimate)[0])
+
     # -- likelihood and output ------------------------------------------------------
     def loglik(self, obs, states):
-        return self.lik.loglik(obs, states)
+        ll = self.lik.loglik(obs, states)
+        if self.app is not None:
+            ll = ll + self.app.loglik(obs.appearance, self._app_boxes(states))
+        return ll
 
     def vertices(self, states):
         from .plate_layout import plate_vertices
@@ -461,13 +500,22 @@ class Plate:
         """Whether a plate is reported at ``state``: ``log r`` above :attr:`visible_loglik` and the
         whole parallelogram at least :attr:`visible_margin` px inside the frame (the ground truth
         counts a plate as in view when it is wholly inside; an estimate at the border is as
-        likely a plate half gone)."""
+        likely a plate half gone). With a learned appearance (:meth:`learn_appearance`), also
+        when the estimate matches the first frame's plate: the template's ``ncc`` at least the
+        appearance's adaptation bar (0.6)."""
         s = np.asarray(state, float).reshape(1, -1)
         v = self.vertices(s)[0]
         w, h = self.frame_size
         d = self.visible_margin
         inside = bool(np.all((v[:, 0] >= d) & (v[:, 0] <= w - 1 - d) & (v[:, 1] >= d) & (v[:, 1] <= h - 1 - d)))
-        return inside and bool(self.loglik(obs, s)[0] / self.lik.sharpness > self.visible_loglik)
+        if not inside:
+            return False
+        if bool(self.lik.loglik(obs, s)[0] / self.lik.sharpness > self.visible_loglik):
+            return True
+        if self.app is None:
+            return False
+        _, _, ncc = self.app.terms(obs.appearance, self._app_boxes(s))
+        return bool(ncc[0] >= self.app.adapt_min_ncc)
 
     def describe(self, state):
         s = np.asarray(state, float).reshape(1, -1)
@@ -508,8 +556,6 @@ class Plate:
         return self.lik.loglik_sparse(obs, states, off)
 
     def lls_window(self):
-        from ..filters.lls import Window
-
         size = self.enter_mean[3]
         return Window("box", (size, size / self.layout.aspect), grid=9)
 

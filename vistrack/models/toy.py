@@ -9,8 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..filters.lis import GaussMixtureProposal
-from ..filters.lls import Window
+from ..proposals import GaussMixtureProposal, Window
 from ..gaussian import gaussian_product
 
 __all__ = ["GaussMixtureToy"]

@@ -1,5 +1,7 @@
-"""Local proposals shared by models (models never import filters)."""
+"""Local proposals and windows shared by models and filters (models never import filters)."""
 
 from .grid import MapProposal, categorical_rows
+from .mixture import GaussMixtureProposal
+from .window import Window
 
-__all__ = ["MapProposal", "categorical_rows"]
+__all__ = ["MapProposal", "GaussMixtureProposal", "Window", "categorical_rows"]

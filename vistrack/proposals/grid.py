@@ -3,7 +3,7 @@
 LIS perturbs the prediction ``X_t`` to ``Z_t ~ q(.) g(X_t - .) / alpha``. Here ``q`` is a
 map over translations that the model computes once per frame (``model.proposal_map``), read
 bilinearly at the centres ``c_j = u + σ o_j`` of a grid of cells around each particle's
-translation ``u`` (``o_j``: the unit grid of a Gaussian :class:`~vistrack.filters.lls.Window`,
+translation ``u`` (``o_j``: the unit grid of a Gaussian :class:`~vistrack.proposals.Window`,
 ``σ``: the particle's window std). A cell is drawn ``∝ q(c_j) g(σ o_j)`` and ``Z`` uniformly
 inside it, so the sampling density is ``h(Z) = q(c_j) g(σ o_j) / alpha_hat`` with
 ``alpha_hat = Σ_k q(c_k) g(σ o_k) |cell|``. The proper LIS weight

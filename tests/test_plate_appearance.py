@@ -1,0 +1,65 @@
+"""The plate model on a plate its rendered-plate likelihood was not fitted to: with ``--init``
+(``model_from_box``) it learns the plate's appearance from the first frame and follows it."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+import vistrack
+from vistrack.builders import model_from_box
+from vistrack.features import FeatureMaps
+
+H, W = 240, 320
+PW, PH = 64, 14  # a single-row plate: aspect about 4.6
+
+
+def road(seed=0):
+    rng = np.random.default_rng(seed)
+    noise = cv2.GaussianBlur(rng.normal(0, 1, (H, W)).astype(np.float32), (0, 0), 3)
+    base = (90 + 250 * noise).clip(0, 255)
+    return np.dstack([base, base, base * 1.05]).clip(0, 255).astype(np.uint8)
+
+
+def draw_plate(img, cx, cy):
+    """A yellow plate with dark characters centred at (cx, cy)."""
+    out = img.copy()
+    x0, y0 = int(round(cx - PW / 2)), int(round(cy - PH / 2))
+    cv2.rectangle(out, (x0, y0), (x0 + PW - 1, y0 + PH - 1), (0, 200, 240), -1)
+    for k in range(7):
+        cv2.rectangle(out, (x0 + 4 + 8 * k, y0 + 3), (x0 + 8 + 8 * k, y0 + PH - 4), (20, 20, 20), -1)
+    return out
+
+
+def centre(t):
+    return 120 + 4.0 * t, 150 + 1.5 * t
+
+
+def test_plate_follows_a_yellow_plate_after_learning_it():
+    bg = road()
+    frames = [draw_plate(bg, *centre(t)) for t in range(20)]
+    cx, cy = centre(0)
+    trk = vistrack.Tracker(model="plate", algo="lis", particles=100, seed=1, layout="single-row")
+    trk.init(frames[0], (cx - PW / 2, cy - PH / 2, PW, PH))
+    assert trk.model.app is not None
+    errs = []
+    for t in range(1, 20):
+        ok, (x, y, w, h) = trk.update(frames[t])
+        errs.append(np.hypot(x + w / 2 - centre(t)[0], y + h / 2 - centre(t)[1]))
+    assert max(errs) < 4.0, errs
+    assert ok  # reported visible: the estimate matches the learned plate
+
+
+def test_appearance_adds_to_the_plate_likelihood_and_can_be_turned_off():
+    img = draw_plate(road(), 160, 120)
+    box = (160 - PW / 2, 120 - PH / 2, PW, PH)
+    with_app = model_from_box("plate", img, box, layout="single-row")
+    plain = model_from_box("plate", img, box, layout="single-row", appearance=False)
+    assert plain.app is None
+    maps = with_app.observe(FeatureMaps(img), None)
+    states = np.tile(with_app.prior_mean, (3, 1))
+    states[1, 0] += 12
+    states[2, 1] -= 9
+    extra = with_app.app.loglik(maps.appearance, with_app._app_boxes(states))
+    np.testing.assert_allclose(with_app.loglik(maps, states), plain.loglik(maps, states) + extra, atol=1e-9)
+    assert np.argmax(extra) == 0  # the appearance term peaks at the learned plate
