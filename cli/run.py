@@ -58,9 +58,12 @@ RUN_ALGOS = ("bootstrap", "ls-n-ips", "lls", "lis", "avpf", "condensation",
 @click.option("--ess-threshold", default=None, type=click.FloatRange(0, 1),
               help="Resample when ESS < threshold·N [default: every frame].")
 @click.option("--max-frames", type=click.IntRange(min=1), help="Stop after this many frames.")
+@click.option("--no-colour", "no_colour", is_flag=True,
+              help="Contour: edges only (no colour term, which is on for colour video). Plate: the plate "
+                   "likelihood only (no appearance learned from the --init box).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary.")
 def run(video, model_name, layout, algo, particles, seed, init, init_gt, template_path, track_path, out_path, show_particles,
-        resample, ess_threshold, max_frames, quiet):
+        resample, ess_threshold, max_frames, no_colour, quiet):
     """Track the object in VIDEO (a video file, an image folder or a clip folder).
 
     \b
@@ -98,6 +101,10 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
             raise click.UsageError("--template is for the contour and landmarks models")
         if name == "landmarks" and init is not None:
             raise click.UsageError("--init is a box; the landmarks model starts from --template FILE or --init-gt")
+        if no_colour and name in ("contour", "plate"):
+            extra["colour" if name == "contour" else "appearance"] = False
+        elif no_colour:
+            raise click.UsageError("--no-colour is for the contour and plate models")
         spec = get_model_spec(name)
         algo = algo or spec.default_algo
         if algo not in spec.algos:
@@ -125,7 +132,7 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", DegenerateWeightsWarning)
             for res in track(frames(), filt, particles, rng):
-                vis = model.visible(res.maps, res.estimate) if hasattr(model, "visible") else True
+                vis = model.visible(res.maps, res.estimate)
                 row = {"frame": res.index, "visible": int(vis)}
                 row.update(model.describe(res.estimate))
                 row["ess"] = res.ess

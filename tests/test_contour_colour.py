@@ -84,3 +84,33 @@ def test_full_likelihood_adds_the_colour_term():
     states = poses(with_c, np.array([[0.0, 0.0], [6.0, -4.0], [-10.0, 8.0]]))
     np.testing.assert_allclose(with_c.loglik(obs, states),
                                edges.loglik(obs, states) + with_c.colour_loglik(obs, states[:, :4]), atol=1e-9)
+
+
+def test_run_no_colour_gives_the_edges_only_track_and_is_refused_for_the_box(tmp_path, capsys):
+    """``vistrack run --model contour --no-colour`` is the edges-only model (the Python API with
+    ``colour=False``); by default the colour term is on; ``--no-colour`` makes no sense on a box."""
+    import vistrack
+    from cli_helpers import run
+    from vistrack.clips import read_groundtruth_csv
+    from vistrack.video import open_video
+
+    video = tmp_path / "clip.avi"
+    wr = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 25, (W, H))
+    for t in range(8):
+        wr.write(frame(CX + 3 * t, CY + t))
+    wr.release()
+    init = ",".join(f"{v:g}" for v in box())
+    tracks = {}
+    for flag in ([], ["--no-colour"]):
+        code, _, err = run(["run", str(video), "--model", "contour", "--init", init, "--track",
+                            str(tmp_path / "t.csv"), "-q", *flag], capsys)
+        assert code == 0, err
+        tracks[bool(flag)] = read_groundtruth_csv(tmp_path / "t.csv")["cx"]
+    frames = [f for _, f in open_video(video)]
+    t = vistrack.Tracker(model="contour", colour=False)
+    t.init(frames[0], box())
+    api = [t.result.estimate[0]] + [t.update(f) and t.result.estimate[0] for f in frames[1:]]
+    np.testing.assert_allclose(tracks[True], api, atol=1e-3)
+    assert not np.allclose(tracks[True], tracks[False])
+    code, _, err = run(["run", str(video), "--init", init, "--no-colour"], capsys)
+    assert code != 0 and "--no-colour is for the contour and plate models" in err

@@ -102,5 +102,4 @@ class Tracker:
 
     @property
     def visible(self):
-        vis = getattr(self.model, "visible", None)
-        return bool(vis(self.result.maps, self.result.estimate)) if vis else True
+        return bool(self.model.visible(self.result.maps, self.result.estimate))

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .features import FeatureMaps
+from .models.protocol import VideoModel, require
 from .particles import ParticleSet
 
 __all__ = ["FrameResult", "FrameStepper", "track", "top_particles"]
@@ -49,36 +50,35 @@ class FrameStepper:
 
     The one loop body behind :func:`track`, ``vistrack run``, ``eval`` and
     :class:`vistrack.Tracker`. The first frame observes ``X_1 ~ p_0``
-    (``filt.first_step``). ``estimator(particles)`` gives the point estimate (default: the
-    model's ``estimate`` if it has one, else the weighted mean). A model with an
-    ``observe(maps, previous_particles)`` method turns each frame's maps into its
-    observation ``Y_t`` (landmarks: blob detection and association; box: the appearance
-    maps over the region the particles can reach); otherwise the maps are the observation.
-    A model with an ``adapt(obs, estimate)`` method (the box model's appearance) is told
-    each frame's estimate after the step. The feature maps of a frame live in buffers that
-    the next frame overwrites: use them before stepping again.
+    (``filt.first_step``). The model is a
+    :class:`~vistrack.models.protocol.VideoModel`: ``observe(maps, previous_particles)``
+    turns each frame's maps into its observation ``Y_t`` (the maps themselves by default;
+    landmarks: blob detection and association; box: the appearance maps over the region
+    the particles can reach), ``estimate(particles)`` gives the point estimate (unless
+    ``estimator`` is given) and ``adapt(obs, estimate)`` is told each frame's estimate
+    after the step (the box model's appearance). The feature maps of a frame live in
+    buffers that the next frame overwrites: use them before stepping again.
     """
 
     def __init__(self, filt, n, rng, *, estimator=None):
         self.filt, self.n, self.rng = filt, n, rng
         self.particles = None
-        self.estimator = estimator or getattr(filt.model, "estimate", None)
-        self._observe = getattr(filt.model, "observe", None)
-        self._adapt = getattr(filt.model, "adapt", None)
+        require(filt.model, (VideoModel,), "the frame loop")
+        self.model = filt.model
+        self.estimator = estimator or filt.model.estimate
         self._buffers = {}  # feature-map buffers reused from frame to frame
 
     def step(self, index, frame):
         """Track one BGR (or grey) ``frame``; returns its :class:`FrameResult`."""
         t0 = time.perf_counter()
         maps = FeatureMaps(frame, buffers=self._buffers)
-        obs = self._observe(maps, self.particles) if self._observe else maps
+        obs = self.model.observe(maps, self.particles)
         if self.particles is None:
             self.particles = self.filt.first_step(obs, self.n, self.rng)
         else:
             self.particles = self.filt.step(self.particles, obs, self.rng)
-        est = self.estimator(self.particles) if self.estimator else self.particles.mean()
-        if self._adapt:
-            self._adapt(obs, est)
+        est = self.estimator(self.particles)
+        self.model.adapt(obs, est)
         ms = (time.perf_counter() - t0) * 1e3
         return FrameResult(index, frame, self.particles, est, ms, maps)
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..particles import ParticleSet, checked_weights, normalized_weights
+from ..models.protocol import PredictMean, StateSpaceModel, offers
 from .base import ParticleFilter
 
 __all__ = ["AVPF"]
@@ -29,12 +30,13 @@ class AVPF(ParticleFilter):
     """
 
     name = "avpf"
+    needs = (StateSpaceModel,)
 
     def __init__(self, model, *, first_stage=None, point="mean", **kwargs):
         super().__init__(model, **kwargs)
         if point not in ("mean", "sample"):
             raise ValueError(f"point must be 'mean' or 'sample', got {point!r}")
-        if point == "mean" and not hasattr(model, "predict_mean"):
+        if point == "mean" and not offers(model, PredictMean):
             point = "sample"
         self.first_stage = first_stage
         self.point = point

@@ -17,6 +17,7 @@ import copy
 
 import numpy as np
 
+from ..models.protocol import Births, LocalMoves, ReservedLineages, offers, require
 from ..particles import ParticleSet, checked_weights, logsumexp
 from ..resampling import get_scheme, needs_resampling
 
@@ -38,7 +39,7 @@ def prior_as_kernel(model):
     m.predict = lambda prev, rng: model.sample_prior(len(prev), rng)
     m.predict_mean = lambda prev: np.broadcast_to(model.prior_mean, prev.shape).copy()
     m.transition_logpdf = lambda new, old: model.prior_logpdf(new)
-    if hasattr(model, "with_local_prior"):
+    if offers(model, LocalMoves):
         m.with_local = model.with_local_prior
     return m
 
@@ -67,21 +68,25 @@ class ParticleFilter:
     """
 
     name = "base"
+    #: the model protocols this filter needs (:mod:`vistrack.models.protocol`)
+    needs = ()
     #: parts whose default the model supplies: attribute -> model method name
     model_parts = {}
 
     def __init__(self, model, *, resample="systematic", ess_threshold=None, birth_reserve=None):
+        require(model, self.needs, self.name)
         self.model = model
         self.resample_scheme = get_scheme(resample)
         self.ess_threshold = ess_threshold
         self._birth_reserve = birth_reserve
         self._from_model = set()
+        self._first = None  # this filter on the first step's model (prior_as_kernel), built on first use
 
     def _set_part(self, attr, value):
         """Set ``attr`` to ``value``, or to what the model's default method gives."""
         if value is None:
             method = self.model_parts[attr]
-            if not hasattr(self.model, method):
+            if getattr(self.model, method, None) is None:
                 raise ValueError(f"{self.name} needs a {attr} and {type(self.model).__name__} does not supply one")
             value = getattr(self.model, method)()
             self._from_model.add(attr)
@@ -92,6 +97,7 @@ class ParticleFilter:
         came from the old model's defaults are taken from the new one."""
         other = copy.copy(self)
         other.model = model
+        other._first = None
         for attr in self._from_model:
             setattr(other, attr, getattr(model, self.model_parts[attr])())
         return other
@@ -100,9 +106,9 @@ class ParticleFilter:
         """``n`` particles ``X_1 ~ p_0`` updated with the first observation ``Y_1``."""
         if n < 1:
             raise ValueError(f"number of particles must be positive, got {n}")
-        if not hasattr(self, "_first"):
+        if self._first is None:
             self._first = self.bind(prior_as_kernel(self.model))
-        prior = ParticleSet(np.zeros((n, getattr(self.model, "dim", 1))))
+        prior = ParticleSet(np.zeros((n, self.model.dim)))
         return self._first.step(prior, obs, rng)
 
     def initialize(self, n, rng):
@@ -113,7 +119,9 @@ class ParticleFilter:
 
     @property
     def birth_reserve(self):
-        eps = self._birth_reserve if self._birth_reserve is not None else getattr(self.model, "birth_reserve", 0.0)
+        eps = self._birth_reserve
+        if eps is None:
+            eps = self.model.birth_reserve if offers(self.model, Births) else 0.0
         if not 0.0 <= eps < 1.0:  # ε = 1 would leave the tracked particles no draws (π_i = 0 < w_i)
             raise ValueError(f"birth_reserve must be in [0, 1), got {eps}")
         return float(eps)
@@ -139,9 +147,11 @@ class ParticleFilter:
         """
         w = particles.weights
         eps = self.birth_reserve
-        if eps > 0 and (hasattr(self.model, "reserved") or hasattr(self.model, "entering")):
-            reserved = getattr(self.model, "reserved", None)
-            born = reserved(particles) if reserved else self.model.entering(particles.states)
+        if eps > 0 and (offers(self.model, ReservedLineages) or offers(self.model, Births)):
+            if offers(self.model, ReservedLineages):
+                born = self.model.reserved(particles)
+            else:
+                born = self.model.entering(particles.states)
             w_b = float(w[born].sum())
             if 0.0 < w_b < 1.0:
                 ll = None if particles.loglik is None else np.where(born, particles.loglik, -np.inf)

@@ -5,6 +5,7 @@ Predict with the dynamics ``K``, weight with the likelihood ``r``, resample.
 
 from __future__ import annotations
 
+from ..models.protocol import StateSpaceModel
 from .base import ParticleFilter
 
 __all__ = ["Bootstrap"]
@@ -14,6 +15,7 @@ class Bootstrap(ParticleFilter):
     """``Z_t ~ K(.|Z_{t-1})``, ``w_t = r(Y_t|Z_t)``."""
 
     name = "bootstrap"
+    needs = (StateSpaceModel,)
 
     def propose(self, prev, obs, rng):
         x = self.model.predict(prev, rng)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..proposals import GaussMixtureProposal
+from ..models.protocol import StateSpaceModel
 from .base import ParticleFilter
 
 __all__ = ["LIS", "GaussMixtureProposal"]
@@ -32,6 +33,7 @@ class LIS(ParticleFilter):
     """
 
     name = "lis"
+    needs = (StateSpaceModel,)
     model_parts = {"proposal": "lis_proposal"}
 
     def __init__(self, model, proposal=None, **kwargs):

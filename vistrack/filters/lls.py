@@ -21,6 +21,7 @@ import numpy as np
 
 from ..particles import logsumexp
 from ..proposals import Window, categorical_rows
+from ..models.protocol import GridLikelihood, LocalMoves, StateSpaceModel, offers
 from .base import ParticleFilter
 
 __all__ = ["LLS", "Window"]
@@ -36,6 +37,7 @@ class LLS(ParticleFilter):
     """
 
     name = "lls"
+    needs = (StateSpaceModel, LocalMoves)
     model_parts = {"window": "lls_window"}
 
     def __init__(self, model, window=None, **kwargs):
@@ -48,7 +50,7 @@ class LLS(ParticleFilter):
         already made); any approximation there only changes the proposal, as
         the weight uses the exact ``r`` at the drawn point."""
         model, win = self.model, self.window
-        if hasattr(model, "loglik_local_grid"):
+        if offers(model, GridLikelihood):
             return model.loglik_local_grid(obs, x, win.offsets)
         n, k = x.shape[0], win.offsets.shape[0]
         cand_u = (u[:, None, :] + win.offsets[None]).reshape(n * k, -1)

@@ -12,6 +12,7 @@ The local search is model-supplied: ``model.local_search(obs, states)``
 
 from __future__ import annotations
 
+from ..models.protocol import LocalSearch, StateSpaceModel, require
 from .base import ParticleFilter
 
 __all__ = ["LSNIPS"]
@@ -27,11 +28,12 @@ class LSNIPS(ParticleFilter):
     """
 
     name = "ls-n-ips"
+    needs = (StateSpaceModel,)
 
     def __init__(self, model, local_search=None, **kwargs):
         super().__init__(model, **kwargs)
-        if local_search is None and not hasattr(model, "local_search"):
-            raise ValueError(f"ls-n-ips needs a local search and {type(model).__name__} does not supply one")
+        if local_search is None:
+            require(model, (LocalSearch,), self.name)
         self.local_search = local_search
 
     def propose(self, prev, obs, rng):

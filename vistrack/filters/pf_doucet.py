@@ -8,6 +8,7 @@ failure PF-EIS avoids (§4, Fig. 2c).
 
 from __future__ import annotations
 
+from ..models.protocol import LaplaceModel, StateSpaceModel
 from .laplace import LaplaceFilter, sample_laplace
 
 __all__ = ["PFDoucet"]
@@ -17,6 +18,7 @@ class PFDoucet(LaplaceFilter):
     """Gaussian proposal at the mode of ``p*(s, θ, c)``."""
 
     name = "pf-doucet"
+    needs = (StateSpaceModel, LaplaceModel)
 
     def propose(self, prev, obs, rng):
         model = self.model

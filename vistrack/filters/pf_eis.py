@@ -9,6 +9,7 @@
 
 from __future__ import annotations
 
+from ..models.protocol import EISModel, LaplaceModel, StateSpaceModel
 from .laplace import LaplaceFilter, sample_laplace
 
 __all__ = ["PFEIS"]
@@ -18,6 +19,7 @@ class PFEIS(LaplaceFilter):
     """Motion ``(s, θ)`` from the prior, shape velocity ``c`` from the Laplace proposal."""
 
     name = "pf-eis"
+    needs = (StateSpaceModel, LaplaceModel, EISModel)
 
     def sample_c(self, mode, hess, rng):
         """Step 3: ``c ~ N(m, Σ_IS)``; returns ``(c, log q(c))``."""

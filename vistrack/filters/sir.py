@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+from ..models.protocol import StateSpaceModel
 from .base import ParticleFilter
 
 __all__ = ["SIR"]
@@ -24,6 +25,7 @@ class SIR(ParticleFilter):
     """
 
     name = "sir"
+    needs = (StateSpaceModel,)
     model_parts = {"proposal": "sir_proposal"}
 
     def __init__(self, model, proposal=None, **kwargs):

@@ -29,13 +29,14 @@ from ..features import remap_points
 from ..proposals import MapProposal, Window
 from ..proposals.translation import TranslationMoves
 from .appearance import Appearance
+from .protocol import VideoModelBase
 
 __all__ = ["Box"]
 
 _LOG2PI = np.log(2 * np.pi)
 
 
-class Box(TranslationMoves):
+class Box(TranslationMoves, VideoModelBase):
     """Box tracking model with appearance learned from the first frame.
 
     Parameters

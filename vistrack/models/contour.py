@@ -61,6 +61,7 @@ from ..features import is_grey
 from ..proposals import GaussMixtureProposal, Window
 from ..proposals.translation import TranslationMoves
 from .appearance import TargetColour
+from .protocol import VideoModelBase
 
 __all__ = ["BSpline", "Contour", "ellipse_template", "pose_from", "pose_params"]
 
@@ -140,7 +141,7 @@ def _edge_peaks(gn, thresh):
     return peak
 
 
-class Contour(TranslationMoves):
+class Contour(TranslationMoves, VideoModelBase):
     """Contour tracking model with similarity pose and AR(2) dynamics.
 
     Parameters

@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..features import blob_peaks
+from .protocol import VideoModelBase
 
 __all__ = ["Landmarks", "LandmarkVideo", "VIDEO_DYNAMICS", "regular_polygon", "tangent_basis", "shape_step",
            "initial_basis"]
@@ -423,7 +424,7 @@ def _pd_or(hess, fallback):
     return np.where(ok[:, None, None], hess, fallback)
 
 
-class LandmarkVideo(Landmarks):
+class LandmarkVideo(Landmarks, VideoModelBase):
     """The landmark model on video frames: pixels, blob detection and association.
 
     A configuration ``h`` lies at pixels ``centre + scale_px · (Re h, Im h)``.
@@ -503,17 +504,19 @@ class LandmarkVideo(Landmarks):
         return y
 
     def outline(self, states):
-        """Landmark polygons in pixels: ``(K, 2)`` for one state, ``(n, K, 2)`` for several."""
-        pts = self.to_pixels(self.configuration(np.atleast_2d(states)))
-        return pts[0] if np.ndim(states) == 1 else pts
+        """Landmark polygons in pixels, ``(n, K, 2)`` (one state: ``n = 1``), as every model's."""
+        return self.to_pixels(self.configuration(np.atleast_2d(states)))
 
-    def visible(self, obs, state):
-        return True
+    def box(self, states):
+        """Bounding boxes ``(n, 4)`` ``(x, y, w, h)`` of the landmark polygons."""
+        pts = self.outline(states)
+        lo, hi = pts.min(axis=1), pts.max(axis=1)
+        return np.concatenate([lo, hi - lo], axis=1)
 
     def describe(self, state):
         """Track-CSV columns: centre, box, rotation (deg), scale ``e^s``, then ``lx0.., ly0..``."""
         s = np.asarray(state, float)
-        pts = self.outline(s)
+        pts = self.outline(s)[0]
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         c = pts.mean(axis=0)
         row = {"cx": c[0], "cy": c[1], "w": hi[0] - lo[0], "h": hi[1] - lo[1],

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..features import remap_points
 from ..proposals import Window
+from .protocol import VideoModelBase
 from .plate_layout import LAYOUTS, plate_points
 
 __all__ = ["PlateLikelihood", "thesis_weights", "scale_band", "LEARNT_WEIGHTS"]
@@ -123,6 +124,10 @@ class PlateLikelihood:
         (vertex error LIS 5.95 / 5.97 / 6.73, bootstrap 4.31 / 5.42 / 6.58 px). 1 keeps
         ``log r`` the calibrated log-odds.
     """
+
+    #: point sets of the scans, built on first use (:meth:`loglik_sparse`, :meth:`scan`)
+    _sparse = None
+    _scan_sets = None
 
     def __init__(self, layout="jp", *, kappa=2.0, weights="learnt", per_unit=24, scan_per_unit=6, sharpness=1.0):
         self.layout = LAYOUTS[layout] if isinstance(layout, str) else layout
@@ -226,7 +231,7 @@ class PlateLikelihood:
         """``log r`` from the sparser point sets of the scans (``scan_per_unit``) at every pose
         shifted by ``offsets (N, C, 2)`` px: ``(N, C)``. The entering particles' coarse 2-D search of
         the proposal (any exactly computed density will do)."""
-        if not hasattr(self, "_sparse"):
+        if self._sparse is None:
             self._sparse = self._stack(self.scan_points)
         points, sl = self._sparse
         n, c = offsets.shape[:2]
@@ -251,7 +256,7 @@ class PlateLikelihood:
         may be any density computed exactly; the weight uses the full ``r``.
         Returns ``(N, k)``.
         """
-        if not hasattr(self, "_scan_sets"):
+        if self._scan_sets is None:
             self._scan_sets = {}
             for t in "hv":
                 idx = self._terms[t]
@@ -269,7 +274,7 @@ class PlateLikelihood:
         return h + v + c
 
 
-class Plate:
+class Plate(VideoModelBase):
     """License-plate tracking model (thesis 001, §1.3.2, §4.5.2).
 
     State ``(u, w, θ, s, u', w', θ', s', a)``: centre, angle of the non-vertical

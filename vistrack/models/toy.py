@@ -72,6 +72,8 @@ class GaussMixtureToy:
     def with_local(self, states, u):
         return np.asarray(u, float).reshape(len(states), 1)
 
+    with_local_prior = with_local  # the state is its local coordinate
+
     def local_mixture(self, obs, states):
         """``q = f`` itself: LIS with this proposal is exact LLS (§4.5)."""
         n, k = len(states), len(self.mu)
