@@ -15,6 +15,7 @@ from tqdm import tqdm
 
 from vistrack.evaluation import (EvalConfig, check_algos, execute, find_clips, load_task_results, summarize,
                                  task_done, task_list)
+from vistrack.models.registry import get_model_spec
 from vistrack.video import VideoError
 
 from .options import IntList, StrList
@@ -166,9 +167,9 @@ def _equal_time(cfg, clips, frames=30):
 @click.option("--particles", default="100,750", show_default=True, type=IntList(), help="Particle counts N.")
 @click.option("--runs", default=20, show_default=True, type=click.IntRange(min=1), help="Runs per clip × algo × N.")
 @click.option("--seed", default=0, show_default=True, type=int)
-@click.option("--model", default="contour", show_default=True, type=click.Choice(["contour", "plate", "box"]),
-              help="Tracking model, started from the first ground-truth box (box: any object, appearance "
-                   "learned from the first frame; plate: layout from the box's aspect).")
+@click.option("--model", default="contour", show_default=True, metavar="[contour|plate|box]",
+              help="Tracking model, any registered one, started from the first ground-truth box (box: any "
+                   "object, appearance learned from the first frame; plate: layout from the box's aspect).")
 @click.option("--equal-time", is_flag=True, help="Pick N per algorithm for equal CPU time per frame.")
 @click.option("--scheduler", help="Address of a running Dask scheduler (tcp://host:8786) [default: a LocalCluster].")
 @click.option("--workers", default=0, show_default=True, type=click.IntRange(min=0),
@@ -191,6 +192,7 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, 
     if any(n < 1 for n in particles) or not particles:
         raise click.ClickException("--particles needs positive integers")
     try:
+        get_model_spec(model)
         check_algos(algos)
         clip_paths = find_clips(clips)
     except (ValueError, VideoError) as e:

@@ -12,6 +12,7 @@ from tqdm import tqdm
 from vistrack.builders import MODELS, build_model, read_support_points
 from vistrack.clips import load_clip, write_track_csv
 from vistrack.filters import make_filter
+from vistrack.models.registry import MODELS as MODEL_REGISTRY
 from vistrack.models.registry import get_model_spec
 from vistrack.metrics import center_error, contour_lost_threshold, iou, landmark_error, success_auc
 from vistrack.particles import DegenerateWeightsWarning
@@ -27,10 +28,29 @@ RUN_ALGOS = ("bootstrap", "ls-n-ips", "lls", "lis", "avpf", "condensation",
              "pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt")
 
 
+def model_options(name, *, layout, no_colour, template):
+    """The model-specific options of ``run`` as builder parameters; a usage error where they do
+    not apply to model ``name``."""
+    opts = {}
+    if template is not None:
+        if name in ("plate", "box"):
+            raise click.UsageError("--template is for the contour and landmarks models")
+        opts["template"] = template
+    if layout is not None:
+        if name != "plate":
+            raise click.UsageError("--layout is for the plate model")
+        opts["layout"] = layout
+    if no_colour:
+        if name not in ("contour", "plate"):
+            raise click.UsageError("--no-colour is for the contour and plate models")
+        opts["colour" if name == "contour" else "appearance"] = False
+    return opts
+
+
 @click.command()
 @click.argument("video", type=click.Path(exists=True))
-@click.option("--model", "model_name", type=click.Choice(MODELS), default=None,
-              help="Tracking model [default: the clip's meta.json model; else box when --init or --init-gt "
+@click.option("--model", "model_name", default=None, metavar="[" + "|".join(MODELS) + "]",
+              help="Tracking model, any registered one [default: the clip's meta.json model; else box when --init or --init-gt "
                    "is given (any object: colour and template learned from the first frame); else plate, "
                    "which finds plates by itself].")
 @click.option("--layout", type=click.Choice(["jp", "single-row"]), default=None,
@@ -93,19 +113,11 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
             if x >= fw or y >= fh or x + w <= 0 or y + h <= 0:
                 raise click.UsageError(f"--init box {x:g},{y:g},{w:g},{h:g} lies outside the {fw}x{fh} frame")
         name = model_name or clip.model_name or ("box" if init is not None or init_gt is not None else "plate")
-        if name not in MODELS:
+        if model_name is None and name not in MODEL_REGISTRY:
             raise click.ClickException(f"{video}: meta.json names model {name!r}, which this version cannot track")
-        template = read_support_points(template_path) if template_path else None
-        extra = {"layout": layout} if name == "plate" else {} if name == "box" else {"template": template}
-        if name in ("plate", "box") and template is not None:
-            raise click.UsageError("--template is for the contour and landmarks models")
-        if name == "landmarks" and init is not None:
-            raise click.UsageError("--init is a box; the landmarks model starts from --template FILE or --init-gt")
-        if no_colour and name in ("contour", "plate"):
-            extra["colour" if name == "contour" else "appearance"] = False
-        elif no_colour:
-            raise click.UsageError("--no-colour is for the contour and plate models")
         spec = get_model_spec(name)
+        extra = model_options(name, layout=layout, no_colour=no_colour,
+                              template=read_support_points(template_path) if template_path else None)
         algo = algo or spec.default_algo
         if algo not in spec.algos:
             raise click.UsageError(f"--algo {algo} does not run on the {name} model; "

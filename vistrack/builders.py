@@ -13,11 +13,10 @@ from .clips import read_groundtruth_csv
 from .features import FeatureMaps, is_grey
 from .models.contour import Contour
 from .models.registry import MODELS as _REGISTRY
+from .models.registry import ModelSpec, get_model_spec, register
 from .video import VideoError, read_rects
 
 __all__ = ["MODELS", "initial_truth", "build_model", "model_from_box", "read_support_points"]
-
-MODELS = tuple(_REGISTRY)
 
 
 def initial_truth(clip, init_gt):
@@ -91,7 +90,8 @@ def _first_frame(clip):
 
 def model_from_box(name, frame, box, **params):
     """Model ``name`` started from ``box`` ``(x, y, w, h)`` in the first ``frame`` (BGR or grey):
-    the one place where ``vistrack run --init`` and :class:`vistrack.Tracker` build a model.
+    the one place where ``vistrack run --init`` and :class:`vistrack.Tracker` build a model
+    (the registry's ``from_box``).
 
     ``box``: the appearance learned from the frame; ``contour``: the ellipse in the box, its
     edge polarity and (colour video; ``colour="auto"``) its colour term learned from the
@@ -99,23 +99,36 @@ def model_from_box(name, frame, box, **params):
     or the one nearest the box's aspect ratio), its appearance learned from the frame
     (``appearance=False``: the plate likelihood alone).
     """
-    frame = np.asarray(frame)
-    size = (frame.shape[1], frame.shape[0])
-    if name == "box":
-        from .models.box import Box
+    spec = _spec(name)
+    if spec.from_box is None:
+        starts = ", ".join(k for k, v in _REGISTRY.items() if v.from_box is not None)
+        raise VideoError(f"model {name!r} does not start from a box; choose from {starts}")
+    return spec.from_box(np.asarray(frame), box, **params)
 
-        return Box(frame, box, **params)
-    if name == "contour":
-        polarity = params.pop("polarity", "auto")
-        colour = params.pop("colour", "auto")
-        template = params.pop("template", None)
-        model = _fit_template(template, box, size, params) if template is not None else \
-            Contour.from_box(box, size, **params)
-        return _learn_contour(model, frame, polarity, colour)
-    if name == "plate":
-        appearance = params.pop("appearance", True)
-        return _plate_from_box(size, box, params.pop("layout", None), params, frame if appearance else None)
-    raise VideoError(f"model {name!r} does not start from a box; choose from box, contour, plate")
+
+def _spec(name):
+    try:
+        return get_model_spec(name)
+    except ValueError as e:
+        raise VideoError(str(e)) from None
+
+
+def _box_from_box(frame, box, **params):
+    from .models.box import Box
+
+    return Box(frame, box, **params)
+
+
+def _contour_from_box(frame, box, *, polarity="auto", colour="auto", template=None, **params):
+    size = (frame.shape[1], frame.shape[0])
+    model = _fit_template(template, box, size, params) if template is not None else \
+        Contour.from_box(box, size, **params)
+    return _learn_contour(model, frame, polarity, colour)
+
+
+def _plate_from_frame_box(frame, box, *, appearance=True, layout=None, **params):
+    size = (frame.shape[1], frame.shape[0])
+    return _plate_from_box(size, box, layout, params, frame if appearance else None)
 
 
 def _learn_contour(model, frame, polarity, colour):
@@ -141,7 +154,7 @@ def _start_box(clip, init, init_gt):
     return (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"])
 
 
-def build_model(name, clip, *, init=None, init_gt=None, template=None, polarity="auto", **params):
+def build_model(name, clip, *, init=None, init_gt=None, template=None, **params):
     """The model ``name`` for ``clip`` started from ``init`` (x, y, w, h) or the ground truth.
 
     For ``contour``: with the clip's template (meta.json) and a ground-truth row
@@ -150,26 +163,38 @@ def build_model(name, clip, *, init=None, init_gt=None, template=None, polarity=
     replaces the ellipse: scaled to fit the box when one is given, else used
     where it lies in the first frame. ``polarity="auto"`` learns the edge polarity from
     the first frame (:meth:`Contour.learn_polarity`); ``None`` keeps edges unsigned.
+
+    Dispatches on the registry (:mod:`vistrack.models.registry`): the model's ``from_clip``,
+    or without one its ``from_box`` at the start box in the clip's first frame.
     """
-    size = clip.source.size
-    if name == "box":
-        if init is None and init_gt is None:
-            raise VideoError("the box model needs a start: --init x,y,w,h or --init-gt")
-        return model_from_box("box", _first_frame(clip), _start_box(clip, init, init_gt), **params)
-    if name == "contour":
-        colour = params.pop("colour", "auto")
-        if colour == "auto" and (clip.meta or {}).get("model"):
-            colour = False  # a rendered clip: the thesis's edge likelihood, as its experiments
-        if init is not None:
-            return model_from_box("contour", _first_frame(clip), init, template=template, polarity=polarity,
-                                  colour=colour, **params)
-        model = _contour(clip, size, init, init_gt, template, params)
-        return _learn_contour(model, _first_frame(clip), polarity, colour)
-    if name == "plate":
-        return _plate(clip, size, init, init_gt, params)
-    if name == "landmarks":
-        return _landmarks(clip, size, init_gt, template, params)
-    raise VideoError(f"unknown model {name!r}; choose from {', '.join(MODELS)}")
+    spec = _spec(name)
+    if spec.from_clip is not None:
+        return spec.from_clip(clip, init=init, init_gt=init_gt, template=template, **params)
+    if init is None and init_gt is None:
+        raise VideoError(f"the {name} model needs a start: --init x,y,w,h or --init-gt")
+    if template is not None:
+        raise VideoError(f"--template is not for the {name} model")
+    return spec.from_box(_first_frame(clip), _start_box(clip, init, init_gt), **params)
+
+
+def _contour_from_clip(clip, *, init, init_gt, template, polarity="auto", colour="auto", **params):
+    if colour == "auto" and (clip.meta or {}).get("model"):
+        colour = False  # a rendered clip: the thesis's edge likelihood, as its experiments
+    if init is not None:
+        return _contour_from_box(_first_frame(clip), init, template=template, polarity=polarity, colour=colour,
+                                 **params)
+    model = _contour(clip, clip.source.size, init, init_gt, template, params)
+    return _learn_contour(model, _first_frame(clip), polarity, colour)
+
+
+def _plate_from_clip(clip, *, init, init_gt, template, **params):
+    return _plate(clip, clip.source.size, init, init_gt, params)
+
+
+def _landmarks_from_clip(clip, *, init, init_gt, template, **params):
+    if init is not None:
+        raise VideoError("--init is a box; the landmarks model starts from --template FILE or --init-gt")
+    return _landmarks(clip, clip.source.size, init_gt, template, params)
 
 
 def _landmarks(clip, size, init_gt, template, params):
@@ -271,3 +296,19 @@ def _contour(clip, size, init, init_gt, template, params):
                                      scale=row["scale"], angle_deg=row.get("angle_deg", 0.0), **params)
     return Contour.from_box((row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"]), size,
                             **params)
+
+
+# -- the built-in models -------------------------------------------------------------------
+_THESIS = ("lis", "bootstrap", "condensation", "ls-n-ips", "lls", "avpf")
+register(ModelSpec("box", _THESIS, "any object from a box: colour + template appearance learned from the first frame",
+                   from_box=_box_from_box))
+register(ModelSpec("contour", _THESIS, "B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
+                   from_box=_contour_from_box, from_clip=_contour_from_clip))
+register(ModelSpec("plate", ("lis", "bootstrap", "condensation", "lls", "avpf"),
+                   "license-plate template (thesis 001 §1.3.2); acquires plates without a box",
+                   from_box=_plate_from_frame_box, from_clip=_plate_from_clip))
+register(ModelSpec("landmarks", ("pf-eis-mt", "pf-eis", "pf-doucet", "pf-gordon", "bootstrap"),
+                   "landmark shape (seed 000 §3)", box_init=False, from_clip=_landmarks_from_clip))
+
+#: the built-in models' names (the registry may hold more: :func:`~vistrack.models.registry.register`)
+MODELS = tuple(_REGISTRY)

@@ -87,7 +87,8 @@ class ParticleFilter:
         if value is None:
             method = self.model_parts[attr]
             if getattr(self.model, method, None) is None:
-                raise ValueError(f"{self.name} needs a {attr} and {type(self.model).__name__} does not supply one")
+                raise ValueError(f"{self.name} needs a model with {method} (its {attr}); "
+                                 f"{type(self.model).__name__} does not supply it")
             value = getattr(self.model, method)()
             self._from_model.add(attr)
         setattr(self, attr, value)

@@ -1,12 +1,15 @@
 """The model registry: what each video model offers, read by ``run``, ``eval`` and ``vistrack.Tracker``.
 
-An entry names the model, the algorithms that run on it (the default first) and a one-line
-description. Adding a model is its module plus one :func:`register` call.
+An entry names the model, the algorithms that run on it (the default first), a one-line
+description and how to build it: from a box in the first frame (``from_box``) and/or from a
+clip (``from_clip``). Adding a model is its module plus one :func:`register` call; the
+built-in models are registered in :mod:`vistrack.builders`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 __all__ = ["ModelSpec", "MODELS", "register", "get_model_spec"]
 
@@ -23,12 +26,21 @@ class ModelSpec:
     description : str
     box_init : bool
         Whether it can start from an ``(x, y, w, h)`` box.
+    from_box : callable or None
+        ``from_box(frame, box, **params) -> model``: started from ``box`` ``(x, y, w, h)`` in the
+        first ``frame`` (BGR or grey array); what ``vistrack.Tracker`` and ``run --init`` call.
+    from_clip : callable or None
+        ``from_clip(clip, *, init, init_gt, template, **params) -> model`` for ``run`` and
+        ``eval`` on a clip; ``None``: ``from_box`` at the start box (``init`` or the first
+        ground-truth row) in the clip's first frame.
     """
 
     name: str
     algos: tuple
     description: str
     box_init: bool = True
+    from_box: Callable | None = None
+    from_clip: Callable | None = None
 
     @property
     def default_algo(self):
@@ -50,12 +62,3 @@ def get_model_spec(name):
         return MODELS[name]
     except KeyError:
         raise ValueError(f"unknown model {name!r}; choose from {', '.join(MODELS)}") from None
-
-
-_THESIS = ("lis", "bootstrap", "condensation", "ls-n-ips", "lls", "avpf")
-register(ModelSpec("box", _THESIS, "any object from a box: colour + template appearance learned from the first frame"))
-register(ModelSpec("contour", _THESIS, "B-spline contour on edges (thesis 001 §1.3.1)"))
-register(ModelSpec("plate", ("lis", "bootstrap", "condensation", "lls", "avpf"),
-                   "license-plate template (thesis 001 §1.3.2); acquires plates without a box"))
-register(ModelSpec("landmarks", ("pf-eis-mt", "pf-eis", "pf-doucet", "pf-gordon", "bootstrap"),
-                   "landmark shape (seed 000 §3)", box_init=False))
