@@ -15,6 +15,7 @@ from vistrack.runtime import keep_freed_memory
 
 from .demo import demo
 from .eval import eval_cmd
+from .fit import fit_plate
 from .reproduce import reproduce
 from .run import run
 from .synth import synth, synth_suite
@@ -44,6 +45,7 @@ def cli():
 cli.add_command(reproduce)
 cli.add_command(demo)
 cli.add_command(eval_cmd)
+cli.add_command(fit_plate)
 cli.add_command(run)
 cli.add_command(synth)
 cli.add_command(synth_suite)

@@ -6,7 +6,7 @@ import os
 
 import click
 
-__all__ = ["IntList", "StrList", "Box", "Size", "check_writable"]
+__all__ = ["IntList", "FloatList", "StrList", "Box", "Size", "check_writable"]
 
 
 class IntList(click.ParamType):
@@ -21,6 +21,23 @@ class IntList(click.ParamType):
             return [int(v) for v in str(value).split(",") if v.strip()]
         except ValueError:
             self.fail(f"expected comma-separated integers, got {value!r}", param, ctx)
+
+
+class FloatList(click.ParamType):
+    """Comma-separated finite numbers, e.g. ``40,80``."""
+
+    name = "X,X,..."
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, list):
+            return value
+        try:
+            out = [float(v) for v in str(value).split(",") if v.strip()]
+        except ValueError:
+            out = None
+        if out is None or not all(v == v and abs(v) != float("inf") for v in out):
+            self.fail(f"expected comma-separated finite numbers, got {value!r}", param, ctx)
+        return out
 
 
 class StrList(click.ParamType):

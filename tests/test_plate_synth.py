@@ -533,3 +533,25 @@ def test_synth_suite_makes_every_kind(kind, model, tmp_path, capsys):
     metas = sorted((tmp_path / "s").glob("*/meta.json"))
     assert [m.parent.name for m in metas] == [f"{kind}-04", f"{kind}-05"]
     assert all(json.loads(m.read_text())["model"] == model for m in metas)
+
+
+def test_fit_plate_separates_plates_from_background_and_prints_the_coefficients(tmp_path, capsys):
+    """``vistrack fit-plate``: the library fit (:func:`fit_plate_coefficients`) on one short clip scores
+    most true plates above log-odds 0 and almost no random or nearby pose; the command prints every
+    feature's coefficient."""
+    from cli_helpers import run
+    from vistrack.models.plate import PlateLikelihood
+    from vistrack.models.plate_fit import fit_plate_coefficients
+
+    code, _, err = run(["synth", "plate", "--out", str(tmp_path / "c1"), "--frames", "12", "--size", "320x240",
+                        "--seed", "101"], capsys)
+    assert code == 0, err
+    fit = fit_plate_coefficients(tmp_path, "jp", rounds=0)
+    s = fit["samples"]
+    assert s["plate"]["n"] > 0 and s["plate"]["above_0"] > 0.8
+    assert s["random"]["above_0"] < 0.05 and s["near"]["above_0"] < 0.2
+    code, out, err = run(["fit-plate", str(tmp_path), "--rounds", "0"], capsys)
+    assert code == 0, err
+    assert all(f'"{n}":' in out for n in PlateLikelihood("jp").FEATURES) and "bias = " in out
+    code, _, err = run(["fit-plate", str(tmp_path / "c1" / "nothing")], capsys)
+    assert code != 0

@@ -1,11 +1,18 @@
-"""Plots for experiment reports (matplotlib, Agg backend; PNG files)."""
+"""Plots for experiment reports (PNG files).
+
+Figures are :class:`matplotlib.figure.Figure` objects saved directly, without pyplot: importing
+this module leaves the user's matplotlib backend alone and opens no window.
+"""
 
 from __future__ import annotations
 
-import matplotlib
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+
+def _subplots():
+    fig = Figure(figsize=(6.4, 4.2), dpi=110)
+    return fig, fig.add_subplot()
+
 
 def _finish(fig, ax, path):
     """Grid, legend, layout, save as PNG, close; returns ``path``."""
@@ -13,7 +20,6 @@ def _finish(fig, ax, path):
     ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
     return path
 
 
@@ -22,7 +28,7 @@ __all__ = ["plot_error_vs_time", "plot_error_vs_n", "plot_per_frame", "plot_vs_n
 
 def plot_error_vs_time(curves, path, *, title="Tracking error vs time step", ylabel="mean position error"):
     """One line per (algorithm, N): mean error at each time step (thesis Fig. 4.18, seed 000 Fig. 2)."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+    fig, ax = _subplots()
     for (algo, n), err in curves.items():
         ax.plot(range(1, len(err) + 1), err, marker="o", ms=3, label=f"{algo}, N={n}")
     ax.set_xlabel("time step")
@@ -34,7 +40,7 @@ def plot_error_vs_time(curves, path, *, title="Tracking error vs time step", yla
 def plot_error_vs_n(results, path, *, key="mean_error_final", err_key="std_error_final",
                     title="Final-step error vs number of particles"):
     """Mean final error ± std vs N, one line per algorithm (thesis Fig. 4.21)."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+    fig, ax = _subplots()
     algos = list(dict.fromkeys(r["algo"] for r in results))
     for algo in algos:
         rows = sorted((r for r in results if r["algo"] == algo), key=lambda r: r["particles"])
@@ -48,13 +54,12 @@ def plot_error_vs_n(results, path, *, key="mean_error_final", err_key="std_error
     ax.legend()
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
     return path
 
 
 def plot_per_frame(curves, path, *, ylabel, title):
     """One line per label: a per-frame curve (thesis Figs. 3.9–3.10, 4.15–4.16)."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+    fig, ax = _subplots()
     for label, y in curves.items():
         ax.plot(range(len(y)), y, lw=1.2, label=label)
     ax.set_xlabel("frame")
@@ -67,7 +72,7 @@ def plot_vs_n(summaries, path, *, key, ylabel, title=None):
     """``key`` (averaged over clips) vs number of particles, one line per algorithm."""
     import numpy as np
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+    fig, ax = _subplots()
     for algo in dict.fromkeys(s["algo"] for s in summaries):
         ns = sorted({s["particles"] for s in summaries if s["algo"] == algo})
         ys = []
@@ -86,7 +91,7 @@ def plot_success(curves, path, *, title="Success plot (IoU)"):
     """Fraction of frames with IoU above each threshold, with the AUC in the legend."""
     import numpy as np
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+    fig, ax = _subplots()
     for label, y in curves.items():
         th = np.linspace(0, 1, len(y))
         ax.plot(th, y, label=f"{label} (AUC {np.mean(y):.3f})")

@@ -25,7 +25,7 @@ from scipy import optimize, special
 
 from ..proposals import GaussMixtureProposal, Window
 
-__all__ = ["Bearings", "wrapped_cauchy_logpdf", "gaussian_fit_to_cauchy"]
+__all__ = ["Bearings", "wrapped_cauchy_logpdf", "gaussian_fit_to_cauchy", "simulate"]
 
 F = np.array([[1.0, 1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 0, 1]])
 G = np.array([[0.5, 0], [1, 0], [0, 0.5], [0, 1]])
@@ -232,3 +232,24 @@ class Bearings:
         pe = self.positions(np.atleast_2d(estimate))
         pt = self.positions(np.atleast_2d(truth))
         return np.mean(np.linalg.norm(pe - pt, axis=-1), axis=-1)
+
+
+def simulate(model, steps, rng, x0=None):
+    """Simulate ``steps`` steps of ``model`` (the true ``x_1`` fixed at the prior mean, as in
+    Gordon et al. 1993; thesis 001 §4.5.5).
+
+    Returns
+    -------
+    states : ndarray (steps, d)
+        ``x_1 .. x_T``; ``x_1`` is ``x0`` or the prior mean.
+    obs : ndarray (steps, M)
+        ``y_1 .. y_T``.
+    """
+    x = np.array(model.prior_mean if x0 is None else x0, dtype=float)[None, :]
+    states, obs = [], []
+    for t in range(steps):
+        if t > 0:
+            x = model.predict(x, rng)
+        states.append(x[0])
+        obs.append(model.sample_observation(x, rng)[0])
+    return np.array(states), np.array(obs)

@@ -37,7 +37,7 @@ def thesis_weights(kappa=2.0):
              "small_s": k, "big_l": k}, 0.0)
 
 
-#: coefficients fitted by ``python -m vistrack.models.plate_fit --scales 40,80`` on 16 synthetic
+#: coefficients fitted by ``vistrack fit-plate CLIPS --scales 40,80`` on 16 synthetic
 #: clips (seeds 101-108 at 640x480, 113-116 at 480x360 and 109-112 at 320x240, disjoint from the
 #: evaluation seeds 1-10), per layout (on ``log(1 + mean)`` of each pixel set, which keeps strong
 #: edges — headlights, sign borders — from outweighing the characters); the JP layout's extra

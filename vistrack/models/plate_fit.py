@@ -25,7 +25,6 @@ let text signs at 640×480 score like plates, one fitted at 640×480 alone score
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import numpy as np
@@ -179,31 +178,27 @@ def fit_weights(clips, layout, *, rounds=2, seed=0, every=6, scales=None):
     return w, (x, y, kinds)
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description="Fit the plate likelihood's term coefficients on synthetic clips.")
-    ap.add_argument("--layout", default="jp")
-    ap.add_argument("--clips", required=True, help="folder of plate clip folders")
-    ap.add_argument("--rounds", type=int, default=2)
-    ap.add_argument("--scales", default=None, metavar="S0,S1",
-                    help="scale-banded weights: fit the coefficients at these two plate widths (px), "
-                         "interpolated in log s between them")
-    args = ap.parse_args(argv)
-    scales = tuple(float(v) for v in args.scales.split(",")) if args.scales else None
-    clips = sorted(p for p in Path(args.clips).iterdir() if (p / "groundtruth.csv").is_file())
-    (w, b), (x, y, kinds) = fit_weights(clips, args.layout, rounds=args.rounds, scales=scales)
+def fit_plate_coefficients(clips_dir, layout="jp", *, rounds=2, scales=None):
+    """Fit the plate likelihood's term coefficients on the plate clips under ``clips_dir``
+    (folders with ``groundtruth.csv``): :func:`fit_weights`, split per feature.
+
+    Returns
+    -------
+    dict
+        ``names`` (the features), ``weights`` (one value per feature, or a ``(w_0, w_1)``
+        pair with ``scales``), ``bias``, ``scales`` and ``samples``: per sample kind
+        (``pos``, ``near``, ``far``, ``hard``) the count and the 1/50/99 % log-odds
+        percentiles and the share scored above 0.
+    """
+    clips = sorted(p for p in Path(clips_dir).iterdir() if (p / "groundtruth.csv").is_file())
+    if not clips:
+        raise ValueError(f"{clips_dir}: no plate clip folders (with groundtruth.csv)")
+    (w, b), (x, y, kinds) = fit_weights(clips, layout, rounds=rounds, scales=scales)
     score = x @ w + b
-    for k in np.unique(kinds):
-        v = score[kinds == k]
-        print(f"{k:>7}: n={len(v):6d}  log-odds 1/50/99 % {np.percentile(v, [1, 50, 99]).round(2)}  > 0: {np.mean(v > 0):.3f}")
-    names = feature_likelihood(args.layout).FEATURES
+    samples = {str(k): {"n": int(np.sum(kinds == k)),
+                        "log_odds_1_50_99": np.percentile(score[kinds == k], [1, 50, 99]).round(2).tolist(),
+                        "above_0": float(np.mean(score[kinds == k] > 0))} for k in np.unique(kinds)}
+    names = feature_likelihood(layout).FEATURES
     coef, bias = split_weights(w, b, len(names), scales)
-    if scales is None:
-        print("weights = {" + ", ".join(f'"{n}": {v:.4f}' for n, v in zip(names, coef)) + "}")
-        print(f"bias = {bias:.4f}")
-    else:
-        print("weights = {" + ", ".join(f'"{n}": ({a:.4f}, {c:.4f})' for n, a, c in zip(names, *coef)) + "}")
-        print(f"bias = ({bias[0]:.4f}, {bias[1]:.4f}), scales = {scales}")
-
-
-if __name__ == "__main__":
-    main()
+    weights = dict(zip(names, coef)) if scales is None else dict(zip(names, zip(*coef)))
+    return {"names": list(names), "weights": weights, "bias": bias, "scales": scales, "samples": samples}

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data_synth.bearings import simulate
+from ..models.bearings import simulate
 from ..filters import ALGORITHMS, filter_steps, make_filter
 from ..models.bearings import Bearings
 from ..particles import DegenerateWeightsWarning

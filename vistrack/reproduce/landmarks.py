@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data_synth.landmarks import simulate
+from ..models.landmarks import simulate
 from ..filters import make_filter
 from ..models.landmarks import Landmarks
 from ..particles import DegenerateWeightsWarning, ParticleSet
