@@ -14,7 +14,7 @@ from vistrack.clips import load_clip, write_track_csv
 from vistrack.filters import make_filter
 from vistrack.models.registry import MODELS as MODEL_REGISTRY
 from vistrack.models.registry import get_model_spec
-from vistrack.metrics import center_error, contour_lost_threshold, iou, landmark_error, success_auc
+from vistrack.metrics import center_error, contour_lost_threshold, iou, landmark_error, plate_frame_measures, success_auc
 from vistrack.particles import DegenerateWeightsWarning
 from vistrack.render import annotate
 from vistrack.tracking import top_particles, track
@@ -178,8 +178,6 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         click.echo(f"vs ground truth: mean landmark error {err.mean():.2f} px (per frame: median "
                    f"{np.median(err):.2f}, max {err.max():.2f})")
     if clip.truth is not None and name == "plate" and "x0" in clip.truth:
-        from vistrack.reproduce.plate import plate_frame_measures
-
         rec = {"reported": [r["visible"] for r in rows],
                "vertices": [[r[f"{c}{i}"] for i in range(4) for c in "xy"] for r in rows]}
         has, err, lost, false = plate_frame_measures(rec, clip.truth, model.layout.aspect)

@@ -5,6 +5,7 @@ import json
 import shutil
 
 import matplotlib.image as mpimg
+import numpy as np
 import pytest
 
 from vistrack.data_synth.contour import make_contour_clip
@@ -129,3 +130,41 @@ def test_engine_workers_keep_freed_memory():
     if platform.libc_ver()[0] != "glibc":
         pytest.skip("no glibc: keep_freed_memory is a no-op")
     assert keep_freed_memory() is True
+
+
+def test_lost_rules_known_answers():
+    """The plate rule (DESIGN.md): lost where a plate is in view and none is reported, or the summed
+    vertex error exceeds a third of the plate height; never in a frame without a plate. Without
+    vertex truth, and for other models, the centre rule (50 px at 240-px width)."""
+    from vistrack.metrics import lost_frames
+
+    square = np.array([[0, 0], [60, 0], [60, 30], [0, 30]], float) + 100  # width 60, aspect 2: height 30
+    truth = {"frame": np.arange(5), "visible": np.array([1, 1, 1, 0, 1.0]), "scale": np.full(5, 60.0)}
+    for i in range(4):
+        truth[f"x{i}"], truth[f"y{i}"] = np.full(5, square[i, 0]), np.full(5, square[i, 1])
+    # summed vertex errors: 4 x 1.41 = 5.7 px (<= 30 / 3), 4 x 4.24 = 17 px (> 10), then exact
+    est = np.stack([square + 1.0, square + 3.0, square, square, square])
+    reported = [True, True, False, True, True]  # frame 2: not reported; frame 3: no plate in view
+    lost = lost_frames("plate", np.zeros(5), 320, truth=truth, reported=reported, vertices=est, aspect=2.0)
+    np.testing.assert_array_equal(lost, [False, True, True, False, False])
+    centre = lost_frames("centre", np.array([10.0, 70.0]), 320)  # threshold 66.7 px at 320 px
+    np.testing.assert_array_equal(centre, [False, True])
+    no_vertices = {k: v for k, v in truth.items() if not k[0] in "xy"}
+    np.testing.assert_array_equal(lost_frames("plate", np.array([10.0, 70.0]), 320, truth=no_vertices,
+                                              reported=[1, 1], vertices=est[:2], aspect=2.0), [False, True])
+    with pytest.raises(ValueError, match="unknown lost rule"):
+        lost_frames("nope", np.zeros(2), 320)
+
+
+def test_eval_plate_uses_the_plate_lost_rule(tmp_path, capsys):
+    """``eval --model plate`` on a plate clip: frames without a plate are never lost, and every task
+    result's lost flags are the plate rule's on its own reported flags and vertices."""
+    code, _, err = run(["synth", "plate", "--out", str(tmp_path / "p"), "--frames", "16", "--size", "320x240",
+                        "--seed", "3"], capsys)
+    assert code == 0, err
+    code, _, err = run(["eval", str(tmp_path / "p"), "--model", "plate", "--algos", "lis", "--particles", "50",
+                        "--runs", "1", "--in-process", "--out", str(tmp_path / "ev"), "-q"], capsys)
+    assert code == 0, err
+    (task,) = [json.loads(p.read_text()) for p in (tmp_path / "ev" / "tasks").glob("*.json")]
+    vis = np.array(task["visible"], bool)
+    assert not np.any(np.array(task["lost"], bool) & ~vis)

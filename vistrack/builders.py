@@ -306,7 +306,7 @@ register(ModelSpec("contour", _THESIS, "B-spline contour on edges (thesis 001 §
                    from_box=_contour_from_box, from_clip=_contour_from_clip))
 register(ModelSpec("plate", ("lis", "bootstrap", "condensation", "lls", "avpf"),
                    "license-plate template (thesis 001 §1.3.2); acquires plates without a box",
-                   from_box=_plate_from_frame_box, from_clip=_plate_from_clip))
+                   from_box=_plate_from_frame_box, from_clip=_plate_from_clip, lost_rule="plate"))
 register(ModelSpec("landmarks", ("pf-eis-mt", "pf-eis", "pf-doucet", "pf-gordon", "bootstrap"),
                    "landmark shape (seed 000 §3)", box_init=False, from_clip=_landmarks_from_clip))
 

@@ -30,7 +30,8 @@ import numpy as np
 from .builders import build_model
 from .clips import load_clip
 from .filters import ALGORITHMS, make_filter
-from .metrics import IOU_THRESHOLDS, center_error, contour_lost_threshold, iou, summarize_runs
+from .metrics import IOU_THRESHOLDS, center_error, iou, lost_frames, summarize_runs
+from .models.registry import get_model_spec
 from .runtime import keep_freed_memory
 from .tracking import track
 from .video import VideoError
@@ -179,9 +180,11 @@ def run_task(task, out_dir):
     clip = load_clip(task["clip"])
     frames = list(clip.source)
     algo, n = task["algo"], task["particles"]
+    rule, reported, vertices, aspect = "centre", [], [], None
     if algo in OPENCV_TRACKERS:
         boxes, ms, ess = _track_opencv(algo, clip, frames)
     else:
+        spec = get_model_spec(task["model"])
         model = build_model(task["model"], clip, init_gt="")
         filt = make_filter(algo, model)
         rng = np.random.default_rng(task["seed_seq"])
@@ -190,11 +193,16 @@ def run_task(task, out_dir):
             est.append(res.estimate)
             ms.append(res.ms)
             ess.append(res.ess)
+            if spec.lost_rule == "plate":  # the maps are overwritten by the next frame: report now
+                reported.append(bool(model.visible(res.maps, res.estimate)))
+                vertices.append(model.vertices(res.estimate)[0])
         est = np.array(est)
         wh = model.box(est)[:, 2:]
         # boxes centred on the pose centre, as groundtruth.csv's (cx, cy, w, h)
         boxes = np.concatenate([est[:, :2] - wh / 2, wh], axis=1)
         ms, ess = np.array(ms), np.array(ess)
+        if spec.lost_rule == "plate":
+            rule, aspect = "plate", model.layout.aspect
     t = clip.truth
     m = min(len(boxes), len(t["cx"]))
     truth = _truth_boxes(t)[:m]
@@ -207,7 +215,8 @@ def run_task(task, out_dir):
         "clip": task["clip"], "algo": algo, "particles": n, "run": task["run"],
         "frames": int(m), "visible": visible.astype(int).tolist(),
         "error": [float(e) if np.isfinite(e) else None for e in err],
-        "lost": (err > contour_lost_threshold(clip.source.size[0])).astype(int).tolist(),
+        "lost": lost_frames(rule, err, clip.source.size[0], truth=t, reported=reported[:m], vertices=vertices[:m],
+                            aspect=aspect).astype(int).tolist(),
         "iou": [float(v) for v in np.nan_to_num(iou(boxes, truth), nan=0.0)],
         "ms": [float(v) for v in ms[:m]],
         "ess": [None if not np.isfinite(v) else float(v) for v in ess[:m]],

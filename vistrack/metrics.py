@@ -1,7 +1,11 @@
 """Tracking errors and losses (DESIGN.md evaluation protocol; thesis §3.2.5, §4.5.3).
 
-- contour: centre distance (px); lost when it exceeds 50 px at the thesis's
-  240-px frame width, scaled with the frame width;
+- contour, box (and any model whose registry entry says ``lost_rule="centre"``): centre
+  distance (px); lost when it exceeds 50 px at the thesis's 240-px frame width, scaled with
+  the frame width;
+- plate (``lost_rule="plate"``, DESIGN.md): lost in a frame with a plate when no plate is
+  reported or the summed vertex error exceeds a third of the plate height; a report in a
+  frame without a plate is a false report (:func:`plate_frame_measures`);
 - P(lost) per frame is the fraction of runs lost; the mean error is over
   runs (and frames) not lost.
 """
@@ -10,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["center_error", "contour_lost_threshold", "summarize_runs", "landmark_error", "iou", "success_auc",
+__all__ = ["center_error", "contour_lost_threshold", "plate_frame_measures", "lost_frames", "summarize_runs", "landmark_error", "iou", "success_auc",
            "IOU_THRESHOLDS"]
 
 #: IoU thresholds of the success plot (OTB protocol)
@@ -80,3 +84,38 @@ def success_auc(ious):
     frames whose IoU ``(frames,)`` exceeds the threshold."""
     ious = np.nan_to_num(np.asarray(ious, float))
     return float(np.mean([(ious > t).mean() for t in IOU_THRESHOLDS])) if ious.size else float("nan")
+
+
+def plate_frame_measures(result, truth, aspect):
+    """Per-frame ``(has_plate, vertex_error, lost, false_report)`` of one task against the truth."""
+    m = min(len(result["reported"]), len(truth["frame"]))
+    has = np.asarray(truth["visible"][:m]) > 0
+    rep = np.asarray(result["reported"][:m], bool)
+    est = np.asarray(result["vertices"][:m], float).reshape(m, 4, 2)
+    tv = np.stack([np.column_stack([truth[f"x{i}"][:m], truth[f"y{i}"][:m]]) for i in range(4)], axis=1)
+    err = np.linalg.norm(est - tv, axis=2).sum(axis=1)
+    height = np.asarray(truth["scale"][:m], float) / aspect
+    with np.errstate(invalid="ignore"):
+        lost = has & (~rep | ~(err <= height / 3))
+    return has, np.where(has, err, np.nan), lost, ~has & rep
+
+
+def lost_frames(rule, centre_err, frame_width, *, truth=None, reported=None, vertices=None, aspect=None):
+    """Per-frame lost flags ``(frames,)`` by a model's lost rule (module docstring).
+
+    ``rule="centre"``: ``centre_err (frames,)`` above :func:`contour_lost_threshold` of the
+    frame width. ``rule="plate"``: :func:`plate_frame_measures` of ``reported (frames,)`` and
+    ``vertices (frames, 4, 2)`` against ``truth`` (groundtruth.csv columns with vertices
+    ``x0..y3``, ``scale``, ``frame``, ``visible``); where the truth has no vertices (a box
+    ground truth), the centre rule.
+    """
+    centre_err = np.asarray(centre_err, float)
+    if rule == "plate" and truth is not None and "x0" in truth:
+        rec = {"reported": list(reported), "vertices": np.asarray(vertices, float).reshape(len(reported), -1)}
+        _, _, lost, _ = plate_frame_measures(rec, truth, aspect)
+        out = np.zeros(len(centre_err), bool)
+        out[:len(lost)] = lost[:len(centre_err)]
+        return out
+    if rule not in ("centre", "plate"):
+        raise ValueError(f"unknown lost rule {rule!r}")
+    return centre_err > contour_lost_threshold(frame_width)

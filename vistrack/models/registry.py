@@ -33,6 +33,8 @@ class ModelSpec:
         ``from_clip(clip, *, init, init_gt, template, **params) -> model`` for ``run`` and
         ``eval`` on a clip; ``None``: ``from_box`` at the start box (``init`` or the first
         ground-truth row) in the clip's first frame.
+    lost_rule : {"centre", "plate"}
+        How ``eval`` decides a frame is lost (:func:`vistrack.metrics.lost_frames`).
     """
 
     name: str
@@ -41,6 +43,7 @@ class ModelSpec:
     box_init: bool = True
     from_box: Callable | None = None
     from_clip: Callable | None = None
+    lost_rule: str = "centre"
 
     @property
     def default_algo(self):

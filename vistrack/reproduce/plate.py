@@ -28,11 +28,12 @@ import numpy as np
 from ..builders import build_model
 from ..clips import load_clip
 from ..evaluation import entry_tasks, prepare_worker, write_task_result
+from ..metrics import plate_frame_measures
 from ..filters import make_filter
 from ..particles import DegenerateWeightsWarning
 from ..tracking import track
 
-__all__ = ["PlateConfig", "plate_tasks", "run_plate_task", "plate_results", "plate_frame_measures"]
+__all__ = ["PlateConfig", "plate_tasks", "run_plate_task", "plate_results"]
 
 
 @dataclass
@@ -68,20 +69,6 @@ def run_plate_task(task, out_dir):
     result = {"clip": task["clip"], "algo": task["algo"], "particles": task["particles"], "run": task["run"],
               "reported": reported, "vertices": verts, "loglik": ll, "ms": ms, "ess": ess}
     return write_task_result(Path(out_dir) / "tasks" / f"{task['name']}.json", result)
-
-
-def plate_frame_measures(result, truth, aspect):
-    """Per-frame ``(has_plate, vertex_error, lost, false_report)`` of one task against the truth."""
-    m = min(len(result["reported"]), len(truth["frame"]))
-    has = np.asarray(truth["visible"][:m]) > 0
-    rep = np.asarray(result["reported"][:m], bool)
-    est = np.asarray(result["vertices"][:m], float).reshape(m, 4, 2)
-    tv = np.stack([np.column_stack([truth[f"x{i}"][:m], truth[f"y{i}"][:m]]) for i in range(4)], axis=1)
-    err = np.linalg.norm(est - tv, axis=2).sum(axis=1)
-    height = np.asarray(truth["scale"][:m], float) / aspect
-    with np.errstate(invalid="ignore"):
-        lost = has & (~rep | ~(err <= height / 3))
-    return has, np.where(has, err, np.nan), lost, ~has & rep
 
 
 def _acquisition_delays(has, lost, ids):
