@@ -10,6 +10,7 @@ from vistrack.data_synth.contour import make_contour_clip
 from vistrack.data_synth.plate import make_plate_clip
 
 from .eval import eval_cmd
+from .options import SEED
 from .run import run
 
 __all__ = ["demo"]
@@ -24,7 +25,7 @@ PLATE_ALGOS = (("lis", 100), ("bootstrap", 750))
 @click.option("--frames", default=150, show_default=True, type=click.IntRange(min=10))
 @click.option("--runs", default=3, show_default=True, type=click.IntRange(min=1),
               help="Monte-Carlo runs per algorithm in the comparison.")
-@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--seed", default=0, show_default=True, type=SEED)
 @click.pass_context
 def demo(ctx, out_dir, frames, runs, seed):
     """Generate a contour clip (clutter, distractor) and a road clip with plates, track them

@@ -18,7 +18,7 @@ from vistrack.evaluation import (EvalConfig, check_algos, execute, find_clips, l
 from vistrack.models.registry import get_model_spec
 from vistrack.video import VideoError
 
-from .options import IntList, StrList
+from .options import SEED, IntList, StrList
 
 __all__ = ["eval_cmd", "run_tasks"]
 
@@ -166,7 +166,7 @@ def _equal_time(cfg, clips, frames=30):
               help="Algorithms (bootstrap, ls-n-ips, lls, lis, avpf) and OpenCV trackers (opencv-mil, ...).")
 @click.option("--particles", default="100,750", show_default=True, type=IntList(), help="Particle counts N.")
 @click.option("--runs", default=20, show_default=True, type=click.IntRange(min=1), help="Runs per clip × algo × N.")
-@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--seed", default=0, show_default=True, type=SEED)
 @click.option("--model", default="contour", show_default=True, metavar="[contour|plate|box]",
               help="Tracking model, any registered one, started from the first ground-truth box (box: any "
                    "object, appearance learned from the first frame; plate: layout from the box's aspect).")

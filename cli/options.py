@@ -6,7 +6,10 @@ import os
 
 import click
 
-__all__ = ["IntList", "FloatList", "StrList", "Box", "Size", "check_writable"]
+__all__ = ["IntList", "FloatList", "StrList", "Box", "Size", "Fraction", "SEED", "check_writable"]
+
+#: ``--seed``: numpy takes any non-negative integer
+SEED = click.IntRange(min=0)
 
 
 class IntList(click.ParamType):
@@ -65,8 +68,23 @@ class Box(click.ParamType):
             self.fail(f"expected four numbers x,y,w,h, got {value!r}", param, ctx)
         if len(v) != 4:
             self.fail(f"expected four numbers x,y,w,h, got {len(v)}", param, ctx)
+        if not all(abs(x) < float("inf") for x in v):  # also false for NaN
+            self.fail(f"expected four finite numbers x,y,w,h, got {value!r}", param, ctx)
         if v[2] <= 0 or v[3] <= 0:
             self.fail(f"width and height must be positive, got {v[2]:g}x{v[3]:g}", param, ctx)
+        return v
+
+
+class Fraction(click.FloatRange):
+    """A finite number in ``[0, 1]`` (``nan`` is refused, not read as "never")."""
+
+    def __init__(self):
+        super().__init__(0.0, 1.0)
+
+    def convert(self, value, param, ctx):
+        v = super().convert(value, param, ctx)
+        if v != v:
+            self.fail("expected a number in [0, 1], got nan", param, ctx)
         return v
 
 

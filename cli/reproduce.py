@@ -15,7 +15,7 @@ from vistrack.reproduce.plate import PlateConfig, plate_results, plate_tasks, ru
 from vistrack.evaluation import entries_config
 from vistrack.reproduce.contour import ContourConfig, contour_results, contour_tasks
 
-from .options import IntList, StrList, check_writable
+from .options import SEED, Fraction, IntList, StrList, check_writable
 
 __all__ = ["reproduce"]
 
@@ -52,7 +52,7 @@ def suite_options(clips_help, size, algos, algos_help, runs):
         click.option("--size", default=size, show_default=True, help="Frame size of made clips."),
         click.option("--algos", "entries", default=algos, show_default=True, type=Entries(), help=algos_help),
         click.option("--runs", default=runs, show_default=True, type=click.IntRange(min=1), help="Runs per clip."),
-        click.option("--seed", default=0, show_default=True, type=int),
+        click.option("--seed", default=0, show_default=True, type=SEED),
     ]
 
     def deco(f):
@@ -88,10 +88,10 @@ def _table(results):
               help="Algorithms, comma-separated (bootstrap, avpf, lis, lls).")
 @click.option("--particles", default="100,500,3000", show_default=True, type=IntList(),
               help="Particle counts N, comma-separated.")
-@click.option("--seed", default=0, show_default=True, type=int, help="Seed of sequences and runs.")
+@click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of sequences and runs.")
 @click.option("--resample", default="systematic", show_default=True,
               type=click.Choice(["multinomial", "residual", "stratified", "systematic"]))
-@click.option("--ess-threshold", default=None, type=float,
+@click.option("--ess-threshold", default=None, type=Fraction(),
               help="Resample when ESS < threshold·N (default: every step).")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
@@ -291,7 +291,7 @@ def _landmarks_table(results):
                    "8: N=20, PF-EIS-MT vs PF-EIS vs PF-Gordon (Fig. 2b).")
 @click.option("--runs", default=80, show_default=True, type=click.IntRange(min=1), help="Monte-Carlo runs.")
 @click.option("--steps", default=50, show_default=True, type=click.IntRange(min=1), help="Time steps T per run.")
-@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--seed", default=0, show_default=True, type=SEED)
 @click.option("--algos", default=None, type=StrList(),
               help=f"Algorithms, comma-separated ({', '.join(LANDMARK_ALGOS)}) [default: the paper's for K].")
 @click.option("-n", "--particles", default=None, type=click.IntRange(min=1),

@@ -2,25 +2,20 @@
 
 from __future__ import annotations
 
-import time
-import warnings
-
 import click
 import numpy as np
 from tqdm import tqdm
 
 from vistrack.builders import MODELS, build_model, read_support_points
-from vistrack.clips import load_clip, write_track_csv
+from vistrack.clips import load_clip
 from vistrack.filters import make_filter
 from vistrack.models.registry import MODELS as MODEL_REGISTRY
 from vistrack.models.registry import get_model_spec
-from vistrack.metrics import center_error, contour_lost_threshold, iou, landmark_error, plate_frame_measures, success_auc
-from vistrack.particles import DegenerateWeightsWarning
-from vistrack.render import annotate
-from vistrack.tracking import top_particles, track
-from vistrack.video import VideoError, VideoWriter
+from vistrack.runtime import check_particle_memory
+from vistrack.session import stop_on_signals, summary_lines, track_video
+from vistrack.video import VideoError
 
-from .options import Box, check_writable
+from .options import SEED, Box, Fraction, check_writable
 
 __all__ = ["run"]
 
@@ -59,7 +54,7 @@ def model_options(name, *, layout, no_colour, template):
               help="Particle filter [default: lis; pf-eis-mt for landmarks].")
 @click.option("-n", "--particles", default=100, show_default=True, type=click.IntRange(min=1),
               help="Number of particles N.")
-@click.option("--seed", default=0, show_default=True, type=int, help="Random seed (same seed, same track).")
+@click.option("--seed", default=0, show_default=True, type=SEED, help="Random seed (same seed, same track).")
 @click.option("--init", type=Box(), help="Start from this box (x,y,w,h) in the first frame; the contour is the "
                                         "ellipse in it.")
 @click.option("--init-gt", "init_gt", is_flag=False, flag_value="", default=None, metavar="[FILE]",
@@ -75,7 +70,7 @@ def model_options(name, *, layout, no_colour, template):
               help="Draw the K highest-weight particles in the annotated video.")
 @click.option("--resample", default="systematic", show_default=True,
               type=click.Choice(["multinomial", "residual", "stratified", "systematic"]))
-@click.option("--ess-threshold", default=None, type=click.FloatRange(0, 1),
+@click.option("--ess-threshold", default=None, type=Fraction(),
               help="Resample when ESS < threshold·N [default: every frame].")
 @click.option("--max-frames", type=click.IntRange(min=1), help="Stop after this many frames.")
 @click.option("--no-colour", "no_colour", is_flag=True,
@@ -122,11 +117,11 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         if algo not in spec.algos:
             raise click.UsageError(f"--algo {algo} does not run on the {name} model; "
                                    f"choose from {', '.join(spec.algos)}")
+        check_particle_memory(particles, spec.bytes_per_particle, algo)
         model = build_model(name, clip, init=init, init_gt=init_gt, **extra)
     except (VideoError, ValueError) as e:
         raise click.ClickException(str(e)) from None
     filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)
-    rng = np.random.default_rng(seed)
     src = clip.source
     total = src.frame_count if max_frames is None else min(max_frames, src.frame_count or max_frames)
 
@@ -136,71 +131,36 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
                 return
             yield i, f
 
-    writer = VideoWriter(out_path, src.fps, src.size) if out_path else None
-    rows, ess_sum, n_degenerate = [], 0.0, 0
     bar = tqdm(total=total, unit="frame", disable=quiet, dynamic_ncols=True, desc=f"{algo} N={particles}")
-    t_start = time.perf_counter()
+
+    def progress(ess):
+        bar.update(1)
+        bar.set_postfix(ess=f"{ess:.1f}", refresh=False)
+
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", DegenerateWeightsWarning)
-            for res in track(frames(), filt, particles, rng):
-                vis = model.visible(res.maps, res.estimate)
-                row = {"frame": res.index, "visible": int(vis)}
-                row.update(model.describe(res.estimate))
-                row["ess"] = res.ess
-                row["ms"] = res.ms
-                rows.append(row)
-                ess_sum += res.ess
-                n_degenerate += bool(res.particles.degenerate)
-                if writer:
-                    text = f"#{res.index}  {algo} N={particles}  ESS {res.ess:.1f}"
-                    writer.write(annotate(res.frame, model.outline(res.estimate) if vis else [],
-                                          model.outline(top_particles(res.particles, show_particles)), text))
-                bar.update(1)
-                bar.set_postfix(ess=f"{res.ess:.1f}", refresh=False)
+        with stop_on_signals():
+            done = track_video(frames(), model, filt, particles, np.random.default_rng(seed), track_path=track_path,
+                               out_path=out_path, video_info=(src.fps, src.size), show_particles=show_particles,
+                               label=f"{algo} N={particles}", progress=progress)
+    except (VideoError, OSError) as e:
+        raise click.ClickException(str(e)) from None
     finally:
         bar.close()
-        if writer:
-            writer.close()
-    wall = time.perf_counter() - t_start
-    if not rows:
+    if not done.rows:
+        if done.stopped:
+            raise click.exceptions.Exit(done.exit_code)
         raise click.ClickException(f"{video}: no frame could be decoded")
-    if track_path:
-        write_track_csv(track_path, rows)
-    if quiet:
-        return
-    n = len(rows)
-    ms = np.array([r["ms"] for r in rows])
-    click.echo(f"{n} frames, {n / wall:.0f} frames/s end to end ({1e3 / ms.mean():.0f} frames/s in the filter), "
-               f"mean ESS {ess_sum / n:.1f} of {particles}" + (f", {n_degenerate} degenerate frames" if n_degenerate else ""))
-    if clip.truth is not None and name == "landmarks" and "lx0" in clip.truth:
-        err = landmark_error(rows, clip.truth, model.k)
-        click.echo(f"vs ground truth: mean landmark error {err.mean():.2f} px (per frame: median "
-                   f"{np.median(err):.2f}, max {err.max():.2f})")
-    if clip.truth is not None and name == "plate" and "x0" in clip.truth:
-        rec = {"reported": [r["visible"] for r in rows],
-               "vertices": [[r[f"{c}{i}"] for i in range(4) for c in "xy"] for r in rows]}
-        has, err, lost, false = plate_frame_measures(rec, clip.truth, model.layout.aspect)
-        ok = has & ~lost
-        click.echo(f"vs ground truth: plate lost in {int(lost.sum())} of {int(has.sum())} plate frames; mean vertex "
-                   f"error {np.nanmean(err[ok]) if ok.any() else float('nan'):.2f} px when tracked; "
-                   f"{int(false.sum())} frames reported a plate where there was none")
-    elif clip.truth is not None and name in ("contour", "box", "plate") and "w" in clip.truth:
-        t = clip.truth
-        k = np.array([r["frame"] for r in rows], int)
-        m = int(np.sum(k < len(t["cx"])))
-        k = k[:m]
-        est = np.array([[rows[i]["cx"], rows[i]["cy"], rows[i]["w"], rows[i]["h"]] for i in range(m)], float)
-        err = center_error(est[:, 0], est[:, 1], t["cx"][k], t["cy"][k])
-        ious = iou(np.column_stack([est[:, :2] - est[:, 2:] / 2, est[:, 2:]]),
-                   np.column_stack([t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k]]))
-        thr = contour_lost_threshold(src.size[0])
-        lost = err > thr
-        mean_ok = err[~lost].mean() if (~lost).any() else float("nan")
-        click.echo(f"vs ground truth ({m} frames): success AUC {success_auc(ious):.3f}, precision@20px "
-                   f"{np.mean(err <= 20):.3f}, mean centre error {err.mean():.2f} px "
-                   f"({mean_ok:.2f} px over tracked frames); lost (> {thr:.0f} px) in {int(lost.sum())} frames")
-    if track_path:
-        click.echo(f"track: {track_path}")
-    if out_path:
-        click.echo(f"annotated video: {out_path}")
+    if done.stopped:
+        click.echo(f"{'Interrupted' if done.stopped == 'interrupt' else 'Terminated'} after {len(done.rows)} frames"
+                   + (f"; track so far: {track_path}" if track_path else "")
+                   + (f"; annotated video so far: {out_path}" if out_path else ""), err=True)
+    if not quiet:
+        for line in summary_lines(done, particles, model_name=name, model=model, truth=clip.truth,
+                                  frame_width=src.size[0]):
+            click.echo(line)
+        if track_path:
+            click.echo(f"track: {track_path}")
+        if out_path:
+            click.echo(f"annotated video: {out_path}")
+    if done.stopped:
+        raise click.exceptions.Exit(done.exit_code)

@@ -11,7 +11,7 @@ from vistrack.data_synth.contour import CLUTTER, make_contour_clip
 from vistrack.data_synth.landmarks import make_landmark_clip
 from vistrack.data_synth.plate import make_plate_clip
 
-from .options import Size
+from .options import SEED, Size
 
 __all__ = ["synth"]
 
@@ -38,7 +38,7 @@ def synth():
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write.")
 @click.option("--frames", default=300, show_default=True, type=click.IntRange(min=1))
 @click.option("--size", default="320x240", show_default=True, type=Size())
-@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--seed", default=0, show_default=True, type=SEED)
 @click.option("--clutter", default="high", show_default=True, type=click.Choice(list(CLUTTER)),
               help="Background edge density and sensor noise.")
 @click.option("--distractor/--no-distractor", default=True, show_default=True,
@@ -60,7 +60,7 @@ def contour(out, frames, size, seed, clutter, distractor, shape, quiet):
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write.")
 @click.option("--frames", default=300, show_default=True, type=click.IntRange(min=1))
 @click.option("--size", default="640x480", show_default=True, type=Size())
-@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--seed", default=0, show_default=True, type=SEED)
 @click.option("--cars", default=3, show_default=True, type=click.IntRange(min=1), help="Cars driving through.")
 @click.option("--layout", default="jp", show_default=True, type=click.Choice(["jp", "single-row"]),
               help="Plate layout: Japanese (Fig. 1.5) or single-row (European/Indian style).")
@@ -83,7 +83,7 @@ def plate(out, frames, size, seed, cars, layout, overlap, quiet):
 @click.option("--k", "k", default=5, show_default=True, type=click.IntRange(min=3), help="Number of landmarks K.")
 @click.option("--frames", default=200, show_default=True, type=click.IntRange(min=1))
 @click.option("--size", default="640x480", show_default=True, type=Size())
-@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--seed", default=0, show_default=True, type=SEED)
 @click.option("--clutter-blobs", default=6, show_default=True, type=click.IntRange(min=0),
               help="Drifting blobs identical to the landmarks.")
 @click.option("--occlusion", default=0.01, show_default=True, type=click.FloatRange(0, 1),
@@ -111,7 +111,7 @@ SUITES = {"contour": (make_contour_clip, 300, (320, 240)), "plate": (make_plate_
 @click.command("synth-suite")
 @click.option("--kind", required=True, type=click.Choice(["contour", "plate", "landmarks"]))
 @click.option("--clips", "n_clips", default=10, show_default=True, type=click.IntRange(min=1))
-@click.option("--seed", default=1, show_default=True, type=int, help="Seed of the first clip (then +1, +2, ...).")
+@click.option("--seed", default=1, show_default=True, type=SEED, help="Seed of the first clip (then +1, +2, ...).")
 @click.option("--frames", default=None, type=click.IntRange(min=1),
               help="Frames per clip [default: 300; 200 for landmarks].")
 @click.option("--size", default=None, type=Size(),

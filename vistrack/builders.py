@@ -301,12 +301,13 @@ def _contour(clip, size, init, init_gt, template, params):
 # -- the built-in models -------------------------------------------------------------------
 _THESIS = ("lis", "bootstrap", "condensation", "ls-n-ips", "lls", "avpf")
 register(ModelSpec("box", _THESIS, "any object from a box: colour + template appearance learned from the first frame",
-                   from_box=_box_from_box))
+                   from_box=_box_from_box, bytes_per_particle=32_000))
 register(ModelSpec("contour", _THESIS, "B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
-                   from_box=_contour_from_box, from_clip=_contour_from_clip))
+                   from_box=_contour_from_box, from_clip=_contour_from_clip, bytes_per_particle=48_000))
 register(ModelSpec("plate", ("lis", "bootstrap", "condensation", "lls", "avpf"),
                    "license-plate template (thesis 001 §1.3.2); acquires plates without a box",
-                   from_box=_plate_from_frame_box, from_clip=_plate_from_clip, lost_rule="plate"))
+                   from_box=_plate_from_frame_box, from_clip=_plate_from_clip, lost_rule="plate",
+                   bytes_per_particle=48_000))
 register(ModelSpec("landmarks", ("pf-eis-mt", "pf-eis", "pf-doucet", "pf-gordon", "bootstrap"),
                    "landmark shape (seed 000 §3)", box_init=False, from_clip=_landmarks_from_clip))
 

@@ -17,6 +17,7 @@ import numpy as np
 from .builders import model_from_box
 from .filters import make_filter
 from .models.registry import get_model_spec
+from .runtime import check_particle_memory
 from .tracking import FrameStepper
 
 __all__ = ["Tracker"]
@@ -62,6 +63,7 @@ class Tracker:
                              f"choose from {', '.join(spec.algos)}")
         if int(particles) < 1:
             raise ValueError(f"particles must be a positive integer, got {particles}")
+        check_particle_memory(int(particles), spec.bytes_per_particle, self.algo)
         self.model_name, self.n, self.seed = model, int(particles), seed
         self.filter_options = {"resample": resample, "ess_threshold": ess_threshold}
         self.model_options = model_options

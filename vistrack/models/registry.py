@@ -35,6 +35,9 @@ class ModelSpec:
         ground-truth row) in the clip's first frame.
     lost_rule : {"centre", "plate"}
         How ``eval`` decides a frame is lost (:func:`vistrack.metrics.lost_frames`).
+    bytes_per_particle : int
+        Peak working memory of one step per particle (bytes; measured, rounded up), for
+        :func:`vistrack.runtime.check_particle_memory`.
     """
 
     name: str
@@ -44,6 +47,7 @@ class ModelSpec:
     from_box: Callable | None = None
     from_clip: Callable | None = None
     lost_rule: str = "centre"
+    bytes_per_particle: int = 64_000
 
     @property
     def default_algo(self):

@@ -1,0 +1,132 @@
+"""Fault injection: interrupts, bad numbers, broken files. Each case ends in one clear error line
+or a correct partial result: never a traceback, never exit 0 with NaN in an output."""
+
+from __future__ import annotations
+
+import csv
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import cv2
+import numpy as np
+import pytest
+
+from cli_helpers import run
+
+H, W = 120, 160
+
+
+def write_video(path, n, seed=0):
+    rng = np.random.default_rng(seed)
+    bg = cv2.GaussianBlur(rng.normal(110, 40, (H, W, 3)).astype(np.float32), (0, 0), 2).clip(0, 255).astype(np.uint8)
+    wr = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 25, (W, H))
+    for t in range(n):
+        f = bg.copy()
+        cx, cy = int(60 + 20 * np.sin(0.1 * t)), int(60 + 10 * np.cos(0.1 * t))
+        cv2.rectangle(f, (cx - 12, cy - 9), (cx + 12, cy + 9), (30, 60, 220), -1)
+        wr.write(f)
+    wr.release()
+
+
+def read_rows(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)], ids=["SIGINT", "SIGTERM"])
+def test_signal_mid_run_keeps_the_track_so_far(tmp_path, sig, code):
+    """``run`` stopped by Ctrl-C or SIGTERM: exit 130 / 143, the track CSV holds every frame done as
+    whole rows (no ``.part`` left), the annotated video plays those frames, one line says so."""
+    video = tmp_path / "v.avi"
+    write_video(video, 300)
+    track, out = tmp_path / "t.csv", tmp_path / "a.mp4"
+    cmd = [sys.executable, "-m", "vistrack.cli", "run", str(video), "--init", "48,51,24,18", "-n", "3000",
+           "--algo", "bootstrap", "--track", str(track), "--out", str(out), "-q"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    part = tmp_path / "t.csv.part"
+    deadline = time.time() + 60
+    while time.time() < deadline and proc.poll() is None:
+        if part.is_file() and part.read_text().count("\n") >= 4:
+            break
+        time.sleep(0.05)
+    assert proc.poll() is None, proc.communicate()
+    proc.send_signal(sig)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == code, stderr
+    assert "Traceback" not in stderr and "after" in stderr and str(track) in stderr
+    rows = read_rows(track)
+    assert 3 <= len(rows) < 300 and not part.exists()
+    assert [int(r["frame"]) for r in rows] == list(range(len(rows)))
+    assert all(np.isfinite(float(r["cx"])) for r in rows)
+    cap = cv2.VideoCapture(str(out))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) >= len(rows) - 1
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--init", "nan,1,2,3"], "expected four finite numbers"),
+    (["--init", "10,10,inf,20"], "expected four finite numbers"),
+    (["--init", "10,10,20,20", "-n", "100000000"], "particles need about"),
+    (["--init", "10,10,20,20", "--ess-threshold", "nan"], "expected a number in [0, 1], got nan"),
+    (["--init", "10,10,20,20", "--seed", "-1"], "-1 is not in the range"),
+], ids=["init-nan", "init-inf", "n-huge", "ess-nan", "seed-negative"])
+def test_bad_numbers_are_one_error_line(tmp_path, capsys, args, message):
+    video = tmp_path / "v.avi"
+    write_video(video, 3)
+    with _no_warnings():
+        code, out, err = run(["run", str(video), *args, "--track", str(tmp_path / "t.csv")], capsys)
+    assert code != 0 and message in err and "Traceback" not in err
+    assert err.count("Error:") == 1
+    assert not (tmp_path / "t.csv").exists()
+
+
+class _no_warnings:
+    """No Python warning (numpy's RuntimeWarning on inf, ...) reaches the user."""
+
+    def __enter__(self):
+        import warnings
+
+        self._cm = warnings.catch_warnings(record=True)
+        self.caught = self._cm.__enter__()
+        warnings.simplefilter("always")
+        return self
+
+    def __exit__(self, *exc):
+        self._cm.__exit__(*exc)
+        assert not self.caught, [str(w.message) for w in self.caught]
+
+
+def test_particle_memory_check_known_answer():
+    from vistrack.runtime import check_particle_memory
+
+    assert check_particle_memory(1000, 32_000, "lis", available=2**30) == 32_000_000
+    with pytest.raises(ValueError, match="use at most 2097"):  # half of 1 GiB / (32 KB x 8 for LLS)
+        check_particle_memory(3000, 32_000, "lls", available=2**30)
+
+
+def test_track_csv_is_whole_after_a_write_error(tmp_path):
+    """A write error mid-run (disk full) leaves the rows written so far, renamed into place."""
+    from vistrack.session import TrackCSV
+
+    t = TrackCSV(tmp_path / "t.csv")
+    t.write({"frame": 0, "cx": 1.0})
+    t.write({"frame": 1, "cx": float("nan")})
+    t._f.close()  # the disk goes away
+    with pytest.raises(ValueError):
+        t.write({"frame": 2, "cx": 3.0})
+    t.close()
+    rows = read_rows(tmp_path / "t.csv")
+    assert [r["frame"] for r in rows] == ["0", "1"] and not (tmp_path / "t.csv.part").exists()
+
+
+def test_truncated_and_empty_videos_are_clear_errors(tmp_path, capsys):
+    video = tmp_path / "v.avi"
+    write_video(video, 20)
+    data = video.read_bytes()
+    (tmp_path / "empty.avi").write_bytes(b"")
+    (tmp_path / "head.avi").write_bytes(data[:200])
+    for name in ("empty.avi", "head.avi"):
+        code, _, err = run(["run", str(tmp_path / name), "--init", "48,51,24,18", "-q"], capsys)
+        assert code != 0 and err.startswith("Error:") and "Traceback" not in err, (name, err)

@@ -1,0 +1,209 @@
+"""One tracking run over a video, as ``vistrack run`` does it: the track CSV and the annotated
+video written frame by frame, nothing lost on an interrupt, and the summary against ground truth.
+
+Writing whole or not at all: the track CSV goes to ``PATH.part``, one flushed row per frame,
+and is renamed to ``PATH`` when the run ends for any reason (done, Ctrl-C, SIGTERM, an
+error), so ``PATH`` is always a whole CSV of the frames tracked; a killed process leaves only
+the ``.part`` file (whole rows up to the last frame). The annotated video is closed on every
+exit path, so the frames so far play.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+import signal
+import time
+import warnings
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .clips import _fmt
+from .metrics import center_error, contour_lost_threshold, iou, landmark_error, plate_frame_measures, success_auc
+from .particles import DegenerateWeightsWarning
+from .render import annotate
+from .tracking import top_particles, track
+from .video import VideoWriter
+
+__all__ = ["TrackCSV", "VideoRun", "track_video", "summary_lines", "Terminated", "stop_on_signals"]
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the run is, so that it ends as cleanly as on Ctrl-C."""
+
+
+@contextmanager
+def stop_on_signals():
+    """Within the block SIGTERM raises :class:`Terminated` (SIGINT already raises
+    ``KeyboardInterrupt``); the previous handler is restored after."""
+    def handler(signum, frame):
+        raise Terminated()
+
+    try:
+        old = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+class TrackCSV:
+    """Track rows (dicts) written as they come: header from the first row, one flushed row per
+    :meth:`write` to ``path.part``; :meth:`close` renames it to ``path`` (module docstring)."""
+
+    def __init__(self, path):
+        self.path = Path(path)
+        self.part = self.path.with_name(self.path.name + ".part")
+        self._f = open(self.part, "w", newline="")
+        self._w = csv.writer(self._f)
+        self.columns = None
+        self.rows = 0
+        self._done = False
+
+    def write(self, row):
+        if self.columns is None:
+            self.columns = list(row)
+            self._w.writerow(self.columns)
+        self._w.writerow([_fmt(row.get(c, "")) for c in self.columns])
+        self._f.flush()
+        self.rows += 1
+
+    def close(self):
+        """Close and rename to :attr:`path` (a run without frames removes the part file); after a
+        write error (disk full) the rows written whole so far are kept."""
+        if self._done:
+            return
+        self._done = True
+        try:
+            self._f.close()
+        except OSError:
+            pass
+        if self.rows:
+            os.replace(self.part, self.path)
+        else:
+            self.part.unlink(missing_ok=True)
+
+
+@dataclass
+class VideoRun:
+    """What a :func:`track_video` run did."""
+
+    rows: list = field(default_factory=list)
+    wall: float = 0.0
+    ess_sum: float = 0.0
+    degenerate: int = 0
+    #: ``None``, or how the run was cut short: ``"interrupt"`` (Ctrl-C) or ``"terminate"`` (SIGTERM)
+    stopped: str | None = None
+
+    @property
+    def exit_code(self):
+        """0, or the shell's code for the signal that stopped the run (130 SIGINT, 143 SIGTERM)."""
+        return {None: 0, "interrupt": 130, "terminate": 143}[self.stopped]
+
+
+def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, video_info=None,
+                show_particles=10, label="", progress=None):
+    """Track ``frames`` (iterable of ``(index, frame)``), writing the track CSV and annotated video as
+    it goes; stops cleanly on Ctrl-C / SIGTERM (:func:`stop_on_signals`). Returns a :class:`VideoRun`.
+
+    Parameters
+    ----------
+    frames : iterable of (int, ndarray)
+    model, filt : the model and its filter
+    particles : int
+    rng : numpy.random.Generator
+    track_path, out_path : path or None
+        Track CSV (:class:`TrackCSV`) and annotated mp4.
+    video_info : tuple or None
+        ``(fps, (width, height))`` for the annotated video.
+    show_particles : int
+        Draw this many highest-weight particles.
+    label : str
+        Text drawn on every annotated frame after the frame number.
+    progress : callable or None
+        ``progress(ess)`` after every frame (a progress bar).
+    """
+    run = VideoRun()
+    writer = VideoWriter(out_path, *video_info) if out_path else None
+    csv_out = TrackCSV(track_path) if track_path else None
+    t0 = time.perf_counter()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DegenerateWeightsWarning)
+            for res in track(frames, filt, particles, rng):
+                vis = model.visible(res.maps, res.estimate)
+                row = {"frame": res.index, "visible": int(vis)}
+                row.update(model.describe(res.estimate))
+                row["ess"], row["ms"] = res.ess, res.ms
+                run.rows.append(row)
+                if csv_out:
+                    csv_out.write(row)
+                run.ess_sum += res.ess
+                run.degenerate += bool(res.particles.degenerate)
+                if writer:
+                    writer.write(annotate(res.frame, model.outline(res.estimate) if vis else [],
+                                          model.outline(top_particles(res.particles, show_particles)),
+                                          f"#{res.index}  {label}  ESS {res.ess:.1f}"))
+                if progress:
+                    progress(res.ess)
+    except Terminated:
+        run.stopped = "terminate"
+    except KeyboardInterrupt:
+        run.stopped = "interrupt"
+    finally:
+        run.wall = time.perf_counter() - t0
+        if writer:
+            writer.close()
+        if csv_out:
+            csv_out.close()
+    return run
+
+
+def summary_lines(run, particles, *, model_name, model, truth, frame_width):
+    """The summary ``vistrack run`` prints: speed and ESS, then the comparison with ground
+    truth when there is one (landmark error; plate lost/vertex error/false reports; success
+    AUC, precision at 20 px and centre error for box-level truth)."""
+    rows, n = run.rows, len(run.rows)
+    ms = np.array([r["ms"] for r in rows])
+    lines = [f"{n} frames, {n / max(run.wall, 1e-9):.0f} frames/s end to end ({1e3 / ms.mean():.0f} frames/s in "
+             f"the filter), mean ESS {run.ess_sum / n:.1f} of {particles}"
+             + (f", {run.degenerate} degenerate frames" if run.degenerate else "")]
+    if truth is None:
+        return lines
+    if model_name == "landmarks" and "lx0" in truth:
+        err = landmark_error(rows, truth, model.k)
+        lines.append(f"vs ground truth: mean landmark error {err.mean():.2f} px (per frame: median "
+                     f"{np.median(err):.2f}, max {err.max():.2f})")
+    elif model_name == "plate" and "x0" in truth:
+        rec = {"reported": [r["visible"] for r in rows],
+               "vertices": [[r[f"{c}{i}"] for i in range(4) for c in "xy"] for r in rows]}
+        has, err, lost, false = plate_frame_measures(rec, truth, model.layout.aspect)
+        ok = has & ~lost
+        mean = f"{np.nanmean(err[ok]):.2f} px" if ok.any() else "n/a (never tracked)"
+        lines.append(f"vs ground truth: plate lost in {int(lost.sum())} of {int(has.sum())} plate frames; mean vertex "
+                     f"error {mean} when tracked; {int(false.sum())} frames reported a plate where there was none")
+    elif "w" in truth and "cx" in truth:
+        lines.append(_box_summary(rows, truth, frame_width))
+    return lines
+
+
+def _box_summary(rows, t, frame_width):
+    k = np.array([r["frame"] for r in rows], int)
+    m = int(np.sum(k < len(t["cx"])))
+    k = k[:m]
+    est = np.array([[rows[i]["cx"], rows[i]["cy"], rows[i]["w"], rows[i]["h"]] for i in range(m)], float)
+    err = center_error(est[:, 0], est[:, 1], t["cx"][k], t["cy"][k])
+    ious = iou(np.column_stack([est[:, :2] - est[:, 2:] / 2, est[:, 2:]]),
+               np.column_stack([t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k]]))
+    thr = contour_lost_threshold(frame_width)
+    lost = err > thr
+    tracked = f"{err[~lost].mean():.2f} px" if (~lost).any() else "none"
+    return (f"vs ground truth ({m} frames): success AUC {success_auc(ious):.3f}, precision@20px "
+            f"{np.mean(err <= 20):.3f}, mean centre error {err.mean():.2f} px ({tracked} over tracked frames); "
+            f"lost (> {thr:.0f} px) in {int(lost.sum())} frames")
