@@ -3,18 +3,19 @@
 from __future__ import annotations
 
 import csv
+import io
 import json
 import os
-import shutil
 import warnings
+from contextlib import contextmanager
 from pathlib import Path
 
 import click
 import numpy as np
 from tqdm import tqdm
 
-from vistrack.evaluation import (EvalConfig, check_algos, execute, find_clips, load_task_results, summarize,
-                                 task_done, task_list)
+from vistrack.evaluation import (EvalConfig, OutLocked, check_algos, execute, find_clips, load_task_results,
+                                 lock_out, stale_tasks, summarize, task_done, task_list, write_atomic)
 from vistrack.models.registry import get_model_spec
 from vistrack.video import VideoError
 
@@ -42,12 +43,34 @@ def _client(scheduler, workers, timeout, in_process=False):
     return Client(cluster), cluster
 
 
+@contextmanager
+def _locked(out):
+    """:func:`vistrack.evaluation.lock_out` with its refusal as one error line."""
+    try:
+        with lock_out(out):
+            yield
+    except OutLocked as e:
+        raise click.ClickException(str(e)) from None
+
+
 def run_tasks(tasks, out, *, scheduler=None, workers=0, timeout=10, in_process=False, resume=False, quiet=False,
               desc="tasks", runner=None):
     """Execute ``tasks`` on Dask (a LocalCluster unless ``scheduler``) with a progress bar
-    (``runner``: see :func:`vistrack.evaluation.execute`)."""
-    if resume and all(task_done(t, out) for t in tasks):
-        return
+    (``runner``: see :func:`vistrack.evaluation.execute`), holding the ``--out`` lock. Task
+    files are only ever replaced whole, as tasks finish: without ``resume`` every task runs again."""
+    with _locked(out):
+        _run_tasks(tasks, out, scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process,
+                   resume=resume, quiet=quiet, desc=desc, runner=runner)
+
+
+def _run_tasks(tasks, out, *, scheduler, workers, timeout, in_process, resume, quiet, desc, runner):
+    if resume:
+        stale = stale_tasks(tasks, out)
+        if stale:  # a warning: even with --quiet
+            click.echo(f"--resume: {len(stale)} of {len(tasks)} task files come from other options, seed, clip content "
+                       "or version (or are damaged): running them again", err=True)
+        if all(task_done(t, out) for t in tasks):
+            return
     client, cluster = _client(scheduler, workers, timeout, in_process)
     try:
         with tqdm(total=len(tasks), unit="task", desc=desc, disable=quiet) as bar:
@@ -69,15 +92,16 @@ def _task_row(r):
 
 
 def _write_outputs(out, cfg, summaries, rows, chosen):
-    with open(out / "results.json", "w") as f:
-        json.dump({"config": {"clips": [str(c) for c in cfg.clips], "algos": cfg.algos, "particles": cfg.particles,
-                              "runs": cfg.runs, "seed": cfg.seed, "model": cfg.model, "equal_time": chosen},
-                   "results": summaries}, f, indent=1)
-    with open(out / "results.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, CSV_COLUMNS)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()})
+    write_atomic(out / "results.json", json.dumps(
+        {"config": {"clips": [str(c) for c in cfg.clips], "algos": cfg.algos, "particles": cfg.particles,
+                    "runs": cfg.runs, "seed": cfg.seed, "model": cfg.model, "equal_time": chosen},
+         "results": summaries}, indent=1))
+    buf = io.StringIO(newline="")
+    w = csv.DictWriter(buf, CSV_COLUMNS)
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()})
+    write_atomic(out / "results.csv", buf.getvalue())
     from vistrack.plots import plot_per_frame, plot_vs_n, plot_success
 
     labels = {}
@@ -120,7 +144,7 @@ def _write_outputs(out, cfg, summaries, rows, chosen):
                      f"{np.mean([s['frames_per_s'] for s in ss]):.0f} |")
     lines += ["", "Averages over clips. Plots:", ""] + [f"![{Path(p).stem}]({Path(p).name})" for p in plots]
     lines += ["", "Per-task rows: `results.csv`; everything: `results.json`."]
-    (out / "report.md").write_text("\n".join(lines) + "\n")
+    write_atomic(out / "report.md", "\n".join(lines) + "\n")
     return plots
 
 
@@ -202,8 +226,6 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, 
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise click.ClickException(f"cannot create --out {out}: {e.strerror}") from None
-    if not resume and (out / "tasks").is_dir():
-        shutil.rmtree(out / "tasks")
     cfg = EvalConfig(clips=clip_paths, algos=list(algos), particles=list(particles), runs=runs, seed=seed, model=model)
     chosen = None
     tasks = task_list(cfg, clip_paths)
@@ -212,11 +234,12 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, 
         if not quiet:
             click.echo("equal time per frame: " + ", ".join(f"{a} N={n}" for a, n in chosen.items()))
         tasks = task_list(EvalConfig(**{**cfg.__dict__, "entries": list(chosen.items())}), clip_paths)
-    run_tasks(tasks, out, scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process,
-              resume=resume, quiet=quiet, desc="eval")
-    results = load_task_results(tasks, out)
-    summaries = summarize(results)
-    plots = _write_outputs(out, cfg, summaries, [_task_row(r) for r in results], chosen)
+    with _locked(out):
+        run_tasks(tasks, out, scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process,
+                  resume=resume, quiet=quiet, desc="eval")
+        results = load_task_results(tasks, out)
+        summaries = summarize(results)
+        plots = _write_outputs(out, cfg, summaries, [_task_row(r) for r in results], chosen)
     if not quiet:
         click.echo((out / "report.md").read_text().split("\n\nAverages")[0].split("\n\n", 1)[-1])
         click.echo(f"wrote {out / 'results.json'}, results.csv, report.md and {len(plots)} plots")

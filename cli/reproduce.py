@@ -12,7 +12,7 @@ from vistrack.reproduce.bearings import DEFAULT_ALGOS, BearingsConfig, bearing_r
 from vistrack.reproduce.landmarks import (LANDMARK_ALGOS, LandmarksConfig, landmark_results, landmark_tasks,
                                           run_landmark_task)
 from vistrack.reproduce.plate import PlateConfig, plate_results, plate_tasks, run_plate_task
-from vistrack.evaluation import entries_config
+from vistrack.evaluation import entries_config, write_atomic
 from vistrack.reproduce.contour import ContourConfig, contour_results, contour_tasks
 
 from .options import SEED, Fraction, IntList, StrList, check_writable
@@ -164,8 +164,7 @@ class Entries(click.ParamType):
 
 
 def _write_json(json_path, config, results):
-    with open(json_path, "w") as f:
-        json.dump({"config": config, "results": results}, f, indent=2)
+    write_atomic(json_path, json.dumps({"config": config, "results": results}, indent=2))
     click.echo(f"results written to {json_path}")
 
 
@@ -199,7 +198,9 @@ def _clip_suite(clips_dir, default, make, frames, size, maker, prefix, quiet, **
 
 
 def _fresh_out(out_dir, tasks, resume):
-    """``out_dir`` created; without ``resume`` the files of ``tasks`` removed."""
+    """``out_dir`` created. Nothing in it is removed: without ``resume`` every task runs again
+    and replaces its file whole when it finishes; with it, only task files computed by the very
+    same task (fingerprint) are kept."""
     from pathlib import Path
 
     out = Path(out_dir)
@@ -207,9 +208,6 @@ def _fresh_out(out_dir, tasks, resume):
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise click.ClickException(f"cannot create --out folder {out_dir}: {e.strerror}") from None
-    if not resume:
-        for t in tasks:
-            (out / "tasks" / f"{t['name']}.json").unlink(missing_ok=True)
     return out
 
 

@@ -69,6 +69,16 @@ def test_eval_files_schema_resume_and_workers(suite, tmp_path, capsys):
     assert code == 0, err
     assert strip_timing(json.loads((one / "results.json").read_text())) == strip_timing(data)
 
+    # --resume under another seed reuses nothing: every task file is recomputed (no mixing)
+    before = {p.name: json.loads(p.read_text()) for p in (one / "tasks").iterdir()}
+    code, _, err = run(grid(suite, one, "--in-process", "--workers", "1", "--resume", "--seed", "2"), capsys)
+    assert code == 0, err
+    assert f"{len(before)} of {len(before)} task files come from other options, seed" in err
+    after = {p.name: json.loads(p.read_text()) for p in (one / "tasks").iterdir()}
+    assert all(after[k]["fingerprint"] != before[k]["fingerprint"] for k in before)
+    assert sum(after[k]["error"] != before[k]["error"] for k in before) > len(before) // 2
+    assert json.loads((one / "results.json").read_text())["config"]["seed"] == 2
+
 
 def test_eval_bad_input(suite, tmp_path, capsys):
     empty = tmp_path / "empty"

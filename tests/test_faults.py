@@ -130,3 +130,40 @@ def test_truncated_and_empty_videos_are_clear_errors(tmp_path, capsys):
     for name in ("empty.avi", "head.avi"):
         code, _, err = run(["run", str(tmp_path / name), "--init", "48,51,24,18", "-q"], capsys)
         assert code != 0 and err.startswith("Error:") and "Traceback" not in err, (name, err)
+
+
+def test_one_experiment_per_out_folder(tmp_path):
+    """A second eval into a folder that a live process holds refuses with one line; a lock left by
+    a dead process is taken over; the lock is gone after."""
+    from vistrack.evaluation import OutLocked, lock_out
+
+    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        import socket
+
+        (tmp_path / ".vistrack.lock").write_text(f"{holder.pid}@{socket.gethostname()}")
+        with pytest.raises(OutLocked, match=f"in use by another vistrack process .{holder.pid}@"):
+            with lock_out(tmp_path):
+                pass
+    finally:
+        holder.kill()
+        holder.wait()
+    with lock_out(tmp_path):  # the holder is dead: taken over
+        with lock_out(tmp_path):  # re-entrant
+            assert (tmp_path / ".vistrack.lock").read_text().startswith(f"{os.getpid()}@")
+    assert not (tmp_path / ".vistrack.lock").exists()
+
+
+def test_write_atomic_leaves_the_old_file_on_failure(tmp_path):
+    from vistrack.evaluation import write_atomic
+
+    p = tmp_path / "results.json"
+    write_atomic(p, "old")
+
+    class Boom:
+        def __str__(self):
+            raise RuntimeError
+
+    with pytest.raises(TypeError):
+        write_atomic(p, Boom())
+    assert p.read_text() == "old" and [q.name for q in tmp_path.iterdir()] == ["results.json"]

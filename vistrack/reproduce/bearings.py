@@ -111,7 +111,7 @@ def run_bearing_task(task, out_dir):
     result = {"sequence": task["sequence"],
               "entries": [{"algo": a, "particles": n, "errors": e.tolist(), "seconds": sec, "degenerate": deg}
                           for (a, n), (e, sec, deg) in res.items()]}
-    return write_task_result(Path(out_dir) / "tasks" / f"{task['name']}.json", result)
+    return write_task_result(Path(out_dir) / "tasks" / f"{task['name']}.json", result, task)
 
 
 def bearing_results(cfg, tasks, out_dir):

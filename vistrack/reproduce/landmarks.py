@@ -137,7 +137,7 @@ def run_landmark_task(task, out_dir):
     res = _one_run(cfg, cfg.model(), task["run"], task["seed_seq"])
     result = {"run": task["run"], "algos": {a: {"sq_error": [float(v) for v in sq], "seconds": sec, "degenerate": deg}
                                             for a, (sq, sec, deg) in res.items()}}
-    return write_task_result(Path(out_dir) / "tasks" / f"{task['name']}.json", result)
+    return write_task_result(Path(out_dir) / "tasks" / f"{task['name']}.json", result, task)
 
 
 def landmark_results(cfg, tasks, out_dir):

@@ -68,7 +68,7 @@ def run_plate_task(task, out_dir):
             ess.append(round(res.ess, 3))
     result = {"clip": task["clip"], "algo": task["algo"], "particles": task["particles"], "run": task["run"],
               "reported": reported, "vertices": verts, "loglik": ll, "ms": ms, "ess": ess}
-    return write_task_result(Path(out_dir) / "tasks" / f"{task['name']}.json", result)
+    return write_task_result(Path(out_dir) / "tasks" / f"{task['name']}.json", result, task)
 
 
 def _acquisition_delays(has, lost, ids):
