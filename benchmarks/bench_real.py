@@ -31,7 +31,7 @@ from vistrack.models.box import Box
 from vistrack.metrics import iou
 from vistrack.proposals import MapProposal
 from vistrack.runtime import keep_freed_memory
-from vistrack.video import open_video, read_rects
+from vistrack.video import groundtruth_origin, open_video, read_rects
 
 from _timing import Timer
 
@@ -52,7 +52,8 @@ def opencv_tracker(name):
 def load(name, size=None):
     folder = DATA / name
     frames = [f for _, f in open_video(next(folder.glob("*.mp4")))]
-    gt = read_rects(folder / "groundtruth_rect.txt")[: len(frames)]
+    gt = read_rects(folder / "groundtruth_rect.txt", origin=groundtruth_origin(folder / "groundtruth_rect.txt"))
+    gt = gt[: len(frames)]
     if size is not None:
         sx, sy = size[0] / frames[0].shape[1], size[1] / frames[0].shape[0]
         frames = [cv2.resize(f, size, interpolation=cv2.INTER_LINEAR) for f in frames]

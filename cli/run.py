@@ -66,6 +66,9 @@ def model_options(name, *, layout, no_colour, template):
                    "Landmarks: the first frame's landmark positions.")
 @click.option("--track", "track_path", type=click.Path(dir_okay=False), help="Write the track CSV here.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False), help="Write the annotated mp4 here.")
+@click.option("--results", "results_path", type=click.Path(dir_okay=False),
+              help="Write the track in the OTB / GOT-10k result format here: x,y,w,h per frame (0-based pixels; "
+                   "0,0,0,0 where the object is not reported).")
 @click.option("--show-particles", default=10, show_default=True, type=click.IntRange(min=0),
               help="Draw the K highest-weight particles in the annotated video.")
 @click.option("--resample", default="systematic", show_default=True,
@@ -77,8 +80,8 @@ def model_options(name, *, layout, no_colour, template):
               help="Contour: edges only (no colour term, which is on for colour video). Plate: the plate "
                    "likelihood only (no appearance learned from the --init box).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary.")
-def run(video, model_name, layout, algo, particles, seed, init, init_gt, template_path, track_path, out_path, show_particles,
-        resample, ess_threshold, max_frames, no_colour, quiet):
+def run(video, model_name, layout, algo, particles, seed, init, init_gt, template_path, track_path, out_path,
+        results_path, show_particles, resample, ess_threshold, max_frames, no_colour, quiet):
     """Track the object in VIDEO (a video file, an image folder or a clip folder).
 
     \b
@@ -98,6 +101,7 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
     """
     check_writable(track_path, "track file")
     check_writable(out_path, "annotated video")
+    check_writable(results_path, "results file")
     if init is not None and init_gt is not None:
         raise click.UsageError("give either --init or --init-gt, not both")
     try:
@@ -140,7 +144,7 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
     try:
         with stop_on_signals():
             done = track_video(frames(), model, filt, particles, np.random.default_rng(seed), track_path=track_path,
-                               out_path=out_path, video_info=(src.fps, src.size), show_particles=show_particles,
+                               out_path=out_path, results_path=results_path, video_info=(src.fps, src.size), show_particles=show_particles,
                                label=f"{algo} N={particles}", progress=progress)
     except (VideoError, OSError) as e:
         raise click.ClickException(str(e)) from None
@@ -162,5 +166,9 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
             click.echo(f"track: {track_path}")
         if out_path:
             click.echo(f"annotated video: {out_path}")
+        if results_path:
+            click.echo(f"results (x,y,w,h): {results_path}")
+        if not (track_path or out_path or results_path):
+            click.echo("nothing written (give --track, --results or --out to keep the track)")
     if done.stopped:
         raise click.exceptions.Exit(done.exit_code)

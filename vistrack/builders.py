@@ -14,7 +14,7 @@ from .features import FeatureMaps, is_grey
 from .models.contour import Contour
 from .models.registry import MODELS as _REGISTRY
 from .models.registry import ModelSpec, get_model_spec, register
-from .video import VideoError, read_rects
+from .video import VideoError, groundtruth_origin, read_rects
 
 __all__ = ["MODELS", "initial_truth", "build_model", "model_from_box", "read_support_points"]
 
@@ -37,7 +37,7 @@ def initial_truth(clip, init_gt):
         if p.suffix == ".csv":
             truth = read_groundtruth_csv(p)
         else:
-            r = read_rects(p)
+            r = read_rects(p, origin=groundtruth_origin(p))
             truth = {"visible": ((r[:, 2] > 0) & (r[:, 3] > 0)).astype(float), "cx": r[:, 0] + r[:, 2] / 2,
                      "cy": r[:, 1] + r[:, 3] / 2, "w": r[:, 2], "h": r[:, 3]}
     vis = np.flatnonzero(np.asarray(truth["visible"]) > 0)

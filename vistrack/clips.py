@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .video import VideoError, find_groundtruth, open_video, read_rects
+from .video import VideoError, find_groundtruth, groundtruth_origin, open_video, read_rects
 
 __all__ = ["Clip", "load_clip", "read_groundtruth_csv", "write_track_csv"]
 
@@ -98,7 +98,8 @@ def load_clip(path):
         if missing:
             raise VideoError(f"{folder / 'groundtruth.csv'} lacks columns {', '.join(sorted(missing))}")
     elif find_groundtruth(p) is not None:
-        truth = _rects_truth(read_rects(find_groundtruth(p)))
+        gt = find_groundtruth(p)
+        truth = _rects_truth(read_rects(gt, origin=groundtruth_origin(gt)))
     return Clip(source, folder, meta, truth)
 
 

@@ -55,22 +55,30 @@ def stop_on_signals():
 
 class TrackCSV:
     """Track rows (dicts) written as they come: header from the first row, one flushed row per
-    :meth:`write` to ``path.part``; :meth:`close` renames it to ``path`` (module docstring)."""
+    :meth:`write` to ``path.part``; :meth:`close` renames it to ``path`` (module docstring).
+    ``boxes=True``: the OTB / GOT-10k result format instead — ``x,y,w,h`` per frame, no header,
+    0-based pixels, ``0,0,0,0`` where the object is not reported (``visible=0``)."""
 
-    def __init__(self, path):
+    def __init__(self, path, boxes=False):
         self.path = Path(path)
         self.part = self.path.with_name(self.path.name + ".part")
         self._f = open(self.part, "w", newline="")
         self._w = csv.writer(self._f)
+        self.boxes = bool(boxes)
         self.columns = None
         self.rows = 0
         self._done = False
 
     def write(self, row):
-        if self.columns is None:
-            self.columns = list(row)
-            self._w.writerow(self.columns)
-        self._w.writerow([_fmt(row.get(c, "")) for c in self.columns])
+        if self.boxes:
+            box = (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"]) if row["visible"] \
+                else (0, 0, 0, 0)
+            self._w.writerow([f"{float(v):.2f}" for v in box])
+        else:
+            if self.columns is None:
+                self.columns = list(row)
+                self._w.writerow(self.columns)
+            self._w.writerow([_fmt(row.get(c, "")) for c in self.columns])
         self._f.flush()
         self.rows += 1
 
@@ -107,8 +115,8 @@ class VideoRun:
         return {None: 0, "interrupt": 130, "terminate": 143}[self.stopped]
 
 
-def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, video_info=None,
-                show_particles=10, label="", progress=None):
+def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, results_path=None,
+                video_info=None, show_particles=10, label="", progress=None):
     """Track ``frames`` (iterable of ``(index, frame)``), writing the track CSV and annotated video as
     it goes; stops cleanly on Ctrl-C / SIGTERM (:func:`stop_on_signals`). Returns a :class:`VideoRun`.
 
@@ -118,8 +126,8 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     model, filt : the model and its filter
     particles : int
     rng : numpy.random.Generator
-    track_path, out_path : path or None
-        Track CSV (:class:`TrackCSV`) and annotated mp4.
+    track_path, out_path, results_path : path or None
+        Track CSV (:class:`TrackCSV`), annotated mp4 and OTB/GOT-10k result file (``x,y,w,h``).
     video_info : tuple or None
         ``(fps, (width, height))`` for the annotated video.
     show_particles : int
@@ -131,7 +139,9 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     """
     run = VideoRun()
     writer = VideoWriter(out_path, *video_info) if out_path else None
-    csv_out = TrackCSV(track_path) if track_path else None
+    outs = [TrackCSV(track_path)] if track_path else []
+    if results_path:
+        outs.append(TrackCSV(results_path, boxes=True))
     t0 = time.perf_counter()
     try:
         with warnings.catch_warnings():
@@ -142,8 +152,8 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
                 row.update(model.describe(res.estimate))
                 row["ess"], row["ms"] = res.ess, res.ms
                 run.rows.append(row)
-                if csv_out:
-                    csv_out.write(row)
+                for o in outs:
+                    o.write(row)
                 run.ess_sum += res.ess
                 run.degenerate += bool(res.particles.degenerate)
                 if writer:
@@ -160,8 +170,8 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         run.wall = time.perf_counter() - t0
         if writer:
             writer.close()
-        if csv_out:
-            csv_out.close()
+        for o in outs:
+            o.close()
     return run
 
 

@@ -3,7 +3,8 @@
 ``open_video(path)`` accepts
 
 * a video file that OpenCV decodes (mp4, avi, ...);
-* an image-sequence folder: ``img/*.jpg`` (OTB style) or images directly in it;
+* an image-sequence folder: ``img/*.jpg`` (OTB, LaSOT), ``color/*.jpg`` (VOT 2020+) or
+  images directly in it (VOT up to 2019, GOT-10k);
 * a clip folder: ``video.mp4`` (synthetic clips) or the one video file it holds.
 
 Frames come as ``(index, frame)`` with ``frame`` a ``uint8`` BGR array of shape
@@ -31,10 +32,13 @@ __all__ = [
     "VideoWriter",
     "read_rects",
     "find_groundtruth",
+    "groundtruth_origin",
 ]
 
 IMAGE_EXT = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".ppm", ".pgm"}
 VIDEO_EXT = {".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"}
+#: files FFmpeg's text/data demuxers would "decode", which are never videos here
+TEXT_EXT = {".txt", ".csv", ".json", ".md", ".rst", ".xml", ".yaml", ".yml", ".log", ".py", ".html", ".srt"}
 
 
 class VideoError(ValueError):
@@ -126,9 +130,12 @@ def open_video(path):
     if p.is_file():
         if os.path.getsize(p) == 0:
             raise VideoError(f"{p} is empty")
+        if p.suffix.lower() in TEXT_EXT:
+            raise VideoError(f"{p} is a {p.suffix} file, not a video (FFmpeg would render its text as frames)")
         return VideoSource(p)
-    if (p / "img").is_dir() and _image_files(p / "img"):
-        return VideoSource(p, _images=_image_files(p / "img"))
+    for sub in ("img", "color"):
+        if (p / sub).is_dir() and _image_files(p / sub):
+            return VideoSource(p, _images=_image_files(p / sub))
     if (p / "video.mp4").is_file():
         return VideoSource(p / "video.mp4")
     videos = sorted(q for q in p.iterdir() if q.suffix.lower() in VIDEO_EXT)
@@ -142,8 +149,16 @@ def open_video(path):
     raise VideoError(f"{p} holds no video and no images")
 
 
-def read_rects(path):
-    """``x, y, w, h`` boxes, one per line (comma, tab or space separated) -> ``(n, 4)`` float array."""
+def read_rects(path, origin=0):
+    """Boxes ``(n, 4)`` as 0-based ``x, y, w, h`` from a ground-truth text file, one frame per line
+    (comma, tab or space separated).
+
+    A line is a rectangle ``x, y, w, h`` (OTB, GOT-10k, LaSOT, VOT rectangles) or a polygon of 4
+    corners ``x1, y1, .., x4, y4`` (VOT), read as its axis-aligned bounding box. A frame without
+    the object — ``NaN`` values, ``0,0,0,0`` or a non-positive size — becomes ``0, 0, 0, 0``
+    (not visible). ``origin=1``: the file's pixel coordinates start at 1 (OTB, LaSOT), and one is
+    subtracted from ``x`` and ``y``. Any other line is a :class:`VideoError` naming the file and line.
+    """
     rows = []
     with open(path) as f:
         for k, line in enumerate(f, 1):
@@ -152,20 +167,49 @@ def read_rects(path):
                 continue
             parts = line.replace(",", " ").replace("\t", " ").split()
             try:
-                rows.append([float(v) for v in parts[:4]])
+                v = np.array([float(x) for x in parts])
             except ValueError:
-                raise VideoError(f"{path}, line {k}: expected x,y,w,h numbers, got {line!r}") from None
-            if len(parts) < 4:
-                raise VideoError(f"{path}, line {k}: expected 4 values x,y,w,h, got {len(parts)}")
+                raise VideoError(f"{path}, line {k}: expected numbers (x,y,w,h or a 4-corner polygon), "
+                                 f"got {line!r}") from None
+            if len(v) == 8:
+                xs, ys = v[0::2], v[1::2]
+                v = np.array([xs.min(), ys.min(), xs.max() - xs.min(), ys.max() - ys.min()])
+            elif len(v) != 4:
+                raise VideoError(f"{path}, line {k}: expected 4 values x,y,w,h or 8 (a polygon), got {len(v)}")
+            if not (np.all(np.isfinite(v)) and v[2] > 0 and v[3] > 0):
+                v = np.zeros(4)  # the object is not in view
+            else:
+                v[:2] -= origin
+            rows.append(v)
     return np.array(rows, dtype=float).reshape(-1, 4)
 
 
+#: ground-truth files by dataset layout: (file name, coordinate origin)
+GROUNDTRUTH_FILES = (("groundtruth_rect.txt", None), ("groundtruth.txt", None))
+
+
+def groundtruth_origin(gt_path):
+    """Pixel origin of a ground-truth file by its dataset's layout: 1 for OTB (``img/`` and
+    ``groundtruth_rect.txt``) and LaSOT (``img/`` and ``groundtruth.txt`` beside ``full_occlusion.txt``),
+    else 0 (VOT, GOT-10k, vistrack's own and other clips)."""
+    p = Path(gt_path)
+    img = (p.parent / "img").is_dir()
+    if p.name == "groundtruth_rect.txt" and img:
+        return 1
+    if p.name == "groundtruth.txt" and img and (p.parent / "full_occlusion.txt").is_file():
+        return 1
+    return 0
+
+
 def find_groundtruth(path):
-    """The OTB-style ``groundtruth_rect.txt`` beside a video or in a clip folder, or ``None``."""
+    """The box ground truth beside a video or in a clip folder — ``groundtruth_rect.txt`` (OTB)
+    or ``groundtruth.txt`` (VOT, GOT-10k, LaSOT) — or ``None``."""
     p = Path(path)
     folder = p if p.is_dir() else p.parent
-    gt = folder / "groundtruth_rect.txt"
-    return gt if gt.is_file() else None
+    for name, _ in GROUNDTRUTH_FILES:
+        if (folder / name).is_file():
+            return folder / name
+    return None
 
 
 class VideoWriter:

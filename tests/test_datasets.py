@@ -1,0 +1,91 @@
+"""Ground truth as users have it: OTB, VOT, GOT-10k and LaSOT layouts, polygons, absent frames,
+malformed lines; and text files that FFmpeg would happily "decode"."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from cli_helpers import run
+from vistrack.clips import load_clip
+from vistrack.video import VideoError, open_video, read_rects
+
+H, W = 64, 96
+
+
+def images(folder, n=4):
+    folder.mkdir(parents=True, exist_ok=True)
+    for i in range(n):
+        img = np.full((H, W, 3), 90, np.uint8)
+        cv2.rectangle(img, (20 + i, 20), (40 + i, 36), (30, 60, 220), -1)
+        cv2.imwrite(str(folder / f"{i + 1:08d}.jpg"), img)
+
+
+@pytest.mark.parametrize("layout, gt_name, line, first_box", [
+    ("otb", "groundtruth_rect.txt", "21,21,21,17", (20, 20, 21, 17)),  # OTB: 1-based
+    ("lasot", "groundtruth.txt", "21,21,21,17", (20, 20, 21, 17)),  # LaSOT: 1-based (img/ + full_occlusion.txt)
+    ("vot-rect", "groundtruth.txt", "20,20,21,17", (20, 20, 21, 17)),  # VOT 2013-2019: images in the folder
+    ("vot-poly", "groundtruth.txt", "20,22,41,20,40,37,21,36", (20, 20, 21, 17)),  # polygon: bounding box
+    ("vot2020", "groundtruth.txt", "20,20,21,17", (20, 20, 21, 17)),  # color/
+    ("got10k", "groundtruth.txt", "20\t20\t21\t17", (20, 20, 21, 17)),
+])
+def test_dataset_layouts_give_the_first_box(tmp_path, layout, gt_name, line, first_box):
+    seq = tmp_path / "seq"
+    sub = {"otb": "img", "lasot": "img", "vot2020": "color"}.get(layout)
+    images(seq / sub if sub else seq)
+    if layout == "lasot":
+        (seq / "full_occlusion.txt").write_text("0,0,0,0\n")
+    (seq / gt_name).write_text("\n".join([line] * 4) + "\n")
+    clip = load_clip(seq)
+    assert clip.source.frame_count == 4
+    np.testing.assert_allclose(clip.first_box(), first_box)
+
+
+def test_absent_frames_are_not_visible(tmp_path):
+    p = tmp_path / "groundtruth.txt"
+    p.write_text("nan,nan,nan,nan\n0,0,0,0\n5,5,10,10\nNaN NaN NaN NaN NaN NaN NaN NaN\n")
+    r = read_rects(p)
+    assert r.tolist() == [[0, 0, 0, 0], [0, 0, 0, 0], [5, 5, 10, 10], [0, 0, 0, 0]]
+    images(tmp_path)
+    t = load_clip(tmp_path).truth
+    assert t["visible"].tolist() == [0, 0, 1, 0]
+
+
+@pytest.mark.parametrize("text, message", [("1,2,3,4\n1,2,3\n", "line 2: expected 4 values x,y,w,h or 8"),
+                                           ("1,2,3,4\n\n1,2,x,4\n", "line 3: expected numbers")])
+def test_malformed_ground_truth_is_one_error(tmp_path, capsys, text, message):
+    images(tmp_path / "img")
+    (tmp_path / "groundtruth_rect.txt").write_text(text)
+    with pytest.raises(VideoError, match=message):
+        load_clip(tmp_path)
+    code, _, err = run(["run", str(tmp_path), "--init-gt"], capsys)
+    assert code != 0 and message in err and "groundtruth_rect.txt" in err and err.count("\n") == 1
+
+
+def test_a_text_file_is_not_a_video(tmp_path, capsys):
+    p = tmp_path / "groundtruth_rect.txt"
+    p.write_text("1,2,3,4\n" * 30)
+    with pytest.raises(VideoError, match="not a video"):
+        open_video(p)
+    code, _, err = run(["run", str(p), "--init", "1,1,5,5"], capsys)
+    assert code != 0 and "is a .txt file, not a video" in err
+
+
+def test_results_file_is_the_otb_format_and_matches_the_track(tmp_path, capsys):
+    """``--results``: one ``x,y,w,h`` line per frame, the track's box (0-based), 0,0,0,0 where the
+    object is not reported; a run with no output file says so."""
+    images(tmp_path / "seq", n=6)
+    code, out, err = run(["run", str(tmp_path / "seq"), "--init", "20,20,21,17", "--track", str(tmp_path / "t.csv"),
+                          "--results", str(tmp_path / "r.txt")], capsys)
+    assert code == 0, err
+    from vistrack.clips import read_groundtruth_csv
+
+    t = read_groundtruth_csv(tmp_path / "t.csv")
+    r = np.loadtxt(tmp_path / "r.txt", delimiter=",")
+    assert r.shape == (6, 4)
+    np.testing.assert_allclose(r[:, 0] + r[:, 2] / 2, t["cx"], atol=0.01)
+    np.testing.assert_allclose(r[:, 2], t["w"], atol=0.01)
+    assert "results (x,y,w,h):" in out
+    code, out, err = run(["run", str(tmp_path / "seq"), "--init", "20,20,21,17"], capsys)
+    assert code == 0 and "nothing written" in out
