@@ -2,11 +2,7 @@
 
 from __future__ import annotations
 
-import csv
-import io
-import json
 import os
-import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -15,17 +11,14 @@ import numpy as np
 from tqdm import tqdm
 
 from vistrack.evaluation import (EvalConfig, OutLocked, check_algos, execute, find_clips, load_task_results,
-                                 lock_out, stale_tasks, summarize, task_done, task_list, write_atomic)
+                                 lock_out, stale_tasks, summarize, task_done, task_list)
+from vistrack.report import write_eval_outputs
 from vistrack.models.registry import get_model_spec
 from vistrack.video import VideoError
 
 from .options import SEED, IntList, StrList
 
 __all__ = ["eval_cmd", "run_tasks"]
-
-CSV_COLUMNS = ["clip", "algo", "particles", "run", "frames", "mean_error", "p_lost", "success_auc",
-               "precision_20px", "frames_per_s", "mean_ess"]
-
 
 def _client(scheduler, workers, timeout, in_process=False):
     try:
@@ -79,73 +72,6 @@ def _run_tasks(tasks, out, *, scheduler, workers, timeout, in_process, resume, q
         client.close()
         if cluster is not None:
             cluster.close()
-
-
-def _task_row(r):
-    err = [e for e, lost in zip(r["error"], r["lost"]) if e is not None and not lost]
-    ess = [e for e in r["ess"] if e is not None]
-    return {"clip": r["clip"], "algo": r["algo"], "particles": r["particles"], "run": r["run"], "frames": r["frames"],
-            "mean_error": float(np.mean(err)) if err else "", "p_lost": float(np.mean(r["lost"])),
-            "success_auc": float(np.mean([np.mean(np.array(r["iou"]) > t) for t in np.linspace(0, 1, 21)])),
-            "precision_20px": float(np.mean([e is not None and e <= 20 for e in r["error"]])),
-            "frames_per_s": 1e3 / float(np.mean(r["ms"])), "mean_ess": float(np.mean(ess)) if ess else ""}
-
-
-def _write_outputs(out, cfg, summaries, rows, chosen):
-    write_atomic(out / "results.json", json.dumps(
-        {"config": {"clips": [str(c) for c in cfg.clips], "algos": cfg.algos, "particles": cfg.particles,
-                    "runs": cfg.runs, "seed": cfg.seed, "model": cfg.model, "equal_time": chosen},
-         "results": summaries}, indent=1))
-    buf = io.StringIO(newline="")
-    w = csv.DictWriter(buf, CSV_COLUMNS)
-    w.writeheader()
-    for r in rows:
-        w.writerow({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()})
-    write_atomic(out / "results.csv", buf.getvalue())
-    from vistrack.plots import plot_per_frame, plot_vs_n, plot_success
-
-    labels = {}
-    for s in summaries:
-        labels.setdefault(f"{s['algo']}, N={s['particles']}", []).append(s)
-
-    def avg(key):
-        out_ = {}
-        for k, ss in labels.items():
-            arr = np.array([[np.nan if v is None else v for v in s[key]] for s in ss], float)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                out_[k] = np.nanmean(arr, axis=0)
-        return out_
-
-    same_len = len({len(s["p_lost_per_frame"]) for s in summaries}) == 1
-    plots = []
-    if same_len:
-        plots.append(plot_per_frame(avg("error_per_frame"), out / "error_vs_frame.png",
-                                    ylabel="mean centre error (px), runs not lost", title="Tracking error per frame"))
-        plots.append(plot_per_frame(avg("p_lost_per_frame"), out / "p_lost_vs_frame.png", ylabel="P(lost)",
-                                    title="Probability of losing the object per frame"))
-    plots.append(plot_vs_n(summaries, out / "error_vs_n.png", key="mean_error", ylabel="mean centre error (px)"))
-    plots.append(plot_vs_n(summaries, out / "fps_vs_n.png", key="frames_per_s", ylabel="frames/s (filter)"))
-    plots.append(plot_success({k: np.mean([s["success_curve"] for s in ss], axis=0) for k, ss in labels.items()},
-                              out / "success.png"))
-    lines = ["# vistrack eval report", "",
-             f"{len(cfg.clips)} clip(s) × algorithms {', '.join(cfg.algos)} × N {cfg.particles} × {cfg.runs} run(s), "
-             f"seed {cfg.seed}, model {cfg.model}.", ""]
-    if chosen:
-        lines += ["Equal time per frame: N chosen per algorithm: "
-                  + ", ".join(f"{a} N={n}" for a, n in chosen.items()), ""]
-    lines += ["| algo | N | mean error (px) | P(lost) | P(lost) last frame | success AUC | precision@20px | frames/s |",
-              "|---|---|---|---|---|---|---|---|"]
-    for k, ss in labels.items():
-        me = [s["mean_error"] for s in ss if s["mean_error"] is not None]
-        lines.append(f"| {ss[0]['algo']} | {ss[0]['particles']} | {np.mean(me) if me else float('nan'):.2f} | "
-                     f"{np.mean([s['p_lost'] for s in ss]):.3f} | {np.mean([s['p_lost_final'] for s in ss]):.3f} | "
-                     f"{np.mean([s['success_auc'] for s in ss]):.3f} | {np.mean([s['precision_20px'] for s in ss]):.3f} | "
-                     f"{np.mean([s['frames_per_s'] for s in ss]):.0f} |")
-    lines += ["", "Averages over clips. Plots:", ""] + [f"![{Path(p).stem}]({Path(p).name})" for p in plots]
-    lines += ["", "Per-task rows: `results.csv`; everything: `results.json`."]
-    write_atomic(out / "report.md", "\n".join(lines) + "\n")
-    return plots
 
 
 def _equal_time(cfg, clips, frames=30):
@@ -239,7 +165,7 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, 
                   resume=resume, quiet=quiet, desc="eval")
         results = load_task_results(tasks, out)
         summaries = summarize(results)
-        plots = _write_outputs(out, cfg, summaries, [_task_row(r) for r in results], chosen)
+        plots = write_eval_outputs(out, cfg, summaries, results, chosen)
     if not quiet:
         click.echo((out / "report.md").read_text().split("\n\nAverages")[0].split("\n\n", 1)[-1])
         click.echo(f"wrote {out / 'results.json'}, results.csv, report.md and {len(plots)} plots")

@@ -3,6 +3,8 @@ malformed lines; and text files that FFmpeg would happily "decode"."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import cv2
 import numpy as np
 import pytest
@@ -89,3 +91,24 @@ def test_results_file_is_the_otb_format_and_matches_the_track(tmp_path, capsys):
     assert "results (x,y,w,h):" in out
     code, out, err = run(["run", str(tmp_path / "seq"), "--init", "20,20,21,17"], capsys)
     assert code == 0 and "nothing written" in out
+
+
+REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
+
+
+@pytest.mark.skipif(not (REAL / "girl_otb").is_dir(), reason="real clips not present")
+def test_run_summary_centre_error_is_the_mean_over_all_ground_truth_frames(tmp_path, capsys):
+    """Computed here independently: the OTB boxes (1-based) against the track CSV's centres."""
+    import re
+
+    code, out, err = run(["run", str(REAL / "girl_otb"), "--init-gt", "--max-frames", "60", "--track",
+                          str(tmp_path / "t.csv")], capsys)
+    assert code == 0, err
+    from vistrack.clips import read_groundtruth_csv
+
+    t = read_groundtruth_csv(tmp_path / "t.csv")
+    gt = np.loadtxt(REAL / "girl_otb" / "groundtruth_rect.txt", delimiter=",")[:60]
+    cx, cy = gt[:, 0] - 1 + gt[:, 2] / 2, gt[:, 1] - 1 + gt[:, 3] / 2
+    expect = np.hypot(t["cx"] - cx, t["cy"] - cy).mean()
+    printed = float(re.search(r"mean centre error ([0-9.]+) px over all", out).group(1))
+    assert abs(printed - expect) < 0.006

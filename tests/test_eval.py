@@ -12,7 +12,8 @@ from vistrack.data_synth.contour import make_contour_clip
 from cli_helpers import run
 
 SUMMARY_KEYS = {"clip", "algo", "particles", "runs", "mean_error", "p_lost", "p_lost_final", "p_lost_per_frame",
-                "error_per_frame", "success_auc", "success_curve", "precision_20px", "frames_per_s", "mean_ess"}
+                "error_per_frame", "success_auc", "success_curve", "precision_20px", "frames_per_s", "mean_ess",
+                "mean_error_all", "precision_curve"}
 
 
 
@@ -49,9 +50,14 @@ def test_eval_files_schema_resume_and_workers(suite, tmp_path, capsys):
     with open(full / "results.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     assert len(rows) == 2 * 2 * 2 * 3
-    for png in ("error_vs_frame.png", "p_lost_vs_frame.png", "error_vs_n.png", "fps_vs_n.png", "success.png"):
+    for png in ("error_vs_frame.png", "p_lost_vs_frame.png", "error_vs_n.png", "fps_vs_n.png", "success.png",
+                "precision.png"):
         assert mpimg.imread(full / png).ndim == 3
-    assert "| lis | 10 |" in (full / "report.md").read_text()
+    report = (full / "report.md").read_text()
+    assert "| lis | 10 |" in report and "## Per clip" in report and report.count("### ") == 2
+    for r in data["results"]:  # precision curve: non-decreasing, its 20-px point is precision_20px
+        assert np.all(np.diff(r["precision_curve"]) >= 0) and r["precision_curve"][20] == r["precision_20px"]
+        assert r["mean_error_all"] >= 0
 
     # killed midway: half the task files gone; --resume finishes with the same results
     part = tmp_path / "part"

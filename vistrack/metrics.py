@@ -1,8 +1,11 @@
 """Tracking errors and losses (DESIGN.md evaluation protocol; thesis §3.2.5, §4.5.3).
 
-- contour, box (and any model whose registry entry says ``lost_rule="centre"``): centre
+- the reproductions of the thesis (``reproduce contour``; ``lost_rule="centre"``): centre
   distance (px); lost when it exceeds 50 px at the thesis's 240-px frame width, scaled with
   the frame width;
+- ``eval`` and ``run`` on box-level ground truth (``lost_rule="size"``, as OTB users read
+  it): lost when the centre error exceeds half the larger side of the true box — the
+  object's own size, not the frame's;
 - plate (``lost_rule="plate"``, DESIGN.md): lost in a frame with a plate when no plate is
   reported or the summed vertex error exceeds a third of the plate height; a report in a
   frame without a plate is a false report (:func:`plate_frame_measures`);
@@ -104,7 +107,8 @@ def lost_frames(rule, centre_err, frame_width, *, truth=None, reported=None, ver
     """Per-frame lost flags ``(frames,)`` by a model's lost rule (module docstring).
 
     ``rule="centre"``: ``centre_err (frames,)`` above :func:`contour_lost_threshold` of the
-    frame width. ``rule="plate"``: :func:`plate_frame_measures` of ``reported (frames,)`` and
+    frame width. ``rule="size"``: above half the larger side of the true box (``truth["w"]``,
+    ``truth["h"]``). ``rule="plate"``: :func:`plate_frame_measures` of ``reported (frames,)`` and
     ``vertices (frames, 4, 2)`` against ``truth`` (groundtruth.csv columns with vertices
     ``x0..y3``, ``scale``, ``frame``, ``visible``); where the truth has no vertices (a box
     ground truth), the centre rule.
@@ -116,6 +120,11 @@ def lost_frames(rule, centre_err, frame_width, *, truth=None, reported=None, ver
         out = np.zeros(len(centre_err), bool)
         out[:len(lost)] = lost[:len(centre_err)]
         return out
-    if rule not in ("centre", "plate"):
+    if rule == "size" and truth is not None:
+        m = len(centre_err)
+        half = 0.5 * np.maximum(np.asarray(truth["w"][:m], float), np.asarray(truth["h"][:m], float))
+        with np.errstate(invalid="ignore"):
+            return ~(centre_err <= half)
+    if rule not in ("centre", "plate", "size"):
         raise ValueError(f"unknown lost rule {rule!r}")
     return centre_err > contour_lost_threshold(frame_width)

@@ -23,7 +23,7 @@ def _finish(fig, ax, path):
     return path
 
 
-__all__ = ["plot_error_vs_time", "plot_error_vs_n", "plot_per_frame", "plot_vs_n", "plot_success"]
+__all__ = ["plot_error_vs_time", "plot_error_vs_n", "plot_per_frame", "plot_vs_n", "plot_success", "plot_precision"]
 
 
 def plot_error_vs_time(curves, path, *, title="Tracking error vs time step", ylabel="mean position error"):
@@ -98,6 +98,23 @@ def plot_success(curves, path, *, title="Success plot (IoU)"):
     ax.set_xlabel("IoU threshold")
     ax.set_ylabel("success rate")
     ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1.02)
+    ax.set_title(title)
+    return _finish(fig, ax, path)
+
+
+def plot_precision(curves, path, *, title="Precision plot (centre error)"):
+    """Fraction of frames with the centre error within each threshold (0..50 px, OTB), with the
+    precision at 20 px in the legend."""
+    import numpy as np
+
+    fig, ax = _subplots()
+    for label, y in curves.items():
+        th = np.arange(len(y))
+        ax.plot(th, y, label=f"{label} (@20 px {y[min(20, len(y) - 1)]:.3f})")
+    ax.set_xlabel("centre error threshold (px)")
+    ax.set_ylabel("precision")
+    ax.set_xlim(0, len(next(iter(curves.values()), [0])) - 1 or 1)
     ax.set_ylim(0, 1.02)
     ax.set_title(title)
     return _finish(fig, ax, path)

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from .clips import _fmt
-from .metrics import center_error, contour_lost_threshold, iou, landmark_error, plate_frame_measures, success_auc
+from .metrics import center_error, iou, landmark_error, lost_frames, plate_frame_measures, success_auc
 from .particles import DegenerateWeightsWarning
 from .render import annotate
 from .tracking import top_particles, track
@@ -211,9 +211,11 @@ def _box_summary(rows, t, frame_width):
     err = center_error(est[:, 0], est[:, 1], t["cx"][k], t["cy"][k])
     ious = iou(np.column_stack([est[:, :2] - est[:, 2:] / 2, est[:, 2:]]),
                np.column_stack([t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k]]))
-    thr = contour_lost_threshold(frame_width)
-    lost = err > thr
-    tracked = f"{err[~lost].mean():.2f} px" if (~lost).any() else "none"
-    return (f"vs ground truth ({m} frames): success AUC {success_auc(ious):.3f}, precision@20px "
-            f"{np.mean(err <= 20):.3f}, mean centre error {err.mean():.2f} px ({tracked} over tracked frames); "
-            f"lost (> {thr:.0f} px) in {int(lost.sum())} frames")
+    vis = (t["w"][k] > 0) & (t["h"][k] > 0)
+    lost = lost_frames("size", err, frame_width, truth={"w": t["w"][k], "h": t["h"][k]}) & vis
+    tracked = f"{err[vis & ~lost].mean():.2f} px" if (vis & ~lost).any() else "none"
+    n = int(vis.sum())
+    return (f"vs ground truth ({n} frames with the object): success AUC {success_auc(ious[vis]):.3f}, precision@20px "
+            f"{np.mean(err[vis] <= 20):.3f}, mean centre error {err[vis].mean():.2f} px over all of them "
+            f"({tracked} over tracked frames); lost (centre error > half the object's larger side) in "
+            f"{int(lost.sum())} frames")

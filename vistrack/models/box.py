@@ -63,7 +63,7 @@ class Box(TranslationMoves, VideoModelBase):
     first_step = False
 
     def __init__(self, frame, box, *, sigma_xy=0.06, sigma_scale=0.002, damping=0.5, prior_std=(0.04, 0.02),
-                 window=1.5, **appearance):
+                 window=2.5, **appearance):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
             raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
