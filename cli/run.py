@@ -13,7 +13,7 @@ from vistrack.models.registry import MODELS as MODEL_REGISTRY
 from vistrack.models.registry import get_model_spec
 from vistrack.runtime import check_particle_memory
 from vistrack.session import stop_on_signals, summary_lines, track_video
-from vistrack.video import VideoError
+from vistrack.video import VideoError, prefetch
 
 from .options import SEED, Box, Fraction, check_writable
 
@@ -130,7 +130,7 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
     total = src.frame_count if max_frames is None else min(max_frames, src.frame_count or max_frames)
 
     def frames():
-        for i, f in src:
+        for i, f in prefetch(src):
             if max_frames is not None and i >= max_frames:
                 return
             yield i, f

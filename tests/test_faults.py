@@ -167,3 +167,32 @@ def test_write_atomic_leaves_the_old_file_on_failure(tmp_path):
     with pytest.raises(TypeError):
         write_atomic(p, Boom())
     assert p.read_text() == "old" and [q.name for q in tmp_path.iterdir()] == ["results.json"]
+
+
+def test_prefetch_gives_the_same_frames_and_stops_cleanly(tmp_path):
+    import threading
+
+    from vistrack.video import open_video, prefetch
+
+    video = tmp_path / "v.avi"
+    write_video(video, 30)
+    src = open_video(video)
+    direct = [(i, f.copy()) for i, f in src]
+    ahead = list(prefetch(src, size=3))
+    assert [i for i, _ in ahead] == [i for i, _ in direct]
+    assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(ahead, direct))
+    gen = prefetch(src, size=2)
+    next(gen)
+    gen.close()  # stopping early ends the decoder thread
+    time.sleep(0.3)
+    assert not any(t.name == "vistrack-decode" for t in threading.enumerate())
+
+    def broken():
+        yield 0, direct[0][1]
+        raise VideoError_("disk gone")
+
+    class VideoError_(RuntimeError):
+        pass
+
+    with pytest.raises(VideoError_, match="disk gone"):
+        list(prefetch(broken()))

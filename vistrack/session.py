@@ -15,7 +15,7 @@ import os
 import signal
 import time
 import warnings
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,6 +24,7 @@ import numpy as np
 from .clips import _fmt
 from .metrics import center_error, iou, landmark_error, lost_frames, plate_frame_measures, success_auc
 from .particles import DegenerateWeightsWarning
+from .profiling import STAGES, Timer, profile_stages
 from .render import annotate
 from .tracking import top_particles, track
 from .video import VideoWriter
@@ -108,6 +109,19 @@ class VideoRun:
     degenerate: int = 0
     #: ``None``, or how the run was cut short: ``"interrupt"`` (Ctrl-C) or ``"terminate"`` (SIGTERM)
     stopped: str | None = None
+    #: per-stage seconds (:class:`~vistrack.profiling.Timer`) or ``None``
+    timer: object = None
+
+    def stage_split(self):
+        """``{stage: ms per frame}`` over :data:`~vistrack.profiling.STAGES`, plus ``other`` (the
+        rest of the filter step) and ``total`` (wall time per frame); ``None`` without a timer."""
+        if self.timer is None or not self.rows:
+            return None
+        n = len(self.rows)
+        out = {s: 1e3 * self.timer.t[s] / n for s in STAGES}
+        out["total"] = 1e3 * self.wall / n
+        out["other"] = max(0.0, out["total"] - sum(out[s] for s in STAGES))
+        return out
 
     @property
     def exit_code(self):
@@ -116,7 +130,7 @@ class VideoRun:
 
 
 def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, results_path=None,
-                video_info=None, show_particles=10, label="", progress=None):
+                video_info=None, show_particles=10, label="", progress=None, profile=True):
     """Track ``frames`` (iterable of ``(index, frame)``), writing the track CSV and annotated video as
     it goes; stops cleanly on Ctrl-C / SIGTERM (:func:`stop_on_signals`). Returns a :class:`VideoRun`.
 
@@ -136,15 +150,21 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         Text drawn on every annotated frame after the frame number.
     progress : callable or None
         ``progress(ess)`` after every frame (a progress bar).
+    profile : bool
+        Time the stages (:mod:`vistrack.profiling`) into ``VideoRun.timer``; the tracks are
+        the same either way.
     """
     run = VideoRun()
+    run.timer = Timer() if profile else None
+    if profile:
+        frames = run.timer.timed_iter(frames, "decode")
     writer = VideoWriter(out_path, *video_info) if out_path else None
     outs = [TrackCSV(track_path)] if track_path else []
     if results_path:
         outs.append(TrackCSV(results_path, boxes=True))
     t0 = time.perf_counter()
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
             warnings.simplefilter("ignore", DegenerateWeightsWarning)
             for res in track(frames, filt, particles, rng):
                 vis = model.visible(res.maps, res.estimate)
@@ -184,6 +204,10 @@ def summary_lines(run, particles, *, model_name, model, truth, frame_width):
     lines = [f"{n} frames, {n / max(run.wall, 1e-9):.0f} frames/s end to end ({1e3 / ms.mean():.0f} frames/s in "
              f"the filter), mean ESS {run.ess_sum / n:.1f} of {particles}"
              + (f", {run.degenerate} degenerate frames" if run.degenerate else "")]
+    split = run.stage_split()
+    if split:
+        lines.append("ms per frame: " + ", ".join(f"{s} {split[s]:.2f}" for s in (*STAGES, "other"))
+                     + f" (total {split['total']:.2f}, drawing and writing included in other)")
     if truth is None:
         return lines
     if model_name == "landmarks" and "lx0" in truth:

@@ -33,6 +33,7 @@ __all__ = [
     "read_rects",
     "find_groundtruth",
     "groundtruth_origin",
+    "prefetch",
 ]
 
 IMAGE_EXT = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".ppm", ".pgm"}
@@ -249,3 +250,56 @@ class VideoWriter:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def prefetch(frames, size=8):
+    """The items of ``frames`` (e.g. a :class:`VideoSource`), decoded ahead in a background thread
+    into a queue of at most ``size``: decoding overlaps tracking (OpenCV releases the GIL while it
+    decodes). Same items, same order; an exception in the decoder is raised here, warnings are
+    re-issued here; closing the generator stops the thread."""
+    import queue
+    import threading
+
+    q = queue.Queue(maxsize=size)
+    stop = threading.Event()
+    done = object()
+
+    def work():
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                for item in frames:
+                    while not stop.is_set():
+                        try:
+                            q.put(("item", item), timeout=0.1)
+                            break
+                        except queue.Full:
+                            continue
+                    if stop.is_set():
+                        return
+            for w in caught:
+                q.put(("warning", w))
+            q.put(("end", done))
+        except BaseException as e:  # handed to the consumer
+            q.put(("error", e))
+
+    t = threading.Thread(target=work, name="vistrack-decode", daemon=True)
+    t.start()
+    try:
+        while True:
+            kind, value = q.get()
+            if kind == "item":
+                yield value
+            elif kind == "warning":
+                warnings.warn_explicit(value.message, value.category, value.filename, value.lineno)
+            elif kind == "error":
+                raise value
+            else:
+                return
+    finally:
+        stop.set()
+        while t.is_alive():
+            try:
+                q.get_nowait()
+            except queue.Empty:
+                t.join(0.05)

@@ -1,0 +1,48 @@
+"""The stage split ``run`` prints: exclusive per-stage times, and the same track with or without it."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from vistrack.builders import model_from_box
+from vistrack.filters import make_filter
+from vistrack.profiling import Timer
+from vistrack.session import track_video
+
+from test_box import clip_frames, obj_box, path
+
+
+def test_timer_counts_nested_calls_once():
+    t = Timer()
+
+    def inner():
+        time.sleep(0.02)
+
+    inner = t.timed(inner, "likelihood")
+
+    def outer():
+        time.sleep(0.01)
+        inner()
+
+    t.timed(outer, "proposal")()
+    assert t.t["likelihood"] == pytest.approx(0.02, abs=0.01)
+    assert t.t["proposal"] == pytest.approx(0.01, abs=0.008)
+
+
+@pytest.mark.parametrize("model, algo", [("contour", "lis"), ("box", "lis"), ("box", "ls-n-ips")])
+def test_profiling_leaves_the_track_unchanged(model, algo):
+    frames = clip_frames(8)
+    runs = []
+    for profile in (True, False):
+        m = model_from_box(model, frames[0], obj_box(*path(0)))
+        f = make_filter(algo, m)
+        runs.append(track_video(enumerate(frames), m, f, 60, np.random.default_rng(3), profile=profile))
+    with_p, without = runs
+    assert [r["cx"] for r in with_p.rows] == [r["cx"] for r in without.rows]
+    split = with_p.stage_split()
+    assert split["likelihood"] > 0 and split["features"] > 0 and split["total"] >= sum(
+        split[s] for s in ("decode", "features", "likelihood", "proposal", "resampling", "adapt")) - 1e-9
+    assert without.stage_split() is None

@@ -1,0 +1,102 @@
+"""Where a run's time goes: per-stage timers (exclusive time) and the stage split of a tracking run.
+
+Stages: ``decode`` (reading frames), ``features`` (feature maps: Sobel/DoG/colour maps, the
+appearance maps over the region of interest), ``likelihood`` (``log r``), ``proposal`` (local
+proposals and searches, minus the likelihood calls inside them), ``resampling``, ``adapt``
+(appearance update) and ``other`` (the rest of the filter step: prediction, weights, the
+estimate). A timed call inside another timed call counts once, in its own stage.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import defaultdict
+from contextlib import contextmanager
+
+__all__ = ["Timer", "STAGES", "profile_stages"]
+
+STAGES = ("decode", "features", "likelihood", "proposal", "resampling", "adapt")
+
+
+class Timer:
+    """Accumulates exclusive seconds per stage; :meth:`timed` wraps a callable."""
+
+    def __init__(self):
+        self.t = defaultdict(float)
+        self._stack = []  # [stage, seconds of nested timed calls]
+
+    def wrap(self, owner, name, part):
+        """Time ``owner.name`` as ``part``; returns the original (restore with ``setattr``)."""
+        fn = getattr(owner, name)
+        setattr(owner, name, self.timed(fn, part))
+        return fn
+
+    def timed(self, fn, part):
+        def timed(*a, **k):
+            self._stack.append([part, 0.0])
+            t0 = time.perf_counter()
+            try:
+                return fn(*a, **k)
+            finally:
+                dt = time.perf_counter() - t0
+                _, nested = self._stack.pop()
+                self.t[part] += dt - nested
+                if self._stack:
+                    self._stack[-1][1] += dt
+
+        return timed
+
+    def timed_iter(self, iterable, part):
+        """``iterable``'s items, the time to produce each counted as ``part``."""
+        it = iter(iterable)
+        while True:
+            t0 = time.perf_counter()
+            try:
+                item = next(it)
+            except StopIteration:
+                return
+            finally:
+                self.t[part] += time.perf_counter() - t0
+            yield item
+
+
+#: what each stage times: (owner kind, method names)
+_MODEL_PARTS = {"features": ("observe",), "likelihood": ("loglik", "loglik_local_grid"),
+                "proposal": ("local_search", "local_mixture", "proposal_log_q"), "adapt": ("adapt",)}
+_MAP_PARTS = ("gradient", "colour_labels", "integral")
+
+
+@contextmanager
+def profile_stages(model, filt, timer):
+    """Within the block, time ``model``'s and ``filt``'s stages (module docstring) into ``timer``.
+
+    The methods are wrapped on their classes (the model's, its proposal's and
+    :class:`~vistrack.features.FeatureMaps`), so that the copies the first step makes
+    (:func:`~vistrack.filters.base.prior_as_kernel`) are timed with their own ``self`` and
+    track exactly as without profiling; use in one thread. Everything is restored after."""
+    from .features import FeatureMaps
+
+    restore = []
+
+    def wrap_class(cls, name, part):
+        if callable(getattr(cls, name, None)) and not isinstance(vars(cls).get(name), (staticmethod, classmethod)):
+            restore.append((cls, name, timer.wrap(cls, name, part), name in vars(cls)))
+
+    for part, names in _MODEL_PARTS.items():
+        for name in names:
+            wrap_class(type(model), name, part)
+    if callable(getattr(filt, "resample_scheme", None)):
+        restore.append((filt, "resample_scheme", timer.wrap(filt, "resample_scheme", "resampling"), True))
+    prop = getattr(filt, "proposal", None)
+    if prop is not None:
+        wrap_class(type(prop), "sample", "proposal")
+    for name in _MAP_PARTS:
+        wrap_class(FeatureMaps, name, "features")
+    try:
+        yield timer
+    finally:
+        for owner, name, fn, own in reversed(restore):
+            if own:
+                setattr(owner, name, fn)
+            else:
+                delattr(owner, name)
