@@ -165,7 +165,7 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         if track_path:
             click.echo(f"track: {track_path}")
         if out_path:
-            click.echo(f"annotated video: {out_path}")
+            click.echo(f"annotated video: {out_path}" + (f" ({done.video_note})" if done.video_note else " (H.264)"))
         if results_path:
             click.echo(f"results (x,y,w,h): {results_path}")
         if not (track_path or out_path or results_path):

@@ -184,3 +184,44 @@ def test_real_otb_folder_and_video():
     assert read_rects(find_groundtruth(REAL / "car4_otb_first100")).shape == (100, 4)
     plate = open_video(REAL / "plate_in_polo_dashcam" / "plate_in_polo_dashcam.mp4")
     assert plate.size == (552, 530) and plate.frame_count == 138
+
+
+@pytest.mark.parametrize("size", [(96, 64), (97, 63)], ids=["even", "odd"])
+def test_annotated_video_is_h264_with_every_frame(tmp_path, size):
+    """The ``auto`` writer: H.264 (browsers, Jupyter) with the clip's frame count, readable by cv2;
+    odd sizes padded by a pixel. Skipped where PyAV cannot encode H.264."""
+    from vistrack.video import VideoWriter
+
+    pytest.importorskip("av")
+    w = VideoWriter(tmp_path / "a.mp4", 25, size, codec="auto")
+    if w.codec != "h264":
+        pytest.skip(w.note)
+    for i in range(12):
+        w.write(np.full((size[1], size[0], 3), 20 * i, np.uint8))
+    w.close()
+    cap = cv2.VideoCapture(str(tmp_path / "a.mp4"))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 12
+    assert int(cap.get(cv2.CAP_PROP_FOURCC)).to_bytes(4, "little") in (b"h264", b"avc1")
+    ok, f = cap.read()
+    assert ok and abs(f.shape[1] - size[0]) <= 1 and abs(f.shape[0] - size[1]) <= 1
+
+
+def test_annotated_video_falls_back_to_mp4v_with_a_note(tmp_path, monkeypatch):
+    import builtins
+
+    from vistrack.video import VideoWriter
+
+    real = builtins.__import__
+
+    def no_av(name, *a, **k):
+        if name == "av":
+            raise ImportError("No module named 'av'")
+        return real(name, *a, **k)
+
+    monkeypatch.setattr(builtins, "__import__", no_av)
+    w = VideoWriter(tmp_path / "a.mp4", 25, (96, 64), codec="auto")
+    assert w.codec == "mp4v" and "pip install av" in w.note
+    for i in range(5):
+        w.write(np.zeros((64, 96, 3), np.uint8))
+    w.close()
+    assert int(cv2.VideoCapture(str(tmp_path / "a.mp4")).get(cv2.CAP_PROP_FRAME_COUNT)) == 5

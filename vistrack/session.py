@@ -111,6 +111,8 @@ class VideoRun:
     stopped: str | None = None
     #: per-stage seconds (:class:`~vistrack.profiling.Timer`) or ``None``
     timer: object = None
+    #: why the annotated video is not H.264, or ``None``
+    video_note: str | None = None
 
     def stage_split(self):
         """``{stage: ms per frame}`` over :data:`~vistrack.profiling.STAGES`, plus ``other`` (the
@@ -158,7 +160,8 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     run.timer = Timer() if profile else None
     if profile:
         frames = run.timer.timed_iter(frames, "decode")
-    writer = VideoWriter(out_path, *video_info) if out_path else None
+    writer = VideoWriter(out_path, *video_info, codec="auto") if out_path else None
+    run.video_note = writer.note if writer else None
     outs = [TrackCSV(track_path)] if track_path else []
     if results_path:
         outs.append(TrackCSV(results_path, boxes=True))

@@ -214,7 +214,7 @@ def find_groundtruth(path):
 
 
 class VideoWriter:
-    """Write BGR ``uint8`` frames to an mp4 (``mp4v``), as a context manager.
+    """Write BGR (or grey) ``uint8`` frames to an mp4, as a context manager.
 
     Parameters
     ----------
@@ -222,34 +222,99 @@ class VideoWriter:
     fps : float
     size : tuple of int
         ``(width, height)``; every frame must have it.
+    codec : {"mp4v", "h264", "auto"}
+        ``mp4v`` (MPEG-4 Part 2, OpenCV; the synthetic clips, whose decoded pixels the
+        experiments depend on); ``h264`` through PyAV (libx264, ``yuv420p``: plays in browsers
+        and Jupyter; an odd width or height is padded by one pixel); ``auto``: H.264 where PyAV
+        can write it, else mp4v with :attr:`note` saying so.
+
+    Attributes
+    ----------
+    codec : str
+        The codec written.
+    note : str or None
+        Why H.264 was not written, under ``codec="auto"``.
     """
 
-    def __init__(self, path, fps, size):
+    def __init__(self, path, fps, size, codec="mp4v"):
         self.path = Path(path)
         if not self.path.parent.is_dir():
             raise VideoError(f"cannot write {self.path}: folder {self.path.parent} does not exist")
+        if codec not in ("mp4v", "h264", "auto"):
+            raise ValueError(f"codec must be mp4v, h264 or auto, got {codec!r}")
         self.size = tuple(int(v) for v in size)
+        self.frames = 0
+        self.note = None
+        self._av = None
+        if codec in ("h264", "auto"):
+            try:
+                self._open_h264(fps)
+                self.codec = "h264"
+                return
+            except Exception as e:  # PyAV missing, or FFmpeg without an H.264 encoder
+                if codec == "h264":
+                    raise VideoError(f"cannot write H.264 to {self.path}: {e}") from None
+                self.note = (f"H.264 not available ({type(e).__name__}: {e}); wrote MPEG-4 Part 2 (mp4v), which "
+                             "browsers do not play (pip install av)")
+        self.codec = "mp4v"
         self._w = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"mp4v"), float(fps), self.size)
         if not self._w.isOpened():
             raise VideoError(f"cannot open {self.path} for writing")
-        self.frames = 0
+
+    def _open_h264(self, fps):
+        import av  # noqa: PLC0415  (optional: PyAV)
+        from fractions import Fraction
+
+        container = av.open(str(self.path), "w")
+        try:
+            stream = container.add_stream("libx264", rate=Fraction(fps).limit_denominator(1001))
+            stream.width, stream.height = (v + v % 2 for v in self.size)
+            stream.pix_fmt = "yuv420p"
+        except Exception:
+            container.close()
+            raise
+        self._av = (av, container, stream)
 
     def write(self, frame):
         if (frame.shape[1], frame.shape[0]) != self.size:
             raise ValueError(f"frame size {frame.shape[1]}x{frame.shape[0]} != video size {self.size[0]}x{self.size[1]}")
         if frame.ndim == 2:
             frame = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
-        self._w.write(np.ascontiguousarray(frame, dtype=np.uint8))
+        frame = np.ascontiguousarray(frame, dtype=np.uint8)
+        if self._av is None:
+            self._w.write(frame)
+        else:
+            av, container, stream = self._av
+            h, w = frame.shape[:2]
+            if w % 2 or h % 2:
+                frame = cv2.copyMakeBorder(frame, 0, h % 2, 0, w % 2, cv2.BORDER_REPLICATE)
+            for packet in stream.encode(av.VideoFrame.from_ndarray(frame, format="bgr24")):
+                container.mux(packet)
         self.frames += 1
 
     def close(self):
-        self._w.release()
+        if self._av is None:
+            self._w.release()
+            return
+        av, container, stream = self._av
+        self._av = None
+        try:
+            for packet in stream.encode():
+                container.mux(packet)
+        finally:
+            container.close()
+        self._w = _Closed()
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
         self.close()
+
+
+class _Closed:
+    def release(self):
+        pass
 
 
 def prefetch(frames, size=8):
