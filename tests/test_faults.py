@@ -45,7 +45,9 @@ def test_signal_mid_run_keeps_the_track_so_far(tmp_path, sig, code):
     track, out = tmp_path / "t.csv", tmp_path / "a.mp4"
     cmd = [sys.executable, "-m", "vistrack.cli", "run", str(video), "--init", "48,51,24,18", "-n", "3000",
            "--algo", "bootstrap", "--track", str(track), "--out", str(out), "-q"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # from tmp_path: run from the repository root, ``-m`` would import the source tree's ``vistrack/``
+    # (which has no ``cli``: it is mapped from ``cli/`` at install) instead of the installed package
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
     part = tmp_path / "t.csv.part"
     deadline = time.time() + 60
     while time.time() < deadline and proc.poll() is None:
