@@ -158,6 +158,9 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         click.echo(f"{'Interrupted' if done.stopped == 'interrupt' else 'Terminated'} after {len(done.rows)} frames"
                    + (f"; track so far: {track_path}" if track_path else "")
                    + (f"; annotated video so far: {out_path}" if out_path else ""), err=True)
+    if src.skipped:
+        click.echo(f"{len(src.skipped)} frame(s) failed to decode and were skipped (no track row): "
+                   + ", ".join(map(str, src.skipped[:10])) + (", ..." if len(src.skipped) > 10 else ""), err=True)
     if not quiet:
         for line in summary_lines(done, particles, model_name=name, model=model, truth=clip.truth,
                                   frame_width=src.size[0]):

@@ -47,7 +47,9 @@ def test_signal_mid_run_keeps_the_track_so_far(tmp_path, sig, code):
            "--algo", "bootstrap", "--track", str(track), "--out", str(out), "-q"]
     # from tmp_path: run from the repository root, ``-m`` would import the source tree's ``vistrack/``
     # (which has no ``cli``: it is mapped from ``cli/`` at install) instead of the installed package
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    # a shell's background job starts with SIGINT ignored, which Python keeps: give the child the default
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     part = tmp_path / "t.csv.part"
     deadline = time.time() + 60
     while time.time() < deadline and proc.poll() is None:
@@ -198,3 +200,50 @@ def test_prefetch_gives_the_same_frames_and_stops_cleanly(tmp_path):
 
     with pytest.raises(VideoError_, match="disk gone"):
         list(prefetch(broken()))
+
+
+def test_an_undecodable_image_is_skipped_and_counted(tmp_path, capsys):
+    """One bad image in an image folder: tracking goes on at the next frame, the track has no row for
+    the bad frame (indices stay the stream's), and the warning says how many were skipped."""
+    import warnings
+
+    from vistrack.video import VideoDecodeWarning, open_video
+
+    (tmp_path / "img").mkdir()
+    for i in range(8):
+        img = np.full((H, W, 3), 100, np.uint8)
+        cv2.rectangle(img, (40 + 2 * i, 50), (64 + 2 * i, 68), (30, 60, 220), -1)
+        cv2.imwrite(str(tmp_path / "img" / f"{i + 1:04d}.jpg"), img)
+    (tmp_path / "img" / "0004.jpg").write_bytes(b"\xff\xd8 not a jpeg")
+    src = open_video(tmp_path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        idx = [i for i, _ in src]
+    assert idx == [0, 1, 2, 4, 5, 6, 7] and src.skipped == [3]
+    assert any(issubclass(w.category, VideoDecodeWarning) and "1 frame(s) of 8" in str(w.message) for w in caught)
+    code, out, err = run(["run", str(tmp_path), "--init", "40,50,25,19", "--track", str(tmp_path / "t.csv")], capsys)
+    assert code == 0, err
+    assert [int(r["frame"]) for r in read_rows(tmp_path / "t.csv")] == [0, 1, 2, 4, 5, 6, 7]
+    assert "failed to decode and were skipped" in err
+
+
+def test_eval_keeps_frames_aligned_with_the_truth_past_a_bad_frame(tmp_path, capsys):
+    """The bad frame counts as lost (no estimate) and the frames after it are scored against their own
+    ground truth, not shifted by one."""
+    import json
+
+    (tmp_path / "clip" / "img").mkdir(parents=True)
+    rows = []
+    for i in range(8):
+        img = np.full((H, W, 3), 100, np.uint8)
+        cv2.rectangle(img, (40 + 2 * i, 50), (64 + 2 * i, 68), (30, 60, 220), -1)
+        cv2.imwrite(str(tmp_path / "clip" / "img" / f"{i + 1:04d}.png"), img)
+        rows.append(f"{41 + 2 * i},51,25,19")  # OTB: 1-based
+    (tmp_path / "clip" / "img" / "0004.png").write_bytes(b"not a png")
+    (tmp_path / "clip" / "groundtruth_rect.txt").write_text("\n".join(rows) + "\n")
+    code, _, err = run(["eval", str(tmp_path / "clip"), "--model", "box", "--algos", "lis", "--particles", "50",
+                        "--runs", "1", "--in-process", "--out", str(tmp_path / "ev"), "-q"], capsys)
+    assert code == 0, err
+    (task,) = [json.loads(p.read_text()) for p in (tmp_path / "ev" / "tasks").glob("*.json")]
+    assert task["error"][3] is None and task["lost"][3] == 1
+    assert all(e is not None and e < 3 for k, e in enumerate(task["error"]) if k != 3)

@@ -148,6 +148,17 @@ def entries_config(cfg):
     return d
 
 
+def _by_index(values, index):
+    """Rows placed at their frame ``index``: frames that failed to decode (absent indices) are
+    NaN, so they count as lost rather than shifting every later frame against the truth."""
+    values, index = np.asarray(values, float), np.asarray(index, int)
+    if np.array_equal(index, np.arange(len(index))):
+        return values
+    out = np.full((index.max() + 1,) + values.shape[1:], np.nan)
+    out[index] = values
+    return out
+
+
 def _truth_boxes(t):
     return np.stack([t["cx"] - t["w"] / 2, t["cy"] - t["h"] / 2, t["w"], t["h"]], axis=1)
 
@@ -158,8 +169,9 @@ def _track_opencv(algo, clip, frames):
     ctor = getattr(cv2, OPENCV_TRACKERS[algo], None) or getattr(cv2.legacy, OPENCV_TRACKERS[algo])
     tracker = ctor()
     x, y, w, h = clip.first_box()
-    boxes, ms = [], []
-    for k, (_, frame) in enumerate(frames):
+    boxes, ms, index = [], [], []
+    for k, (i, frame) in enumerate(frames):
+        index.append(i)
         t0 = time.perf_counter()
         if k == 0:
             tracker.init(frame, (int(round(x)), int(round(y)), int(round(w)), int(round(h))))
@@ -169,7 +181,7 @@ def _track_opencv(algo, clip, frames):
             box = tuple(float(v) for v in b) if ok else (np.nan,) * 4
         ms.append((time.perf_counter() - t0) * 1e3)
         boxes.append(box)
-    return np.array(boxes, float), np.array(ms), np.full(len(boxes), np.nan)
+    return _by_index(np.array(boxes, float), index), np.array(ms), np.full(max(index) + 1, np.nan)
 
 
 def prepare_worker():
@@ -198,8 +210,9 @@ def run_task(task, out_dir):
         model = build_model(task["model"], clip, init_gt="")
         filt = make_filter(algo, model)
         rng = np.random.default_rng(task["seed_seq"])
-        est, ms, ess = [], [], []
+        est, ms, ess, index = [], [], [], []
         for res in track(frames, filt, n, rng):
+            index.append(res.index)
             est.append(res.estimate)
             ms.append(res.ms)
             ess.append(res.ess)
@@ -209,8 +222,8 @@ def run_task(task, out_dir):
         est = np.array(est)
         wh = model.box(est)[:, 2:]
         # boxes centred on the pose centre, as groundtruth.csv's (cx, cy, w, h)
-        boxes = np.concatenate([est[:, :2] - wh / 2, wh], axis=1)
-        ms, ess = np.array(ms), np.array(ess)
+        boxes = _by_index(np.concatenate([est[:, :2] - wh / 2, wh], axis=1), index)
+        ms, ess = np.array(ms), _by_index(np.array(ess), index)
         if spec.lost_rule == "plate":
             rule, aspect = "plate", model.layout.aspect
     t = clip.truth

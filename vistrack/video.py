@@ -9,8 +9,8 @@
 
 Frames come as ``(index, frame)`` with ``frame`` a ``uint8`` BGR array of shape
 ``(H, W, 3)``; ``frame_count``, ``fps`` and ``size`` are known up front where the
-container says. A frame that fails to decode mid-stream ends the iteration with
-a :class:`VideoDecodeWarning` (the frames so far are kept); a path that is
+container says. A frame that fails to decode is skipped (its index is not yielded) and
+counted in a :class:`VideoDecodeWarning`; a path that is
 missing, not a video, or holds no frame raises :class:`VideoError` with one
 clear sentence.
 """
@@ -67,6 +67,8 @@ class VideoSource:
     def __init__(self, path, *, _images=None):
         self.path = Path(path)
         self._images = _images
+        #: indices of the frames the last iteration skipped (failed to decode)
+        self.skipped = []
         if _images is not None:
             first = cv2.imread(str(_images[0]), cv2.IMREAD_COLOR)
             if first is None:
@@ -93,30 +95,54 @@ class VideoSource:
             raise TypeError("frame count unknown for this container")
         return self.frame_count
 
+    #: a video's decoding gives up after this many failed frames in a row (before the announced end)
+    max_failed_run = 25
+
     def __iter__(self):
+        """``(index, frame)`` pairs. A frame that fails to decode is skipped (its index is not
+        yielded: indices stay those of the stream, so ground truth stays aligned) and tracking
+        goes on with the next decodable one; :attr:`skipped` counts them and a
+        :class:`VideoDecodeWarning` at the end says how many. A video gives up after
+        :attr:`max_failed_run` failures in a row."""
+        self.skipped = []
         if self._images is not None:
             for i, p in enumerate(self._images):
                 frame = cv2.imread(str(p), cv2.IMREAD_COLOR)
                 if frame is None:
-                    warnings.warn(f"frame {i} ({p.name}) failed to decode; stopping there", VideoDecodeWarning,
-                                  stacklevel=2)
-                    return
+                    self.skipped.append(i)
+                    continue
                 yield i, frame
+            self._warn_skipped(len(self._images))
             return
         cap = cv2.VideoCapture(str(self.path))
         try:
-            i = 0
+            i, failed = 0, 0
             while True:
                 ok, frame = cap.read()
-                if not ok:
+                if ok:
+                    if failed:
+                        self.skipped.extend(range(i - failed, i))
+                    failed = 0
+                    yield i, frame
+                elif self.frame_count is not None and i < self.frame_count - 1 and failed < self.max_failed_run:
+                    failed += 1
+                else:
                     break
-                yield i, frame
                 i += 1
+            i -= failed
             if self.frame_count is not None and i < self.frame_count:
                 warnings.warn(f"{self.path.name}: decoding stopped at frame {i} of {self.frame_count}",
                               VideoDecodeWarning, stacklevel=2)
+            self._warn_skipped(self.frame_count)
         finally:
             cap.release()
+
+    def _warn_skipped(self, total):
+        if self.skipped:
+            k = self.skipped
+            warnings.warn(f"{self.path.name}: {len(k)} frame(s) of {total} failed to decode and were skipped "
+                          f"(frames {', '.join(map(str, k[:10]))}{', ...' if len(k) > 10 else ''})",
+                          VideoDecodeWarning, stacklevel=3)
 
 
 def _image_files(folder):
@@ -320,8 +346,8 @@ class _Closed:
 def prefetch(frames, size=8):
     """The items of ``frames`` (e.g. a :class:`VideoSource`), decoded ahead in a background thread
     into a queue of at most ``size``: decoding overlaps tracking (OpenCV releases the GIL while it
-    decodes). Same items, same order; an exception in the decoder is raised here, warnings are
-    re-issued here; closing the generator stops the thread."""
+    decodes). Same items, same order; an exception in the decoder is raised here (its warnings
+    are issued from the decoding thread); closing the generator stops the thread."""
     import queue
     import threading
 
@@ -331,19 +357,15 @@ def prefetch(frames, size=8):
 
     def work():
         try:
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                for item in frames:
-                    while not stop.is_set():
-                        try:
-                            q.put(("item", item), timeout=0.1)
-                            break
-                        except queue.Full:
-                            continue
-                    if stop.is_set():
-                        return
-            for w in caught:
-                q.put(("warning", w))
+            for item in frames:
+                while not stop.is_set():
+                    try:
+                        q.put(("item", item), timeout=0.1)
+                        break
+                    except queue.Full:
+                        continue
+                if stop.is_set():
+                    return
             q.put(("end", done))
         except BaseException as e:  # handed to the consumer
             q.put(("error", e))
@@ -355,8 +377,6 @@ def prefetch(frames, size=8):
             kind, value = q.get()
             if kind == "item":
                 yield value
-            elif kind == "warning":
-                warnings.warn_explicit(value.message, value.category, value.filename, value.lineno)
             elif kind == "error":
                 raise value
             else:
