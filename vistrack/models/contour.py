@@ -57,91 +57,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..features import is_grey
-from ..proposals import GaussMixtureProposal, Window
 from ..proposals.translation import TranslationMoves
-from .appearance import TargetColour
+from .contour_colour import ContourColour
+from .contour_moves import ContourMoves
 from .protocol import VideoModelBase
+from .spline import BSpline, edge_peaks, ellipse_template, pose_from, pose_params
 
 __all__ = ["BSpline", "Contour", "ellipse_template", "pose_from", "pose_params"]
 
-_M = np.array([[-1.0, 3, -3, 1], [3, -6, 3, 0], [-3, 0, 3, 0], [1, 4, 1, 0]]) / 6.0
 
-
-def _basis(t, n, deriv=0):
-    """Control-point weights ``(len(t), n)`` of a closed uniform cubic B-spline at ``t``
-    (``t`` in units of segments; support point ``i`` sits at ``t = i``)."""
-    t = np.asarray(t, dtype=float) % n
-    k = np.floor(t).astype(int)
-    u = t - k
-    if deriv == 0:
-        pw = np.stack([u**3, u**2, u, np.ones_like(u)], axis=1)
-    else:
-        pw = np.stack([3 * u**2, 2 * u, np.ones_like(u), np.zeros_like(u)], axis=1)
-    w = pw @ _M  # weights of control points k-1, k, k+1, k+2
-    out = np.zeros((len(t), n))
-    rows = np.arange(len(t))
-    for j in range(4):
-        np.add.at(out, (rows, (k - 1 + j) % n), w[:, j])
-    return out
-
-
-class BSpline:
-    """Closed uniform cubic B-spline through ``n`` support points (§1.3.1, §4.3.1)."""
-
-    def __init__(self, n):
-        if n < 4:
-            raise ValueError(f"a closed cubic B-spline needs at least 4 support points, got {n}")
-        self.n = n
-        a = np.zeros((n, n))
-        idx = np.arange(n)
-        a[idx, idx] = 4 / 6
-        a[idx, (idx + 1) % n] = 1 / 6
-        a[idx, (idx - 1) % n] = 1 / 6
-        self.A = a
-        self.A_inv = np.linalg.inv(a)
-        # B = A^-T (1/L ∫ φ φ^T) A^-1, the Gram integral by 64-point-per-segment midpoint rule
-        t = (np.arange(64 * n) + 0.5) / 64
-        phi = _basis(t, n)
-        self.B = self.A_inv.T @ (phi.T @ phi / len(t)) @ self.A_inv
-
-    def curve_matrix(self, t, deriv=0):
-        """``C (len(t), n)`` with curve points ``s(t) = C q`` for support points ``q``."""
-        return _basis(t, self.n, deriv) @ self.A_inv
-
-    def dense(self, per_segment=8):
-        """Curve matrix for ``per_segment`` points per segment (for drawing and sizes)."""
-        return self.curve_matrix(np.arange(self.n * per_segment) / per_segment)
-
-
-def ellipse_template(w, h, n=24):
-    """Support points of an axis-aligned ellipse of width ``w`` and height ``h``, centred."""
-    phi = 2 * np.pi * np.arange(n) / n
-    return np.stack([0.5 * w * np.cos(phi), 0.5 * h * np.sin(phi)], axis=1)
-
-
-def pose_from(cx, cy, scale, angle_deg):
-    """``z = (cx, cy, a, b)`` for a centre, scale and angle (degrees)."""
-    th = np.deg2rad(angle_deg)
-    return np.array([cx, cy, scale * np.cos(th) - 1.0, scale * np.sin(th)], dtype=float)
-
-
-def pose_params(z):
-    """``(scale, angle_deg)`` of poses ``z (..., 4)``."""
-    z = np.asarray(z, float)
-    return np.hypot(1 + z[..., 2], z[..., 3]), np.rad2deg(np.arctan2(z[..., 3], 1 + z[..., 2]))
-
-
-def _edge_peaks(gn, thresh):
-    """Local maxima of the edge strength ``gn >= 0`` along the last axis above ``thresh`` (edge features)."""
-    m = gn
-    peak = m > thresh
-    peak[..., 1:] &= m[..., 1:] >= m[..., :-1]
-    peak[..., :-1] &= m[..., :-1] > m[..., 1:]
-    return peak
-
-
-class Contour(TranslationMoves, VideoModelBase):
+class Contour(ContourMoves, ContourColour, TranslationMoves, VideoModelBase):
     """Contour tracking model with similarity pose and AR(2) dynamics.
 
     Parameters
@@ -191,8 +116,6 @@ class Contour(TranslationMoves, VideoModelBase):
 
     dim = 8
     first_step = False
-    #: the colour term (:meth:`learn_colour`); ``None``: edges only
-    colour = None
 
     def __init__(self, template, init_pose, frame_size, *, sigma_xy=None, sigma_a=0.02, sigma_b=0.03,
                  damping=0.8, prior_std=None, sigma_edge=None, half_line=None, q_miss=0.1,
@@ -403,78 +326,6 @@ class Contour(TranslationMoves, VideoModelBase):
             self.polarity = -1
         return self.polarity
 
-    # -- colour term (real footage) ----------------------------------------------
-    def learn_colour(self, frame, *, lambda_colour=15.0, kappa=1.0, band=(0.1, 0.25), grey=None):
-        """Turn on the colour term, learned from ``frame`` at the initial pose (module docstring).
-
-        Parameters
-        ----------
-        frame : ndarray of shape (H, W, 3) uint8 BGR, or (H, W)
-            The first frame.
-        lambda_colour, kappa : float
-            ``λ_c``, ``κ`` of :class:`~vistrack.models.appearance.TargetColour`.
-        band : tuple of float
-            Offsets of the outside sample points along the normals, as shares of the size.
-        grey : bool or None
-            Grey-level bins; ``None``: :func:`~vistrack.features.is_grey` of the frame.
-
-        Returns
-        -------
-        TargetColour
-        """
-        import cv2
-
-        from ..features import colour_bins, n_colour_bins
-
-        self.colour_grey = is_grey(frame) if grey is None else bool(grey)
-        self.n_bins = n_colour_bins(self.colour_grey)
-        labels = colour_bins(frame, self.colour_grey)
-        h, w = labels.shape
-        curve = self.outline(self.prior_mean[None])[0]
-        inside = np.zeros((h, w), np.uint8)
-        cv2.fillPoly(inside, [np.round(curve).astype(np.int32)], 1)
-        x0, y0 = curve.min(axis=0)
-        x1, y1 = curve.max(axis=0)
-        g = 0.75 * ((x1 - x0) + (y1 - y0))
-        around = np.zeros((h, w), np.uint8)
-        around[max(0, int(y0 - g)):max(0, int(y1 + g) + 1), max(0, int(x0 - g)):max(0, int(x1 + g) + 1)] = 1
-        around[inside > 0] = 0
-        count = lambda m: np.bincount(labels[m > 0], minlength=self.n_bins).astype(float)  # noqa: E731
-        self.colour = TargetColour(count(inside), count(around), lambda_colour=lambda_colour, kappa=kappa)
-        rings_in = [self.meas0[::2] * s for s in (0.35, 0.7)] + [np.zeros((1, 2))]
-        rings_out = [self.meas0[::2] + d * self.size * self.meas_normals0[::2] for d in band]
-        self.colour_points_in = np.concatenate(rings_in)
-        self.colour_points_out = np.concatenate(rings_out)
-        return self.colour
-
-    def _label_counts(self, labels, pts):
-        """Bin counts ``(..., B)`` of the labels at points ``(..., P, 2)`` (nearest pixel;
-        points outside the frame are not counted)."""
-        h, w = labels.shape
-        xi = np.floor(pts[..., 0]).astype(np.intp)
-        yi = np.floor(pts[..., 1]).astype(np.intp)
-        ok = (xi >= 0) & (xi < w) & (yi >= 0) & (yi < h)
-        b = self.n_bins
-        lab = np.where(ok, labels[np.clip(yi, 0, h - 1), np.clip(xi, 0, w - 1)], b).astype(np.intp)
-        rows = int(np.prod(lab.shape[:-1]))
-        lab = lab.reshape(rows, -1) + (b + 1) * np.arange(rows)[:, None]
-        counts = np.bincount(lab.ravel(), minlength=rows * (b + 1)).reshape(rows, b + 1)[:, :b]
-        return counts.reshape(pts.shape[:-2] + (b,))
-
-    def colour_loglik(self, obs, z, offsets=None):
-        """``log r_c`` of poses ``z (N, 4)``: ``(N,)``; with translations ``offsets (G, 2)``,
-        of every pose shifted by every offset: ``(N, G)``. Zero without a colour term."""
-        if self.colour is None:
-            n = len(z)
-            return np.zeros(n) if offsets is None else np.zeros((n, len(offsets)))
-        labels = obs.colour_labels(self.colour_grey)
-        p_in = self._place(z, self.colour_points_in)
-        p_out = self._place(z, self.colour_points_out)
-        if offsets is not None:
-            d = np.asarray(offsets, float)[None, :, None, :]
-            p_in, p_out = p_in[:, None] + d, p_out[:, None] + d
-        return self.colour.loglik(self._label_counts(labels, p_in), self._label_counts(labels, p_out))
-
     def _threshold(self, obs):
         return self.edge_threshold * max(obs.gradient(self.gradient_sigma)[1], 1e-6)
 
@@ -488,179 +339,9 @@ class Contour(TranslationMoves, VideoModelBase):
 
     def _loglik_from_profiles(self, gn, thresh):
         """``log r`` from edge strengths ``(N, M, L)`` sampled at :attr:`line_offsets`."""
-        peaks = _edge_peaks(gn, thresh)
+        peaks = edge_peaks(gn, thresh)
         kern = np.exp(-0.5 * (self.line_offsets / self.sigma_edge) ** 2)
         return np.sum(np.log1p(np.exp(self.log_c) * (peaks @ kern)), axis=1)
-
-    # -- local search LS_λ (LS-N-IPS, §4.3.1) ------------------------------------
-    def _lms_fit(self, obs, z, samples, reach_factor=1.0):
-        """One LMS step: on each normal within the search length, the edge feature
-        nearest to the predicted curve, projected with ``W⁺`` (normals without an
-        edge keep their predicted point)."""
-        scale, _ = pose_params(z)
-        reach = self.search_length * scale * reach_factor  # (N,)
-        off = reach[:, None, None] * np.linspace(-1.0, 1.0, samples)  # (N, 1, L)
-        gn = self._profiles(obs, z, off, support=True)
-        peaks = _edge_peaks(gn, self._threshold(obs))
-        score = np.where(peaks, -np.abs(off), -np.inf)
-        best = np.argmax(score, axis=-1)  # (N, n)
-        found = peaks.any(axis=-1)
-        nu = np.where(found, np.take_along_axis(np.broadcast_to(off, peaks.shape), best[..., None], -1)[..., 0], 0.0)
-        q_hat = self.support_points(z) + nu[..., None] * self.normals(z)
-        d = np.concatenate([q_hat[..., 0] - self.q0[:, 0], q_hat[..., 1] - self.q0[:, 1]], axis=1)
-        return d @ self.W_plus.T
-
-    def local_search(self, obs, states):
-        """``LS_λ`` of §4.3 / eq. 4.1 for contours: refine predicted poses ``z_t``.
-
-        One set of measurement lines, long enough for every move, serves both steps:
-
-        1. translation: the argmax of ``r`` over a grid of shifts ``δ`` within
-           ``(λ_x, λ_y)`` (the grid likelihood of :meth:`loglik_local_grid`);
-        2. the LMS fit of §4.3.1 from there: on each normal the edge nearest to the
-           shifted curve within ``l = l0 · scale / 2``, fitted in the least-squares
-           sense, ``ẑ = W_m⁺ (p̂ - p0)`` with ``W_m`` the matrix ``W`` of eq. 1.1 on the
-           measurement points (two per spline segment, a discretisation of the
-           spline norm ``U``; normals without an edge keep the shifted point).
-
-        The LMS result is used only if it is within ``λ`` of the prediction (max
-        norm per coordinate; else the translation step alone), and the move is
-        kept only if it raises the exact likelihood, so ``r(y|LS_λ(x, y)) >= r(y|x)``.
-        With a colour term the search itself reads the edges only (the colour on its grid
-        cost 3x the time and lost accuracy on the real clips) and the check uses the full ``r``.
-        Returns the states and their log-likelihoods.
-        """
-        z = states[:, :4]
-        lx, ly = self.search_lambda[:2]
-        step = max(1.0, self.grid_step * self.sigma_edge)
-        gx = np.arange(-np.floor(lx / step), np.floor(lx / step) + 1) * step
-        gy = np.arange(-np.floor(ly / step), np.floor(ly / step) + 1) * step
-        grid = np.stack(np.meshgrid(gx, gy), axis=-1).reshape(-1, 2)
-        scale, _ = pose_params(z)
-        reach_lms = step
-        off, gn = self._profiles_wide(obs, z, np.hypot(lx, ly) + reach_lms)
-        thresh = self._threshold(obs)
-        peaks = _edge_peaks(gn, thresh)
-        pts, nrm = self.measurement_lines(z)
-        ll_grid = self._grid_from_peaks(off, peaks, nrm, grid)
-        delta = grid[np.argmax(ll_grid, axis=1)]  # (N, 2)
-        z_t = z.copy()
-        z_t[:, :2] += delta
-        # LMS: nearest feature to the shifted curve on each line (offsets along the old line)
-        shift = np.einsum("kmd,kd->km", nrm, delta)  # (N, M)
-        dist = np.where(peaks, np.abs(off - shift[..., None]), np.inf)
-        j = np.argmin(dist, axis=-1)
-        found = np.take_along_axis(dist, j[..., None], -1)[..., 0] <= reach_lms
-        # the edge found on the old line, moved along the contour with the shift
-        # (edges are locally parallel to the contour): p + δ + (ν - n·δ) n
-        nu = np.where(found, off[j] - shift, 0.0)
-        p_hat = pts + delta[:, None, :] + nu[..., None] * nrm
-        d = np.concatenate([p_hat[..., 0] - self.meas0[:, 0], p_hat[..., 1] - self.meas0[:, 1]], axis=1)
-        z_hat = d @ self.W_meas_plus.T
-        near = np.all(np.abs(z_hat - z) <= self.search_lambda, axis=1)
-        cand = states.copy()
-        cand[:, :4] = np.where(near[:, None], z_hat, z_t)  # the grid step is within λ by construction
-        ll = self.loglik(obs, cand)
-        if not self.search_check:
-            return cand, ll
-        # r at the prediction, exactly as loglik: its lines are the middle samples of the long ones
-        r = (len(off) - len(self.line_offsets)) // 2
-        ll_x = self._loglik_from_profiles(gn[..., r:r + len(self.line_offsets)], thresh)
-        if self.colour is not None:
-            ll_x = ll_x + self.colour_loglik(obs, z)
-        keep = ll < ll_x  # the move lowered r: stay at the prediction
-        cand[keep] = states[keep]
-        return cand, np.where(keep, ll_x, ll)
-
-    def lms_step(self, obs, states, samples=33):
-        """The plain LMS step of §4.3.1 at the support points: the edge nearest to the
-        curve on each normal within ``l = l0 · scale``, ``ẑ = W⁺ (q̂ - q0)`` with the
-        spline norm. Returns new states (not checked against ``λ``)."""
-        out = states.copy()
-        out[:, :4] = self._lms_fit(obs, states[:, :4], samples)
-        return out
-
-    # -- local moves on translation (LLS / LIS, §4.4.3) ---------------------------
-    def window_std(self):
-        """Window std on translation: the spread of ``K`` (or of ``p_0`` on the first step)."""
-        return self.prior_std[:2] if self.first_step else self.sigma[:2]
-
-    def _profiles_wide(self, obs, z, reach):
-        """Offsets and edge strengths on lines long enough for shifts up to ``reach`` px
-        (:attr:`line_offsets` are their middle samples)."""
-        h = int(np.ceil(reach)) + self.half_line
-        off = np.arange(-h, h + 1, dtype=float)
-        return off, self._profiles(obs, z, off)
-
-    def _peaks_wide(self, obs, z, reach):
-        """Edge features on lines long enough for shifts up to ``reach`` px."""
-        off, gn = self._profiles_wide(obs, z, reach)
-        return off, _edge_peaks(gn, self._threshold(obs))
-
-    def loglik_local_grid(self, obs, states, offsets):
-        """``log r`` at ``states`` translated by each of ``offsets (G, 2)``: ``(N, G)``.
-
-        From one set of lines: a translation ``δ`` shifts the edge distances on
-        normal ``i`` by ``-n_i · δ``, so ``Σ_j exp(-(ν_j - n_i·δ)² / 2σ²)`` is the
-        feature train smoothed by the Gaussian, read at ``n_i · δ``.
-        """
-        z = states[:, :4]
-        off, peaks = self._peaks_wide(obs, z, np.max(np.abs(offsets)) * np.sqrt(2))
-        ll = self._grid_from_peaks(off, peaks, self.measurement_lines(z)[1], offsets)
-        if self.colour is not None:
-            ll = ll + self.colour_loglik(obs, z, offsets)
-        return ll
-
-    def _grid_from_peaks(self, off, peaks, nrm, offsets):
-        kern = np.exp(-0.5 * ((off[:, None] - off[None, :]) / self.sigma_edge) ** 2).astype(np.float32)
-        smooth = peaks.astype(np.float32) @ kern  # (N, M, L): S_i(ν') at ν' = off
-        shift = nrm.astype(np.float32) @ np.asarray(offsets, np.float32).T  # (N, M, G): n_i · δ
-        # nearest line sample (1 px apart; index = floor(n_i · δ - off[0] + 0.5)): one flat gather
-        shift -= off[0] - 0.5
-        np.clip(shift, 0, len(off) - 1, out=shift)
-        idx = shift.astype(np.intp)
-        n, m, L = smooth.shape
-        idx += (np.arange(n * m) * L).reshape(n, m, 1)
-        val = smooth.reshape(-1)[idx]
-        val *= np.float32(np.exp(self.log_c))
-        return np.sum(np.log1p(val, out=val), axis=1)
-
-    def local_mixture(self, obs, states, defensive=0.2):
-        """LIS proposal on translation: a Gaussian from the edges nearest to the predicted
-        contour (least squares along the normals, precision ``Σ n nᵀ / σ_edge²``), mixed
-        with a broad defensive component ``N(x, 4 Σ_g)`` of weight ``defensive``.
-
-        Returns ``log_p (N, 1, 2)``, ``mu (N, 1, 2, 2)``, ``cov (N, 1, 2, 2, 2)``.
-        """
-        z = states[:, :4]
-        win = self.window_std()
-        off, peaks = self._peaks_wide(obs, z, 3 * np.max(win))
-        dist = np.where(peaks, np.abs(off), np.inf)
-        j = np.argmin(dist, axis=-1)
-        found = np.isfinite(np.take_along_axis(dist, j[..., None], -1)[..., 0])  # (N, n)
-        nu = np.where(found, off[j], 0.0)
-        nrm = self.measurement_lines(z)[1]
-        wgt = found.astype(float)
-        prec = np.einsum("ki,kia,kib->kab", wgt, nrm, nrm) / self.sigma_edge**2 + np.eye(2) * 1e-6
-        rhs = np.einsum("ki,ki,kia->ka", wgt, nu, nrm) / self.sigma_edge**2
-        cov_fit = np.linalg.inv(prec)
-        # the fit needs edges on at least ~two directions; else lean on the prior spread
-        cov_fit = cov_fit + np.eye(2) * self.sigma_edge**2
-        mu_fit = states[:, :2] + np.einsum("kab,kb->ka", np.linalg.inv(prec), rhs)
-        n = len(states)
-        big = np.broadcast_to(np.diag(4 * win**2), (n, 2, 2))
-        mu = np.stack([mu_fit, states[:, :2]], axis=1)[:, None]
-        cov = np.stack([cov_fit, big], axis=1)[:, None]
-        log_p = np.log(np.array([1 - defensive, defensive]))
-        return np.broadcast_to(log_p, (n, 1, 2)).copy(), mu, cov
-
-    def lis_proposal(self):
-        """LIS with the edge-fit translation proposal and a Gaussian window (:meth:`window_std`)."""
-        return GaussMixtureProposal(self, np.diag(self.window_std() ** 2))
-
-    def lls_window(self):
-        """Box window of half-width ``2 σ`` on translation, 7×7 grid (§4.4.3)."""
-        return Window("box", 2.0 * self.window_std(), grid=7)
 
     # -- output -------------------------------------------------------------------
     def describe(self, state):

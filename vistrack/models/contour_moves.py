@@ -1,0 +1,186 @@
+"""The contour model's local moves (thesis 001): ``LS_λ`` for LS-N-IPS (§4.3, eq. 4.1; LMS of
+§4.3.1) and the translation moves of LLS and LIS (§4.4.3) from one set of long measurement
+lines (:mod:`~vistrack.models.contour` module docstring)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..proposals import GaussMixtureProposal, Window
+from .spline import edge_peaks, pose_params
+
+__all__ = ["ContourMoves"]
+
+
+class ContourMoves:
+    """Mixin of :class:`~vistrack.models.contour.Contour`: local search and local moves."""
+
+    # -- local search LS_λ (LS-N-IPS, §4.3.1) ------------------------------------
+    def _lms_fit(self, obs, z, samples, reach_factor=1.0):
+        """One LMS step: on each normal within the search length, the edge feature
+        nearest to the predicted curve, projected with ``W⁺`` (normals without an
+        edge keep their predicted point)."""
+        scale, _ = pose_params(z)
+        reach = self.search_length * scale * reach_factor  # (N,)
+        off = reach[:, None, None] * np.linspace(-1.0, 1.0, samples)  # (N, 1, L)
+        gn = self._profiles(obs, z, off, support=True)
+        peaks = edge_peaks(gn, self._threshold(obs))
+        score = np.where(peaks, -np.abs(off), -np.inf)
+        best = np.argmax(score, axis=-1)  # (N, n)
+        found = peaks.any(axis=-1)
+        nu = np.where(found, np.take_along_axis(np.broadcast_to(off, peaks.shape), best[..., None], -1)[..., 0], 0.0)
+        q_hat = self.support_points(z) + nu[..., None] * self.normals(z)
+        d = np.concatenate([q_hat[..., 0] - self.q0[:, 0], q_hat[..., 1] - self.q0[:, 1]], axis=1)
+        return d @ self.W_plus.T
+
+    def local_search(self, obs, states):
+        """``LS_λ`` of §4.3 / eq. 4.1 for contours: refine predicted poses ``z_t``.
+
+        One set of measurement lines, long enough for every move, serves both steps:
+
+        1. translation: the argmax of ``r`` over a grid of shifts ``δ`` within
+           ``(λ_x, λ_y)`` (the grid likelihood of :meth:`loglik_local_grid`);
+        2. the LMS fit of §4.3.1 from there: on each normal the edge nearest to the
+           shifted curve within ``l = l0 · scale / 2``, fitted in the least-squares
+           sense, ``ẑ = W_m⁺ (p̂ - p0)`` with ``W_m`` the matrix ``W`` of eq. 1.1 on the
+           measurement points (two per spline segment, a discretisation of the
+           spline norm ``U``; normals without an edge keep the shifted point).
+
+        The LMS result is used only if it is within ``λ`` of the prediction (max
+        norm per coordinate; else the translation step alone), and the move is
+        kept only if it raises the exact likelihood, so ``r(y|LS_λ(x, y)) >= r(y|x)``.
+        With a colour term the search itself reads the edges only (the colour on its grid
+        cost 3x the time and lost accuracy on the real clips) and the check uses the full ``r``.
+        Returns the states and their log-likelihoods.
+        """
+        z = states[:, :4]
+        lx, ly = self.search_lambda[:2]
+        step = max(1.0, self.grid_step * self.sigma_edge)
+        gx = np.arange(-np.floor(lx / step), np.floor(lx / step) + 1) * step
+        gy = np.arange(-np.floor(ly / step), np.floor(ly / step) + 1) * step
+        grid = np.stack(np.meshgrid(gx, gy), axis=-1).reshape(-1, 2)
+        scale, _ = pose_params(z)
+        reach_lms = step
+        off, gn = self._profiles_wide(obs, z, np.hypot(lx, ly) + reach_lms)
+        thresh = self._threshold(obs)
+        peaks = edge_peaks(gn, thresh)
+        pts, nrm = self.measurement_lines(z)
+        ll_grid = self._grid_from_peaks(off, peaks, nrm, grid)
+        delta = grid[np.argmax(ll_grid, axis=1)]  # (N, 2)
+        z_t = z.copy()
+        z_t[:, :2] += delta
+        # LMS: nearest feature to the shifted curve on each line (offsets along the old line)
+        shift = np.einsum("kmd,kd->km", nrm, delta)  # (N, M)
+        dist = np.where(peaks, np.abs(off - shift[..., None]), np.inf)
+        j = np.argmin(dist, axis=-1)
+        found = np.take_along_axis(dist, j[..., None], -1)[..., 0] <= reach_lms
+        # the edge found on the old line, moved along the contour with the shift
+        # (edges are locally parallel to the contour): p + δ + (ν - n·δ) n
+        nu = np.where(found, off[j] - shift, 0.0)
+        p_hat = pts + delta[:, None, :] + nu[..., None] * nrm
+        d = np.concatenate([p_hat[..., 0] - self.meas0[:, 0], p_hat[..., 1] - self.meas0[:, 1]], axis=1)
+        z_hat = d @ self.W_meas_plus.T
+        near = np.all(np.abs(z_hat - z) <= self.search_lambda, axis=1)
+        cand = states.copy()
+        cand[:, :4] = np.where(near[:, None], z_hat, z_t)  # the grid step is within λ by construction
+        ll = self.loglik(obs, cand)
+        if not self.search_check:
+            return cand, ll
+        # r at the prediction, exactly as loglik: its lines are the middle samples of the long ones
+        r = (len(off) - len(self.line_offsets)) // 2
+        ll_x = self._loglik_from_profiles(gn[..., r:r + len(self.line_offsets)], thresh)
+        if self.colour is not None:
+            ll_x = ll_x + self.colour_loglik(obs, z)
+        keep = ll < ll_x  # the move lowered r: stay at the prediction
+        cand[keep] = states[keep]
+        return cand, np.where(keep, ll_x, ll)
+
+    def lms_step(self, obs, states, samples=33):
+        """The plain LMS step of §4.3.1 at the support points: the edge nearest to the
+        curve on each normal within ``l = l0 · scale``, ``ẑ = W⁺ (q̂ - q0)`` with the
+        spline norm. Returns new states (not checked against ``λ``)."""
+        out = states.copy()
+        out[:, :4] = self._lms_fit(obs, states[:, :4], samples)
+        return out
+
+    # -- local moves on translation (LLS / LIS, §4.4.3) ---------------------------
+    def window_std(self):
+        """Window std on translation: the spread of ``K`` (or of ``p_0`` on the first step)."""
+        return self.prior_std[:2] if self.first_step else self.sigma[:2]
+
+    def _profiles_wide(self, obs, z, reach):
+        """Offsets and edge strengths on lines long enough for shifts up to ``reach`` px
+        (:attr:`line_offsets` are their middle samples)."""
+        h = int(np.ceil(reach)) + self.half_line
+        off = np.arange(-h, h + 1, dtype=float)
+        return off, self._profiles(obs, z, off)
+
+    def _peaks_wide(self, obs, z, reach):
+        """Edge features on lines long enough for shifts up to ``reach`` px."""
+        off, gn = self._profiles_wide(obs, z, reach)
+        return off, edge_peaks(gn, self._threshold(obs))
+
+    def loglik_local_grid(self, obs, states, offsets):
+        """``log r`` at ``states`` translated by each of ``offsets (G, 2)``: ``(N, G)``.
+
+        From one set of lines: a translation ``δ`` shifts the edge distances on
+        normal ``i`` by ``-n_i · δ``, so ``Σ_j exp(-(ν_j - n_i·δ)² / 2σ²)`` is the
+        feature train smoothed by the Gaussian, read at ``n_i · δ``.
+        """
+        z = states[:, :4]
+        off, peaks = self._peaks_wide(obs, z, np.max(np.abs(offsets)) * np.sqrt(2))
+        ll = self._grid_from_peaks(off, peaks, self.measurement_lines(z)[1], offsets)
+        if self.colour is not None:
+            ll = ll + self.colour_loglik(obs, z, offsets)
+        return ll
+
+    def _grid_from_peaks(self, off, peaks, nrm, offsets):
+        kern = np.exp(-0.5 * ((off[:, None] - off[None, :]) / self.sigma_edge) ** 2).astype(np.float32)
+        smooth = peaks.astype(np.float32) @ kern  # (N, M, L): S_i(ν') at ν' = off
+        shift = nrm.astype(np.float32) @ np.asarray(offsets, np.float32).T  # (N, M, G): n_i · δ
+        # nearest line sample (1 px apart; index = floor(n_i · δ - off[0] + 0.5)): one flat gather
+        shift -= off[0] - 0.5
+        np.clip(shift, 0, len(off) - 1, out=shift)
+        idx = shift.astype(np.intp)
+        n, m, L = smooth.shape
+        idx += (np.arange(n * m) * L).reshape(n, m, 1)
+        val = smooth.reshape(-1)[idx]
+        val *= np.float32(np.exp(self.log_c))
+        return np.sum(np.log1p(val, out=val), axis=1)
+
+    def local_mixture(self, obs, states, defensive=0.2):
+        """LIS proposal on translation: a Gaussian from the edges nearest to the predicted
+        contour (least squares along the normals, precision ``Σ n nᵀ / σ_edge²``), mixed
+        with a broad defensive component ``N(x, 4 Σ_g)`` of weight ``defensive``.
+
+        Returns ``log_p (N, 1, 2)``, ``mu (N, 1, 2, 2)``, ``cov (N, 1, 2, 2, 2)``.
+        """
+        z = states[:, :4]
+        win = self.window_std()
+        off, peaks = self._peaks_wide(obs, z, 3 * np.max(win))
+        dist = np.where(peaks, np.abs(off), np.inf)
+        j = np.argmin(dist, axis=-1)
+        found = np.isfinite(np.take_along_axis(dist, j[..., None], -1)[..., 0])  # (N, n)
+        nu = np.where(found, off[j], 0.0)
+        nrm = self.measurement_lines(z)[1]
+        wgt = found.astype(float)
+        prec = np.einsum("ki,kia,kib->kab", wgt, nrm, nrm) / self.sigma_edge**2 + np.eye(2) * 1e-6
+        rhs = np.einsum("ki,ki,kia->ka", wgt, nu, nrm) / self.sigma_edge**2
+        cov_fit = np.linalg.inv(prec)
+        # the fit needs edges on at least ~two directions; else lean on the prior spread
+        cov_fit = cov_fit + np.eye(2) * self.sigma_edge**2
+        mu_fit = states[:, :2] + np.einsum("kab,kb->ka", np.linalg.inv(prec), rhs)
+        n = len(states)
+        big = np.broadcast_to(np.diag(4 * win**2), (n, 2, 2))
+        mu = np.stack([mu_fit, states[:, :2]], axis=1)[:, None]
+        cov = np.stack([cov_fit, big], axis=1)[:, None]
+        log_p = np.log(np.array([1 - defensive, defensive]))
+        return np.broadcast_to(log_p, (n, 1, 2)).copy(), mu, cov
+
+    def lis_proposal(self):
+        """LIS with the edge-fit translation proposal and a Gaussian window (:meth:`window_std`)."""
+        return GaussMixtureProposal(self, np.diag(self.window_std() ** 2))
+
+    def lls_window(self):
+        """Box window of half-width ``2 σ`` on translation, 7×7 grid (§4.4.3)."""
+        return Window("box", 2.0 * self.window_std(), grid=7)
