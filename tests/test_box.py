@@ -145,7 +145,7 @@ def test_box_lis_weights_match_a_brute_force_posterior():
         - model.transition_logpdf(x, prev)
     w = np.exp(lw - lw.max())
     sd = model.sigma[0]
-    step = 0.1
+    step = 0.25
     du, dv = np.meshgrid(np.arange(-6 * sd, 6 * sd, step), np.arange(-6 * sd, 6 * sd, step), indexing="ij")
     grid = np.tile(np.concatenate([pose, pose]), (du.size, 1))
     grid[:, 0] += du.ravel()

@@ -201,7 +201,7 @@ def _landmarks(clip, size, init_gt, template, params):
     """Landmark model started from the first frame's landmarks: ``--template FILE`` (x y per
     line), ``--init-gt`` (lx0.., ly0.. columns), or the clip's meta.json; the clip's centre,
     scale and dynamics when meta.json has them."""
-    from .models.landmarks import LandmarkVideo
+    from .models.landmark_video import LandmarkVideo
 
     meta = clip.meta or {}
     if template is not None:

@@ -19,10 +19,7 @@ precision at 20 px, frames/s, mean ESS).
 
 from __future__ import annotations
 
-import json
-import os
 import time
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -33,15 +30,20 @@ from .clips import load_clip
 from .filters import ALGORITHMS, make_filter
 from .metrics import IOU_THRESHOLDS, center_error, iou, lost_frames, summarize_runs
 from .models.registry import get_model_spec
-
-#: centre-error thresholds (px) of the precision plot (OTB)
-PRECISION_THRESHOLDS = np.arange(0, 51)
 from .runtime import keep_freed_memory
+from .tasks import (OutLocked, execute, load_task_results, lock_out, stale_tasks, task_done, task_fingerprint,
+                    write_atomic, write_task_result)
 from .tracking import track
 from .video import VideoError
 
-__all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_config", "run_task", "execute", "summarize", "pooled_summary",
-           "OPENCV_TRACKERS", "check_algos", "task_fingerprint", "task_done", "stale_tasks", "write_task_result", "write_atomic", "OutLocked", "lock_out"]
+__all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_config", "run_task", "summarize",
+           "pooled_summary", "OPENCV_TRACKERS", "check_algos",
+           # the engine's task files (vistrack.tasks), re-exported
+           "execute", "task_fingerprint", "task_done", "stale_tasks", "write_task_result", "write_atomic", "OutLocked",
+           "lock_out", "load_task_results"]
+
+#: centre-error thresholds (px) of the precision plot (OTB)
+PRECISION_THRESHOLDS = np.arange(0, 51)
 
 #: OpenCV trackers by name -> constructor attribute (contrib ones may be missing)
 OPENCV_TRACKERS = {"opencv-mil": "TrackerMIL_create", "opencv-kcf": "TrackerKCF_create",
@@ -247,96 +249,6 @@ def run_task(task, out_dir):
     return write_task_result(out, result, task)
 
 
-def _clip_signature(clip):
-    """Name, size and modification time of the files of a clip (its folder, or a video file's
-    folder): a changed video or ground truth changes the signature."""
-    p = Path(clip)
-    folder = p if p.is_dir() else p.parent
-    out = []
-    try:
-        for e in sorted(os.scandir(folder), key=lambda e: e.name):
-            if e.is_file():
-                st = e.stat()
-                out.append((e.name, st.st_size, st.st_mtime_ns))
-            elif e.is_dir():
-                out.append((e.name + "/", len(os.listdir(e.path)), e.stat().st_mtime_ns))
-    except OSError:
-        pass
-    return out
-
-
-def _jsonable(v):
-    if isinstance(v, np.random.SeedSequence):
-        return {"entropy": str(v.entropy), "spawn_key": list(v.spawn_key)}
-    if isinstance(v, dict):
-        return {k: _jsonable(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_jsonable(x) for x in v]
-    if isinstance(v, (np.integer, np.floating)):
-        return v.item()
-    return v if isinstance(v, (int, float, str, bool, type(None))) else str(v)
-
-
-def task_fingerprint(task):
-    """A hash of everything that determines a task's result: the task itself (algorithm, N, model,
-    run, seed stream, config), the content signature of its clip, and the vistrack version. A
-    result file whose fingerprint differs is not reused by ``--resume``."""
-    import hashlib
-
-    from . import __version__
-
-    body = {"task": _jsonable(task), "version": __version__}
-    if "clip" in task:
-        body["clip_files"] = _clip_signature(task["clip"])
-    return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()[:20]
-
-
-def write_task_result(path, result, task=None):
-    """Write a task's result JSON atomically (temporary file, then rename); return the path.
-    With ``task``, the result records its :func:`task_fingerprint` (what ``--resume`` checks)."""
-    path = Path(path)
-    if task is not None:
-        result = {**result, "fingerprint": task_fingerprint(task)}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    write_atomic(path, json.dumps(result))
-    return str(path)
-
-
-def write_atomic(path, text):
-    """Write ``text`` to ``path`` whole or not at all: a temporary file beside it, then a rename
-    (a crash leaves the old file or none, never half of the new one)."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    try:
-        tmp.write_text(text)
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
-
-def task_done(task, out_dir):
-    """Whether ``task``'s result file exists, parses, and was computed by this very task (its
-    :func:`task_fingerprint`: same clip content, options, seed stream and version) — what
-    ``--resume`` may reuse."""
-    p = Path(out_dir) / "tasks" / f"{task['name']}.json"
-    if not p.is_file():
-        return False
-    try:
-        data = json.loads(p.read_text())
-    except (json.JSONDecodeError, OSError, UnicodeDecodeError):
-        return False
-    return isinstance(data, dict) and data.get("fingerprint") == task_fingerprint(task)
-
-
-def stale_tasks(tasks, out_dir):
-    """The tasks whose result file exists but cannot be reused (another configuration, or damaged)."""
-    return [t for t in tasks if (Path(out_dir) / "tasks" / f"{t['name']}.json").is_file()
-            and not task_done(t, out_dir)]
-
-
-def load_task_results(tasks, out_dir):
-    return [json.loads((Path(out_dir) / "tasks" / f"{t['name']}.json").read_text()) for t in tasks]
-
-
 def summarize(results):
     """Per clip × algo × N summaries (list of dicts, in first-seen order) from task results."""
     groups = {}
@@ -377,28 +289,6 @@ def summarize(results):
     return out
 
 
-def execute(tasks, out_dir, client, *, resume=False, progress=None, key_prefix="vistrack", runner=None):
-    """Run the tasks not yet done on a ``distributed.Client``; each writes its own file.
-
-    ``runner(task, out_dir)`` does one task (default :func:`run_task`, one tracking run
-    of a clip); it must write ``out_dir/tasks/<name>.json``.
-
-    ``progress(k)`` is called as tasks finish (and once for those skipped on resume).
-    """
-    from distributed import as_completed
-
-    pending = [t for t in tasks if not (resume and task_done(t, out_dir))]
-    if progress and len(tasks) > len(pending):
-        progress(len(tasks) - len(pending))
-    futs = [client.submit(runner or run_task, t, str(out_dir), key=f"{key_prefix}-{t['name']}", retries=2, pure=False)
-            for t in pending]
-    for f in as_completed(futs):
-        f.result()
-        if progress:
-            progress(1)
-    return len(pending)
-
-
 def pooled_summary(results):
     """Per (algo, N) over all clips and runs (same frame count): P(lost) per frame, at the
     last frame and averaged, mean error over frames not lost, ms per frame, mean ESS."""
@@ -420,45 +310,3 @@ def pooled_summary(results):
     return out
 
 
-class OutLocked(RuntimeError):
-    """Another running process holds the ``--out`` folder."""
-
-
-@contextmanager
-def lock_out(out_dir):
-    """Hold ``out_dir/.vistrack.lock`` (pid and host) for the block: one experiment per ``--out``.
-
-    Raises :class:`OutLocked` (one line naming the holder) when a live process holds it; a lock
-    left by a dead process on this host is taken over. Re-entrant within a process.
-    """
-    import socket
-
-    path = Path(out_dir) / ".vistrack.lock"
-    me = f"{os.getpid()}@{socket.gethostname()}"
-    try:
-        fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-    except FileExistsError:
-        holder = path.read_text().strip() if path.is_file() else ""
-        if holder == me:
-            yield
-            return
-        pid, _, host = holder.partition("@")
-        alive = True
-        if host == socket.gethostname() and pid.isdigit():
-            try:
-                os.kill(int(pid), 0)
-            except ProcessLookupError:
-                alive = False
-            except PermissionError:
-                pass
-        if alive:
-            raise OutLocked(f"{out_dir} is in use by another vistrack process ({holder}); wait for it or "
-                            f"choose another --out (remove {path} if that process is gone)") from None
-        path.unlink(missing_ok=True)
-        fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-    with os.fdopen(fd, "w") as f:
-        f.write(me)
-    try:
-        yield
-    finally:
-        path.unlink(missing_ok=True)

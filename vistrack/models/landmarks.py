@@ -30,10 +30,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..features import blob_peaks
-from .protocol import VideoModelBase
+from .shape_space import _diag, initial_basis, regular_polygon, shape_step, tangent_basis
 
-__all__ = ["Landmarks", "LandmarkVideo", "VIDEO_DYNAMICS", "regular_polygon", "tangent_basis", "shape_step",
+__all__ = ["Landmarks", "VIDEO_DYNAMICS", "regular_polygon", "tangent_basis", "shape_step",
            "initial_basis", "simulate", "sample_observations"]
 
 #: dynamics of the synthetic landmark clips (per frame at 30 frames/s): slow zoom, rotation of a few
@@ -42,58 +41,6 @@ VIDEO_DYNAMICS = {"alpha_s": 0.95, "sigma2_s": 2.5e-4, "alpha_theta": 0.98, "sig
                   "a_c": 0.6, "sigma_c": 1e-5}
 
 _LOG_PI = np.log(np.pi)
-
-
-def regular_polygon(k, phase=0.0):
-    """The regular ``k``-gon as a shape: centred, unit norm, ``z_m = e^{j(2πm/k + phase)}/√k``."""
-    return np.exp(1j * (2 * np.pi * np.arange(k) / k + phase)) / np.sqrt(k)
-
-
-def tangent_basis(u_prev, z_prev):
-    """``U_t = g(U_{t-1}, z_{t-1})`` (§3.1), batched over leading axes.
-
-    Gram–Schmidt of the columns of ``U_{t-1}`` against ``1_K``, ``z_{t-1}`` and
-    the columns already done, done as one batched QR of ``[1_K/√K, z, U_{t-1}]``
-    whose columns are rephased so that ``R`` has a positive real diagonal —
-    exactly the paper's recursion, plus the explicit ``⟂ 1_K`` it keeps in exact
-    arithmetic.
-
-    Parameters
-    ----------
-    u_prev : complex ndarray (..., K, K-2)
-    z_prev : complex ndarray (..., K)
-    """
-    k = z_prev.shape[-1]
-    ones = np.full(z_prev.shape + (1,), 1.0 / np.sqrt(k), dtype=complex)
-    a = np.concatenate([ones, z_prev[..., None], u_prev], axis=-1)
-    q, r = np.linalg.qr(a)
-    d = np.diagonal(r, axis1=-2, axis2=-1)
-    phase = d / np.maximum(np.abs(d), 1e-300)
-    return (q * phase[..., None, :])[..., 2:]
-
-
-def shape_step(z_prev, u, c):
-    """``z_t = f(z_{t-1}, U_t, c_t) = (1 - cᵀc)^{1/2} z_{t-1} + U_t (c_re + j c_im)`` (eq. 5)."""
-    m = u.shape[-1]
-    ct = c[..., :m] + 1j * c[..., m:]
-    g = np.sqrt(np.clip(1.0 - np.sum(c * c, axis=-1), 0.0, None))
-    return g[..., None] * z_prev + np.einsum("...km,...m->...k", u, ct)
-
-
-def initial_basis(z0):
-    """An orthonormal basis ``(K, K-2)`` of the tangent space at ``z0`` (⟂ z0, ⟂ 1_K).
-
-    Starts from the Fourier vectors ``e^{2πj m k/K}/√K``, ``m = 2..K-1``: for the
-    regular polygon (``m = 1``) they already are that basis.
-    """
-    k = len(z0)
-    f = np.exp(2j * np.pi * np.outer(np.arange(k), np.arange(2, k)) / k) / np.sqrt(k)
-    return tangent_basis(f, np.asarray(z0, complex))
-
-
-def _diag(v, d):
-    v = np.asarray(v, float)
-    return np.full(d, float(v)) if v.ndim == 0 else v.copy()
 
 
 class Landmarks:
@@ -422,108 +369,6 @@ def _pd_or(hess, fallback):
     ev = np.linalg.eigvalsh(0.5 * (hess + np.swapaxes(hess, -1, -2)))
     ok = ev[:, 0] > 1e-9 * np.maximum(np.abs(ev[:, -1]), 1e-300)
     return np.where(ok[:, None, None], hess, fallback)
-
-
-class LandmarkVideo(Landmarks, VideoModelBase):
-    """The landmark model on video frames: pixels, blob detection and association.
-
-    A configuration ``h`` lies at pixels ``centre + scale_px · (Re h, Im h)``.
-    Observations (:meth:`observe`): bright blobs are the peaks of the small
-    box-filter DoG above ``blob_threshold`` (:func:`~vistrack.features.blob_peaks`);
-    landmark ``k`` observes the candidate nearest to its predicted position
-    (the weighted mean of every particle's mean prediction), or nothing (NaN,
-    no likelihood term) when no candidate is within ``gate_px``. Wrong
-    associations — a clutter blob nearer than an occluded landmark — are what
-    the clutter component of (6) absorbs; its variance defaults to half the
-    frame diagonal, squared, in configuration units.
-
-    Parameters
-    ----------
-    first : array (K, 2)
-        Landmark pixels in the first frame: they fix ``X_0`` (shape, scale, rotation).
-    size : (W, H)
-    centre : (x, y), optional
-        Centre of scale and rotation; default the landmarks' centroid.
-    scale_px : float, optional
-        Pixels per configuration unit; default the norm of the centred first landmarks,
-        so that ``s_0 = 0``.
-    sigma_o_px : float
-        Observation noise (std of the complex Gaussian, px). Blob centres are
-        accurate to ~0.1 px, but a small ``σ_o`` narrows the basin in which (6)
-        treats a landmark as an inlier (``|Y_k - h_k| ≲ 3.3 σ_o``): after a 3σ jump
-        of rotation and scale (about once per 200-frame clip) a filter with
-        ``σ_o = 1.5`` px lost track on 1 of 5 clips; 3 px keeps all five.
-    """
-
-    def __init__(self, first, size, *, centre=None, scale_px=None, sigma_o_px=3.0, p=0.2, gate_px=30.0,
-                 blob_threshold=25.0, **dynamics):
-        first = np.asarray(first, float)
-        if first.ndim != 2 or first.shape[1] != 2 or len(first) < 3:
-            raise ValueError(f"need at least 3 landmark positions (x, y), got shape {first.shape}")
-        self.size = tuple(int(v) for v in size)
-        self.centre = first.mean(axis=0) if centre is None else np.asarray(centre, float)
-        h0 = (first[:, 0] - self.centre[0]) + 1j * (first[:, 1] - self.centre[1])
-        nrm = float(np.linalg.norm(h0 - h0.mean()))
-        if nrm < 1e-6:
-            raise ValueError("the first-frame landmarks all coincide")
-        self.scale_px = nrm if scale_px is None else float(scale_px)
-        hs = h0 / self.scale_px
-        s0 = float(np.log(np.linalg.norm(hs - hs.mean())))
-        theta0 = float(dynamics.pop("theta0", 0.0))
-        z0 = (hs - hs.mean()) * np.exp(-s0 - 1j * theta0)
-        half_diag = 0.5 * float(np.hypot(*self.size)) / self.scale_px
-        params = {**VIDEO_DYNAMICS, **dynamics}
-        super().__init__(len(first), z0=z0, s0=s0, theta0=theta0, sigma2_o=(sigma_o_px / self.scale_px) ** 2,
-                         p=p, clutter_var=half_diag ** 2, **params)
-        self.gate_px = float(gate_px)
-        self.blob_threshold = float(blob_threshold)
-
-    def to_pixels(self, h):
-        """Complex configurations ``(..., K)`` to pixel coordinates ``(..., K, 2)``."""
-        return np.stack([self.centre[0] + self.scale_px * h.real, self.centre[1] + self.scale_px * h.imag], axis=-1)
-
-    def predicted_pixels(self, particles):
-        """Landmark pixels ``(K, 2)`` predicted for the next frame from the previous ``particles``."""
-        if particles is None:
-            return self.to_pixels(self.configuration(self.prior_mean[None])[0])
-        x = particles.states
-        mean = self.advance(x, self.alpha_s * x[:, 0], self.alpha_theta * x[:, 1], self.c_prior_mean(x))
-        return self.to_pixels(particles.weights @ self.configuration(mean))
-
-    def observe(self, maps, particles):
-        """``Y_t`` (complex ``(K,)``, NaN where missing) from a frame's feature maps."""
-        peaks, _ = blob_peaks(maps.dog_small, self.blob_threshold)
-        pred = self.predicted_pixels(particles)
-        y = np.full(self.k, np.nan + 0j)
-        if len(peaks):
-            d = np.linalg.norm(pred[:, None, :] - peaks[None, :, :], axis=2)
-            j = np.argmin(d, axis=1)
-            ok = d[np.arange(self.k), j] <= self.gate_px
-            pts = peaks[j[ok]]
-            y[ok] = ((pts[:, 0] - self.centre[0]) + 1j * (pts[:, 1] - self.centre[1])) / self.scale_px
-        return y
-
-    def outline(self, states):
-        """Landmark polygons in pixels, ``(n, K, 2)`` (one state: ``n = 1``), as every model's."""
-        return self.to_pixels(self.configuration(np.atleast_2d(states)))
-
-    def box(self, states):
-        """Bounding boxes ``(n, 4)`` ``(x, y, w, h)`` of the landmark polygons."""
-        pts = self.outline(states)
-        lo, hi = pts.min(axis=1), pts.max(axis=1)
-        return np.concatenate([lo, hi - lo], axis=1)
-
-    def describe(self, state):
-        """Track-CSV columns: centre, box, rotation (deg), scale ``e^s``, then ``lx0.., ly0..``."""
-        s = np.asarray(state, float)
-        pts = self.outline(s)[0]
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
-        c = pts.mean(axis=0)
-        row = {"cx": c[0], "cy": c[1], "w": hi[0] - lo[0], "h": hi[1] - lo[1],
-               "angle_deg": float(np.rad2deg(s[1])), "scale": float(np.exp(s[0]))}
-        row.update({f"lx{i}": pts[i, 0] for i in range(self.k)})
-        row.update({f"ly{i}": pts[i, 1] for i in range(self.k)})
-        return row
 
 
 def sample_observations(model, h, rng):
