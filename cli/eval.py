@@ -11,7 +11,8 @@ import numpy as np
 from tqdm import tqdm
 
 from vistrack.evaluation import (EvalConfig, OutLocked, check_algos, execute, find_clips, load_task_results,
-                                 lock_out, stale_tasks, summarize, task_done, task_list)
+                                 lock_out, result_files, score_result_file, stale_tasks, summarize, task_done,
+                                 task_list)
 from vistrack.report import write_eval_outputs
 from vistrack.models.registry import get_model_spec
 from vistrack.video import VideoError
@@ -128,10 +129,14 @@ def _equal_time(cfg, clips, frames=30):
               help="Seconds to wait for --scheduler.")
 @click.option("--in-process", is_flag=True, help="LocalCluster workers as threads of this process (debugging, tests).")
 @click.option("--resume", is_flag=True, help="Keep finished task files in --out and run only the rest.")
+@click.option("--results-dir", "results_dirs", multiple=True, type=click.Path(exists=True, file_okay=False),
+              help="Score another tracker's result files beside vistrack's: DIR/<clip name>.txt per clip, x,y,w,h "
+                   "per frame (0-based; 0,0,0,0 for none; the format of run --results); named after DIR. "
+                   "Repeat for several trackers; --algos '' scores only these.")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Results folder.")
 @click.option("--quiet", "-q", is_flag=True)
 def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, workers, timeout, in_process, resume,
-             out_dir, quiet):
+             results_dirs, out_dir, quiet):
     """Evaluate algorithms over CLIPS (clip folders, videos with ground truth, or folders of clip folders).
 
     Every clip × algorithm × N × run is one Dask task writing its own file
@@ -141,6 +146,8 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, 
     """
     if any(n < 1 for n in particles) or not particles:
         raise click.ClickException("--particles needs positive integers")
+    if not algos and not results_dirs:
+        raise click.UsageError("nothing to evaluate: give --algos or --results-dir")
     try:
         get_model_spec(model)
         check_algos(algos)
@@ -161,11 +168,16 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, 
             click.echo("equal time per frame: " + ", ".join(f"{a} N={n}" for a, n in chosen.items()))
         tasks = task_list(EvalConfig(**{**cfg.__dict__, "entries": list(chosen.items())}), clip_paths)
     with _locked(out):
-        run_tasks(tasks, out, scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process,
-                  resume=resume, quiet=quiet, desc="eval")
+        if tasks:
+            run_tasks(tasks, out, scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process,
+                      resume=resume, quiet=quiet, desc="eval")
         results = load_task_results(tasks, out)
+        try:
+            results += [score_result_file(c, f, name) for name, c, f in result_files(results_dirs, clip_paths)]
+        except (ValueError, VideoError) as e:
+            raise click.ClickException(str(e)) from None
         summaries = summarize(results)
         plots = write_eval_outputs(out, cfg, summaries, results, chosen)
     if not quiet:
-        click.echo((out / "report.md").read_text().split("\n\nAverages")[0].split("\n\n", 1)[-1])
+        click.echo((out / "report.md").read_text().split("\n\n## Per clip")[0].split("## Averages over clips\n\n")[-1])
         click.echo(f"wrote {out / 'results.json'}, results.csv, report.md and {len(plots)} plots")

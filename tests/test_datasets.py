@@ -112,3 +112,29 @@ def test_run_summary_centre_error_is_the_mean_over_all_ground_truth_frames(tmp_p
     expect = np.hypot(t["cx"] - cx, t["cy"] - cy).mean()
     printed = float(re.search(r"mean centre error ([0-9.]+) px over all", out).group(1))
     assert abs(printed - expect) < 0.006
+
+
+def test_result_files_round_trip_through_eval(tmp_path, capsys):
+    """``run --results`` then ``eval --results-dir``: the other tracker's scores equal the run's own
+    (success AUC, all-frames centre error), with no frame rate; a missing result file is one line."""
+    import json
+    import re
+
+    seq = tmp_path / "seq"
+    images(seq / "img", n=6)
+    (seq / "groundtruth_rect.txt").write_text("\n".join(f"{21 + i},21,21,17" for i in range(6)) + "\n")
+    (tmp_path / "mytracker").mkdir()
+    code, out, err = run(["run", str(seq), "--init-gt", "--results", str(tmp_path / "mytracker" / "seq.txt")], capsys)
+    assert code == 0, err
+    auc = float(re.search(r"success AUC ([0-9.]+)", out).group(1))
+    mean_err = float(re.search(r"mean centre error ([0-9.]+) px over all", out).group(1))
+    code, out, err = run(["eval", str(seq), "--algos", "", "--results-dir", str(tmp_path / "mytracker"),
+                          "--out", str(tmp_path / "ev"), "-q"], capsys)
+    assert code == 0, err
+    (r,) = json.loads((tmp_path / "ev" / "results.json").read_text())["results"]
+    assert r["algo"] == "mytracker" and r["frames_per_s"] is None
+    assert r["success_auc"] == pytest.approx(auc, abs=2e-3) and r["mean_error_all"] == pytest.approx(mean_err, abs=0.01)
+    (tmp_path / "empty").mkdir()
+    code, _, err = run(["eval", str(seq), "--algos", "", "--results-dir", str(tmp_path / "empty"),
+                        "--out", str(tmp_path / "ev2"), "-q"], capsys)
+    assert code != 0 and "no result file seq.txt" in err

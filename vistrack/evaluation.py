@@ -38,6 +38,7 @@ from .video import VideoError
 
 __all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_config", "run_task", "summarize",
            "pooled_summary", "OPENCV_TRACKERS", "check_algos",
+           "score_boxes", "score_result_file", "result_files",
            # the engine's task files (vistrack.tasks), re-exported
            "execute", "task_fingerprint", "task_done", "stale_tasks", "write_task_result", "write_atomic", "OutLocked",
            "lock_out", "load_task_results"]
@@ -228,6 +229,18 @@ def run_task(task, out_dir):
         ms, ess = np.array(ms), _by_index(np.array(ess), index)
         if spec.lost_rule == "plate":
             rule, aspect = "plate", model.layout.aspect
+    result = score_boxes(clip, boxes, rule=rule, reported=reported, vertices=vertices, aspect=aspect)
+    result.update({"clip": task["clip"], "algo": algo, "particles": n, "run": task["run"],
+                   "ms": [float(v) for v in ms[:result["frames"]]],
+                   "ess": [None if not np.isfinite(v) else float(v) for v in ess[:result["frames"]]]})
+    return write_task_result(out, result, task)
+
+
+def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=None):
+    """Per-frame measures of ``boxes (frames, 4)`` (``x, y, w, h``; NaN where there is no
+    estimate) against ``clip``'s ground truth: ``frames``, ``visible``, ``error`` (centre, px;
+    ``None`` without an estimate), ``lost`` (by ``rule``, :func:`~vistrack.metrics.lost_frames`)
+    and ``iou``."""
     t = clip.truth
     m = min(len(boxes), len(t["cx"]))
     truth = _truth_boxes(t)[:m]
@@ -236,17 +249,44 @@ def run_task(task, out_dir):
                        truth[:, 0] + truth[:, 2] / 2, truth[:, 1] + truth[:, 3] / 2)
     err = np.where(np.isfinite(err), err, np.inf)
     visible = np.asarray(t["visible"][:m]) > 0
-    result = {
-        "clip": task["clip"], "algo": algo, "particles": n, "run": task["run"],
+    return {
         "frames": int(m), "visible": visible.astype(int).tolist(),
         "error": [float(e) if np.isfinite(e) else None for e in err],
-        "lost": lost_frames(rule, err, clip.source.size[0], truth=t, reported=reported[:m], vertices=vertices[:m],
-                            aspect=aspect).astype(int).tolist(),
+        "lost": lost_frames(rule, err, clip.source.size[0], truth=t, reported=list(reported)[:m],
+                            vertices=list(vertices)[:m], aspect=aspect).astype(int).tolist(),
         "iou": [float(v) for v in np.nan_to_num(iou(boxes, truth), nan=0.0)],
-        "ms": [float(v) for v in ms[:m]],
-        "ess": [None if not np.isfinite(v) else float(v) for v in ess[:m]],
     }
-    return write_task_result(out, result, task)
+
+
+def result_files(dirs, clips):
+    """``(tracker name, clip, result file)`` for every result folder and clip: ``DIR/<clip name>.txt``
+    (case-insensitive), the tracker named after ``DIR``. A missing file is a ``ValueError``."""
+    out = []
+    for d in dirs:
+        d = Path(d)
+        files = {p.name.lower(): p for p in d.iterdir() if p.suffix.lower() == ".txt"}
+        for c in clips:
+            want = f"{_name(c)}.txt"
+            if want.lower() not in files:
+                raise ValueError(f"--results-dir {d}: no result file {want} for clip {c}")
+            out.append((d.name, c, files[want.lower()]))
+    return out
+
+
+def score_result_file(clip_path, path, name):
+    """A task result, as :func:`run_task` writes, from another tracker's result file ``path``
+    (``x,y,w,h`` per frame, 0-based, ``0,0,0,0`` or NaN where it reports nothing — the format of
+    ``vistrack run --results``), scored against the clip's ground truth under algorithm ``name``.
+    Its frame rate is unknown (``ms`` empty)."""
+    from .video import read_rects
+
+    clip = load_clip(clip_path)
+    boxes = read_rects(path)
+    boxes[~((boxes[:, 2] > 0) & (boxes[:, 3] > 0))] = np.nan
+    result = score_boxes(clip, boxes)
+    result.update({"clip": str(clip_path), "algo": name, "particles": 1, "run": 0, "ms": [],
+                   "ess": [None] * result["frames"]})
+    return result
 
 
 def summarize(results):
@@ -269,7 +309,7 @@ def summarize(results):
         precision20 = float(np.mean(err[:, vis] <= 20.0))
         precision = [float(np.mean(err[:, vis] <= th)) for th in PRECISION_THRESHOLDS]
         every = err[:, vis][np.isfinite(err[:, vis])]
-        ms = np.array([np.mean(r["ms"]) for r in rs])
+        ms = np.array([np.mean(r["ms"]) if r["ms"] else np.nan for r in rs])
         ess = [e for r in rs for e in r["ess"] if e is not None]
         out.append({
             "clip": clip, "algo": algo, "particles": n, "runs": len(rs),
@@ -283,7 +323,7 @@ def summarize(results):
             "success_curve": success,
             "precision_20px": precision20,
             "precision_curve": precision,
-            "frames_per_s": float(1e3 / ms.mean()),
+            "frames_per_s": float(1e3 / ms.mean()) if np.all(np.isfinite(ms)) else None,
             "mean_ess": float(np.mean(ess)) if ess else None,
         })
     return out

@@ -29,7 +29,7 @@ def task_row(r):
             "p_lost": float(np.mean(r["lost"])),
             "success_auc": float(np.mean([np.mean(np.array(r["iou"]) > t) for t in np.linspace(0, 1, 21)])),
             "precision_20px": float(np.mean([e is not None and e <= 20 for e in r["error"]])),
-            "frames_per_s": 1e3 / float(np.mean(r["ms"])), "mean_ess": float(np.mean(ess)) if ess else ""}
+            "frames_per_s": 1e3 / float(np.mean(r["ms"])) if r["ms"] else "", "mean_ess": float(np.mean(ess)) if ess else ""}
 
 
 def write_eval_outputs(out, cfg, summaries, results, chosen=None):
@@ -69,7 +69,9 @@ def write_eval_outputs(out, cfg, summaries, results, chosen=None):
         plots.append(plot_per_frame(avg("p_lost_per_frame"), out / "p_lost_vs_frame.png", ylabel="P(lost)",
                                     title="Probability of losing the object per frame"))
     plots.append(plot_vs_n(summaries, out / "error_vs_n.png", key="mean_error", ylabel="mean centre error (px)"))
-    plots.append(plot_vs_n(summaries, out / "fps_vs_n.png", key="frames_per_s", ylabel="frames/s (filter)"))
+    timed = [s for s in summaries if s["frames_per_s"] is not None]  # result files carry no timing
+    if timed:
+        plots.append(plot_vs_n(timed, out / "fps_vs_n.png", key="frames_per_s", ylabel="frames/s (filter)"))
     plots.append(plot_success({k: np.mean([s["success_curve"] for s in ss], axis=0) for k, ss in labels.items()},
                               out / "success.png"))
     plots.append(plot_precision({k: np.mean([s["precision_curve"] for s in ss], axis=0) for k, ss in labels.items()},
@@ -93,9 +95,9 @@ def write_eval_outputs(out, cfg, summaries, results, chosen=None):
     return plots
 
 
-def _mean(ss, key):
+def _mean(ss, key, fmt=".2f"):
     v = [s[key] for s in ss if s.get(key) is not None]
-    return f"{np.mean(v):.2f}" if v else "–"
+    return f"{np.mean(v):{fmt}}" if v else "–"
 
 
 def _table(labels, first):
@@ -106,7 +108,7 @@ def _table(labels, first):
         out.append(f"| {ss[0]['algo']} | {ss[0]['particles']} | {_mean(ss, 'mean_error_all')} | {_mean(ss, 'mean_error')} | "
                    f"{np.mean([s['p_lost'] for s in ss]):.3f} | {np.mean([s['p_lost_final'] for s in ss]):.3f} | "
                    f"{np.mean([s['success_auc'] for s in ss]):.3f} | {np.mean([s['precision_20px'] for s in ss]):.3f} | "
-                   f"{np.mean([s['frames_per_s'] for s in ss]):.0f} |")
+                   f"{_mean(ss, 'frames_per_s', '.0f')} |")
     return "\n".join(out)
 
 
