@@ -8,8 +8,10 @@ import click
 
 from vistrack.data_synth.contour import make_contour_clip
 from vistrack.data_synth.plate import make_plate_clip
+from vistrack.evaluation import EvalConfig, load_task_results, summarize, task_list
+from vistrack.report import write_eval_outputs
 
-from .eval import eval_cmd
+from .eval import run_tasks
 from .options import SEED
 from .run import run
 
@@ -61,9 +63,17 @@ def demo(ctx, out_dir, frames, runs, seed):
         ctx.invoke(run, video=str(plate), algo=algo, particles=n, seed=seed, out_path=str(video),
                    track_path=str(track), quiet=False, show_particles=10)
         made += [video, track]
-    click.echo(f"4/4 comparing the contour trackers over {runs} runs (vistrack eval)")
-    ctx.invoke(eval_cmd, clips=(str(clip),), algos=[a for a, _ in DEMO_ALGOS], particles=[30, 300], runs=runs,
-               seed=seed, equal_time=False, out_dir=str(out / "eval"), quiet=False, workers=1, in_process=True)
+    click.echo(f"4/4 comparing the contour trackers over {runs} runs (as vistrack eval does): "
+               + ", ".join(f"{a} N={n}" for a, n in DEMO_ALGOS))
+    cfg = EvalConfig(clips=[clip], algos=[a for a, _ in DEMO_ALGOS], particles=sorted({n for _, n in DEMO_ALGOS}),
+                     runs=runs, seed=seed, model="contour", entries=list(DEMO_ALGOS))
+    tasks = task_list(cfg, [clip])
+    ev = out / "eval"
+    ev.mkdir(exist_ok=True)
+    run_tasks(tasks, ev, workers=1, in_process=True, desc="eval")
+    results = load_task_results(tasks, ev)
+    write_eval_outputs(ev, cfg, summarize(results), results)
+    click.echo((ev / "report.md").read_text().split("\n\n## Per clip")[0].split("## Averages over clips\n\n")[-1])
     click.echo("")
     click.echo(f"done. In {out}/:")
     for p in made:

@@ -133,7 +133,8 @@ def test_demo_writes_videos_tracks_and_report(tmp_path, capsys):
         if name.startswith("plate"):
             assert {"x0", "y3", "visible"} <= set(rows[0])
     assert (out / "eval" / "report.md").is_file() and str(out) in stdout
-    assert len(json.loads((out / "eval" / "results.json").read_text())["results"]) == 3 * 2
+    res = json.loads((out / "eval" / "results.json").read_text())["results"]
+    assert [(r["algo"], r["particles"]) for r in res] == [("ls-n-ips", 30), ("lis", 30), ("bootstrap", 300)]
 
 
 def test_engine_workers_keep_freed_memory():
