@@ -253,13 +253,30 @@ class Appearance:
         grad = grad / np.maximum(np.linalg.norm(grad, axis=1, keepdims=True), 1e-6)
         return np.concatenate([grey, grad], axis=1) * np.sqrt(0.5)
 
+    def ncc(self, obs, boxes):
+        """``patches(obs, boxes) @ template`` ``(N,)`` without forming the patches: with raw
+        samples ``g`` (grey) and ``d`` (gradient), and the template's parts ``T_g`` (zero-mean)
+        and ``T_d``, ``√½ [g·T_g / |g - ḡ| + d·T_d / |d|]`` (the sum of ``T_g`` is zero, so the
+        mean drops out of the dot product)."""
+        b = np.asarray(boxes, float)
+        x = b[:, None, 0] + self.grid[None, :, 0] * b[:, None, 2]
+        y = b[:, None, 1] + self.grid[None, :, 1] * b[:, None, 3]
+        t = obs.sample_texture(x, y)  # (N, M, 3) float32
+        m = len(self.grid)
+        g = t[..., 0].astype(float)
+        d = t[..., 1:].reshape(len(b), -1).astype(float)
+        g_norm = np.sqrt(np.maximum(np.einsum("ij,ij->i", g, g) - g.sum(axis=1) ** 2 / m, 0.0))
+        d_norm = np.sqrt(np.einsum("ij,ij->i", d, d))
+        return np.sqrt(0.5) * ((g @ self.template[:m]) / np.maximum(g_norm, 1e-6)
+                               + (d @ self.template[m:]) / np.maximum(d_norm, 1e-6))
+
     def terms(self, obs, boxes):
         """``(log r_c, log r_t, ncc)`` of ``boxes (N, 4)``, each of shape ``(N,)``."""
         b = np.asarray(boxes, float)
         grow = self.ring * 0.5 * (b[:, 2] + b[:, 3])
         inner, ring = obs.histograms(b[:, 0], b[:, 1], b[:, 2], b[:, 3], grow=grow)
         log_rc = self.colour.loglik(inner, ring)
-        ncc = self.patches(obs, b) @ self.template
+        ncc = self.ncc(obs, b)
         return log_rc, self.lambda_template * (ncc - 1.0), ncc
 
     def loglik(self, obs, boxes):
