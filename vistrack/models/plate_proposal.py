@@ -104,30 +104,30 @@ class PlateLISProposal:
         then ``U'`` from ``r^v`` along the horizontal line at ``W'`` (``± half[:, 0]``); ``k`` cells
         per line, each ∝ the scan likelihood at its centre (times the Gaussian ``prior = (mean, std)``
         of (u, w) there, if given). Returns the new ``(u, w)`` and their log density."""
-        m = self.model
         n = len(x)
-        rows = np.arange(n)
         frac = (np.arange(k) + 0.5) / k * 2 - 1  # cell centres in [-1, 1]
         off = np.zeros((n, k, 2))
         wc = centre[:, 1:2] + frac * half[:, 1:2]  # (n, k) cell centres on the vertical line
         off[:, :, 0] = (centre[:, 0] - x[:, 0])[:, None]
         off[:, :, 1] = wc - x[:, 1:2]
-        log_h = m.lik.scan(obs, x, "h", off)
-        if prior is not None:
-            log_h = log_h - 0.5 * ((wc - prior[0][:, 1:2]) / prior[1][1]) ** 2
-        jh, lqh = self._conditional(log_h, rng, beta)
-        cell_h = 2 * half[:, 1] / k
-        w_new = wc[rows, jh] + cell_h * (rng.random(n) - 0.5)
+        w_new, lqh, cell_h = self._scan_draw(obs, x, rng, beta, "h", off, wc, 1, prior, half, k)
         uc = centre[:, 0:1] + frac * half[:, 0:1]
         off[:, :, 0] = uc - x[:, 0:1]
         off[:, :, 1] = (w_new - x[:, 1])[:, None]
-        log_v = m.lik.scan(obs, x, "v", off)
-        if prior is not None:
-            log_v = log_v - 0.5 * ((uc - prior[0][:, 0:1]) / prior[1][0]) ** 2
-        jv, lqv = self._conditional(log_v, rng, beta)
-        cell_v = 2 * half[:, 0] / k
-        u_new = uc[rows, jv] + cell_v * (rng.random(n) - 0.5)
+        u_new, lqv, cell_v = self._scan_draw(obs, x, rng, beta, "v", off, uc, 0, prior, half, k)
         return np.stack([u_new, w_new], axis=1), lqh - np.log(cell_h) + lqv - np.log(cell_v)
+
+    def _scan_draw(self, obs, x, rng, beta, which, off, centres, axis, prior, half, k):
+        """One line scan of ``_line_scans``: ``log r^which`` at the cell centres ``(n, k)`` (times the
+        prior's factor on ``axis``), a cell drawn ∝ it, a point uniform in the cell. Returns the
+        coordinate ``(n,)``, the log probability of its cell and the cell's width ``(n,)``."""
+        n = len(x)
+        log_r = self.model.lik.scan(obs, x, which, off)
+        if prior is not None:
+            log_r = log_r - 0.5 * ((centres - prior[0][:, axis:axis + 1]) / prior[1][axis]) ** 2
+        j, lq = self._conditional(log_r, rng, beta)
+        cell = 2 * half[:, axis] / k
+        return centres[np.arange(n), j] + cell * (rng.random(n) - 0.5), lq, cell
 
     def _draw_cell(self, obs, x, col, values, rng, offsets=None):
         """For each pose of ``x``, one of ``values (n, k)`` of its state column ``col``, drawn ∝ the
