@@ -138,3 +138,15 @@ def test_result_files_round_trip_through_eval(tmp_path, capsys):
     code, _, err = run(["eval", str(seq), "--algos", "", "--results-dir", str(tmp_path / "empty"),
                         "--out", str(tmp_path / "ev2"), "-q"], capsys)
     assert code != 0 and "no result file seq.txt" in err
+
+
+@pytest.mark.parametrize("rows, message", [(3, "3 rows for 4 frames; frames past its end are not scored"),
+                                           (6, "6 rows for 4 frames; its extra rows are ignored")])
+def test_ground_truth_of_another_length_is_a_warning_with_the_counts(tmp_path, rows, message):
+    from vistrack.clips import GroundTruthWarning
+
+    images(tmp_path / "img")
+    (tmp_path / "groundtruth_rect.txt").write_text("21,21,21,17\n" * rows)
+    with pytest.warns(GroundTruthWarning, match=message):
+        clip = load_clip(tmp_path)
+    assert len(clip.truth["cx"]) == rows

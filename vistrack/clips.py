@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import json
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,7 +19,7 @@ import numpy as np
 
 from .video import VideoError, find_groundtruth, groundtruth_origin, open_video, read_rects
 
-__all__ = ["Clip", "load_clip", "read_groundtruth_csv", "write_track_csv"]
+__all__ = ["Clip", "load_clip", "read_groundtruth_csv", "write_track_csv", "GroundTruthWarning"]
 
 
 @dataclass
@@ -100,7 +101,16 @@ def load_clip(path):
     elif find_groundtruth(p) is not None:
         gt = find_groundtruth(p)
         truth = _rects_truth(read_rects(gt, origin=groundtruth_origin(gt)))
+    if truth is not None and source.frame_count and len(truth["cx"]) != source.frame_count:
+        k, n = len(truth["cx"]), source.frame_count
+        warnings.warn(f"{folder}: the ground truth has {k} rows for {n} frames; "
+                      + ("frames past its end are not scored" if k < n else "its extra rows are ignored"),
+                      GroundTruthWarning, stacklevel=2)
     return Clip(source, folder, meta, truth)
+
+
+class GroundTruthWarning(UserWarning):
+    """The ground truth and the video disagree (e.g. in length)."""
 
 
 def write_track_csv(path, rows, columns=None):
