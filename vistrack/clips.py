@@ -19,7 +19,7 @@ import numpy as np
 
 from .video import VideoError, find_groundtruth, groundtruth_origin, open_video, read_rects
 
-__all__ = ["Clip", "load_clip", "read_groundtruth_csv", "write_track_csv", "GroundTruthWarning"]
+__all__ = ["Clip", "load_clip", "read_groundtruth_csv", "write_track_csv", "format_value", "GroundTruthWarning"]
 
 
 @dataclass
@@ -120,10 +120,11 @@ def write_track_csv(path, rows, columns=None):
         wr = csv.writer(f)
         wr.writerow(columns)
         for r in rows:
-            wr.writerow([_fmt(r.get(c, "")) for c in columns])
+            wr.writerow([format_value(r.get(c, "")) for c in columns])
 
 
-def _fmt(v):
+def format_value(v):
+    """A track-CSV cell: integers and flags as integers, numbers with 3 decimals, text as is."""
     if isinstance(v, (bool, np.bool_)):
         return str(int(v))
     if isinstance(v, (int, np.integer)):

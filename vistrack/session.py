@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .clips import _fmt
+from .clips import format_value
 from .metrics import center_error, iou, landmark_error, lost_frames, plate_frame_measures, success_auc
 from .particles import DegenerateWeightsWarning
 from .profiling import STAGES, Timer, profile_stages
@@ -79,7 +79,7 @@ class TrackCSV:
             if self.columns is None:
                 self.columns = list(row)
                 self._w.writerow(self.columns)
-            self._w.writerow([_fmt(row.get(c, "")) for c in self.columns])
+            self._w.writerow([format_value(row.get(c, "")) for c in self.columns])
         self._f.flush()
         self.rows += 1
 
