@@ -99,7 +99,7 @@ def test_laplace_proposals_are_properly_weighted():
     for algo, n in [("pf-gordon", 400_000), ("pf-eis", 40_000), ("pf-doucet", 40_000)]:
         filt = make_filter(algo, model)
         prev = np.repeat(states[2:3], n, axis=0)
-        _, log_incr, _, _ = filt.propose(prev, y, np.random.default_rng(4))
+        _, log_incr, _, _ = filt.propose(prev, y, np.random.default_rng(4), filt.kernel)
         w = np.exp(log_incr - log_incr.max())
         estimates[algo] = (np.log(w.mean()) + log_incr.max(), w.std() / w.mean() / np.sqrt(n))
     ref, ref_se = estimates["pf-gordon"]

@@ -99,3 +99,64 @@ def test_a_step_hands_on_the_likelihood_of_its_particles(algo, rng):
         assert p.loglik is not None
         np.testing.assert_allclose(p.loglik, model.loglik(None, p.states))
         p = filt.step(p, None, rng)
+
+
+def _spread_set(rng, n=64):
+    """Particles around the toy's likelihood modes with unequal weights (ESS well below n)."""
+    states = rng.normal(0.0, 1.5, size=(n, 1))
+    return ParticleSet(states, rng.normal(0.0, 1.0, size=n))
+
+
+def test_avpf_step_is_the_auxiliary_first_stage_then_k():
+    """AVPF (Fig. B.1) as the shared step's first stage: ancestors drawn ∝ w r(Y|mu), offspring
+    X ~ K(.|X_{t-1}) weighted r(Y|X) / r(Y|mu) — the same draws as writing Fig. B.1 out."""
+    from vistrack.filters import AVPF
+    from vistrack.resampling import systematic
+
+    model = GaussMixtureToy()
+    p = _spread_set(np.random.default_rng(1))
+    q = AVPF(model).step(p, None, np.random.default_rng(7))
+    rng = np.random.default_rng(7)
+    log_mu = model.loglik(None, model.predict_mean(p.states))
+    lam = np.exp(p.log_weights + log_mu - np.max(p.log_weights + log_mu))
+    k = systematic(lam / lam.sum(), p.n, rng)
+    x = model.predict(p.states[k], rng)
+    np.testing.assert_array_equal(q.states, x)
+    w_expect = np.exp(model.loglik(None, x) - log_mu[k])
+    np.testing.assert_allclose(q.weights, w_expect / w_expect.sum(), rtol=1e-10)
+
+
+def test_avpf_honours_the_ess_threshold():
+    """When the policy keeps the set, the look-ahead divides out: AVPF's step is the bootstrap
+    filter's (same draws, same weights); when the tilted ESS is low it resamples."""
+    from vistrack.filters import AVPF
+
+    model = GaussMixtureToy()
+    p = _spread_set(np.random.default_rng(2))
+    kept = AVPF(model, ess_threshold=0.0).step(p, None, np.random.default_rng(3))
+    boot = Bootstrap(model, ess_threshold=0.0).step(p, None, np.random.default_rng(3))
+    np.testing.assert_array_equal(kept.states, boot.states)
+    np.testing.assert_allclose(kept.weights, boot.weights, rtol=1e-10)
+    # a threshold of 0.5: the toy's peaky likelihood leaves the tilted ESS far below N / 2
+    resampled = AVPF(model, ess_threshold=0.5).step(p, None, np.random.default_rng(3))
+    always = AVPF(model).step(p, None, np.random.default_rng(3))
+    np.testing.assert_array_equal(resampled.states, always.states)
+    assert not np.array_equal(resampled.states, kept.states)
+
+
+def test_the_first_step_predicts_with_the_prior_kernel(rng):
+    """The first step is the ordinary step with p_0 in the place of K
+    (:class:`~vistrack.models.kernel.PriorKernel`), the LIS window built for p_0's spread."""
+    from vistrack.filters import LIS
+    from vistrack.models.kernel import PriorKernel
+
+    model = GaussMixtureToy(prior_mean=3.0, prior_var=0.25)
+    filt = LIS(model)
+    kernel = filt.prior_kernel
+    assert isinstance(kernel, PriorKernel) and kernel.first and not filt.kernel.first
+    prev = np.full((5, 1), -40.0)  # ignored by p_0
+    draws = kernel.predict(prev, np.random.default_rng(0))
+    np.testing.assert_array_equal(draws, model.sample_prior(5, np.random.default_rng(0)))
+    np.testing.assert_allclose(kernel.logpdf(draws, prev), model.prior_logpdf(draws))
+    assert filt.part("proposal", kernel) is filt.part("proposal", kernel)  # built once per kernel
+    assert filt.part("proposal", filt.kernel) is filt.proposal

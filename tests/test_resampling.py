@@ -6,6 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vistrack.filters import ParticleFilter
+from vistrack.filters.resampler import BirthReserve, Resampler, make_resampler
 from vistrack.particles import ParticleSet
 from vistrack.resampling import SCHEMES, get_scheme, needs_resampling
 
@@ -94,7 +95,7 @@ def test_policy_and_registry():
         get_scheme("nope")
 
 
-# -- birth reserve (ParticleFilter.resampling_probs) ---------------------------------------
+# -- birth reserve (filters.resampler.BirthReserve) ---------------------------------------
 
 
 class _Births:
@@ -130,15 +131,16 @@ def test_birth_reserve_keeps_offspring_weights_unbiased(name, loglik):
     eps, reps = 0.1, 4000
     ps, w, born = _births_set(loglik=loglik)
     n = ps.n
-    filt = ParticleFilter(_Births(eps), resample=name)
+    res = ParticleFilter(_Births(eps), resample=name).resampler
+    assert isinstance(res, BirthReserve) and res.eps == eps
     rng = np.random.default_rng(11)
     carried, n_born = np.zeros(n), 0
     for _ in range(reps):
-        states, log_w = filt._resampled(ps, rng)
-        parent = np.abs(states[:, 0]).astype(int) - 1
+        idx, log_w = res(ps, rng)
+        parent = np.abs(ps.states[idx, 0]).astype(int) - 1
         carried += np.bincount(parent, weights=np.exp(log_w), minlength=n)
         n_born += born[parent].sum()
-    pi, _ = filt.resampling_probs(ps)
+    pi, _ = res.probs(ps)
     assert np.isclose(pi.sum(), 1.0)
     assert np.isclose(pi[born].sum(), eps + (1 - eps) * w[born].sum())
     # each offspring of i carries w_i / (n π_i); its count has variance at most n π_i (1 - π_i)
@@ -153,19 +155,20 @@ def test_birth_reserve_keeps_offspring_weights_unbiased(name, loglik):
 def test_no_birth_reserve_is_plain_resampling():
     ps, w, born = _births_set()
     for model, kw in ((_Births(0.0), {}), (_Births(0.2), {"birth_reserve": 0.0}), (object(), {"birth_reserve": 0.2})):
-        filt = ParticleFilter(model, **kw)
-        states, log_w = filt._resampled(ps, np.random.default_rng(5))
+        res = ParticleFilter(model, **kw).resampler
+        assert type(res) is Resampler
+        got, log_w = res(ps, np.random.default_rng(5))
         idx = SCHEMES["systematic"](w, ps.n, np.random.default_rng(5))
-        assert np.array_equal(states, ps.states[idx])
+        assert np.array_equal(got, idx)
         assert np.allclose(log_w, -np.log(ps.n))
     # the model's reserve is the default; an explicit one overrides it
-    assert ParticleFilter(_Births(0.2)).birth_reserve == 0.2
-    assert ParticleFilter(_Births(0.2), birth_reserve=0.05).birth_reserve == 0.05
+    assert make_resampler(_Births(0.2)).eps == 0.2
+    assert make_resampler(_Births(0.2), birth_reserve=0.05).eps == 0.05
     with pytest.raises(ValueError, match=r"birth_reserve must be in \[0, 1\), got 1.0"):
-        ParticleFilter(_Births(0.2), birth_reserve=1.0).resampling_probs(ps)
+        ParticleFilter(_Births(0.2), birth_reserve=1.0)
     # all the weight on births (the first step draws every particle from p_0): plain resampling
     one = ParticleSet(np.arange(1.0, 11.0)[:, None])
-    pi, log_w = ParticleFilter(_Births(0.3)).resampling_probs(one)
+    pi, log_w = make_resampler(_Births(0.3)).probs(one)
     assert np.allclose(pi, one.weights) and np.all(log_w == 0)
 
 
@@ -185,8 +188,8 @@ def test_the_reserve_takes_the_models_reserved_set():
     """A model's ``reserved(particles)`` (e.g. lineages a few frames old) replaces ``entering`` as
     the reserve's set: the same probabilities as for births at those particles."""
     ps, w, born = _births_set()
-    pi_young, carry_young = ParticleFilter(_Young(0.1)).resampling_probs(ps)
-    pi_born, carry_born = ParticleFilter(_Births(0.1)).resampling_probs(ps)
+    pi_young, carry_young = make_resampler(_Young(0.1)).probs(ps)
+    pi_born, carry_born = make_resampler(_Births(0.1)).probs(ps)
     np.testing.assert_allclose(pi_young, pi_born)
     np.testing.assert_allclose(carry_young, carry_born)
     assert np.isclose(pi_young[born].sum(), 0.1 + 0.9 * w[born].sum())
@@ -200,7 +203,7 @@ def test_the_reserve_goes_by_likelihood_when_the_filter_gives_it():
     eps = 0.05
     ps, w, born = _births_set(loglik=True)
     ll = ps.loglik
-    pi, carry = ParticleFilter(_Births(eps)).resampling_probs(ps)
+    pi, carry = make_resampler(_Births(eps)).probs(ps)
     rho = np.where(born, np.exp(ll - ll[born].max()), 0.0)
     np.testing.assert_allclose(pi, (1 - eps) * w + eps * rho / rho.sum())
     np.testing.assert_allclose(carry, np.log(w / pi))
@@ -209,12 +212,12 @@ def test_the_reserve_goes_by_likelihood_when_the_filter_gives_it():
     lw = np.log(w)
     lw[i] = np.log(1e-6 / len(i)) - (ll[i] - ll[i].min())  # the likelier, the less weight
     ps2 = ParticleSet(ps.states, lw, loglik=ll)
-    pi2, _ = ParticleFilter(_Births(eps)).resampling_probs(ps2)
+    pi2, _ = make_resampler(_Births(eps)).probs(ps2)
     best = i[np.argmax(ll[i])]
     assert np.argmax(np.where(born, pi2, -1)) == best and ps2.weights[best] == ps2.weights[i].min()
     assert pi2[best] > 1e3 * ps2.weights[best]
     # a loglik without a finite value on the births: back to the weights
     ps3 = ParticleSet(ps.states, ps.log_weights, loglik=np.where(born, -np.inf, 0.0))
-    pi3, _ = ParticleFilter(_Births(eps)).resampling_probs(ps3)
-    by_weight = ParticleFilter(_Births(eps)).resampling_probs(ParticleSet(ps.states, ps.log_weights))[0]
+    pi3, _ = make_resampler(_Births(eps)).probs(ps3)
+    by_weight = make_resampler(_Births(eps)).probs(ParticleSet(ps.states, ps.log_weights))[0]
     np.testing.assert_allclose(pi3, by_weight)

@@ -71,7 +71,7 @@ class ParticleSet:
     loglik : ndarray of shape (N,) or None
         ``log r(Y_t | X_t)`` of each particle at the observation that weighted
         it, where the filter computed it (the birth reserve of
-        :meth:`~vistrack.filters.base.ParticleFilter.resampling_probs` draws ∝ it).
+        :class:`~vistrack.filters.resampler.BirthReserve` draws ∝ it).
     """
 
     states: np.ndarray

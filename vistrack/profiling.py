@@ -71,9 +71,9 @@ def profile_stages(model, filt, timer):
     """Within the block, time ``model``'s and ``filt``'s stages (module docstring) into ``timer``.
 
     The methods are wrapped on their classes (the model's, its proposal's and
-    :class:`~vistrack.features.FeatureMaps`), so that the copies the first step makes
-    (:func:`~vistrack.filters.base.prior_as_kernel`) are timed with their own ``self`` and
-    track exactly as without profiling; use in one thread. Everything is restored after."""
+    :class:`~vistrack.features.FeatureMaps`), so that the parts the first step builds
+    (:meth:`~vistrack.filters.base.ParticleFilter.part`) are timed too and the track is
+    exactly as without profiling; use in one thread. Everything is restored after."""
     from .features import FeatureMaps
 
     restore = []
@@ -85,8 +85,9 @@ def profile_stages(model, filt, timer):
     for part, names in _MODEL_PARTS.items():
         for name in names:
             wrap_class(type(model), name, part)
-    if callable(getattr(filt, "resample_scheme", None)):
-        restore.append((filt, "resample_scheme", timer.wrap(filt, "resample_scheme", "resampling"), True))
+    resampler = getattr(filt, "resampler", None)
+    if resampler is not None:
+        restore.append((resampler, "scheme", timer.wrap(resampler, "scheme", "resampling"), True))
     prop = getattr(filt, "proposal", None)
     if prop is not None:
         wrap_class(type(prop), "sample", "proposal")

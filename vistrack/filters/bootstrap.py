@@ -17,7 +17,7 @@ class Bootstrap(ParticleFilter):
     name = "bootstrap"
     needs = (StateSpaceModel,)
 
-    def propose(self, prev, obs, rng):
-        x = self.model.predict(prev, rng)
+    def propose(self, prev, obs, rng, kernel):
+        x = kernel.predict(prev, rng)
         ll = self.model.loglik(obs, x)
         return x, ll, x, ll

@@ -29,7 +29,8 @@ class LIS(ParticleFilter):
     ----------
     proposal : object or None
         Local proposal with ``sample(x, obs, rng, prev) -> (z, log_alpha, log_q)``;
-        ``None`` asks the model (``model.lis_proposal()``).
+        ``None`` asks the model (``model.lis_proposal(kernel)``, one per kernel:
+        :meth:`~vistrack.filters.base.ParticleFilter.part`).
     """
 
     name = "lis"
@@ -40,17 +41,10 @@ class LIS(ParticleFilter):
         super().__init__(model, **kwargs)
         self._set_part("proposal", proposal)
 
-    def propose(self, prev, obs, rng):
-        model = self.model
-        x = model.predict(prev, rng)
-        z, log_alpha, log_q = self.proposal.sample(x, obs, rng, prev)
-        ll = model.loglik(obs, z)
-        log_incr = (
-            log_alpha
-            + ll
-            - log_q
-            + model.transition_logpdf(z, prev)
-            - model.transition_logpdf(x, prev)
-        )
+    def propose(self, prev, obs, rng, kernel):
+        x = kernel.predict(prev, rng)
+        z, log_alpha, log_q = self.part("proposal", kernel).sample(x, obs, rng, prev)
+        ll = self.model.loglik(obs, z)
+        log_incr = log_alpha + ll - log_q + kernel.logpdf(z, prev) - kernel.logpdf(x, prev)
         log_incr = np.where(np.isfinite(log_alpha), log_incr, -np.inf)
         return z, log_incr, x, ll

@@ -33,7 +33,7 @@ class LLS(ParticleFilter):
     Parameters
     ----------
     window : Window or None
-        The window; ``None`` asks the model (``model.lls_window()``).
+        The window; ``None`` asks the model (``model.lls_window(kernel)``, one per kernel).
     """
 
     name = "lls"
@@ -44,38 +44,38 @@ class LLS(ParticleFilter):
         super().__init__(model, **kwargs)
         self._set_part("window", window)
 
-    def _grid_loglik(self, obs, x, u):
+    def _grid_loglik(self, obs, x, u, win, kernel):
         """``log r`` at the grid cell centres ``(N, G)``. A model may supply
         ``loglik_local_grid(obs, x, offsets)`` (e.g. from measurements it has
         already made); any approximation there only changes the proposal, as
         the weight uses the exact ``r`` at the drawn point."""
-        model, win = self.model, self.window
+        model = self.model
         if offers(model, GridLikelihood):
             return model.loglik_local_grid(obs, x, win.offsets)
         n, k = x.shape[0], win.offsets.shape[0]
         cand_u = (u[:, None, :] + win.offsets[None]).reshape(n * k, -1)
-        cand = model.with_local(np.repeat(x, k, axis=0), cand_u)
+        cand = kernel.with_local(np.repeat(x, k, axis=0), cand_u)
         return model.loglik(obs, cand).reshape(n, k)
 
-    def propose(self, prev, obs, rng):
-        model, win = self.model, self.window
-        x = model.predict(prev, rng)
+    def propose(self, prev, obs, rng, kernel):
+        model, win = self.model, self.part("window", kernel)
+        x = kernel.predict(prev, rng)
         n = x.shape[0]
         u = model.local_coords(x)  # (N, m)
-        log_rg = self._grid_loglik(obs, x, u) + win.log_g_offsets
+        log_rg = self._grid_loglik(obs, x, u, win, kernel) + win.log_g_offsets
         log_alpha = logsumexp(log_rg, axis=1) + win.log_cell
         ok = np.isfinite(log_alpha)
         j = categorical_rows(log_rg, rng)
         z_u = u + win.offsets[j] + win.cell * (rng.random(u.shape) - 0.5)
-        z = model.with_local(x, z_u)
+        z = kernel.with_local(x, z_u)
         ll = model.loglik(obs, z)
         log_incr = (
             log_alpha
             + ll
             + win.logpdf(u - z_u)
             - log_rg[np.arange(n), j]
-            + model.transition_logpdf(z, prev)
-            - model.transition_logpdf(x, prev)
+            + kernel.logpdf(z, prev)
+            - kernel.logpdf(x, prev)
         )
         log_incr = np.where(ok, log_incr, -np.inf)
         return z, log_incr, x, ll

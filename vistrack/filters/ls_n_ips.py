@@ -36,8 +36,8 @@ class LSNIPS(ParticleFilter):
             require(model, (LocalSearch,), self.name)
         self.local_search = local_search
 
-    def propose(self, prev, obs, rng):
-        x = self.model.predict(prev, rng)
+    def propose(self, prev, obs, rng, kernel):
+        x = kernel.predict(prev, rng)
         search = self.local_search or self.model.local_search
         z = search(obs, x)
         if isinstance(z, tuple):  # the search may return the log-likelihoods it computed

@@ -20,10 +20,10 @@ class PFDoucet(LaplaceFilter):
     name = "pf-doucet"
     needs = (StateSpaceModel, LaplaceModel)
 
-    def propose(self, prev, obs, rng):
+    def propose(self, prev, obs, rng, kernel):
         model = self.model
         mode, hess, u = model.laplace(obs, prev, free="all")
         x, log_q = sample_laplace(mode, hess, rng)
         new = model.advance(prev, x[:, 0], x[:, 1], x[:, 2:], u=u)
         ll = model.loglik(obs, new)
-        return new, ll + model.transition_logpdf(new, prev) - log_q, new, ll
+        return new, ll + kernel.logpdf(new, prev) - log_q, new, ll

@@ -25,7 +25,7 @@ class PFEIS(LaplaceFilter):
         """Step 3: ``c ~ N(m, Σ_IS)``; returns ``(c, log q(c))``."""
         return sample_laplace(mode, hess, rng)
 
-    def propose(self, prev, obs, rng):
+    def propose(self, prev, obs, rng, kernel):
         model = self.model
         s, theta = model.sample_motion(prev, rng)
         mode, hess, u = model.laplace(obs, prev, free="c", motion=(s, theta))

@@ -21,7 +21,7 @@ class SIR(ParticleFilter):
     proposal : object or None
         ``sample(prev, obs, rng) -> new (N, d)`` and
         ``logpdf(new, prev, obs) -> (N,)``; must be positive wherever ``K`` is.
-        ``None`` asks the model (``model.sir_proposal()``).
+        ``None`` asks the model (``model.sir_proposal(kernel)``).
     """
 
     name = "sir"
@@ -32,8 +32,9 @@ class SIR(ParticleFilter):
         super().__init__(model, **kwargs)
         self._set_part("proposal", proposal)
 
-    def propose(self, prev, obs, rng):
-        x = self.proposal.sample(prev, obs, rng)
+    def propose(self, prev, obs, rng, kernel):
+        proposal = self.part("proposal", kernel)
+        x = proposal.sample(prev, obs, rng)
         ll = self.model.loglik(obs, x)
-        log_incr = ll + self.model.transition_logpdf(x, prev) - self.proposal.logpdf(x, prev, obs)
-        return x, log_incr, self.model.predict(prev, rng), ll
+        log_incr = ll + kernel.logpdf(x, prev) - proposal.logpdf(x, prev, obs)
+        return x, log_incr, kernel.predict(prev, rng), ll

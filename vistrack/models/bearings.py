@@ -24,6 +24,7 @@ import numpy as np
 from scipy import optimize, special
 
 from ..proposals import GaussMixtureProposal, Window
+from .kernel import is_prior
 
 __all__ = ["Bearings", "wrapped_cauchy_logpdf", "gaussian_fit_to_cauchy", "simulate"]
 
@@ -207,24 +208,22 @@ class Bearings:
         cov = var[..., None, None] * shape
         return np.zeros((n, m, 1)), mean[:, :, None, :], cov[:, :, None]
 
-    first_step = False
-
-    def window_std(self):
+    def window_std(self, kernel=None):
         """Window std per position coordinate: ``sigma_g``, matched to the spread of ``K``
         (position noise ``sigma_eta / 2``); on the first step, where ``p_0`` is the
         prediction density, the prior's position std (same rule, §4.4.1)."""
-        if self.first_step:
+        if is_prior(kernel):
             return self.prior_std[self.pos_idx]
         return np.full(2 * self.ships, self.sigma_g)
 
-    def lis_proposal(self):
+    def lis_proposal(self, kernel=None):
         """The §4.5.5 LIS proposal with a Gaussian window (:meth:`window_std`) per ship."""
-        var = self.window_std().reshape(self.ships, 2) ** 2
-        return GaussMixtureProposal(self, var[:, :, None] * np.eye(2))
+        var = self.window_std(kernel).reshape(self.ships, 2) ** 2
+        return GaussMixtureProposal(self, var[:, :, None] * np.eye(2), kernel)
 
-    def lls_window(self):
+    def lls_window(self, kernel=None):
         """Gaussian window of std ``sigma_g`` on positions (for LLS)."""
-        return Window("gaussian", self.window_std(), grid=7)
+        return Window("gaussian", self.window_std(kernel), grid=7)
 
     # -- errors ---------------------------------------------------------------
     def position_error(self, estimate, truth):

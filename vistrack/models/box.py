@@ -29,6 +29,7 @@ from ..features import remap_points
 from ..proposals import MapProposal, Window
 from ..proposals.translation import TranslationMoves
 from .appearance import Appearance
+from .kernel import is_prior
 from .protocol import VideoModelBase
 
 __all__ = ["Box"]
@@ -60,7 +61,6 @@ class Box(TranslationMoves, VideoModelBase):
     """
 
     dim = 6
-    first_step = False
 
     def __init__(self, frame, box, *, sigma_xy=0.06, sigma_scale=0.002, damping=0.5, prior_std=(0.04, 0.02),
                  window=2.5, **appearance):
@@ -160,10 +160,11 @@ class Box(TranslationMoves, VideoModelBase):
         return self.app.adapt(obs, self.boxes(estimate)[0])
 
     # -- local moves ------------------------------------------------------------------
-    def window_std(self, states=None):
-        """Window std on the centre (px): ``window`` innovation stds (of ``p_0`` on the first
-        step), per particle ``(N,)`` with ``states``, else the scalar at scale 1."""
-        base = self.window * (self.prior_std[0] if self.first_step else self.sigma[0])
+    def window_std(self, states=None, kernel=None):
+        """Window std on the centre (px): ``window`` innovation stds of ``kernel`` (``p_0`` on
+        the first step, :mod:`~vistrack.models.kernel`), per particle ``(N,)`` with ``states``,
+        else the scalar at scale 1."""
+        base = self.window * (self.prior_std[0] if is_prior(kernel) else self.sigma[0])
         return base if states is None else base * np.exp(states[:, 2])
 
     def proposal_log_q(self, obs, states, points):
@@ -185,11 +186,13 @@ class Box(TranslationMoves, VideoModelBase):
         val = 0.5 * (val - val.max(axis=1, keepdims=True))
         return np.logaddexp(val + np.log(0.95), np.log(0.05))
 
-    def lis_proposal(self):
-        return MapProposal(self)
+    def lis_proposal(self, kernel=None):
+        """LIS's proposal for a step with ``kernel``: the colour/template map on a grid."""
+        return MapProposal(self, kernel=kernel)
 
-    def lls_window(self):
-        return Window("gaussian", [self.window_std()] * 2, grid=5, truncate=2.5)
+    def lls_window(self, kernel=None):
+        """LLS's Gaussian window on the centre, :meth:`window_std` of ``kernel``."""
+        return Window("gaussian", [self.window_std(kernel=kernel)] * 2, grid=5, truncate=2.5)
 
     def local_search(self, obs, states):
         """``LS_λ``: mean shift of the centres on the back-projection; a move longer than ``λ``

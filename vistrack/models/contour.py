@@ -115,7 +115,6 @@ class Contour(ContourMoves, ContourColour, TranslationMoves, VideoModelBase):
     """
 
     dim = 8
-    first_step = False
 
     def __init__(self, template, init_pose, frame_size, *, sigma_xy=None, sigma_a=0.02, sigma_b=0.03,
                  damping=0.8, prior_std=None, sigma_edge=None, half_line=None, q_miss=0.1,

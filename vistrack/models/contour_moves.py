@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..proposals import GaussMixtureProposal, Window
+from .kernel import is_prior
 from .spline import edge_peaks, pose_params
 
 __all__ = ["ContourMoves"]
@@ -104,9 +105,10 @@ class ContourMoves:
         return out
 
     # -- local moves on translation (LLS / LIS, §4.4.3) ---------------------------
-    def window_std(self):
-        """Window std on translation: the spread of ``K`` (or of ``p_0`` on the first step)."""
-        return self.prior_std[:2] if self.first_step else self.sigma[:2]
+    def window_std(self, kernel=None):
+        """Window std on translation: the spread of ``kernel`` (``K``, or ``p_0`` on the first
+        step: :mod:`~vistrack.models.kernel`)."""
+        return self.prior_std[:2] if is_prior(kernel) else self.sigma[:2]
 
     def _profiles_wide(self, obs, z, reach):
         """Offsets and edge strengths on lines long enough for shifts up to ``reach`` px
@@ -177,10 +179,10 @@ class ContourMoves:
         log_p = np.log(np.array([1 - defensive, defensive]))
         return np.broadcast_to(log_p, (n, 1, 2)).copy(), mu, cov
 
-    def lis_proposal(self):
+    def lis_proposal(self, kernel=None):
         """LIS with the edge-fit translation proposal and a Gaussian window (:meth:`window_std`)."""
-        return GaussMixtureProposal(self, np.diag(self.window_std() ** 2))
+        return GaussMixtureProposal(self, np.diag(self.window_std(kernel) ** 2), kernel)
 
-    def lls_window(self):
+    def lls_window(self, kernel=None):
         """Box window of half-width ``2 σ`` on translation, 7×7 grid (§4.4.3)."""
-        return Window("box", 2.0 * self.window_std(), grid=7)
+        return Window("box", 2.0 * self.window_std(kernel), grid=7)

@@ -70,7 +70,6 @@ class Plate(VideoModelBase):
     """
 
     dim = 9
-    first_step = False
 
     def __init__(self, frame_size, layout="jp", *, enter_weight=0.1, damping=(0.8, 0.8, 0.5, 0.5), sigma=None,
                  enter_mean=None, enter_std=None, enter_sides=0.5, kappa=2.0, weights="learnt", sharpness=1.0,
@@ -95,7 +94,7 @@ class Plate(VideoModelBase):
                                     float)
         self.enter_sides = float(enter_sides)
         #: share of the resampled particles kept for the entering-car births (see
-        #: :meth:`~vistrack.filters.base.ParticleFilter.resampling_probs`)
+        #: :class:`~vistrack.filters.resampler.BirthReserve`)
         self.birth_reserve = float(birth_reserve)
         #: lineages younger than this many frames since their entering draw are in the reserve
         self.reserve_age = int(reserve_age)
@@ -290,8 +289,9 @@ class Plate(VideoModelBase):
         s = states[:, 3]
         return np.stack([s, s / self.layout.aspect], axis=1)
 
-    def lis_proposal(self):
-        return PlateLISProposal(self)
+    def lis_proposal(self, kernel=None):
+        """LIS's proposal for a step with ``kernel`` (:class:`PlateLISProposal`)."""
+        return PlateLISProposal(self, kernel=kernel)
 
     def loglik_local_grid(self, obs, states, offsets):
         """LLS's grid (:class:`~vistrack.filters.lls.LLS`): ``log r`` at every pose shifted by the
@@ -300,6 +300,6 @@ class Plate(VideoModelBase):
         off = np.broadcast_to(np.asarray(offsets, float)[None], (len(states),) + np.shape(offsets))
         return self.lik.loglik_sparse(obs, states, off)
 
-    def lls_window(self):
+    def lls_window(self, kernel=None):
         size = self.enter_mean[3]
         return Window("box", (size, size / self.layout.aspect), grid=9)

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .kernel import Transition
+
 __all__ = ["PlateLISProposal"]
 
 
@@ -37,10 +39,13 @@ class PlateLISProposal:
 
     def __init__(self, model, cells=24, window_sigmas=3.0, coarse=(12, 6), fine=8, window="dynamics",
                  scale_cells=5, scale_span=0.35, scale_fine=5, angle_cells=9, angle_span=0.25, rescan=True,
-                 birth_beta=2.0):
+                 birth_beta=2.0, kernel=None):
         if window not in ("dynamics", "box"):
             raise ValueError(f"window must be 'dynamics' or 'box', got {window!r}")
         self.model = model
+        #: the step's kernel (:mod:`~vistrack.models.kernel`): the dynamics window is centred
+        #: on its mean (``p_0``'s on the first step); ``None``: the model's ``K``
+        self.kernel = Transition(model) if kernel is None else kernel
         #: entering particles also search the scale: ``scale_cells`` cells of ``log s`` over
         #: ``± scale_span`` about the drawn scale (1 cell, or span 0: translation only), each
         #: refined into ``scale_fine`` sub-cells after the line scans
@@ -80,7 +85,7 @@ class PlateLISProposal:
         box = ~ent & ~dyn
         if dyn.any():
             sig = m.sigma[:2]
-            mean = m.predict_mean(prev[dyn])[:, :2]
+            mean = self.kernel.predict_mean(prev[dyn])[:, :2]
             half[dyn] = np.minimum(half[dyn], self.window_sigmas * sig)
             uv[dyn], lq = self._line_scans(x[dyn], obs, rng, mean, half[dyn], self.cells, prior=(mean, sig))
             # LIS adds K(Z)/K(X) = N_uw(Z)/N_uw(X) (same θ, s): take N_uw(X) out of q
@@ -94,7 +99,7 @@ class PlateLISProposal:
         # a box window g is the box's uniform density, 1 / area: with boxes of different sizes
         # (entering or not, plate scale) it must be in the weight, w = r g K(Z) / (K(X) q)
         log_q[~dyn] += np.log(4 * half[~dyn, 0] * half[~dyn, 1])
-        z = m.with_local(x, uv)
+        z = self.kernel.with_local(x, uv)
         z[ent, 2] = z[ent, 6] = angle[ent]  # an entering particle stays a zero-velocity start
         z[ent, 3] = z[ent, 7] = scale[ent]
         return z, np.zeros(n), log_q

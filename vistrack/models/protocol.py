@@ -18,12 +18,13 @@ for optional parts. Shapes: ``N`` particles, ``d`` the state dimension.
     ``with_local_prior`` is the same for the first step (``X_1 ~ p_0``: a model whose state
     carries the previous pose moves it too, a zero initial velocity).
 :class:`LLSModel` (§4.4)
-    ``lls_window() -> Window``.
+    ``lls_window(kernel) -> Window`` for a step with ``kernel`` (:mod:`~vistrack.models.kernel`).
 :class:`GridLikelihood` (optional speed-up for LLS)
     ``loglik_local_grid(obs, states, offsets (G, m)) -> (N, G)``: ``log r`` of every state
     moved by every offset, from shared measurements.
 :class:`LISModel` (§4.5)
-    ``lis_proposal()``: an object with ``sample(x, obs, rng, prev) -> (z, log_alpha, log_q)``.
+    ``lis_proposal(kernel)``: an object with ``sample(x, obs, rng, prev) -> (z, log_alpha, log_q)``
+    for a step with ``kernel`` (``K``, or ``p_0`` on the first step: :mod:`~vistrack.models.kernel`).
 :class:`Births` (the plate model's entering cars)
     ``birth_reserve`` (share ``ε`` of the resampled particles) and
     ``entering(states) -> (N,) bool``: the fresh births, which the reserve keeps; or, with
@@ -33,7 +34,7 @@ for optional parts. Shapes: ``N`` particles, ``d`` the state dimension.
     the Laplace approximation, ``advance(states, ...)``; PF-EIS also
     ``sample_motion(states, rng)`` and ``c_logpdf(c, states)``.
 :class:`SIRModel`
-    ``sir_proposal()``: the image-only proposal of plain SIR.
+    ``sir_proposal(kernel)``: the image-only proposal of plain SIR.
 :class:`VideoModel` (the frame loop, ``run``, ``eval`` and ``vistrack.Tracker``)
     ``observe(maps, particles) -> obs`` (the frame's observation ``Y_t`` from its feature
     maps), ``adapt(obs, estimate)``, ``estimate(particles) -> (d,)``, ``visible(obs, state)
@@ -87,7 +88,7 @@ class LocalMoves(Protocol):
 
 @runtime_checkable
 class LLSModel(Protocol):
-    def lls_window(self): ...
+    def lls_window(self, kernel=None): ...
 
 
 @runtime_checkable
@@ -97,7 +98,7 @@ class GridLikelihood(Protocol):
 
 @runtime_checkable
 class LISModel(Protocol):
-    def lis_proposal(self): ...
+    def lis_proposal(self, kernel=None): ...
 
 
 @runtime_checkable
@@ -128,7 +129,7 @@ class EISModel(Protocol):
 
 @runtime_checkable
 class SIRModel(Protocol):
-    def sir_proposal(self): ...
+    def sir_proposal(self, kernel=None): ...
 
 
 @runtime_checkable
@@ -150,9 +151,6 @@ class VideoModel(Protocol):
 
 class VideoModelBase:
     """Defaults of the :class:`VideoModel` parts that most models share."""
-
-    #: ``True`` on the model the first step sees (:func:`~vistrack.filters.base.prior_as_kernel`)
-    first_step = False
 
     def observe(self, maps, particles):
         """The frame's observation: its feature maps (``particles``: the previous set, or ``None``)."""

@@ -80,10 +80,10 @@ class GaussMixtureToy:
         return (np.broadcast_to(self.log_p, (n, 1, k)), np.broadcast_to(self.mu[:, None], (n, 1, k, 1)),
                 np.broadcast_to(self.var[:, None, None], (n, 1, k, 1, 1)))
 
-    def lis_proposal(self):
-        return GaussMixtureProposal(self, np.array([[self.window**2]]))
+    def lis_proposal(self, kernel=None):
+        return GaussMixtureProposal(self, np.array([[self.window**2]]), kernel)
 
-    def lls_window(self):
+    def lls_window(self, kernel=None):
         return Window("box", [self.window], grid=41)
 
     def posterior(self, x_prev):

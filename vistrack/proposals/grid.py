@@ -34,17 +34,22 @@ class MapProposal:
     Parameters
     ----------
     model : object
-        Supplies ``local_coords(x) (N, 2)``, ``with_local(x, u)``, ``window_std(x) (N,)``
+        Supplies ``local_coords(x) (N, 2)``, ``with_local(x, u)``, ``window_std(x, kernel) (N,)``
         (px) and ``proposal_log_q(obs, x, points (N, G, 2)) -> (N, G)``, the map's
         ``log q`` at translations.
     grid : int
         Cells per axis.
     truncate : float
         The grid spans ``± truncate`` window stds.
+    kernel : Transition or None
+        The step's kernel (:mod:`vistrack.models.kernel`): its ``with_local`` moves the
+        particles and the window follows its spread; ``None``: the model's ``K``.
     """
 
-    def __init__(self, model, grid=9, truncate=2.5):
+    def __init__(self, model, grid=9, truncate=2.5, kernel=None):
         self.model = model
+        self.kernel = kernel
+        self.with_local = model.with_local if kernel is None else kernel.with_local
         cell = 2.0 * truncate / grid
         axis = -truncate + cell * (np.arange(grid) + 0.5)
         self.offsets = np.stack(np.meshgrid(axis, axis), axis=-1).reshape(-1, 2)  # (G, 2), unit std
@@ -54,7 +59,7 @@ class MapProposal:
     def sample(self, x, obs, rng, prev=None):
         model = self.model
         u = model.local_coords(x)
-        sig = model.window_std(x)[:, None]  # (N, 1)
+        sig = model.window_std(x, self.kernel)[:, None]  # (N, 1)
         pts = u[:, None, :] + sig[..., None] * self.offsets[None]
         log_qg = model.proposal_log_q(obs, x, pts) + self.log_g_unit - 2 * np.log(sig)
         j = categorical_rows(log_qg, rng)
@@ -63,4 +68,4 @@ class MapProposal:
         log_g = -0.5 * np.sum(d * d, axis=1) - _LOG2PI - 2 * np.log(sig[:, 0])
         log_alpha = logsumexp(log_qg, axis=1) + 2 * np.log(self.cell * sig[:, 0]) + log_g
         log_q = log_qg[np.arange(len(u)), j]
-        return model.with_local(x, z_u), log_alpha, log_q
+        return self.with_local(x, z_u), log_alpha, log_q

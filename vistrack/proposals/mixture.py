@@ -28,10 +28,14 @@ class GaussMixtureProposal:
     model : object
     window_cov : array_like of shape (k, k) or (B, k, k)
         Covariance ``Σ_g`` of the Gaussian window on one factor (or per factor).
+    kernel : Transition or None
+        The step's kernel (:mod:`vistrack.models.kernel`), whose ``with_local`` moves the
+        particles; ``None``: the model's ``K``.
     """
 
-    def __init__(self, model, window_cov):
+    def __init__(self, model, window_cov, kernel=None):
         self.model = model
+        self.with_local = model.with_local if kernel is None else kernel.with_local
         self.window_cov = np.asarray(window_cov, dtype=float)
 
     def sample(self, x, obs, rng, prev=None):
@@ -53,4 +57,4 @@ class GaussMixtureProposal:
         z_u = mvn_sample(nu, c, rng)  # (N, B, k)
         log_q = np.sum(gm_logpdf(z_u, log_p, mu, cov), axis=1)
         log_alpha = np.where(ok, log_alpha, -np.inf)
-        return model.with_local(x, z_u.reshape(n, b * k)), log_alpha, log_q
+        return self.with_local(x, z_u.reshape(n, b * k)), log_alpha, log_q

@@ -1,0 +1,80 @@
+"""The kernel a filter step predicts with (thesis 001, §2.1; Figs. 2.3, 4.11, 4.13).
+
+Every step moves the particles by the model's Markov kernel ``K(.|Z_{t-1})``,
+except the first: there ``Y_1`` observes ``X_1 ~ p_0``, and every algorithm's
+first update is its ordinary step with ``p_0`` in the place of ``K`` (the
+figures start from ``p_0``). :class:`Transition` is ``K``;
+:class:`PriorKernel` is ``p_0`` seen as a kernel that ignores the previous
+state. A filter hands the step's kernel to its proposal, and the model parts
+whose spread follows the kernel's (the LIS and LLS windows, §4.4.1: ``g``
+matched to the spread of ``K``) are built per kernel
+(``model.lis_proposal(kernel)``, ``model.lls_window(kernel)``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["Transition", "PriorKernel", "is_prior"]
+
+
+class Transition:
+    """``K(x_t | x_{t-1})`` of ``model``: the kernel of every step after the first.
+
+    Parameters
+    ----------
+    model : StateSpaceModel
+        Supplies ``predict``, ``transition_logpdf`` and, where used,
+        ``predict_mean`` and ``with_local``.
+    """
+
+    #: whether this is ``p_0`` (the first step) rather than ``K``
+    first = False
+
+    def __init__(self, model):
+        self.model = model
+
+    def predict(self, prev, rng):
+        """Draw ``X_t ~ K(.|prev)``; ``prev (N, d)`` -> ``(N, d)``."""
+        return self.model.predict(prev, rng)
+
+    def predict_mean(self, prev):
+        """The mean of ``K(.|prev)``, ``(N, d)`` (AVPF's first stage, §4.5.4)."""
+        return self.model.predict_mean(prev)
+
+    def logpdf(self, new, old):
+        """``log K(new|old)`` per particle; ``new, old (N, d)`` -> ``(N,)``."""
+        return self.model.transition_logpdf(new, old)
+
+    def with_local(self, states, u):
+        """``states (N, d)`` with their local coordinates set to ``u (N, m)`` (§4.4.3)."""
+        return self.model.with_local(states, u)
+
+
+class PriorKernel(Transition):
+    """``p_0`` in the place of ``K``: the kernel of the first step.
+
+    ``predict`` draws from ``p_0`` whatever the previous state, ``logpdf`` is
+    ``log p_0(new)``, and local moves use ``model.with_local_prior`` (a move
+    that need not keep the support of ``K``, e.g. both poses of an AR(2)
+    state at once).
+    """
+
+    first = True
+
+    def predict(self, prev, rng):
+        return self.model.sample_prior(len(prev), rng)
+
+    def predict_mean(self, prev):
+        return np.broadcast_to(self.model.prior_mean, prev.shape).copy()
+
+    def logpdf(self, new, old):
+        return self.model.prior_logpdf(new)
+
+    def with_local(self, states, u):
+        return self.model.with_local_prior(states, u)
+
+
+def is_prior(kernel):
+    """Whether ``kernel`` is the first step's ``p_0`` (``None`` means ``K``)."""
+    return kernel is not None and kernel.first
