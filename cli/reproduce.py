@@ -14,6 +14,7 @@ from vistrack.reproduce.landmarks import (LANDMARK_ALGOS, LandmarksConfig, landm
 from vistrack.reproduce.plate import PlateConfig, plate_results, plate_tasks, run_plate_task
 from vistrack.evaluation import entries_config, write_atomic
 from vistrack.reproduce.contour import ContourConfig, contour_results, contour_tasks
+from vistrack.reproduce.report import format_table, write_plots
 
 from .options import SEED, Fraction, IntList, StrList, check_writable
 
@@ -68,17 +69,6 @@ def reproduce():
     """Reproduce the experiments of the seeds (tables and figures)."""
 
 
-def _table(results):
-    head = f"{'algo':<10} {'N':>6} {'ships':>5} {'final err':>10} {'± std':>9} {'mean err':>9} {'ms/run':>8}"
-    lines = [head, "-" * len(head)]
-    for r in results:
-        lines.append(
-            f"{r['algo']:<10} {r['particles']:>6d} {r['ships']:>5d} {r['mean_error_final']:>10.5f}"
-            f" {r['std_error_final']:>9.5f} {r['mean_error']:>9.5f} {r['ms_per_run']:>8.2f}"
-        )
-    return "\n".join(lines)
-
-
 @reproduce.command()
 @click.option("--ships", default=1, show_default=True, type=int, help="Number of ships M (state dimension 4M).")
 @click.option("--sequences", default=10, show_default=True, type=int, help="Fixed state/observation sequences.")
@@ -114,12 +104,7 @@ def bearings(ships, sequences, runs, steps, algos, particles, seed, resample, es
         cfg.validate()
     except ValueError as e:
         raise click.ClickException(str(e)) from None
-    if plots_dir:
-        try:
-            os.makedirs(plots_dir, exist_ok=True)
-        except OSError as e:
-            raise click.ClickException(f"cannot create --plots folder {plots_dir}: {e.strerror}") from None
-        check_writable(os.path.join(plots_dir, "error_vs_time.png"), "plot")
+    _plots_dir(plots_dir, "error_vs_time.png")
     check_writable(json_path, "--json file")
 
     from .eval import run_tasks
@@ -129,17 +114,7 @@ def bearings(ships, sequences, runs, steps, algos, particles, seed, resample, es
     run_tasks(tasks, out_path, scheduler=scheduler, workers=workers, in_process=in_process, resume=resume,
               quiet=quiet, desc="bearings", runner=run_bearing_task)
     out = bearing_results(cfg, tasks, out_path)
-    click.echo(_table(out["results"]))
-    if json_path:
-        _write_json(json_path, out["config"], out["results"])
-    if plots_dir:
-        from vistrack.plots import plot_error_vs_n, plot_error_vs_time
-
-        a = plot_error_vs_time(out["curves"], os.path.join(plots_dir, "error_vs_time.png"),
-                               title=f"Bearings-only, {ships} ship(s): error vs time (Fig. 4.18)")
-        b = plot_error_vs_n(out["results"], os.path.join(plots_dir, "error_vs_n.png"),
-                            title=f"Bearings-only, {ships} ship(s): final error vs N (Fig. 4.21)")
-        click.echo(f"plots written to {a} and {b}")
+    _report("bearings", out, out["config"], json_path, plots_dir, title=f"Bearings-only, {ships} ship(s)")
 
 
 class Entries(click.ParamType):
@@ -163,9 +138,25 @@ class Entries(click.ParamType):
         return out
 
 
-def _write_json(json_path, config, results):
-    write_atomic(json_path, json.dumps({"config": config, "results": results}, indent=2))
-    click.echo(f"results written to {json_path}")
+def _report(experiment, out, config, json_path, plots_dir, title=""):
+    """Print the experiment's table; write ``--json`` and ``--plots``."""
+    click.echo(format_table(experiment, out["results"]))
+    if json_path:
+        write_atomic(json_path, json.dumps({"config": config, "results": out["results"]}, indent=2))
+        click.echo(f"results written to {json_path}")
+    if plots_dir:
+        paths = write_plots(experiment, out, plots_dir, title=title)
+        click.echo(f"plot{'s' if len(paths) > 1 else ''} written to {' and '.join(paths)}")
+
+
+def _plots_dir(plots_dir, first_png):
+    """Create ``--plots`` and check it is writable before any work."""
+    if plots_dir:
+        try:
+            os.makedirs(plots_dir, exist_ok=True)
+        except OSError as e:
+            raise click.ClickException(f"cannot create --plots folder {plots_dir}: {e.strerror}") from None
+        check_writable(os.path.join(plots_dir, first_png), "plot")
 
 
 def _check_entries(entries):
@@ -177,24 +168,14 @@ def _check_entries(entries):
 
 
 def _clip_suite(clips_dir, default, make, frames, size, maker, prefix, quiet, **kw):
-    """The clip folders in ``clips_dir`` (or ``default``); ``make`` clips of seeds 1..make are
-    generated there with ``maker`` when it has none."""
-    from pathlib import Path
+    """:func:`vistrack.reproduce.suite.clip_suite` in ``clips_dir`` (or ``default``), with a progress bar."""
+    from vistrack.reproduce.suite import clip_suite
 
     from .options import Size
 
-    base = Path(clips_dir) if clips_dir else Path(default)
-
-    def found():
-        return sorted(p for p in base.iterdir() if (p / "groundtruth.csv").is_file()) if base.is_dir() else []
-
-    if not found():
-        wh = Size().convert(size, None, None)
-        base.mkdir(parents=True, exist_ok=True)
-        with tqdm(total=make * frames, unit="frame", desc="making clips", disable=quiet, leave=False) as bar:
-            for s in range(1, make + 1):
-                maker(base / f"{prefix}-{s:02d}", frames=frames, size=wh, seed=s, progress=bar.update, **kw)
-    return found()
+    with tqdm(total=make * frames, unit="frame", desc="making clips", disable=quiet, leave=False) as bar:
+        return clip_suite(clips_dir or default, make, frames, Size().convert(size, None, None), maker, prefix,
+                          progress=bar.update, **kw)
 
 
 def _fresh_out(out_dir, tasks, resume):
@@ -209,17 +190,6 @@ def _fresh_out(out_dir, tasks, resume):
     except OSError as e:
         raise click.ClickException(f"cannot create --out folder {out_dir}: {e.strerror}") from None
     return out
-
-
-def _contour_table(results):
-    head = (f"{'algo':<10} {'N':>6} {'P(lost) final':>13} {'P(lost) mean':>12} {'mean err px':>11}"
-            f" {'ms/frame':>9} {'frames/s':>9} {'mean ESS':>9}")
-    lines = [head, "-" * len(head)]
-    for r in results:
-        lines.append(f"{r['algo']:<10} {r['particles']:>6d} {r['p_lost_final']:>13.3f} {r['p_lost_mean']:>12.3f}"
-                     f" {r['mean_error']:>11.2f} {r['ms_per_frame']:>9.2f} {r['frames_per_s']:>9.0f}"
-                     f" {r['mean_ess']:>9.1f}")
-    return "\n".join(lines)
 
 
 @reproduce.command()
@@ -247,6 +217,7 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
 
     _check_entries(entries)
     check_writable(json_path, "--json file")
+    _plots_dir(plots_dir, "p_lost_vs_frame.png")
     clips = _clip_suite(clips_dir, "contour-clips", make, frames, size, make_contour_clip, "contour", quiet,
                         clutter="high", distractor=True)
     cfg = ContourConfig(clips=clips, entries=entries, runs=runs, seed=seed)
@@ -255,32 +226,8 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
 
     run_tasks(tasks, out, scheduler=scheduler, workers=workers, in_process=in_process, resume=resume, quiet=quiet,
               desc="contour")
-    results = contour_results(tasks, out)
     click.echo(f"{len(clips)} clips x {runs} runs")
-    click.echo(_contour_table(results))
-    if json_path:
-        _write_json(json_path, entries_config(cfg), results)
-    if plots_dir:
-        from vistrack.plots import plot_per_frame
-
-        os.makedirs(plots_dir, exist_ok=True)
-        lab = {f"{r['algo']}, N={r['particles']}": r for r in results}
-        a = plot_per_frame({k: r["p_lost_per_frame"] for k, r in lab.items()},
-                           os.path.join(plots_dir, "p_lost_vs_frame.png"), ylabel="P(lost)",
-                           title="Contour: probability of losing the object (Fig. 3.10)")
-        b = plot_per_frame({k: r["error_per_frame"] for k, r in lab.items()},
-                           os.path.join(plots_dir, "error_vs_frame.png"), ylabel="mean centre error (px), runs not lost",
-                           title="Contour: tracking error (Fig. 3.9)")
-        click.echo(f"plots written to {a} and {b}")
-
-
-def _landmarks_table(results):
-    head = f"{'algo':<10} {'N':>4} {'K':>2} {'mean MSE':>9} {'final MSE':>10} {'median run':>10} {'ms/run':>8}"
-    lines = [head, "-" * len(head)]
-    for r in results:
-        lines.append(f"{r['algo']:<10} {r['particles']:>4d} {r['k']:>2d} {r['mean_mse']:>9.4f} {r['final_mse']:>10.4f}"
-                     f" {r['median_run_mse']:>10.4f} {r['ms_per_run']:>8.1f}")
-    return "\n".join(lines)
+    _report("contour", {"results": contour_results(tasks, out)}, entries_config(cfg), json_path, plots_dir)
 
 
 @reproduce.command()
@@ -320,12 +267,7 @@ def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, schedule
     except ValueError as e:
         raise click.ClickException(str(e)) from None
     check_writable(json_path, "--json file")
-    if plots_dir:
-        try:
-            os.makedirs(plots_dir, exist_ok=True)
-        except OSError as e:
-            raise click.ClickException(f"cannot create --plots folder {plots_dir}: {e.strerror}") from None
-        check_writable(os.path.join(plots_dir, "mse_vs_time.png"), "plot")
+    _plots_dir(plots_dir, "mse_vs_time.png")
     from .eval import run_tasks
 
     tasks = landmark_tasks(cfg)
@@ -334,28 +276,7 @@ def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, schedule
               quiet=quiet, desc=f"landmarks K={k}", runner=run_landmark_task)
     out = landmark_results(cfg, tasks, out_path)
     click.echo(f"K = {k}, {runs} runs x {steps} steps")
-    click.echo(_landmarks_table(out["results"]))
-    if json_path:
-        _write_json(json_path, out["config"], out["results"])
-    if plots_dir:
-        from vistrack.plots import plot_error_vs_time
-
-        a = plot_error_vs_time(out["curves"], os.path.join(plots_dir, "mse_vs_time.png"),
-                               ylabel="MSE of the configuration", title=f"Landmark shape tracking, K = {k} (Fig. 2)")
-        click.echo(f"plot written to {a}")
-
-
-def _plate_table(results):
-    head = (f"{'algo':<10} {'N':>5} {'P(lost)':>8} {'vertex err':>10} {'false rep.':>10} {'acq<=10':>8}"
-            f" {'never':>6} {'mean acq':>8} {'ms/frame':>9} {'frames/s':>9} {'ESS':>6}")
-    lines = [head, "-" * len(head)]
-    for r in results:
-        fmt = lambda v, f: "-" if v is None else format(v, f)  # noqa: E731
-        lines.append(f"{r['algo']:<10} {r['particles']:>5d} {r['p_lost']:>8.3f} {fmt(r['mean_vertex_error'], '10.2f')}"
-                     f" {r['false_reports']:>10d} {fmt(r['acquired_within'], '8.2f')} {r['never_acquired']:>6d}"
-                     f" {fmt(r['mean_acquisition_delay'], '8.1f')} {r['ms_per_frame']:>9.2f}"
-                     f" {r['frames_per_s']:>9.0f} {r['mean_ess']:>6.1f}")
-    return "\n".join(lines)
+    _report("landmarks", out, out["config"], json_path, plots_dir, title=f"Landmark shape tracking, K = {k}")
 
 
 @reproduce.command()
@@ -383,24 +304,12 @@ def plate(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler
 
     _check_entries(entries)
     check_writable(json_path, "--json file")
+    _plots_dir(plots_dir, "p_lost_vs_frame.png")
     clips = _clip_suite(clips_dir, "plate-clips", make, frames, size, make_plate_clip, "plate", quiet)
     cfg = PlateConfig(clips=clips, entries=entries, runs=runs, seed=seed)
     tasks = plate_tasks(cfg)
     out = _fresh_out(out_dir, tasks, resume)
     run_tasks(tasks, out, scheduler=scheduler, workers=workers, in_process=in_process, resume=resume, quiet=quiet,
               desc="plate", runner=run_plate_task)
-    results = plate_results(cfg, tasks, out)
     click.echo(f"{len(clips)} clips x {runs} runs")
-    click.echo(_plate_table(results))
-    if json_path:
-        _write_json(json_path, entries_config(cfg), results)
-    if plots_dir:
-        from vistrack.plots import plot_per_frame
-
-        os.makedirs(plots_dir, exist_ok=True)
-        curves = {f"{r['algo']}, N={r['particles']}": [float("nan") if v is None else v for v in r["p_lost_per_frame"]]
-                  for r in results if r["p_lost_per_frame"] is not None}
-        a = plot_per_frame(curves, os.path.join(plots_dir, "p_lost_vs_frame.png"),
-                           ylabel="P(lost), frames with a plate",
-                           title="Plates: probability of losing the plate (Fig. 4.15)")
-        click.echo(f"plot written to {a}")
+    _report("plate", {"results": plate_results(cfg, tasks, out)}, entries_config(cfg), json_path, plots_dir)

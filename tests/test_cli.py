@@ -90,3 +90,19 @@ def test_json_may_go_into_the_plots_folder(tmp_path, capsys):
                         "--plots", str(out), "--json", str(out / "results.json")], capsys)
     assert code == 0, err
     assert json.loads((out / "results.json").read_text())["results"]
+
+
+def test_reproduce_tables_align_every_column_and_mark_missing_measures():
+    """``reproduce``'s tables (vistrack.reproduce.report): one fixed width per column, and a
+    measure with nothing to average (None, e.g. no plate frame) printed as '-' in its column."""
+    from vistrack.reproduce.report import format_table
+
+    row = dict(algo="lis", particles=100, p_lost=0.25, mean_vertex_error=None, false_reports=2,
+               acquired_within=None, never_acquired=0, mean_acquisition_delay=1.5, ms_per_frame=7.3,
+               frames_per_s=137.0, mean_ess=20.0)
+    lines = format_table("plate", [row, dict(row, mean_vertex_error=3.25)]).splitlines()
+    assert len({len(line) for line in lines}) == 1  # header, rule and rows are equally wide
+    assert lines[0].split() == ["algo", "N", "P(lost)", "vertex", "err", "false", "rep.", "acq<=10", "never",
+                                "mean", "acq", "ms/frame", "frames/s", "ESS"]
+    assert lines[2].split()[3] == "-" and lines[3].split()[3] == "3.25"
+    assert lines[2].index(" - ") + 2 == lines[3].index("3.25") + 4  # the '-' sits where the number ends
