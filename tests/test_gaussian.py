@@ -67,3 +67,17 @@ def test_small_matrix_fast_paths_match_numpy(m, rng):
     s = a @ np.swapaxes(a, -1, -2) + 0.1 * np.eye(m)
     assert _cholesky(s) == pytest.approx(np.linalg.cholesky(s))
     assert _inv_spd(s) == pytest.approx(np.linalg.inv(s))
+
+
+def test_diag_logpdf_matches_scipy_per_coordinate_and_per_row_std():
+    from scipy import stats
+
+    from vistrack.gaussian import diag_logpdf
+
+    rng = np.random.default_rng(0)
+    x, mean = rng.normal(size=(5, 3)), rng.normal(size=3)
+    std = np.array([0.5, 2.0, 1.3])
+    expect = stats.norm(mean, std).logpdf(x).sum(axis=1)
+    np.testing.assert_allclose(diag_logpdf(x, mean, std), expect, rtol=1e-12)
+    rows = rng.uniform(0.2, 3.0, size=(5, 3))
+    np.testing.assert_allclose(diag_logpdf(x, mean, rows), stats.norm(mean, rows).logpdf(x).sum(axis=1), rtol=1e-12)

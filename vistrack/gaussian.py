@@ -11,7 +11,7 @@ import numpy as np
 
 from .particles import logsumexp
 
-__all__ = ["mvn_logpdf", "mvn_sample", "gaussian_product", "gm_logpdf"]
+__all__ = ["diag_logpdf", "mvn_logpdf", "mvn_sample", "gaussian_product", "gm_logpdf"]
 
 _LOG2PI = np.log(2.0 * np.pi)
 
@@ -57,6 +57,16 @@ def _inv_spd(s):
         inv[..., 0, 1] = inv[..., 1, 0] = -b / det
         return inv
     return np.linalg.inv(s)
+
+
+def diag_logpdf(x, mean, std):
+    """Log-density of ``N(mean, diag(std²))`` at ``x (..., d)``, over the last axis.
+
+    ``mean`` and ``std`` broadcast against ``x`` (``std`` per coordinate ``(d,)`` or per
+    row ``(..., d)``); returns ``(...,)``.
+    """
+    e = (x - mean) / std
+    return -0.5 * np.sum(e * e, axis=-1) - np.sum(np.log(std), axis=-1) - 0.5 * e.shape[-1] * _LOG2PI
 
 
 def mvn_logpdf(x, mean, cov):

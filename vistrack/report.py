@@ -32,6 +32,36 @@ def task_row(r):
             "frames_per_s": 1e3 / float(np.mean(r["ms"])) if r["ms"] else "", "mean_ess": float(np.mean(ess)) if ess else ""}
 
 
+def _eval_plots(out, summaries, labels):
+    """The evaluation's PNGs in ``out``, curves averaged over the summaries of each label; their paths."""
+    from .plots import plot_per_frame, plot_precision, plot_success, plot_vs_n
+
+    def avg(key):
+        out_ = {}
+        for k, ss in labels.items():
+            arr = np.array([[np.nan if v is None else v for v in s[key]] for s in ss], float)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                out_[k] = np.nanmean(arr, axis=0)
+        return out_
+
+    plots = []
+    if len({len(s["p_lost_per_frame"]) for s in summaries}) == 1:  # per-frame curves need equal lengths
+        plots.append(plot_per_frame(avg("error_per_frame"), out / "error_vs_frame.png",
+                                    ylabel="mean centre error (px), runs not lost", title="Tracking error per frame"))
+        plots.append(plot_per_frame(avg("p_lost_per_frame"), out / "p_lost_vs_frame.png", ylabel="P(lost)",
+                                    title="Probability of losing the object per frame"))
+    plots.append(plot_vs_n(summaries, out / "error_vs_n.png", key="mean_error", ylabel="mean centre error (px)"))
+    timed = [s for s in summaries if s["frames_per_s"] is not None]  # result files carry no timing
+    if timed:
+        plots.append(plot_vs_n(timed, out / "fps_vs_n.png", key="frames_per_s", ylabel="frames/s (filter)"))
+    plots.append(plot_success({k: np.mean([s["success_curve"] for s in ss], axis=0) for k, ss in labels.items()},
+                              out / "success.png"))
+    plots.append(plot_precision({k: np.mean([s["precision_curve"] for s in ss], axis=0) for k, ss in labels.items()},
+                                out / "precision.png"))
+    return plots
+
+
 def write_eval_outputs(out, cfg, summaries, results, chosen=None):
     """Write ``results.json``, ``results.csv``, the plots and ``report.md`` of an evaluation into
     ``out`` (each file whole); returns the plot paths."""
@@ -46,36 +76,10 @@ def write_eval_outputs(out, cfg, summaries, results, chosen=None):
     for r in rows:
         w.writerow({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()})
     write_atomic(out / "results.csv", buf.getvalue())
-    from .plots import plot_per_frame, plot_precision, plot_success, plot_vs_n
-
     labels = {}
     for s in summaries:
         labels.setdefault(f"{s['algo']}, N={s['particles']}", []).append(s)
-
-    def avg(key):
-        out_ = {}
-        for k, ss in labels.items():
-            arr = np.array([[np.nan if v is None else v for v in s[key]] for s in ss], float)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                out_[k] = np.nanmean(arr, axis=0)
-        return out_
-
-    same_len = len({len(s["p_lost_per_frame"]) for s in summaries}) == 1
-    plots = []
-    if same_len:
-        plots.append(plot_per_frame(avg("error_per_frame"), out / "error_vs_frame.png",
-                                    ylabel="mean centre error (px), runs not lost", title="Tracking error per frame"))
-        plots.append(plot_per_frame(avg("p_lost_per_frame"), out / "p_lost_vs_frame.png", ylabel="P(lost)",
-                                    title="Probability of losing the object per frame"))
-    plots.append(plot_vs_n(summaries, out / "error_vs_n.png", key="mean_error", ylabel="mean centre error (px)"))
-    timed = [s for s in summaries if s["frames_per_s"] is not None]  # result files carry no timing
-    if timed:
-        plots.append(plot_vs_n(timed, out / "fps_vs_n.png", key="frames_per_s", ylabel="frames/s (filter)"))
-    plots.append(plot_success({k: np.mean([s["success_curve"] for s in ss], axis=0) for k, ss in labels.items()},
-                              out / "success.png"))
-    plots.append(plot_precision({k: np.mean([s["precision_curve"] for s in ss], axis=0) for k, ss in labels.items()},
-                                out / "precision.png"))
+    plots = _eval_plots(out, summaries, labels)
     lines = ["# vistrack eval report", "",
              f"{len(cfg.clips)} clip(s) × algorithms {', '.join(cfg.algos)} × N {cfg.particles} × {cfg.runs} run(s), "
              f"seed {cfg.seed}, model {cfg.model}.", ""]

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize, special
 
+from ..gaussian import diag_logpdf
 from ..proposals import GaussMixtureProposal, Window
 from .kernel import is_prior
 
@@ -131,8 +132,7 @@ class Bearings:
 
     def prior_logpdf(self, states):
         """``log p_0`` (diagonal Gaussian)."""
-        z = (states - self.prior_mean) / self.prior_std
-        return -0.5 * np.sum(z * z, axis=1) - np.sum(np.log(self.prior_std)) - 0.5 * self.dim * np.log(2 * np.pi)
+        return diag_logpdf(states, self.prior_mean, self.prior_std)
 
     def predict_mean(self, states):
         s = states.reshape(len(states), self.ships, 4)

@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..features import remap_points
+from ..gaussian import diag_logpdf
 from ..proposals import MapProposal, Window
 from ..proposals.translation import TranslationMoves
 from .appearance import Appearance
@@ -33,8 +34,6 @@ from .kernel import is_prior
 from .protocol import VideoModelBase
 
 __all__ = ["Box"]
-
-_LOG2PI = np.log(2 * np.pi)
 
 
 class Box(TranslationMoves, VideoModelBase):
@@ -108,17 +107,12 @@ class Box(TranslationMoves, VideoModelBase):
         sd[:, :2] *= np.exp(old[:, 2:3])
         return sd
 
-    @staticmethod
-    def _logn(x, mean, std):
-        e = (x - mean) / std
-        return -0.5 * np.sum(e * e, axis=1) - np.sum(np.log(std), axis=-1) - 0.5 * x.shape[1] * _LOG2PI
-
     def sample_prior(self, n, rng):
         z = self.init_pose + self.prior_std * rng.standard_normal((n, 3))
         return np.concatenate([z, z], axis=1)
 
     def prior_logpdf(self, states):
-        return self._logn(states[:, :3], self.init_pose, self.prior_std)
+        return diag_logpdf(states[:, :3], self.init_pose, self.prior_std)
 
     def predict_mean(self, states):
         z1, z2 = states[:, :3], states[:, 3:]
@@ -132,7 +126,7 @@ class Box(TranslationMoves, VideoModelBase):
     def transition_logpdf(self, new, old):
         """``log K(new|old)``: Gaussian in the current values; the previous values of ``new``
         are the current values of ``old``."""
-        return self._logn(new[:, :3], self.predict_mean(old)[:, :3], self._std(old))
+        return diag_logpdf(new[:, :3], self.predict_mean(old)[:, :3], self._std(old))
 
     # -- observation --------------------------------------------------------------------
     def observe(self, maps, particles):

@@ -57,6 +57,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..gaussian import diag_logpdf
 from ..proposals.translation import TranslationMoves
 from .contour_colour import ContourColour
 from .contour_moves import ContourMoves
@@ -250,8 +251,7 @@ class Contour(ContourMoves, ContourColour, TranslationMoves, VideoModelBase):
         return np.concatenate([z, z], axis=1)
 
     def prior_logpdf(self, states):
-        e = (states[:, :4] - self.init_pose) / self.prior_std
-        return -0.5 * np.sum(e * e, axis=1) - np.sum(np.log(self.prior_std)) - 2 * np.log(2 * np.pi)
+        return diag_logpdf(states[:, :4], self.init_pose, self.prior_std)
 
     def predict_mean(self, states):
         z1, z2 = states[:, :4], states[:, 4:]
@@ -264,8 +264,7 @@ class Contour(ContourMoves, ContourColour, TranslationMoves, VideoModelBase):
 
     def transition_logpdf(self, new, old):
         """``log K(new|old)``: Gaussian in ``z_t``; ``z_{t-1}`` of ``new`` is ``z_t`` of ``old``."""
-        e = (new[:, :4] - self.predict_mean(old)[:, :4]) / self.sigma
-        return -0.5 * np.sum(e * e, axis=1) - np.sum(np.log(self.sigma)) - 2 * np.log(2 * np.pi)
+        return diag_logpdf(new[:, :4], self.predict_mean(old)[:, :4], self.sigma)
 
     # -- likelihood -------------------------------------------------------------
     def _profiles(self, obs, z, offsets, support=False):

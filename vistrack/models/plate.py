@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..gaussian import diag_logpdf
 from ..proposals import Window
 from .plate_likelihood import LEARNT_WEIGHTS, PlateLikelihood, scale_band, thesis_weights
 from .plate_proposal import PlateLISProposal
@@ -118,7 +119,7 @@ class Plate(VideoModelBase):
 
     def enter_logpdf(self, z):
         """Log density of the entering-car mixture at poses ``z (N, 4)``."""
-        parts = [np.log(wt) + self._logn(z, m, sd) for wt, m, sd in self._enter_parts if wt > 0]
+        parts = [np.log(wt) + diag_logpdf(z, m, sd) for wt, m, sd in self._enter_parts if wt > 0]
         return np.logaddexp.reduce(np.stack(parts), axis=0)
 
     #: optional ``(mean, std)`` of the first pose (``--init``); else the entering density
@@ -131,16 +132,11 @@ class Plate(VideoModelBase):
         z = mean + std * rng.standard_normal((n, 4))
         return np.concatenate([z, z, np.zeros((n, 1))], axis=1)
 
-    def _logn(self, x, mean, std):
-        """``log N(x; mean, diag(std²))`` over the last axis."""
-        e = (x - mean) / std
-        return -0.5 * np.sum(e * e, axis=-1) - np.sum(np.log(std)) - 0.5 * x.shape[-1] * np.log(2 * np.pi)
-
     def prior_logpdf(self, states):
         if self.start is None:
             return self.enter_logpdf(states[:, :4])
         mean, std = self.start
-        return self._logn(states[:, :4], mean, std)
+        return diag_logpdf(states[:, :4], mean, std)
 
     def predict_mean(self, states):
         z1, z2 = states[:, :4], states[:, 4:8]
@@ -170,7 +166,7 @@ class Plate(VideoModelBase):
 
     def transition_logpdf(self, new, old):
         """``log K(new|old)`` for the branch ``new`` came from (AR(2) or entering car)."""
-        ar = np.log1p(-self.enter_weight) + self._logn(new[:, :4], self.predict_mean(old)[:, :4], self.sigma)
+        ar = np.log1p(-self.enter_weight) + diag_logpdf(new[:, :4], self.predict_mean(old)[:, :4], self.sigma)
         ent = np.log(self.enter_weight) + self.enter_logpdf(new[:, :4])
         return np.where(self.entering(new), ent, ar)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..gaussian import diag_logpdf
 from .kernel import Transition
 
 __all__ = ["PlateLISProposal"]
@@ -89,7 +90,7 @@ class PlateLISProposal:
             half[dyn] = np.minimum(half[dyn], self.window_sigmas * sig)
             uv[dyn], lq = self._line_scans(x[dyn], obs, rng, mean, half[dyn], self.cells, prior=(mean, sig))
             # LIS adds K(Z)/K(X) = N_uw(Z)/N_uw(X) (same θ, s): take N_uw(X) out of q
-            log_q[dyn] = lq - m._logn(x[dyn, :2], mean, sig)
+            log_q[dyn] = lq - diag_logpdf(x[dyn, :2], mean, sig)
         if box.any():
             half[box] = np.minimum(half[box], self.window_sigmas * m.sigma[:2])
             uv[box], log_q[box] = self._line_scans(x[box], obs, rng, x[box, :2], half[box], self.cells)
