@@ -107,12 +107,9 @@ def bearings(ships, sequences, runs, steps, algos, particles, seed, resample, es
     _plots_dir(plots_dir, "error_vs_time.png")
     check_writable(json_path, "--json file")
 
-    from .eval import run_tasks
-
     tasks = bearing_tasks(cfg)
-    out_path = _fresh_out(out_dir, tasks, resume)
-    run_tasks(tasks, out_path, scheduler=scheduler, workers=workers, in_process=in_process, resume=resume,
-              quiet=quiet, desc="bearings", runner=run_bearing_task)
+    out_path = _run(tasks, out_dir, "bearings", runner=run_bearing_task, scheduler=scheduler, workers=workers,
+                    in_process=in_process, resume=resume, quiet=quiet)
     out = bearing_results(cfg, tasks, out_path)
     _report("bearings", out, out["config"], json_path, plots_dir, title=f"Bearings-only, {ships} ship(s)")
 
@@ -178,17 +175,21 @@ def _clip_suite(clips_dir, default, make, frames, size, maker, prefix, quiet, **
                           progress=bar.update, **kw)
 
 
-def _fresh_out(out_dir, tasks, resume):
-    """``out_dir`` created. Nothing in it is removed: without ``resume`` every task runs again
-    and replaces its file whole when it finishes; with it, only task files computed by the very
-    same task (fingerprint) are kept."""
+def _run(tasks, out_dir, desc, runner=None, **engine):
+    """Run ``tasks`` on the evaluation engine into ``out_dir`` (created; see
+    :func:`vistrack.cli.eval.run_tasks`: nothing in it is removed, each task file is replaced
+    whole when its task finishes, and ``--resume`` keeps only files of the very same task);
+    returns the folder."""
     from pathlib import Path
+
+    from .eval import run_tasks
 
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise click.ClickException(f"cannot create --out folder {out_dir}: {e.strerror}") from None
+    run_tasks(tasks, out, desc=desc, runner=runner, **engine)
     return out
 
 
@@ -213,8 +214,6 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
     """
     from vistrack.data_synth.contour import make_contour_clip
 
-    from .eval import run_tasks
-
     _check_entries(entries)
     check_writable(json_path, "--json file")
     _plots_dir(plots_dir, "p_lost_vs_frame.png")
@@ -222,10 +221,8 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
                         clutter="high", distractor=True)
     cfg = ContourConfig(clips=clips, entries=entries, runs=runs, seed=seed)
     tasks = contour_tasks(cfg)
-    out = _fresh_out(out_dir, tasks, resume)
-
-    run_tasks(tasks, out, scheduler=scheduler, workers=workers, in_process=in_process, resume=resume, quiet=quiet,
-              desc="contour")
+    out = _run(tasks, out_dir, "contour", scheduler=scheduler, workers=workers,
+               in_process=in_process, resume=resume, quiet=quiet)
     click.echo(f"{len(clips)} clips x {runs} runs")
     _report("contour", {"results": contour_results(tasks, out)}, entries_config(cfg), json_path, plots_dir)
 
@@ -268,12 +265,9 @@ def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, schedule
         raise click.ClickException(str(e)) from None
     check_writable(json_path, "--json file")
     _plots_dir(plots_dir, "mse_vs_time.png")
-    from .eval import run_tasks
-
     tasks = landmark_tasks(cfg)
-    out_path = _fresh_out(out_dir, tasks, resume)
-    run_tasks(tasks, out_path, scheduler=scheduler, workers=workers, in_process=in_process, resume=resume,
-              quiet=quiet, desc=f"landmarks K={k}", runner=run_landmark_task)
+    out_path = _run(tasks, out_dir, f"landmarks K={k}", runner=run_landmark_task, scheduler=scheduler, workers=workers,
+                    in_process=in_process, resume=resume, quiet=quiet)
     out = landmark_results(cfg, tasks, out_path)
     click.echo(f"K = {k}, {runs} runs x {steps} steps")
     _report("landmarks", out, out["config"], json_path, plots_dir, title=f"Landmark shape tracking, K = {k}")
@@ -300,16 +294,13 @@ def plate(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler
     """
     from vistrack.data_synth.plate import make_plate_clip
 
-    from .eval import run_tasks
-
     _check_entries(entries)
     check_writable(json_path, "--json file")
     _plots_dir(plots_dir, "p_lost_vs_frame.png")
     clips = _clip_suite(clips_dir, "plate-clips", make, frames, size, make_plate_clip, "plate", quiet)
     cfg = PlateConfig(clips=clips, entries=entries, runs=runs, seed=seed)
     tasks = plate_tasks(cfg)
-    out = _fresh_out(out_dir, tasks, resume)
-    run_tasks(tasks, out, scheduler=scheduler, workers=workers, in_process=in_process, resume=resume, quiet=quiet,
-              desc="plate", runner=run_plate_task)
+    out = _run(tasks, out_dir, "plate", runner=run_plate_task, scheduler=scheduler, workers=workers,
+               in_process=in_process, resume=resume, quiet=quiet)
     click.echo(f"{len(clips)} clips x {runs} runs")
     _report("plate", {"results": plate_results(cfg, tasks, out)}, entries_config(cfg), json_path, plots_dir)
