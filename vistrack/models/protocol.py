@@ -2,46 +2,22 @@
 
 A filter states the protocols it needs (``ParticleFilter.needs``) and fails at construction
 with one clear line when the model lacks a part (:func:`require`); nothing probes a model
-for optional parts. Shapes: ``N`` particles, ``d`` the state dimension.
+for optional parts. Shapes: ``N`` particles, ``d`` the state dimension, ``m`` the number of
+local coordinates; each method's docstring gives its arguments and results.
 
-:class:`StateSpaceModel` (every filter; thesis 001 §2.1)
-    ``sample_prior(n, rng) -> (n, d)``, ``prior_logpdf(states (N, d)) -> (N,)``,
-    ``predict(states (N, d), rng) -> (N, d)`` (a draw from ``K``),
-    ``transition_logpdf(new (N, d), old (N, d)) -> (N,)`` (``log K(new|old)``) and
-    ``loglik(obs, states (N, d)) -> (N,)`` (``log r(Y_t|X_t)``).
-:class:`PredictMean`
-    ``predict_mean(states) -> (N, d)``: the mean of ``K`` (AVPF's first stage, §4.5.4).
-:class:`LocalSearch` (LS-N-IPS, §4.3)
-    ``local_search(obs, states) -> states`` or ``(states, loglik)``: ``LS_λ``.
-:class:`LocalMoves` (LLS and LIS act on local coordinates, §4.4.3)
-    ``local_coords(states) -> (N, m)`` and ``with_local(states, u (N, m)) -> (N, d)``;
-    ``with_local_prior`` is the same for the first step (``X_1 ~ p_0``: a model whose state
-    carries the previous pose moves it too, a zero initial velocity).
-:class:`LLSModel` (§4.4)
-    ``lls_window(kernel) -> Window`` for a step with ``kernel`` (:mod:`~vistrack.models.kernel`).
-:class:`GridLikelihood` (optional speed-up for LLS)
-    ``loglik_local_grid(obs, states, offsets (G, m)) -> (N, G)``: ``log r`` of every state
-    moved by every offset, from shared measurements.
-:class:`LISModel` (§4.5)
-    ``lis_proposal(kernel)``: an object with ``sample(x, obs, rng, prev) -> (z, log_alpha, log_q)``
-    for a step with ``kernel`` (``K``, or ``p_0`` on the first step: :mod:`~vistrack.models.kernel`).
-:class:`Births` (the plate model's entering cars)
-    ``birth_reserve`` (share ``ε`` of the resampled particles) and
-    ``entering(states) -> (N,) bool``: the fresh births, which the reserve keeps; or, with
-    :class:`ReservedLineages`, ``reserved(particles) -> (N,) bool``: the young lineages.
-:class:`LaplaceModel`, :class:`EISModel` (PF-Doucet, PF-EIS, PF-EIS-MT; seed 000 §2–3)
-    ``laplace(obs, states, ...) -> (mode, hessian, u)`` of the likelihood part sampled from
-    the Laplace approximation, ``advance(states, ...)``; PF-EIS also
-    ``sample_motion(states, rng)`` and ``c_logpdf(c, states)``.
-:class:`SIRModel`
-    ``sir_proposal(kernel)``: the image-only proposal of plain SIR.
-:class:`VideoModel` (the frame loop, ``run``, ``eval`` and ``vistrack.Tracker``)
-    ``observe(maps, particles) -> obs`` (the frame's observation ``Y_t`` from its feature
-    maps), ``adapt(obs, estimate)``, ``estimate(particles) -> (d,)``, ``visible(obs, state)
-    -> bool``, ``box(states) -> (N, 4)`` ``(x, y, w, h)``, ``outline(states)`` (points to
-    draw) and ``describe(state) -> dict`` (the track-file columns). Subclass
-    :class:`VideoModelBase` for the defaults (the maps are the observation, no adaptation,
-    the weighted mean, always visible).
+* :class:`StateSpaceModel`: every filter (thesis 001 §2.1).
+* :class:`PredictMean`: AVPF's first stage (§4.5.4, App. B).
+* :class:`LocalSearch`: LS-N-IPS (§4.3).
+* :class:`LocalMoves`: LLS and LIS, which act on local coordinates (§4.4.3).
+* :class:`LLSModel`, :class:`GridLikelihood`: LLS's window (§4.4) and an optional speed-up.
+* :class:`LISModel`: LIS's local proposal (§4.5).
+* :class:`Births`, :class:`ReservedLineages`: the birth reserve of a model with entering
+  objects (the plate model's entering cars, §4.5.3).
+* :class:`LaplaceModel`, :class:`EISModel`: PF-Doucet, PF-EIS, PF-EIS-MT (seed 000 §2–3).
+* :class:`SIRModel`: plain SIR's proposal (§3.1).
+* :class:`VideoModel`: the frame loop, ``run``, ``eval`` and ``vistrack.Tracker``. Subclass
+  :class:`VideoModelBase` for the defaults (the maps are the observation, no adaptation,
+  the weighted mean, always visible).
 """
 
 from __future__ import annotations
@@ -54,100 +30,204 @@ __all__ = ["StateSpaceModel", "PredictMean", "LocalSearch", "LocalMoves", "LLSMo
 
 @runtime_checkable
 class StateSpaceModel(Protocol):
+    """The state-space model every filter needs (thesis 001 §2.1): ``p_0``, ``K`` and ``r``,
+    vectorised over particles (``states``: an ``(N, d)`` array, one row per particle).
+
+    Attributes
+    ----------
+    dim : int
+        The state dimension ``d``.
+    """
+
     dim: int
 
-    def sample_prior(self, n, rng): ...
+    def sample_prior(self, n, rng):
+        """``n`` draws ``(n, d)`` from the prior ``p_0`` (``rng``: a ``numpy.random.Generator``)."""
 
-    def prior_logpdf(self, states): ...
+    def prior_logpdf(self, states):
+        """``log p_0`` of ``states (N, d)`` -> ``(N,)`` (up to a constant shared by all states)."""
 
-    def predict(self, states, rng): ...
+    def predict(self, states, rng):
+        """One draw ``X_t ~ K(.|x_{t-1})`` per row of ``states (N, d)`` -> ``(N, d)``: the dynamics."""
 
-    def transition_logpdf(self, new, old): ...
+    def transition_logpdf(self, new, old):
+        """``log K(new|old)`` row by row; ``new, old (N, d)`` -> ``(N,)`` (on the support of ``K``)."""
 
-    def loglik(self, obs, states): ...
+    def loglik(self, obs, states):
+        """``log r(Y_t|x)`` of ``states (N, d)`` -> ``(N,)`` (``-inf`` where impossible).
+
+        ``obs`` is the observation ``Y_t``; for a video model, what :meth:`VideoModel.observe`
+        returns.
+        """
 
 
 @runtime_checkable
 class PredictMean(Protocol):
-    def predict_mean(self, states): ...
+    """The mean of the dynamics, for AVPF's first stage (thesis 001 §4.5.4, App. B)."""
+
+    def predict_mean(self, states):
+        """The mean of ``K(.|x)`` per row of ``states (N, d)`` -> ``(N, d)``."""
 
 
 @runtime_checkable
 class LocalSearch(Protocol):
-    def local_search(self, obs, states): ...
+    """The local search ``LS_λ`` of LS-N-IPS (thesis 001 §4.3, eq. 4.1)."""
+
+    def local_search(self, obs, states):
+        """Move each prediction ``X_t`` (rows of ``states (N, d)``) to a nearby local maximum of
+        ``r(Y_t|.)``, at most ``λ`` away.
+
+        Returns the moved states ``Z_t (N, d)``, or ``(Z_t, log r(Y_t|Z_t) (N,))`` (which saves
+        the filter a likelihood evaluation).
+        """
 
 
 @runtime_checkable
 class LocalMoves(Protocol):
-    def local_coords(self, states): ...
+    """Local coordinates that LLS and LIS perturb (thesis 001 §4.4.3, e.g. translation)."""
 
-    def with_local(self, states, u): ...
+    def local_coords(self, states):
+        """The local coordinates ``u (N, m)`` of ``states (N, d)``."""
 
-    def with_local_prior(self, states, u): ...
+    def with_local(self, states, u):
+        """A copy of ``states (N, d)`` with the local coordinates set to ``u (N, m)``, kept on
+        the support of ``K`` (e.g. an AR(2) state keeps its velocity consistent)."""
+
+    def with_local_prior(self, states, u):
+        """:meth:`with_local` for the first step (``X_1 ~ p_0``): a state that carries the
+        previous pose moves it too (a zero initial velocity); ``(N, d)``, ``(N, m)`` -> ``(N, d)``."""
 
 
 @runtime_checkable
 class LLSModel(Protocol):
-    def lls_window(self, kernel=None): ...
+    """LLS's window ``g`` on the local coordinates (thesis 001 §4.4)."""
+
+    def lls_window(self, kernel=None):
+        """The :class:`~vistrack.proposals.Window` over the ``m`` local coordinates for a step
+        with ``kernel`` (``g`` matched to its spread, §4.4.1; ``None``: ``K``;
+        :mod:`~vistrack.models.kernel`)."""
 
 
 @runtime_checkable
 class GridLikelihood(Protocol):
-    def loglik_local_grid(self, obs, states, offsets): ...
+    """An optional speed-up for LLS: ``r`` on the window's grid from shared measurements."""
+
+    def loglik_local_grid(self, obs, states, offsets):
+        """``log r (N, G)`` of every state of ``states (N, d)`` moved by every row of
+        ``offsets (G, m)`` in local coordinates. Only LLS's proposal reads it; the weight takes
+        the exact ``r`` at the drawn point, so an approximation here stays properly weighted."""
 
 
 @runtime_checkable
 class LISModel(Protocol):
-    def lis_proposal(self, kernel=None): ...
+    """LIS's local proposal ``q_{X,Y}`` with its window ``g`` (thesis 001 §4.5, Prop. 4.5.1)."""
+
+    def lis_proposal(self, kernel=None):
+        """The local proposal for a step with ``kernel`` (``K``, or ``p_0`` on the first step;
+        ``None``: ``K``; :mod:`~vistrack.models.kernel`).
+
+        Returns an object with ``sample(x (N, d), obs, rng, prev (N, d)) -> (z (N, d),
+        log_alpha (N,), log_q (N,))``: ``z`` drawn from ``q g(x - .) / α`` about the predictions
+        ``x`` (``prev``, the resampled ``Z_{t-1}``, lets a window follow ``K`` itself).
+        """
 
 
 @runtime_checkable
 class Births(Protocol):
+    """A model with births (the plate model's entering cars, thesis 001 §4.5.3): the resampling
+    reserve (:class:`~vistrack.filters.resampler.BirthReserve`) keeps a share
+    ``birth_reserve`` ``ε`` in ``[0, 1)`` of the draws for them."""
+
     birth_reserve: float
 
-    def entering(self, states): ...
+    def entering(self, states):
+        """Which rows of ``states (N, d)`` are fresh births (entering draws): bool ``(N,)``."""
 
 
 @runtime_checkable
 class ReservedLineages(Protocol):
-    def reserved(self, particles): ...
+    """The births the reserve keeps, chosen on the particle set (e.g. young lineages)."""
+
+    def reserved(self, particles):
+        """Which particles of the :class:`~vistrack.particles.ParticleSet` the birth reserve
+        keeps: bool ``(N,)``."""
 
 
 @runtime_checkable
 class LaplaceModel(Protocol):
-    def laplace(self, obs, states, **kwargs): ...
+    """The Laplace approximation of the optimal proposal (seed 000 §2–3, eqs. 3–4 and 8)."""
 
-    def advance(self, states, *args, **kwargs): ...
+    def laplace(self, obs, states, **kwargs):
+        """Mode and Hessian of ``L = -log p(Y_t|X) - log p(X|X_{t-1})`` in the sampled part
+        (``p`` components) of the state, for each previous state of ``states (N, d)``.
+
+        ``free="all"`` (PF-Doucet: motion and shape velocity) or ``free="c"`` (PF-EIS: the
+        shape velocity given ``motion=(s (N,), θ (N,))``). Returns ``(mode (N, p), hessian
+        (N, p, p), u)``: the Hessian is positive definite (its inverse is ``Σ_IS``) and ``u``
+        the deterministic part of the move (the landmark model's ``U_t``) for :meth:`advance`.
+        """
+
+    def advance(self, states, *args, **kwargs):
+        """New states ``(N, d)`` from the previous ``states (N, d)`` and the sampled parts (the
+        landmark model: ``s (N,)``, ``θ (N,)``, ``c (N, p)``, ``u=``): the deterministic rest of
+        the dynamics, ``U_t = g(U_{t-1}, z_{t-1})``, ``z_t = f(z_{t-1}, U_t, c_t)`` (§3.1)."""
 
 
 @runtime_checkable
 class EISModel(Protocol):
-    def sample_motion(self, states, rng): ...
+    """PF-EIS's split of the state: motion from its prior, the rest importance-sampled
+    (seed 000 §2.2, §3.3)."""
 
-    def c_logpdf(self, c, states): ...
+    def sample_motion(self, states, rng):
+        """The broad part of the state drawn from its state-transition prior given the previous
+        ``states (N, d)`` (step 1 of §3.3); the landmark model: ``(s_t (N,), θ_t (N,))``."""
+
+    def c_logpdf(self, c, states):
+        """``log N(c; A_c c_{t-1}, Σ_c) (N,)`` of the importance-sampled part ``c (N, p)`` given
+        the previous ``states (N, d)`` (the STP of §3.1)."""
 
 
 @runtime_checkable
 class SIRModel(Protocol):
-    def sir_proposal(self, kernel=None): ...
+    """Plain SIR's proposal ``π(.|X_{t-1}, Y_t)`` (thesis 001 §3.1, Fig. 3.1)."""
+
+    def sir_proposal(self, kernel=None):
+        """The proposal for a step with ``kernel``: an object with ``sample(prev (N, d), obs,
+        rng) -> (N, d)`` and ``logpdf(new (N, d), prev (N, d), obs) -> (N,)``, positive wherever
+        ``K`` is."""
 
 
 @runtime_checkable
 class VideoModel(Protocol):
-    def observe(self, maps, particles): ...
+    """What tracking on video needs beyond the state-space model: a frame's observation, the
+    estimate, its box and outline, the track-file columns."""
 
-    def adapt(self, obs, estimate): ...
+    def observe(self, maps, particles):
+        """The frame's observation ``Y_t`` (what :meth:`StateSpaceModel.loglik` reads) from its
+        :class:`~vistrack.features.FeatureMaps`; ``particles``: the previous frame's
+        :class:`~vistrack.particles.ParticleSet` (``None`` on the first frame)."""
 
-    def estimate(self, particles): ...
+    def adapt(self, obs, estimate):
+        """Learn from the frame's ``estimate (d,)`` (e.g. update an appearance template);
+        returns whether anything changed."""
 
-    def visible(self, obs, state): ...
+    def estimate(self, particles):
+        """The frame's point estimate ``(d,)`` from its :class:`~vistrack.particles.ParticleSet`."""
 
-    def box(self, states): ...
+    def visible(self, obs, state):
+        """Whether the object is reported at ``state (d,)`` in the frame observed as ``obs``."""
 
-    def outline(self, states): ...
+    def box(self, states):
+        """Axis-aligned boxes ``(N, 4)`` ``(x, y, w, h)`` (top-left corner, pixels) of
+        ``states (N, d)`` or one state ``(d,)``."""
 
-    def describe(self, state): ...
+    def outline(self, states):
+        """Points ``(N, P, 2)`` ``(x, y)`` to draw per state (box corners, contour points, plate
+        vertices) of ``states (N, d)`` or ``(d,)``."""
 
+    def describe(self, state):
+        """The track-file columns of one ``state (d,)``: a dict with ``cx, cy, w, h, angle_deg,
+        scale`` and the model's own columns (e.g. support points or plate vertices)."""
 
 class VideoModelBase:
     """Defaults of the :class:`VideoModel` parts that most models share."""
