@@ -18,6 +18,7 @@ class IntList(click.ParamType):
     name = "N,N,..."
 
     def convert(self, value, param, ctx):
+        """Parse ``value`` into a list of ints; a bad value fails with click's one-line usage error."""
         if isinstance(value, list):
             return value
         try:
@@ -32,6 +33,7 @@ class FloatList(click.ParamType):
     name = "X,X,..."
 
     def convert(self, value, param, ctx):
+        """Parse ``value`` into a list of finite floats; a bad value fails with click's one-line usage error."""
         if isinstance(value, list):
             return value
         try:
@@ -49,6 +51,7 @@ class StrList(click.ParamType):
     name = "A,B,..."
 
     def convert(self, value, param, ctx):
+        """Parse ``value`` into a list of names; a bad value fails with click's one-line usage error."""
         if isinstance(value, list):
             return value
         return [v.strip() for v in str(value).split(",") if v.strip()]
@@ -60,6 +63,8 @@ class Box(click.ParamType):
     name = "x,y,w,h"
 
     def convert(self, value, param, ctx):
+        """Parse ``value`` into an ``(x, y, w, h)`` tuple of floats; a bad value fails with click's one-line usage
+        error."""
         if isinstance(value, tuple):
             return value
         try:
@@ -82,6 +87,7 @@ class Fraction(click.FloatRange):
         super().__init__(0.0, 1.0)
 
     def convert(self, value, param, ctx):
+        """Parse ``value`` into a float in ``[0, 1]``; a bad value fails with click's one-line usage error."""
         v = super().convert(value, param, ctx)
         if v != v:
             self.fail("expected a number in [0, 1], got nan", param, ctx)
@@ -94,6 +100,7 @@ class Size(click.ParamType):
     name = "WxH"
 
     def convert(self, value, param, ctx):
+        """Parse ``value`` into a ``(width, height)`` tuple; a bad value fails with click's one-line usage error."""
         if isinstance(value, tuple):
             return value
         try:

@@ -120,6 +120,7 @@ class Entries(click.ParamType):
     name = "ALGO:N,..."
 
     def convert(self, value, param, ctx):
+        """Parse ``value`` into a list of ``(algo, N)`` pairs; a bad pair fails with click's one-line usage error."""
         if isinstance(value, list):
             return value
         out = []

@@ -44,6 +44,7 @@ class Clip:
 
     @property
     def model_name(self):
+        """The model named in ``meta.json`` (a synthetic clip's kind), or ``None``."""
         return (self.meta or {}).get("model")
 
     def first_box(self):

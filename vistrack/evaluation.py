@@ -53,6 +53,26 @@ OPENCV_TRACKERS = {"opencv-mil": "TrackerMIL_create", "opencv-kcf": "TrackerKCF_
 
 @dataclass
 class EvalConfig:
+    """One evaluation: clips × (algorithm, N) × runs (:func:`task_list` turns it into tasks).
+
+    Attributes
+    ----------
+    clips : list
+        Clip folders, videos or image folders with ground truth.
+    algos : list of str
+        Particle filters or OpenCV trackers (``opencv-mil``, ...).
+    particles : list of int
+        Numbers of particles ``N``; every algorithm runs at every ``N``.
+    runs : int
+        Runs per clip, algorithm and ``N``.
+    seed : int
+        Root seed: run ``r`` on clip ``c`` draws from ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]``.
+    model : str
+        A registered model (:mod:`vistrack.models.registry`).
+    entries : list of (str, int) or None
+        Explicit ``(algo, N)`` pairs instead of the ``algos × particles`` grid.
+    """
+
     clips: list
     algos: list = field(default_factory=lambda: ["lis", "bootstrap"])
     particles: list = field(default_factory=lambda: [100, 750])

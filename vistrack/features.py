@@ -216,6 +216,7 @@ class FeatureMaps:
 
     @property
     def shape(self):
+        """``(H, W)`` of the frame."""
         return self.frame.shape[:2]
 
     @cached_property

@@ -32,6 +32,7 @@ class Timer:
         return fn
 
     def timed(self, fn, part):
+        """``fn`` wrapped so that its exclusive time (less that of nested timed calls) adds to stage ``part``."""
         def timed(*a, **k):
             self._stack.append([part, 0.0])
             t0 = time.perf_counter()

@@ -71,6 +71,8 @@ class TrackCSV:
         self._done = False
 
     def write(self, row):
+        """Write one track ``row`` (a dict: column -> value; ``visible``, ``cx``, ``cy``, ``w``, ``h`` for the box
+        format) and flush it."""
         if self.boxes:
             box = (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"]) if row["visible"] \
                 else (0, 0, 0, 0)

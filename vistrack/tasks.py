@@ -102,6 +102,8 @@ def stale_tasks(tasks, out_dir):
 
 
 def load_task_results(tasks, out_dir):
+    """The result dicts of ``tasks`` (list of task dicts), read from ``out_dir/tasks/<name>.json``, in the tasks'
+    order."""
     return [json.loads((Path(out_dir) / "tasks" / f"{t['name']}.json").read_text()) for t in tasks]
 
 

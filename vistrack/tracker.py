@@ -73,6 +73,7 @@ class Tracker:
 
     @property
     def particles(self):
+        """The :class:`~vistrack.particles.ParticleSet` after the last frame (``None`` before :meth:`init`)."""
         return None if self._stepper is None else self._stepper.particles
 
     def init(self, frame, box):
@@ -104,4 +105,5 @@ class Tracker:
 
     @property
     def visible(self):
+        """Whether the model reports the object at the last estimate (:meth:`VideoModel.visible`)."""
         return bool(self.model.visible(self.result.maps, self.result.estimate))

@@ -32,6 +32,7 @@ class FrameResult:
 
     @property
     def ess(self):
+        """Effective sample size of the frame's particle set (thesis 001 §2.4)."""
         return self.particles.ess
 
 

@@ -302,6 +302,7 @@ class VideoWriter:
         self._av = (av, container, stream)
 
     def write(self, frame):
+        """Append one frame, ``(H, W, 3)`` BGR or ``(H, W)`` grey, of the video's :attr:`size`."""
         if (frame.shape[1], frame.shape[0]) != self.size:
             raise ValueError(f"frame size {frame.shape[1]}x{frame.shape[0]} != video size {self.size[0]}x{self.size[1]}")
         if frame.ndim == 2:
@@ -319,6 +320,7 @@ class VideoWriter:
         self.frames += 1
 
     def close(self):
+        """Flush the encoder and close the file."""
         if self._av is None:
             self._w.release()
             return

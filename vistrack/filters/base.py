@@ -67,10 +67,12 @@ class ParticleFilter:
 
     @property
     def ess_threshold(self):
+        """The resampler's threshold: resample when ``ESS < ess_threshold · N`` (``None``: every step)."""
         return self.resampler.ess_threshold
 
     @property
     def resample_scheme(self):
+        """The resampler's scheme, ``scheme(w, n, rng) -> idx`` (:mod:`vistrack.resampling`)."""
         return self.resampler.scheme
 
     def _set_part(self, attr, value):

@@ -18,6 +18,11 @@ class Bootstrap(ParticleFilter):
     needs = (StateSpaceModel,)
 
     def propose(self, prev, obs, rng, kernel):
+        """``Z_t = X_t ~ K(.|Z_{t-1})`` with log weight increment ``log r(Y_t|Z_t)`` (Fig. 2.3).
+
+        Parameters and returns as :meth:`ParticleFilter.propose`: ``prev (N, d)`` ->
+        ``(new (N, d), log_incr (N,), predicted (N, d), loglik (N,))``.
+        """
         x = kernel.predict(prev, rng)
         ll = self.model.loglik(obs, x)
         return x, ll, x, ll

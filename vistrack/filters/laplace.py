@@ -37,6 +37,10 @@ class LaplaceFilter(ParticleFilter):
     """
 
     def first_step(self, obs, n, rng):
+        """``n`` copies of the known ``X_0`` (``model.sample_prior``), weighted by ``log p(Y_1|X_0)``.
+
+        Returns a :class:`~vistrack.particles.ParticleSet` of ``n`` states ``(n, d)``.
+        """
         if n < 1:
             raise ValueError(f"number of particles must be positive, got {n}")
         x = self.model.sample_prior(n, rng)

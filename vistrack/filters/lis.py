@@ -42,6 +42,13 @@ class LIS(ParticleFilter):
         self._set_part("proposal", proposal)
 
     def propose(self, prev, obs, rng, kernel):
+        """Prop. 4.5.1 / Fig. 4.13: ``X_t ~ K(.|Z_{t-1})``, ``Z_t ~ q g(X_t - .) / α`` from the local
+        proposal, log increment ``log α + log r(Y_t|Z_t) - log q(Z_t) + log K(Z_t|Z_{t-1}) -
+        log K(X_t|Z_{t-1})``.
+
+        Parameters and returns as :meth:`ParticleFilter.propose`: ``prev (N, d)`` ->
+        ``(new (N, d), log_incr (N,), predicted (N, d), loglik (N,))``.
+        """
         x = kernel.predict(prev, rng)
         z, log_alpha, log_q = self.part("proposal", kernel).sample(x, obs, rng, prev)
         ll = self.model.loglik(obs, z)

@@ -58,6 +58,12 @@ class LLS(ParticleFilter):
         return model.loglik(obs, cand).reshape(n, k)
 
     def propose(self, prev, obs, rng, kernel):
+        """Fig. 4.11 with a grid-sampled ``r g``: ``X_t ~ K``, a window cell drawn ∝ ``r(c_j) g(o_j)``
+        and ``Z_t`` uniform in it; the exact sampling density enters the weight (module docstring).
+
+        Parameters and returns as :meth:`ParticleFilter.propose`: ``prev (N, d)`` ->
+        ``(new (N, d), log_incr (N,), predicted (N, d), loglik (N,))``.
+        """
         model, win = self.model, self.part("window", kernel)
         x = kernel.predict(prev, rng)
         n = x.shape[0]

@@ -37,6 +37,12 @@ class LSNIPS(ParticleFilter):
         self.local_search = local_search
 
     def propose(self, prev, obs, rng, kernel):
+        """§4.3, Fig. 4.2: ``X_t ~ K``, ``Z_t = LS_λ(X_t)``, log increment ``log r(Y_t|Z_t)``
+        (uncompensated: the search's density is not in the weight).
+
+        Parameters and returns as :meth:`ParticleFilter.propose`: ``prev (N, d)`` ->
+        ``(new (N, d), log_incr (N,), predicted (N, d), loglik (N,))``.
+        """
         x = kernel.predict(prev, rng)
         search = self.local_search or self.model.local_search
         z = search(obs, x)

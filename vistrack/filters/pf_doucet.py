@@ -21,6 +21,12 @@ class PFDoucet(LaplaceFilter):
     needs = (StateSpaceModel, LaplaceModel)
 
     def propose(self, prev, obs, rng, kernel):
+        """``(s, θ, c) ~ N(m, Σ_IS)`` at the mode of ``L`` over the whole sampled state (seed 000 §1,
+        [3]), log increment ``log p(Y_t|X_t) + log p(X_t|X_{t-1}) - log N(X_t; m, Σ_IS)``.
+
+        Parameters and returns as :meth:`ParticleFilter.propose`: ``prev (N, d)`` ->
+        ``(new (N, d), log_incr (N,), predicted (N, d), loglik (N,))``.
+        """
         model = self.model
         mode, hess, u = model.laplace(obs, prev, free="all")
         x, log_q = sample_laplace(mode, hess, rng)

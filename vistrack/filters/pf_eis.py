@@ -26,6 +26,13 @@ class PFEIS(LaplaceFilter):
         return sample_laplace(mode, hess, rng)
 
     def propose(self, prev, obs, rng, kernel):
+        """Steps 1–5 of seed 000 §3.3 (module docstring): ``(s, θ)`` from the STP, ``c`` from the
+        Laplace Gaussian of eq. (8), log increment ``log p(Y_t|X_t) + log N(c; A_c c_{t-1}, Σ_c) -
+        log N(c; m, Σ_IS)``.
+
+        Parameters and returns as :meth:`ParticleFilter.propose`: ``prev (N, d)`` ->
+        ``(new (N, d), log_incr (N,), predicted (N, d), loglik (N,))``.
+        """
         model = self.model
         s, theta = model.sample_motion(prev, rng)
         mode, hess, u = model.laplace(obs, prev, free="c", motion=(s, theta))

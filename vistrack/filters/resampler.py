@@ -97,6 +97,9 @@ class BirthReserve(Resampler):
         return self.model.entering(particles.states)
 
     def probs(self, particles):
+        """``π = (1 - ε) w + ε ρ`` (class docstring) and the offspring log-weights ``log(w / π)``,
+        both ``(N,)``; plain ``π = w`` when the births hold no weight or all of it.
+        """
         w = particles.weights
         born = self.births(particles)
         w_b = float(w[born].sum())

@@ -33,6 +33,12 @@ class SIR(ParticleFilter):
         self._set_part("proposal", proposal)
 
     def propose(self, prev, obs, rng, kernel):
+        """Fig. 3.1: ``X_t ~ π(.|Z_{t-1}, Y_t)``, log increment ``log r(Y_t|X_t) + log K(X_t|Z_{t-1}) -
+        log π(X_t|Z_{t-1}, Y_t)``; the fallback prediction is a draw from ``K``.
+
+        Parameters and returns as :meth:`ParticleFilter.propose`: ``prev (N, d)`` ->
+        ``(new (N, d), log_incr (N,), predicted (N, d), loglik (N,))``.
+        """
         proposal = self.part("proposal", kernel)
         x = proposal.sample(prev, obs, rng)
         ll = self.model.loglik(obs, x)

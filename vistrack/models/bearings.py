@@ -128,6 +128,8 @@ class Bearings:
 
     # -- the model contract ---------------------------------------------------
     def sample_prior(self, n, rng):
+        """``n`` draws ``(n, 4M)`` from ``p_0``: independent Gaussians about the ship means (§4.5.5,
+        :data:`PRIOR_VAR`)."""
         return self.prior_mean + self.prior_std * rng.standard_normal((n, self.dim))
 
     def prior_logpdf(self, states):
@@ -135,10 +137,12 @@ class Bearings:
         return diag_logpdf(states, self.prior_mean, self.prior_std)
 
     def predict_mean(self, states):
+        """``F X`` per ship: the mean of ``K``, ``(N, 4M)`` -> ``(N, 4M)`` (AVPF's first stage)."""
         s = states.reshape(len(states), self.ships, 4)
         return (s @ F.T).reshape(len(states), self.dim)
 
     def predict(self, states, rng):
+        """``X_{t+1} = F X_t + G ξ_t``, ``ξ_t ~ N(0, σ_η² I_2)`` per ship (§1.3.3); ``(N, 4M)`` -> ``(N, 4M)``."""
         xi = self.sigma_eta * rng.standard_normal((len(states), self.ships, 2))
         return self.predict_mean(states) + (xi @ G.T).reshape(len(states), self.dim)
 
@@ -171,6 +175,7 @@ class Bearings:
 
     # -- local coordinates: the position of every ship -------------------------
     def local_coords(self, states):
+        """The positions ``(x1, x3)`` of every ship, ``(N, 4M)`` -> ``(N, 2M)`` (§4.5.5)."""
         return states[:, self.pos_idx]
 
     def with_local(self, states, u):

@@ -108,17 +108,23 @@ class Box(TranslationMoves, VideoModelBase):
         return sd
 
     def sample_prior(self, n, rng):
+        """``n`` states ``(n, 6)`` from ``p_0``: a Gaussian about the first box, zero velocity (previous = current)."""
         z = self.init_pose + self.prior_std * rng.standard_normal((n, 3))
         return np.concatenate([z, z], axis=1)
 
     def prior_logpdf(self, states):
+        """``log p_0`` of the current pose of ``states (N, 6)`` -> ``(N,)``."""
         return diag_logpdf(states[:, :3], self.init_pose, self.prior_std)
 
     def predict_mean(self, states):
+        """The mean of the AR(2) ``K``: ``z + d (z - z')``, with ``z`` as the new previous pose; ``(N, 6)`` ->
+        ``(N, 6)``."""
         z1, z2 = states[:, :3], states[:, 3:]
         return np.concatenate([z1 + self.damping * (z1 - z2), z1], axis=1)
 
     def predict(self, states, rng):
+        """A draw from ``K``: the mean plus ``σ_c e^{l}`` noise on the centre and ``σ_l`` on the log-scale;
+        ``(N, 6)`` -> ``(N, 6)``."""
         out = self.predict_mean(states)
         out[:, :3] += self._std(states) * rng.standard_normal((len(states), 3))
         return out

@@ -247,17 +247,24 @@ class Contour(ContourMoves, ContourColour, TranslationMoves, VideoModelBase):
 
     # -- dynamics ---------------------------------------------------------------
     def sample_prior(self, n, rng):
+        """``n`` states ``(n, 8)`` from ``p_0``: a Gaussian about the initial pose, zero velocity (previous =
+        current)."""
         z = self.init_pose + self.prior_std * rng.standard_normal((n, 4))
         return np.concatenate([z, z], axis=1)
 
     def prior_logpdf(self, states):
+        """``log p_0`` of the current pose of ``states (N, 8)`` -> ``(N,)``."""
         return diag_logpdf(states[:, :4], self.init_pose, self.prior_std)
 
     def predict_mean(self, states):
+        """The mean of the AR(2) ``K`` (thesis 001 §1.3.1): ``z + d (z - z')``, with ``z`` as the new previous pose;
+        ``(N, 8)`` -> ``(N, 8)``."""
         z1, z2 = states[:, :4], states[:, 4:]
         return np.concatenate([z1 + self.damping * (z1 - z2), z1], axis=1)
 
     def predict(self, states, rng):
+        """A draw from ``K`` (§1.3.1): the mean plus ``σ ε`` on the pose ``(cx, cy, a, b)``; ``(N, 8)`` ->
+        ``(N, 8)``."""
         out = self.predict_mean(states)
         out[:, :4] += self.sigma * rng.standard_normal((len(states), 4))
         return out

@@ -63,15 +63,19 @@ class PriorKernel(Transition):
     first = True
 
     def predict(self, prev, rng):
+        """Draw ``X_1 ~ p_0``, one per row of ``prev (N, d)`` (only its length is used) -> ``(N, d)``."""
         return self.model.sample_prior(len(prev), rng)
 
     def predict_mean(self, prev):
+        """The mean of ``p_0`` (``model.prior_mean``) per row of ``prev (N, d)`` -> ``(N, d)``."""
         return np.broadcast_to(self.model.prior_mean, prev.shape).copy()
 
     def logpdf(self, new, old):
+        """``log p_0(new)`` per row, ``(N,)``; ``old`` is ignored."""
         return self.model.prior_logpdf(new)
 
     def with_local(self, states, u):
+        """``model.with_local_prior``: ``states (N, d)`` with local coordinates ``u (N, m)`` on a prior draw."""
         return self.model.with_local_prior(states, u)
 
 

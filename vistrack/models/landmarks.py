@@ -128,6 +128,7 @@ class Landmarks:
         return np.tile(self.prior_mean, (n, 1))
 
     def prior_logpdf(self, states):
+        """Zeros ``(N,)``: ``p_0`` is the point mass at the known ``X_0`` (seed 000 §4)."""
         return np.zeros(len(states))
 
     def sample_motion(self, prev, rng):
@@ -138,6 +139,7 @@ class Landmarks:
         return s, th
 
     def c_prior_mean(self, prev):
+        """The STP mean ``A_c c_{t-1}`` of the shape velocity (seed 000 §3.1), ``(N, 2K - 4)``."""
         return prev[:, self._sl["c"]] * self.a_c
 
     def advance(self, prev, s, theta, c, u=None):

@@ -126,6 +126,8 @@ class Plate(VideoModelBase):
     start = None
 
     def sample_prior(self, n, rng):
+        """``n`` states ``(n, 9)`` from ``p_0``: the entering-car mixture, or the ``--init`` Gaussian
+        (:attr:`start`); zero velocity and age."""
         if self.start is None:
             return self._enter(n, rng)
         mean, std = self.start
@@ -133,16 +135,21 @@ class Plate(VideoModelBase):
         return np.concatenate([z, z, np.zeros((n, 1))], axis=1)
 
     def prior_logpdf(self, states):
+        """``log p_0`` of the current pose of ``states (N, 9)`` -> ``(N,)``."""
         if self.start is None:
             return self.enter_logpdf(states[:, :4])
         mean, std = self.start
         return diag_logpdf(states[:, :4], mean, std)
 
     def predict_mean(self, states):
+        """The mean of the AR(2) branch (thesis 001 §1.3.2): ``z + d (z - z')``, previous pose ``z``, age + 1;
+        ``(N, 9)`` -> ``(N, 9)``."""
         z1, z2 = states[:, :4], states[:, 4:8]
         return np.concatenate([z1 + self.damping * (z1 - z2), z1, states[:, 8:] + 1], axis=1)
 
     def predict(self, states, rng):
+        """A draw from ``K`` (§1.3.2): the factored AR(2), or with probability :attr:`enter_weight` (0.1) an entering
+        car; ``(N, 9)`` -> ``(N, 9)``."""
         n = len(states)
         out = self.predict_mean(states)
         out[:, :4] += self.sigma * rng.standard_normal((n, 4))
@@ -218,20 +225,25 @@ class Plate(VideoModelBase):
 
     # -- likelihood and output ------------------------------------------------------
     def loglik(self, obs, states):
+        """``log r`` of ``states (N, 9)`` -> ``(N,)``: :class:`PlateLikelihood`, plus the learned appearance term
+        when there is one."""
         ll = self.lik.loglik(obs, states)
         if self.app is not None:
             ll = ll + self.app.loglik(obs.appearance, self._app_boxes(states))
         return ll
 
     def vertices(self, states):
+        """The parallelogram's four vertices ``(N, 4, 2)`` of ``states (N, 9)`` or ``(9,)``."""
         from .plate_layout import plate_vertices
 
         return plate_vertices(np.atleast_2d(states)[:, :4], self.layout.aspect)
 
     def outline(self, states):
+        """The vertices ``(N, 4, 2)`` (:meth:`vertices`), to draw."""
         return self.vertices(states)
 
     def box(self, states):
+        """Bounding boxes ``(N, 4)`` ``(x, y, w, h)`` of the parallelograms."""
         v = self.vertices(states)
         lo, hi = v.min(axis=1), v.max(axis=1)
         return np.concatenate([lo, hi - lo], axis=1)
@@ -258,6 +270,7 @@ class Plate(VideoModelBase):
         return bool(ncc[0] >= self.app.adapt_min_ncc)
 
     def describe(self, state):
+        """Track-file fields of one state: ``cx, cy, w, h, angle_deg, scale`` and the vertices ``x0..x3, y0..y3``."""
         s = np.asarray(state, float).reshape(1, -1)
         v = self.vertices(s)[0]
         lo, hi = v.min(axis=0), v.max(axis=0)
@@ -269,9 +282,12 @@ class Plate(VideoModelBase):
 
     # -- local moves on translation (§4.5.2) -------------------------------------
     def local_coords(self, states):
+        """The translation ``(u, w)``, ``(N, 9)`` -> ``(N, 2)`` (§4.5.2)."""
         return states[:, :2]
 
     def with_local(self, states, u):
+        """``states (N, 9)`` moved to the translations ``u (N, 2)``; an entering particle moves its previous pose
+        along (a zero-velocity start)."""
         out = states.copy()
         ent = self.entering(states)
         out[:, :2] = u
@@ -297,5 +313,6 @@ class Plate(VideoModelBase):
         return self.lik.loglik_sparse(obs, states, off)
 
     def lls_window(self, kernel=None):
+        """LLS's box window: a 9×9 grid over the entering plate's width and height."""
         size = self.enter_mean[3]
         return Window("box", (size, size / self.layout.aspect), grid=9)

@@ -37,6 +37,20 @@ __all__ = ["PlateLayout", "LAYOUTS", "plate_points", "plate_vertices"]
 
 @dataclass(frozen=True)
 class PlateLayout:
+    """A plate layout: aspect ratio and the Table 1.1 pixel sets in unit-square coordinates
+    (module docstring).
+
+    Attributes
+    ----------
+    name : str
+    aspect : float
+        Width / height.
+    h_edge, h_free, v_edge, v_free, small, big : tuple of (a0, b0, a1, b1)
+        Rectangles of the six pixel sets of Table 1.1.
+    extra : tuple of (name, rectangles, channel, term)
+        Further pixel sets with learnt coefficients.
+    """
+
     name: str
     aspect: float  # width / height
     h_edge: tuple
@@ -48,6 +62,7 @@ class PlateLayout:
     extra: tuple = ()
 
     def sets(self):
+        """The six Table 1.1 pixel sets as ``{name: (R, 4) array of rectangles}``."""
         return {k: np.array(getattr(self, k), float) for k in ("h_edge", "h_free", "v_edge", "v_free", "small", "big")}
 
 

@@ -77,6 +77,12 @@ class PlateLISProposal:
         return j, log_vals[np.arange(len(j)), j] - lz
 
     def sample(self, x, obs, rng, prev=None):
+        """Draw ``z (N, 9)`` about the predictions ``x (N, 9)`` (class docstring).
+
+        Returns ``(z (N, 9), log_alpha (N,), log_q (N,))`` with ``log_alpha = 0`` and ``log_q`` set so
+        that LIS's ``α r / q · K(Z)/K(X)`` is the weight of the chosen window; ``prev (N, 9)`` (the
+        resampled ``Z_{t-1}``) centres the dynamics window.
+        """
         m = self.model
         n = len(x)
         ent = m.entering(x)

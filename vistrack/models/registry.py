@@ -51,6 +51,7 @@ class ModelSpec:
 
     @property
     def default_algo(self):
+        """The default algorithm: the first of :attr:`algos`."""
         return self.algos[0]
 
 

@@ -44,32 +44,40 @@ class GaussMixtureToy:
         self.window = float(window)
 
     def sample_prior(self, n, rng):
+        """``n`` draws ``(n, 1)`` from ``p_0 = N(prior_mean, prior_var)``."""
         return self.prior_mean + np.sqrt(self.prior_var) * rng.standard_normal((n, 1))
 
     def prior_logpdf(self, states):
+        """``log p_0`` of ``states (N, 1)`` -> ``(N,)``."""
         d = states[:, 0] - self.prior_mean
         return -0.5 * d * d / self.prior_var - 0.5 * np.log(2 * np.pi * self.prior_var)
 
     def predict(self, states, rng):
+        """``x_t = x_{t-1} + N(0, q)``; ``(N, 1)`` -> ``(N, 1)``."""
         return states + np.sqrt(self.q) * rng.standard_normal(states.shape)
 
     def predict_mean(self, states):
+        """The mean of ``K``: the states themselves, ``(N, 1)``."""
         return states.copy()
 
     def transition_logpdf(self, new, old):
+        """``log N(new; old, q)`` row by row, ``(N,)``."""
         d = (new - old)[:, 0]
         return -0.5 * d * d / self.q - 0.5 * np.log(2 * np.pi * self.q)
 
     def loglik(self, obs, states):
+        """``log Σ_i p_i N(x; μ_i, s_i²)`` of ``states (N, 1)`` -> ``(N,)`` (``obs`` ignored)."""
         x = states[:, :1]
         comp = self.log_p - 0.5 * (x - self.mu) ** 2 / self.var - 0.5 * np.log(2 * np.pi * self.var)
         mx = comp.max(axis=1, keepdims=True)
         return (mx + np.log(np.exp(comp - mx).sum(axis=1, keepdims=True)))[:, 0]
 
     def local_coords(self, states):
+        """The state is its own local coordinate: ``(N, 1)``."""
         return states[:, :1]
 
     def with_local(self, states, u):
+        """The states ``(N, 1)`` set to ``u``."""
         return np.asarray(u, float).reshape(len(states), 1)
 
     with_local_prior = with_local  # the state is its local coordinate
@@ -81,9 +89,11 @@ class GaussMixtureToy:
                 np.broadcast_to(self.var[:, None, None], (n, 1, k, 1, 1)))
 
     def lis_proposal(self, kernel=None):
+        """LIS with ``q = f`` and a Gaussian window of std ``window`` (Fig. 4.17; exact LLS)."""
         return GaussMixtureProposal(self, np.array([[self.window**2]]), kernel)
 
     def lls_window(self, kernel=None):
+        """LLS's box window of half-width ``window``, 41 cells."""
         return Window("box", [self.window], grid=41)
 
     def posterior(self, x_prev):

@@ -57,6 +57,9 @@ class MapProposal:
         self.log_g_unit = -0.5 * np.sum(self.offsets**2, axis=1) - _LOG2PI
 
     def sample(self, x, obs, rng, prev=None):
+        """Draw ``z (N, d)`` about the predictions ``x (N, d)`` from the map on the grid (module
+        docstring); returns ``(z, log_alpha (N,), log_q (N,))`` for LIS's weight. ``prev`` is unused.
+        """
         model = self.model
         u = model.local_coords(x)
         sig = model.window_std(x, self.kernel)[:, None]  # (N, 1)

@@ -39,6 +39,9 @@ class GaussMixtureProposal:
         self.window_cov = np.asarray(window_cov, dtype=float)
 
     def sample(self, x, obs, rng, prev=None):
+        """Draw ``z (N, d)`` about the predictions ``x (N, d)`` from ``q g(x - .) / α`` (eqs. 4.7–4.9);
+        returns ``(z, log_alpha (N,), log_q (N,))`` for LIS's weight. ``prev`` is unused.
+        """
         model = self.model
         log_p, mu, cov = model.local_mixture(obs, x)
         n, b, _, k = mu.shape

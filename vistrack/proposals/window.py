@@ -44,6 +44,7 @@ class Window:
 
     @property
     def dim(self):
+        """Number ``m`` of local coordinates."""
         return self.scale.size
 
     def logpdf(self, d):

@@ -18,6 +18,18 @@ __all__ = ["ContourConfig", "contour_tasks", "contour_results"]
 
 @dataclass
 class ContourConfig:
+    """The contour experiment (Table 4.1): ``runs`` per clip and ``(algo, N)`` entry, root ``seed``.
+
+    Attributes
+    ----------
+    clips : list
+        Clip folders.
+    entries : list of (str, int)
+        ``(algorithm, N)`` pairs.
+    runs : int
+    seed : int
+    """
+
     clips: list
     entries: list = field(default_factory=lambda: [("ls-n-ips", 30), ("bootstrap", 2000)])
     runs: int = 10

@@ -79,6 +79,7 @@ class LandmarksConfig:
                 raise ValueError(f"unknown algorithm {a!r} for landmarks; choose from {', '.join(LANDMARK_ALGOS)}")
 
     def model(self):
+        """The :class:`~vistrack.models.landmarks.Landmarks` model of the paper's experiment for ``k`` (seed 000 §4)."""
         return Landmarks(self.k, **PAPER[self.k]["model"])
 
 

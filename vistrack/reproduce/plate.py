@@ -38,6 +38,20 @@ __all__ = ["PlateConfig", "plate_tasks", "run_plate_task", "plate_results"]
 
 @dataclass
 class PlateConfig:
+    """The plate experiment (§4.5.3): ``runs`` per clip and ``(algo, N)`` entry, root ``seed``.
+
+    Attributes
+    ----------
+    clips : list
+        Clip folders.
+    entries : list of (str, int)
+        ``(algorithm, N)`` pairs.
+    runs : int
+    seed : int
+    acquire_within : int
+        A plate counts as acquired in time when the tracker is on it within this many frames.
+    """
+
     clips: list
     entries: list = field(default_factory=lambda: [("lis", 100), ("bootstrap", 750)])
     runs: int = 20
