@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 import click
 import numpy as np
 from tqdm import tqdm
@@ -92,8 +94,10 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
 
     The track CSV has one row per frame: frame, visible, cx, cy, w, h,
     angle_deg, scale, the model's points (contour: support points qx0..,
-    qy0..; plate: vertices x0..y3; landmarks: lx0.., ly0..), then ess and ms
-    (time spent on the frame). With ground truth beside the video, the
+    qy0..; plate: vertices x0..y3; landmarks: lx0.., ly0..), then ess, ms
+    (time spent on the frame) and lost_reason (empty where visible=1; else
+    scale, outside, likelihood or "not found"). run says on which frames it
+    loses the object and why. With ground truth beside the video, the
     summary reports the centre error (landmarks: the mean landmark error).
 
     \b
@@ -141,11 +145,17 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         bar.update(1)
         bar.set_postfix(ess=f"{ess:.1f}", refresh=False)
 
+    def notify(index, reason, detail, said=[]):
+        said.append(index)
+        if not quiet and len(said) <= 5:
+            tqdm.write(f"frame {index}: lost the object ({reason}: {detail})"
+                       + ("; further losses in the summary" if len(said) == 5 else ""), file=sys.stderr)
+
     try:
         with stop_on_signals():
             done = track_video(frames(), model, filt, particles, np.random.default_rng(seed), track_path=track_path,
                                out_path=out_path, results_path=results_path, video_info=(src.fps, src.size), show_particles=show_particles,
-                               label=f"{algo} N={particles}", progress=progress)
+                               label=f"{algo} N={particles}", progress=progress, notify=notify)
     except (VideoError, OSError) as e:
         raise click.ClickException(str(e)) from None
     finally:

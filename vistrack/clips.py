@@ -58,8 +58,12 @@ class Clip:
         return t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k]
 
 
+#: track-CSV columns of text (read as ``str`` arrays; every other column is numbers)
+TEXT_COLUMNS = ("lost_reason",)
+
+
 def read_groundtruth_csv(path):
-    """Columns of a ``groundtruth.csv`` (or track CSV) as float arrays."""
+    """Columns of a ``groundtruth.csv`` (or track CSV) as float arrays (:data:`TEXT_COLUMNS`: str)."""
     with open(path, newline="") as f:
         rd = csv.reader(f)
         try:
@@ -67,11 +71,17 @@ def read_groundtruth_csv(path):
         except StopIteration:
             raise VideoError(f"{path} is empty") from None
         rows = [r for r in rd if r]
+    text = [k for k, h in enumerate(header) if h in TEXT_COLUMNS]
     try:
-        data = np.array(rows, dtype=float).reshape(len(rows), len(header))
+        if any(len(r) != len(header) for r in rows):
+            raise ValueError
+        data = np.array([[v for k, v in enumerate(r) if k not in text] for r in rows], dtype=float)
     except ValueError:
         raise VideoError(f"{path}: every row needs {len(header)} numbers") from None
-    return {h: data[:, k] for k, h in enumerate(header)}
+    numeric = [h for k, h in enumerate(header) if k not in text]
+    out = {h: data[:, k] if len(rows) else np.zeros(0) for k, h in enumerate(numeric)}
+    out.update({header[k]: np.array([r[k] for r in rows], dtype=str) for k in text})
+    return {h: out[h] for h in header}
 
 
 def _rects_truth(rects):
@@ -132,3 +142,4 @@ def format_value(v):
     if isinstance(v, str):
         return v
     return f"{float(v):.3f}"
+

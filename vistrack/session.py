@@ -113,6 +113,17 @@ class VideoRun:
     timer: object = None
     #: why the annotated video is not H.264, or ``None``
     video_note: str | None = None
+    #: ``(index, reason, detail)`` of the first frame of every stretch where the object is lost
+    losses: list = field(default_factory=list)
+    _was_lost: bool = False
+
+    def note_lost(self, res, notify=None):
+        """Record the frame result ``res`` where a stretch of lost frames starts (and tell ``notify``)."""
+        if res.lost_reason and not self._was_lost:
+            self.losses.append((res.index, res.lost_reason, res.lost_detail))
+            if notify:
+                notify(res.index, res.lost_reason, res.lost_detail)
+        self._was_lost = bool(res.lost_reason)
 
     def stage_split(self):
         """``{stage: ms per frame}`` over :data:`~vistrack.profiling.STAGES`, plus ``other`` (the
@@ -132,7 +143,7 @@ class VideoRun:
 
 
 def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, results_path=None,
-                video_info=None, show_particles=10, label="", progress=None, profile=True):
+                video_info=None, show_particles=10, label="", progress=None, notify=None, profile=True):
     """Track ``frames`` (iterable of ``(index, frame)``), writing the track CSV and annotated video as
     it goes; stops cleanly on Ctrl-C / SIGTERM (:func:`stop_on_signals`). Returns a :class:`VideoRun`.
 
@@ -152,6 +163,9 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         Text drawn on every annotated frame after the frame number.
     progress : callable or None
         ``progress(ess)`` after every frame (a progress bar).
+    notify : callable or None
+        ``notify(index, reason, detail)`` on the first frame of every stretch where the
+        object is lost (``visible=0``; :mod:`vistrack.models.collapse`).
     profile : bool
         Time the stages (:mod:`vistrack.profiling`) into ``VideoRun.timer``; the tracks are
         the same either way.
@@ -170,10 +184,11 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
             warnings.simplefilter("ignore", DegenerateWeightsWarning)
             for res in track(frames, filt, particles, rng):
-                vis = model.visible(res.maps, res.estimate)
+                vis = res.visible
                 row = {"frame": res.index, "visible": int(vis)}
                 row.update(model.describe(res.estimate))
-                row["ess"], row["ms"] = res.ess, res.ms
+                row["ess"], row["ms"], row["lost_reason"] = res.ess, res.ms, res.lost_reason
+                run.note_lost(res, notify)
                 run.rows.append(row)
                 for o in outs:
                     o.write(row)
@@ -211,6 +226,8 @@ def summary_lines(run, particles, *, model_name, model, truth, frame_width):
     if split:
         lines.append("ms per frame: " + ", ".join(f"{s} {split[s]:.2f}" for s in (*STAGES, "other"))
                      + f" (total {split['total']:.2f}, drawing and writing included in other)")
+    if run.losses:
+        lines.append(_lost_line(run))
     if truth is None:
         return lines
     if model_name == "landmarks" and "lx0" in truth:
@@ -228,6 +245,19 @@ def summary_lines(run, particles, *, model_name, model, truth, frame_width):
     elif "w" in truth and "cx" in truth:
         lines.append(_box_summary(rows, truth, frame_width))
     return lines
+
+
+def _lost_line(run):
+    """One line: in how many frames the object was not reported, why, and where it was first lost."""
+    reasons = {}
+    for r in run.rows:
+        if r["lost_reason"]:
+            reasons[r["lost_reason"]] = reasons.get(r["lost_reason"], 0) + 1
+    first, reason, detail = run.losses[0]
+    times = f"; lost {len(run.losses)} times" if len(run.losses) > 1 else ""
+    return (f"object not reported (visible=0) in {sum(reasons.values())} of {len(run.rows)} frames ("
+            + ", ".join(f"{k} {v}" for k, v in reasons.items()) + f"); first lost at frame {first} ({reason}: "
+            f"{detail}){times}")
 
 
 def _box_summary(rows, t, frame_width):

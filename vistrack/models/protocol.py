@@ -37,10 +37,12 @@ for optional parts. Shapes: ``N`` particles, ``d`` the state dimension.
 :class:`VideoModel` (the frame loop, ``run``, ``eval`` and ``vistrack.Tracker``)
     ``observe(maps, particles) -> obs`` (the frame's observation ``Y_t`` from its feature
     maps), ``adapt(obs, estimate)``, ``estimate(particles) -> (d,)``, ``visible(obs, state)
-    -> bool``, ``box(states) -> (N, 4)`` ``(x, y, w, h)``, ``outline(states)`` (points to
-    draw) and ``describe(state) -> dict`` (the track-file columns). Subclass
-    :class:`VideoModelBase` for the defaults (the maps are the observation, no adaptation,
-    the weighted mean, always visible).
+    -> bool``, ``check_lost(obs, estimate) -> (reason, detail)`` (once per frame, in order:
+    ``("", "")`` when the object is reported, :mod:`vistrack.models.collapse`),
+    ``box(states) -> (N, 4)`` ``(x, y, w, h)``, ``outline(states)`` (points to draw) and
+    ``describe(state) -> dict`` (the track-file columns). Subclass :class:`VideoModelBase`
+    for the defaults (the maps are the observation, no adaptation, the weighted mean,
+    always visible, lost where ``visible`` says no).
 """
 
 from __future__ import annotations
@@ -141,6 +143,8 @@ class VideoModel(Protocol):
 
     def visible(self, obs, state): ...
 
+    def check_lost(self, obs, state): ...
+
     def box(self, states): ...
 
     def outline(self, states): ...
@@ -169,6 +173,13 @@ class VideoModelBase:
     def visible(self, obs, state):
         """Whether the object is reported at ``state`` (here: always)."""
         return True
+
+    def check_lost(self, obs, state):
+        """``(reason, detail)`` for the frame's estimate ``state``: ``("", "")`` when
+        :meth:`visible`, else ``("not found", ...)``."""
+        if self.visible(obs, state):
+            return "", ""
+        return "not found", "no object passes the model's test at the estimate"
 
 
 def _members(protocol):
