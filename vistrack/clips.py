@@ -19,7 +19,8 @@ import numpy as np
 
 from .video import VideoError, find_groundtruth, groundtruth_origin, open_video, read_rects
 
-__all__ = ["Clip", "load_clip", "read_groundtruth_csv", "write_track_csv", "format_value", "GroundTruthWarning"]
+__all__ = ["Clip", "load_clip", "read_groundtruth_csv", "write_track_csv", "format_value", "excerpt_clip",
+           "GroundTruthWarning"]
 
 
 @dataclass
@@ -143,3 +144,29 @@ def format_value(v):
         return v
     return f"{float(v):.3f}"
 
+
+def excerpt_clip(src, dst, frames):
+    """Write the first ``frames`` frames of the clip ``src`` (any layout :func:`load_clip`
+    opens, with box ground truth) into folder ``dst``: ``img/`` of lossless PNGs and a 0-based
+    ``groundtruth.txt`` (``x,y,w,h``, ``0,0,0,0`` where the object is absent: the GOT-10k
+    layout). Returns ``dst``."""
+    import cv2
+
+    clip = load_clip(src)
+    if clip.truth is None or "w" not in clip.truth:
+        raise VideoError(f"{src}: no box ground truth to excerpt")
+    dst = Path(dst)
+    (dst / "img").mkdir(parents=True, exist_ok=True)
+    n = 0
+    for i, frame in clip.source:
+        if i >= frames:
+            break
+        if not cv2.imwrite(str(dst / "img" / f"{i + 1:08d}.png"), frame):
+            raise VideoError(f"cannot write {dst / 'img'}")
+        n = i + 1
+    t = clip.truth
+    with open(dst / "groundtruth.txt", "w") as f:
+        for k in range(min(n, len(t["cx"]))):
+            box = (t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k])
+            f.write(",".join(f"{v:.2f}" for v in (box if t["visible"][k] > 0 else (0, 0, 0, 0))) + "\n")
+    return dst
