@@ -44,6 +44,20 @@ def model_options(name, *, layout, no_colour, template):
     return opts
 
 
+def lost_notice(most=5):
+    """``notify(index, reason, detail)`` for :func:`~vistrack.session.track_video`: a line on stderr
+    (above the progress bar) for each of the first ``most`` frames where the object is lost."""
+    said = []
+
+    def notify(index, reason, detail):
+        said.append(index)
+        if len(said) <= most:
+            tqdm.write(f"frame {index}: lost the object ({reason}: {detail})"
+                       + ("; further losses in the summary" if len(said) == most else ""), file=sys.stderr)
+
+    return notify
+
+
 @click.command()
 @click.argument("video", type=click.Path(exists=True))
 @click.option("--model", "model_name", default=None, metavar="[" + "|".join(MODELS) + "]",
@@ -145,17 +159,12 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         bar.update(1)
         bar.set_postfix(ess=f"{ess:.1f}", refresh=False)
 
-    def notify(index, reason, detail, said=[]):
-        said.append(index)
-        if not quiet and len(said) <= 5:
-            tqdm.write(f"frame {index}: lost the object ({reason}: {detail})"
-                       + ("; further losses in the summary" if len(said) == 5 else ""), file=sys.stderr)
-
     try:
         with stop_on_signals():
             done = track_video(frames(), model, filt, particles, np.random.default_rng(seed), track_path=track_path,
                                out_path=out_path, results_path=results_path, video_info=(src.fps, src.size), show_particles=show_particles,
-                               label=f"{algo} N={particles}", progress=progress, notify=notify)
+                               label=f"{algo} N={particles}", progress=progress,
+                               notify=None if quiet else lost_notice())
     except (VideoError, OSError) as e:
         raise click.ClickException(str(e)) from None
     finally:

@@ -90,6 +90,7 @@ def test_run_writes_lost_reason_and_says_when_it_loses_the_object(tmp_path, caps
     assert {r["lost_reason"] for r in rows if r["visible"] == "0"} == {"likelihood"}
     assert f"frame {first}: lost the object (likelihood: log r at the estimate" in err
     lost = sum(r["visible"] == "0" for r in rows)
-    assert f"object not reported (visible=0) in {lost} of 34 frames (likelihood {lost}); first lost at frame {first}" in out
+    assert (f"object not reported (visible=0) in {lost} of 34 frames (likelihood {lost}); "
+            f"first lost at frame {first}") in out
     t = read_groundtruth_csv(track)  # the text column reads back beside the numbers
     assert t["lost_reason"][first] == "likelihood" and t["visible"][first] == 0.0 and len(t["cx"]) == 34

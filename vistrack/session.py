@@ -29,7 +29,7 @@ from .render import annotate
 from .tracking import top_particles, track
 from .video import VideoWriter
 
-__all__ = ["TrackCSV", "VideoRun", "track_video", "summary_lines", "Terminated", "stop_on_signals"]
+__all__ = ["TrackCSV", "VideoRun", "track_row", "track_video", "summary_lines", "Terminated", "stop_on_signals"]
 
 
 class Terminated(KeyboardInterrupt):
@@ -142,6 +142,15 @@ class VideoRun:
         return {None: 0, "interrupt": 130, "terminate": 143}[self.stopped]
 
 
+def track_row(model, res):
+    """The track-CSV row of a :class:`~vistrack.tracking.FrameResult`: ``frame, visible``, the
+    model's :meth:`describe` columns, ``ess, ms, lost_reason``."""
+    row = {"frame": res.index, "visible": int(res.visible)}
+    row.update(model.describe(res.estimate))
+    row["ess"], row["ms"], row["lost_reason"] = res.ess, res.ms, res.lost_reason
+    return row
+
+
 def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, results_path=None,
                 video_info=None, show_particles=10, label="", progress=None, notify=None, profile=True):
     """Track ``frames`` (iterable of ``(index, frame)``), writing the track CSV and annotated video as
@@ -185,9 +194,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
             warnings.simplefilter("ignore", DegenerateWeightsWarning)
             for res in track(frames, filt, particles, rng):
                 vis = res.visible
-                row = {"frame": res.index, "visible": int(vis)}
-                row.update(model.describe(res.estimate))
-                row["ess"], row["ms"], row["lost_reason"] = res.ess, res.ms, res.lost_reason
+                row = track_row(model, res)
                 run.note_lost(res, notify)
                 run.rows.append(row)
                 for o in outs:
