@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 import click
 import numpy as np
 from tqdm import tqdm
@@ -40,6 +42,20 @@ def model_options(name, *, layout, no_colour, template):
             raise click.UsageError("--no-colour is for the contour and plate models")
         opts["colour" if name == "contour" else "appearance"] = False
     return opts
+
+
+def lost_notice(most=5):
+    """``notify(index, reason, detail)`` for :func:`~vistrack.session.track_video`: a line on stderr
+    (above the progress bar) for each of the first ``most`` frames where the object is lost."""
+    said = []
+
+    def notify(index, reason, detail):
+        said.append(index)
+        if len(said) <= most:
+            tqdm.write(f"frame {index}: lost the object ({reason}: {detail})"
+                       + ("; further losses in the summary" if len(said) == most else ""), file=sys.stderr)
+
+    return notify
 
 
 @click.command()
@@ -92,8 +108,10 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
 
     The track CSV has one row per frame: frame, visible, cx, cy, w, h,
     angle_deg, scale, the model's points (contour: support points qx0..,
-    qy0..; plate: vertices x0..y3; landmarks: lx0.., ly0..), then ess and ms
-    (time spent on the frame). With ground truth beside the video, the
+    qy0..; plate: vertices x0..y3; landmarks: lx0.., ly0..), then ess, ms
+    (time spent on the frame) and lost_reason (empty where visible=1; else
+    scale, outside, likelihood or "not found"). run says on which frames it
+    loses the object and why. With ground truth beside the video, the
     summary reports the centre error (landmarks: the mean landmark error).
 
     \b
@@ -145,7 +163,8 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         with stop_on_signals():
             done = track_video(frames(), model, filt, particles, np.random.default_rng(seed), track_path=track_path,
                                out_path=out_path, results_path=results_path, video_info=(src.fps, src.size), show_particles=show_particles,
-                               label=f"{algo} N={particles}", progress=progress)
+                               label=f"{algo} N={particles}", progress=progress,
+                               notify=None if quiet else lost_notice())
     except (VideoError, OSError) as e:
         raise click.ClickException(str(e)) from None
     finally:

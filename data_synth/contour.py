@@ -6,7 +6,7 @@ over a static background full of edges:
 
 - centre: AR(2) (velocity ``v_t = 0.9 v_{t-1} + N(0, (0.005 W)²)``), bouncing
   off the frame margins, with sudden jumps (probability 0.02 per frame,
-  2.5–4.5 % of the frame width);
+  2.5–4.5 % of the frame width, by default);
 - scale: ``log s`` AR(1) about 0 (std ~0.1); rotation: damped angular velocity,
   kept within ±45°;
 - global and sweeping illumination change, motion blur along the motion
@@ -88,10 +88,13 @@ def _paste(frame, sprite, mask, half, cx, cy, scale, angle_deg, velocity=(0.0, 0
 
 
 def make_contour_clip(out, *, frames=300, size=(320, 240), seed=0, clutter="high", distractor=True,
-                      shape="hand", n_support=24, fps=30.0, progress=None):
+                      shape="hand", n_support=24, fps=30.0, jump_prob=0.02, jump_size=(0.025, 0.045),
+                      progress=None):
     """Render a contour clip into folder ``out`` (video.mp4, groundtruth.csv, meta.json).
 
-    Returns the meta dictionary. ``progress(k)`` is called after every frame when given.
+    ``jump_prob``: the chance of a sudden jump per frame; ``jump_size``: its length range as
+    shares of the frame width. Returns the meta dictionary. ``progress(k)`` is called after
+    every frame when given.
     """
     if clutter not in CLUTTER:
         raise ValueError(f"clutter must be one of {', '.join(CLUTTER)}, got {clutter!r}")
@@ -130,9 +133,9 @@ def make_contour_clip(out, *, frames=300, size=(320, 240), seed=0, clutter="high
             if t > 0:
                 vel = 0.9 * vel + rng.normal(0, 0.005 * w, 2)
                 step = vel.copy()
-                if rng.random() < 0.02:  # a sudden movement
+                if rng.random() < jump_prob:  # a sudden movement
                     a = rng.uniform(0, 2 * np.pi)
-                    step += rng.uniform(0.025, 0.045) * w * np.array([np.cos(a), np.sin(a)])
+                    step += rng.uniform(*jump_size) * w * np.array([np.cos(a), np.sin(a)])
                 pos = pos + step
                 for k, lim in enumerate((w, h)):
                     if pos[k] < margin or pos[k] > lim - margin:
@@ -177,8 +180,8 @@ def make_contour_clip(out, *, frames=300, size=(320, 240), seed=0, clutter="high
         "template": {"support_points": np.round(template, 4).tolist(),
                      "note": "support points at scale 1, angle 0, centred; pose (cx, cy, scale, angle_deg)"},
         "distractor": distractor_pose,
-        "dynamics": {"velocity_ar": 0.9, "velocity_noise_px": 0.005 * w, "jump_prob": 0.02,
-                     "jump_px": [0.025 * w, 0.045 * w], "log_scale_ar": 0.97, "log_scale_noise": 0.02,
+        "dynamics": {"velocity_ar": 0.9, "velocity_noise_px": 0.005 * w, "jump_prob": jump_prob,
+                     "jump_px": [jump_size[0] * w, jump_size[1] * w], "log_scale_ar": 0.97, "log_scale_noise": 0.02,
                      "angle_rate_ar": 0.9, "angle_rate_noise_deg": 0.6, "max_angle_deg": 45},
         "noise_std": noise,
         "background_shapes": shapes,

@@ -117,24 +117,59 @@ def test_synth_suite(tmp_path, capsys):
     assert json.loads((tmp_path / "s" / "contour-06" / "meta.json").read_text())["seed"] == 6
 
 
-def test_demo_writes_videos_tracks_and_report(tmp_path, capsys):
+def _tiny_otb_clip(folder, frames=12):
+    """An OTB-layout clip (img/ + 1-based groundtruth_rect.txt): a red square moving right on grey noise."""
+    import cv2
+
+    rng = np.random.default_rng(3)
+    bg = cv2.GaussianBlur(rng.integers(40, 200, (72, 96, 3)).astype(np.uint8), (0, 0), 1.5)
+    (folder / "img").mkdir(parents=True)
+    lines = []
+    for t in range(frames):
+        f = bg.copy()
+        f[26:46, 20 + t:40 + t] = (20, 30, 220)
+        cv2.imwrite(str(folder / "img" / f"{t + 1:04d}.png"), f)
+        lines.append(f"{21 + t},27,20,20")
+    (folder / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n")
+    return folder
+
+
+def test_demo_writes_videos_tracks_and_reports(tmp_path, capsys):
     import cv2
 
     out = tmp_path / "demo"
-    code, stdout, err = run(["demo", "--out", str(out), "--frames", "12", "--runs", "1"], capsys)
+    real = _tiny_otb_clip(tmp_path / "Tiny")
+    code, stdout, err = run(["demo", "--out", str(out), "--frames", "12", "--runs", "2", "--real-clip", str(real),
+                             "--real-frames", "10"], capsys)
     assert code == 0, err
-    made = [f"contour-{a}" for a in ("ls-n-ips", "lis", "bootstrap")] + [f"plate-{a}" for a in ("lis", "bootstrap")]
-    for name in made:
+    for name in [f"jumps-{a}" for a in ("ls-n-ips", "lis", "bootstrap")]:
         cap = cv2.VideoCapture(str(out / f"{name}.mp4"))
         assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 12
         with open(out / f"{name}.csv", newline="") as f:
             rows = list(csv.DictReader(f))
-        assert len(rows) == 12
-        if name.startswith("plate"):
-            assert {"x0", "y3", "visible"} <= set(rows[0])
+        assert len(rows) == 12 and {"visible", "lost_reason"} <= set(rows[0])
     assert (out / "eval" / "report.md").is_file() and str(out) in stdout
-    res = json.loads((out / "eval" / "results.json").read_text())["results"]
-    assert [(r["algo"], r["particles"]) for r in res] == [("ls-n-ips", 30), ("lis", 30), ("bootstrap", 300)]
+    res = json.loads((out / "eval" / "results.json").read_text())
+    assert res["config"]["model"] == "box"
+    assert [(r["algo"], r["particles"], r["runs"]) for r in res["results"]] == [
+        ("ls-n-ips", 30, 2), ("lis", 30, 2), ("bootstrap", 150, 2)]
+    real_res = json.loads((out / "eval-real" / "results.json").read_text())["results"]
+    assert [(r["algo"], r["particles"], r["runs"]) for r in real_res] == [("lis", 100, 2), ("opencv-mil", 1, 1)]
+    assert len(real_res[0]["p_lost_per_frame"]) == 10  # the excerpt: the first 10 frames
+    assert "| opencv-mil | 1 |" in stdout and "| lis | 100 |" in stdout
+
+
+def test_demo_skips_a_missing_real_clip(tmp_path, capsys, monkeypatch):
+    import importlib
+
+    demo_module = importlib.import_module("vistrack.cli.demo")  # the package's `demo` is the command
+    monkeypatch.setattr(demo_module, "DEMO_ALGOS", (("bootstrap", 20),))  # the skip is what is tested
+    out = tmp_path / "demo"
+    code, stdout, err = run(["demo", "--out", str(out), "--frames", "10", "--runs", "1", "--real-clip",
+                             str(tmp_path / "nowhere")], capsys)
+    assert code == 0, err
+    assert f"4/4 skipped: no real clip at {tmp_path / 'nowhere'}" in stdout
+    assert (out / "eval" / "report.md").is_file() and not (out / "eval-real").exists()
 
 
 def test_engine_workers_keep_freed_memory():

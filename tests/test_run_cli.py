@@ -50,7 +50,7 @@ def test_run_writes_track_and_annotated_video(clip, tmp_path, capsys):
     assert code == 0, err
     h = header(track)
     assert h[:8] == ["frame", "visible", "cx", "cy", "w", "h", "angle_deg", "scale"]
-    assert h[-2:] == ["ess", "ms"]
+    assert h[-3:] == ["ess", "ms", "lost_reason"]
     r = rows(track)
     assert len(r) == 25 and [int(x["frame"]) for x in r] == list(range(25))
     assert all(1.0 <= float(x["ess"]) <= 20.0 for x in r)

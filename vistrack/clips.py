@@ -19,7 +19,8 @@ import numpy as np
 
 from .video import VideoError, find_groundtruth, groundtruth_origin, open_video, read_rects
 
-__all__ = ["Clip", "load_clip", "read_groundtruth_csv", "write_track_csv", "format_value", "GroundTruthWarning"]
+__all__ = ["Clip", "load_clip", "read_groundtruth_csv", "write_track_csv", "format_value", "excerpt_clip",
+           "GroundTruthWarning"]
 
 
 @dataclass
@@ -59,8 +60,12 @@ class Clip:
         return t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k]
 
 
+#: track-CSV columns of text (read as ``str`` arrays; every other column is numbers)
+TEXT_COLUMNS = ("lost_reason",)
+
+
 def read_groundtruth_csv(path):
-    """Columns of a ``groundtruth.csv`` (or track CSV) as float arrays."""
+    """Columns of a ``groundtruth.csv`` (or track CSV) as float arrays (:data:`TEXT_COLUMNS`: str)."""
     with open(path, newline="") as f:
         rd = csv.reader(f)
         try:
@@ -68,11 +73,17 @@ def read_groundtruth_csv(path):
         except StopIteration:
             raise VideoError(f"{path} is empty") from None
         rows = [r for r in rd if r]
+    text = [k for k, h in enumerate(header) if h in TEXT_COLUMNS]
     try:
-        data = np.array(rows, dtype=float).reshape(len(rows), len(header))
+        if any(len(r) != len(header) for r in rows):
+            raise ValueError
+        data = np.array([[v for k, v in enumerate(r) if k not in text] for r in rows], dtype=float)
     except ValueError:
         raise VideoError(f"{path}: every row needs {len(header)} numbers") from None
-    return {h: data[:, k] for k, h in enumerate(header)}
+    numeric = [h for k, h in enumerate(header) if k not in text]
+    out = {h: data[:, k] if len(rows) else np.zeros(0) for k, h in enumerate(numeric)}
+    out.update({header[k]: np.array([r[k] for r in rows], dtype=str) for k in text})
+    return {h: out[h] for h in header}
 
 
 def _rects_truth(rects):
@@ -133,3 +144,30 @@ def format_value(v):
     if isinstance(v, str):
         return v
     return f"{float(v):.3f}"
+
+
+def excerpt_clip(src, dst, frames):
+    """Write the first ``frames`` frames of the clip ``src`` (any layout :func:`load_clip`
+    opens, with box ground truth) into folder ``dst``: ``img/`` of lossless PNGs and a 0-based
+    ``groundtruth.txt`` (``x,y,w,h``, ``0,0,0,0`` where the object is absent: the GOT-10k
+    layout). Returns ``dst``."""
+    import cv2
+
+    clip = load_clip(src)
+    if clip.truth is None or "w" not in clip.truth:
+        raise VideoError(f"{src}: no box ground truth to excerpt")
+    dst = Path(dst)
+    (dst / "img").mkdir(parents=True, exist_ok=True)
+    n = 0
+    for i, frame in clip.source:
+        if i >= frames:
+            break
+        if not cv2.imwrite(str(dst / "img" / f"{i + 1:08d}.png"), frame):
+            raise VideoError(f"cannot write {dst / 'img'}")
+        n = i + 1
+    t = clip.truth
+    with open(dst / "groundtruth.txt", "w") as f:
+        for k in range(min(n, len(t["cx"]))):
+            box = (t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k])
+            f.write(",".join(f"{v:.2f}" for v in (box if t["visible"][k] > 0 else (0, 0, 0, 0))) + "\n")
+    return dst

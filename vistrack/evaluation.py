@@ -239,8 +239,8 @@ def run_task(task, out_dir):
             est.append(res.estimate)
             ms.append(res.ms)
             ess.append(res.ess)
-            if spec.lost_rule == "plate":  # the maps are overwritten by the next frame: report now
-                reported.append(bool(model.visible(res.maps, res.estimate)))
+            if spec.lost_rule == "plate":  # the plate rule scores what was reported
+                reported.append(res.visible)
                 vertices.append(model.vertices(res.estimate)[0])
         est = np.array(est)
         wh = model.box(est)[:, 2:]

@@ -29,7 +29,7 @@ from .render import annotate
 from .tracking import top_particles, track
 from .video import VideoWriter
 
-__all__ = ["TrackCSV", "VideoRun", "track_video", "summary_lines", "Terminated", "stop_on_signals"]
+__all__ = ["TrackCSV", "VideoRun", "track_row", "track_video", "summary_lines", "Terminated", "stop_on_signals"]
 
 
 class Terminated(KeyboardInterrupt):
@@ -115,6 +115,17 @@ class VideoRun:
     timer: object = None
     #: why the annotated video is not H.264, or ``None``
     video_note: str | None = None
+    #: ``(index, reason, detail)`` of the first frame of every stretch where the object is lost
+    losses: list = field(default_factory=list)
+    _was_lost: bool = False
+
+    def note_lost(self, res, notify=None):
+        """Record the frame result ``res`` where a stretch of lost frames starts (and tell ``notify``)."""
+        if res.lost_reason and not self._was_lost:
+            self.losses.append((res.index, res.lost_reason, res.lost_detail))
+            if notify:
+                notify(res.index, res.lost_reason, res.lost_detail)
+        self._was_lost = bool(res.lost_reason)
 
     def stage_split(self):
         """``{stage: ms per frame}`` over :data:`~vistrack.profiling.STAGES`, plus ``other`` (the
@@ -133,8 +144,17 @@ class VideoRun:
         return {None: 0, "interrupt": 130, "terminate": 143}[self.stopped]
 
 
+def track_row(model, res):
+    """The track-CSV row of a :class:`~vistrack.tracking.FrameResult`: ``frame, visible``, the
+    model's :meth:`describe` columns, ``ess, ms, lost_reason``."""
+    row = {"frame": res.index, "visible": int(res.visible)}
+    row.update(model.describe(res.estimate))
+    row["ess"], row["ms"], row["lost_reason"] = res.ess, res.ms, res.lost_reason
+    return row
+
+
 def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, results_path=None,
-                video_info=None, show_particles=10, label="", progress=None, profile=True):
+                video_info=None, show_particles=10, label="", progress=None, notify=None, profile=True):
     """Track ``frames`` (iterable of ``(index, frame)``), writing the track CSV and annotated video as
     it goes; stops cleanly on Ctrl-C / SIGTERM (:func:`stop_on_signals`). Returns a :class:`VideoRun`.
 
@@ -154,6 +174,9 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         Text drawn on every annotated frame after the frame number.
     progress : callable or None
         ``progress(ess)`` after every frame (a progress bar).
+    notify : callable or None
+        ``notify(index, reason, detail)`` on the first frame of every stretch where the
+        object is lost (``visible=0``; :mod:`vistrack.models.collapse`).
     profile : bool
         Time the stages (:mod:`vistrack.profiling`) into ``VideoRun.timer``; the tracks are
         the same either way.
@@ -172,10 +195,9 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
             warnings.simplefilter("ignore", DegenerateWeightsWarning)
             for res in track(frames, filt, particles, rng):
-                vis = model.visible(res.maps, res.estimate)
-                row = {"frame": res.index, "visible": int(vis)}
-                row.update(model.describe(res.estimate))
-                row["ess"], row["ms"] = res.ess, res.ms
+                vis = res.visible
+                row = track_row(model, res)
+                run.note_lost(res, notify)
                 run.rows.append(row)
                 for o in outs:
                     o.write(row)
@@ -213,6 +235,8 @@ def summary_lines(run, particles, *, model_name, model, truth, frame_width):
     if split:
         lines.append("ms per frame: " + ", ".join(f"{s} {split[s]:.2f}" for s in (*STAGES, "other"))
                      + f" (total {split['total']:.2f}, drawing and writing included in other)")
+    if run.losses:
+        lines.append(_lost_line(run))
     if truth is None:
         return lines
     if model_name == "landmarks" and "lx0" in truth:
@@ -230,6 +254,19 @@ def summary_lines(run, particles, *, model_name, model, truth, frame_width):
     elif "w" in truth and "cx" in truth:
         lines.append(_box_summary(rows, truth, frame_width))
     return lines
+
+
+def _lost_line(run):
+    """One line: in how many frames the object was not reported, why, and where it was first lost."""
+    reasons = {}
+    for r in run.rows:
+        if r["lost_reason"]:
+            reasons[r["lost_reason"]] = reasons.get(r["lost_reason"], 0) + 1
+    first, reason, detail = run.losses[0]
+    times = f"; lost {len(run.losses)} times" if len(run.losses) > 1 else ""
+    return (f"object not reported (visible=0) in {sum(reasons.values())} of {len(run.rows)} frames ("
+            + ", ".join(f"{k} {v}" for k, v in reasons.items()) + f"); first lost at frame {first} ({reason}: "
+            f"{detail}){times}")
 
 
 def _box_summary(rows, t, frame_width):

@@ -91,7 +91,7 @@ class Tracker:
 
     def update(self, frame):
         """Track ``frame``; returns ``(ok, (x, y, w, h))`` with ``ok`` whether the model reports
-        the object as visible."""
+        the object (``False`` where its estimate collapsed: :attr:`lost_reason`)."""
         if self._stepper is None:
             raise RuntimeError("call init(frame, box) before update(frame)")
         self._index += 1
@@ -105,5 +105,11 @@ class Tracker:
 
     @property
     def visible(self):
-        """Whether the model reports the object at the last estimate (:meth:`VideoModel.visible`)."""
-        return bool(self.model.visible(self.result.maps, self.result.estimate))
+        """Whether the last frame reports the object (``update``'s ``ok``)."""
+        return self.result.visible
+
+    @property
+    def lost_reason(self):
+        """``""``, or why the last frame does not report the object
+        (:data:`~vistrack.models.collapse.REASONS`)."""
+        return self.result.lost_reason

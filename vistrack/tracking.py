@@ -29,11 +29,20 @@ class FrameResult:
     estimate: np.ndarray
     ms: float
     maps: object = None
+    #: ``""`` when the object is reported at the estimate, else why not
+    #: (:data:`~vistrack.models.collapse.REASONS`), and a sentence with the numbers
+    lost_reason: str = ""
+    lost_detail: str = ""
 
     @property
     def ess(self):
         """Effective sample size of the frame's particle set (thesis 001 §2.4)."""
         return self.particles.ess
+
+    @property
+    def visible(self):
+        """Whether the object is reported at the estimate (the track CSV's ``visible``)."""
+        return not self.lost_reason
 
 
 def top_particles(particles, k):
@@ -56,8 +65,9 @@ class FrameStepper:
     turns each frame's maps into its observation ``Y_t`` (the maps themselves by default;
     landmarks: blob detection and association; box: the appearance maps over the region
     the particles can reach), ``estimate(particles)`` gives the point estimate (unless
-    ``estimator`` is given) and ``adapt(obs, estimate)`` is told each frame's estimate
-    after the step (the box model's appearance). The feature maps of a frame live in
+    ``estimator`` is given), ``check_lost(obs, estimate)`` whether the object is reported
+    there (:mod:`vistrack.models.collapse`) and ``adapt(obs, estimate)`` is told each
+    frame's estimate after the step (the box model's appearance). The feature maps of a frame live in
     buffers that the next frame overwrites: use them before stepping again.
     """
 
@@ -79,9 +89,10 @@ class FrameStepper:
         else:
             self.particles = self.filt.step(self.particles, obs, self.rng)
         est = self.estimator(self.particles)
+        reason, detail = self.model.check_lost(obs, est)
         self.model.adapt(obs, est)
         ms = (time.perf_counter() - t0) * 1e3
-        return FrameResult(index, frame, self.particles, est, ms, maps)
+        return FrameResult(index, frame, self.particles, est, ms, maps, reason, detail)
 
 
 def track(frames, filt, n, rng, *, estimator=None):

@@ -17,7 +17,8 @@ local coordinates; each method's docstring gives its arguments and results.
 * :class:`SIRModel`: plain SIR's proposal (§3.1).
 * :class:`VideoModel`: the frame loop, ``run``, ``eval`` and ``vistrack.Tracker``. Subclass
   :class:`VideoModelBase` for the defaults (the maps are the observation, no adaptation,
-  the weighted mean, always visible).
+  the weighted mean, always visible, lost where ``visible`` says no; ``check_lost``
+  once per frame: :mod:`vistrack.models.collapse`).
 """
 
 from __future__ import annotations
@@ -217,6 +218,12 @@ class VideoModel(Protocol):
     def visible(self, obs, state):
         """Whether the object is reported at ``state (d,)`` in the frame observed as ``obs``."""
 
+    def check_lost(self, obs, state):
+        """``(reason, detail)`` for the frame's estimate ``state (d,)``, asked once per frame in
+        order: ``("", "")`` when the object is reported, else a reason of
+        :data:`vistrack.models.collapse.REASONS` (a collapsed scale, a likelihood far below its
+        running level, ...) and a detail for the user."""
+
     def box(self, states):
         """Axis-aligned boxes ``(N, 4)`` ``(x, y, w, h)`` (top-left corner, pixels) of
         ``states (N, d)`` or one state ``(d,)``."""
@@ -247,6 +254,13 @@ class VideoModelBase:
     def visible(self, obs, state):
         """Whether the object is reported at ``state`` (here: always)."""
         return True
+
+    def check_lost(self, obs, state):
+        """``(reason, detail)`` for the frame's estimate ``state``: ``("", "")`` when
+        :meth:`visible`, else ``("not found", ...)``."""
+        if self.visible(obs, state):
+            return "", ""
+        return "not found", "no object passes the model's test at the estimate"
 
 
 def _members(protocol):

@@ -1,0 +1,122 @@
+"""When a track has lost its object: the collapse test behind ``visible=0`` and ``lost_reason``.
+
+The frame loop (:class:`~vistrack.tracking.FrameStepper`) asks the model once per frame,
+in order, :meth:`check_lost(obs, estimate) <CollapseCheck.check_lost>`; the answer is the
+track CSV's ``visible`` and ``lost_reason`` columns and what ``vistrack run`` says when it
+loses the object. A model whose estimate collapses is reported lost with one of
+:data:`REASONS`:
+
+``scale``
+    the estimate's scale below ``scale_floor`` (0.3) of the first frame's: the contour or
+    box has shrunk towards a point;
+``outside``
+    the estimate's centre outside the frame;
+``likelihood``
+    ``log r`` at the estimate far below its running level (the median over the last
+    ``window`` = 30 frames where the object was reported): more than ``drop`` below it
+    (a difference, for likelihoods of any sign: the box model, 55), or under ``ratio``
+    times it (for a positive level: the contour's edge evidence, 0.15); or not finite.
+
+A frame reported lost does not enter the running level, so the track stays lost until
+the likelihood at the estimate comes back. The test looks at the estimate only, not at
+ground truth: a tracker that follows a look-alike (another face, skin of the same
+colour) scores as well there as on the object and stays ``visible=1``; what it catches
+is an estimate that no longer explains the frame (the object gone, occluded by
+something unlike it, the curve shrunk to a point).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+
+__all__ = ["REASONS", "CollapseWatch", "CollapseCheck"]
+
+#: ``lost_reason`` codes (the track CSV's column) and what they mean
+REASONS = {
+    "scale": "the estimate's scale fell below the floor",
+    "outside": "the estimate's centre left the frame",
+    "likelihood": "log r at the estimate fell far below its running level",
+    "not found": "the model's own test found no object at the estimate",
+}
+
+
+class CollapseWatch:
+    """The running state of the collapse test of one track (module docstring).
+
+    Parameters
+    ----------
+    scale_floor : float
+        Lost when the scale is below this share of the first frame's scale.
+    drop : float or None
+        Lost when ``log r < level - drop``.
+    ratio : float or None
+        Lost when the level is positive and ``log r < ratio · level``.
+    window : int
+        Frames in the running level (their median).
+    warmup : int
+        Frames reported before the likelihood test starts.
+    """
+
+    def __init__(self, *, scale_floor=0.3, drop=None, ratio=None, window=30, warmup=5):
+        self.scale_floor, self.drop, self.ratio = float(scale_floor), drop, ratio
+        self.warmup = int(warmup)
+        self.history = deque(maxlen=int(window))
+        self.scale0 = None
+
+    @property
+    def level(self):
+        """The running level of ``log r`` (``None`` before any frame was reported)."""
+        return float(np.median(self.history)) if self.history else None
+
+    def _likelihood(self, loglik):
+        if not np.isfinite(loglik):
+            return f"log r at the estimate is {loglik}"
+        if len(self.history) < self.warmup:
+            return ""
+        level = self.level
+        if self.drop is not None and loglik < level - self.drop:
+            return f"log r at the estimate {loglik:.1f}, more than {self.drop:g} below its running level {level:.1f}"
+        if self.ratio is not None and level > 0 and loglik < self.ratio * level:
+            return f"log r at the estimate {loglik:.1f}, under {self.ratio:g} of its running level {level:.1f}"
+        return ""
+
+    def check(self, loglik, scale, centre, frame_size):
+        """``(reason, detail)`` for one frame's estimate: ``("", "")`` when it is reported,
+        else a :data:`REASONS` code and a sentence with the numbers. Updates the running
+        level (a reported frame) and, on the first call, the reference scale."""
+        if self.scale0 is None:
+            self.scale0 = float(scale)
+        (x, y), (w, h) = centre, frame_size
+        if not scale >= self.scale_floor * self.scale0:
+            out = "scale", f"scale {scale:.3g}, below {self.scale_floor:g} of the first frame's {self.scale0:.3g}"
+        elif not (0 <= x < w and 0 <= y < h):
+            out = "outside", f"centre ({x:.1f}, {y:.1f}) outside the {w}x{h} frame"
+        else:
+            detail = self._likelihood(float(loglik))
+            out = ("likelihood", detail) if detail else ("", "")
+        if not out[0]:
+            self.history.append(float(loglik))
+        return out
+
+
+class CollapseCheck:
+    """Mixin for a video model with ``loglik``, ``describe`` (``cx``, ``cy``, ``scale``) and
+    ``frame_size``: :meth:`check_lost` by a :class:`CollapseWatch` made from
+    :attr:`collapse_options` on the first frame."""
+
+    #: keyword arguments of the model's :class:`CollapseWatch`
+    collapse_options: dict = {}
+    _collapse = None
+
+    def check_lost(self, obs, state):
+        """``(reason, detail)``: ``("", "")`` when the object is reported at the frame's
+        estimate ``state``, else why not (:data:`REASONS`). Called once per frame, in order,
+        by the frame loop (it keeps the running level)."""
+        if self._collapse is None:
+            self._collapse = CollapseWatch(**self.collapse_options)
+        s = np.asarray(state, float).reshape(1, -1)
+        d = self.describe(s[0])
+        return self._collapse.check(float(self.loglik(obs, s)[0]), float(d["scale"]), (float(d["cx"]), float(d["cy"])),
+                                    self.frame_size)
