@@ -19,9 +19,16 @@ STAGES = ("decode", "features", "likelihood", "proposal", "resampling", "adapt")
 
 
 class Timer:
-    """Accumulates exclusive seconds per stage; :meth:`timed` wraps a callable."""
+    """Accumulates exclusive seconds per stage; :meth:`timed` wraps a callable.
 
-    def __init__(self):
+    Parameters
+    ----------
+    clock : callable
+        Seconds now (default :func:`time.perf_counter`; tests pass a fake clock).
+    """
+
+    def __init__(self, clock=time.perf_counter):
+        self.clock = clock
         self.t = defaultdict(float)
         self._stack = []  # [stage, seconds of nested timed calls]
 
@@ -35,11 +42,11 @@ class Timer:
         """``fn`` wrapped so that its exclusive time (less that of nested timed calls) adds to stage ``part``."""
         def timed(*a, **k):
             self._stack.append([part, 0.0])
-            t0 = time.perf_counter()
+            t0 = self.clock()
             try:
                 return fn(*a, **k)
             finally:
-                dt = time.perf_counter() - t0
+                dt = self.clock() - t0
                 _, nested = self._stack.pop()
                 self.t[part] += dt - nested
                 if self._stack:
@@ -51,13 +58,13 @@ class Timer:
         """``iterable``'s items, the time to produce each counted as ``part``."""
         it = iter(iterable)
         while True:
-            t0 = time.perf_counter()
+            t0 = self.clock()
             try:
                 item = next(it)
             except StopIteration:
                 return
             finally:
-                self.t[part] += time.perf_counter() - t0
+                self.t[part] += self.clock() - t0
             yield item
 
 
