@@ -247,3 +247,129 @@ def test_eval_keeps_frames_aligned_with_the_truth_past_a_bad_frame(tmp_path, cap
     (task,) = [json.loads(p.read_text()) for p in (tmp_path / "ev" / "tasks").glob("*.json")]
     assert task["error"][3] is None and task["lost"][3] == 1
     assert all(e is not None and e < 3 for k, e in enumerate(task["error"]) if k != 3)
+
+
+def _workers(pid):
+    """The Dask worker processes a LocalCluster of process ``pid`` spawned."""
+    import psutil
+
+    procs = []
+    for c in psutil.Process(pid).children():
+        try:
+            if "spawn_main" in " ".join(c.cmdline()):
+                procs.append(c)
+        except psutil.Error:
+            pass
+    return procs
+
+
+def test_eval_worker_killed_mid_grid_gives_the_uninterrupted_results(tmp_path, capsys):
+    """kill -9 of a worker process while the grid runs: the nanny replaces it, its task runs again from
+    its own seed stream, and results.json equals an uninterrupted run's (but for the frame rates)."""
+    import json
+
+    from test_eval import strip_timing
+    from vistrack.data_synth.contour import make_contour_clip
+
+    make_contour_clip(tmp_path / "clips" / "c1", frames=12, size=(128, 96), seed=1, clutter="low", distractor=False)
+    grid = ["eval", str(tmp_path / "clips"), "--algos", "lis,bootstrap", "--particles", "60", "--runs", "3",
+            "--seed", "4", "-q"]
+    proc = subprocess.Popen([sys.executable, "-m", "vistrack.cli", *grid, "--workers", "2", "--out", "killed"],
+                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        tasks, victim = tmp_path / "killed" / "tasks", None
+        deadline = time.time() + 120
+        while victim is None and proc.poll() is None and time.time() < deadline:
+            if tasks.is_dir() and any(tasks.iterdir()):  # both workers are busy now: one finished, 5 tasks left
+                victim = _workers(proc.pid)[0]
+                victim.kill()
+            time.sleep(0.02)
+        assert victim is not None and len(list(tasks.iterdir())) < 6
+        code, _, err = run([*grid, "--in-process", "--workers", "1", "--out", str(tmp_path / "whole")], capsys)
+        assert code == 0, err
+        _, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0 and "Traceback" not in err, err
+    assert "note: 1 worker process(es) died and were replaced" in err
+    whole = json.loads((tmp_path / "whole" / "results.json").read_text())
+    assert strip_timing(json.loads((tmp_path / "killed" / "results.json").read_text())) == strip_timing(whole)
+
+
+def _dies_every_time(task, out_dir):
+    from types import SimpleNamespace
+
+    from distributed import KilledWorker
+
+    raise KilledWorker(f"vistrack-{task['name']}", SimpleNamespace(address="tcp://w:1"), 3)
+
+
+def _disk_gone(task, out_dir):
+    raise OSError(28, "No space left on device")
+
+
+@pytest.mark.parametrize("runner, message", [
+    (_dies_every_time, "task t1 ended the process of every worker that ran it (4; out of memory?)"),
+    (_disk_gone, "task t1 failed: [Errno 28] No space left on device"),
+], ids=["killed-worker", "oserror"])
+def test_a_task_that_cannot_finish_is_one_error_line(tmp_path, runner, message):
+    """Workers that keep dying on a task (dask's KilledWorker) or a task meeting a broken file: one
+    line naming the task, the finished task files kept for --resume."""
+    import click
+
+    from vistrack.cli.eval import run_tasks
+
+    with pytest.raises(click.ClickException) as e:
+        run_tasks([{"name": "t1"}], tmp_path, workers=1, in_process=True, quiet=True, runner=runner)
+    assert message in e.value.message and "--resume runs the rest" in e.value.message
+    assert not (tmp_path / ".vistrack.lock").exists()
+
+
+class _FakeClient:
+    """``client.run`` on two workers, the second of which cannot see the paths ``hidden(path)`` says
+    (a filesystem it does not share)."""
+
+    def __init__(self, hidden):
+        self.hidden = hidden
+
+    def run(self, fn, probe, clips):
+        missing = fn(probe, clips)
+        return {"tcp://a:1": missing, "tcp://b:1": missing + [p for p in [probe, *clips] if self.hidden(p)]}
+
+
+def test_workers_must_see_out_and_the_clips(tmp_path):
+    """With a scheduler elsewhere, workers write into --out and read the clips at the tasks' paths:
+    checked before the grid, one line naming what a worker cannot see; the probe file is removed."""
+    from vistrack.tasks import TaskFailed, check_shared
+
+    clip = tmp_path / "clip"
+    clip.mkdir()
+    tasks = [{"name": "t", "clip": str(clip)}]
+    check_shared(_FakeClient(lambda p: False), tasks, tmp_path)
+    with pytest.raises(TaskFailed, match=f"1 worker.s. of the scheduler .e.g. tcp://b:1. cannot see clip {clip}: "):
+        check_shared(_FakeClient(lambda p: p == str(clip)), tasks, tmp_path)
+    with pytest.raises(TaskFailed, match=f"cannot see --out {tmp_path}: --out and the clips must be on a filesystem"):
+        check_shared(_FakeClient(lambda p: True), tasks, tmp_path)
+    assert [p.name for p in tmp_path.iterdir()] == ["clip"]
+
+
+def test_eval_through_an_external_scheduler(tmp_path, capsys):
+    """--scheduler: the workers (here threads of a cluster started by the test) see --out and the
+    clips, the check passes and the results are those of the built-in cluster."""
+    import json
+
+    from distributed import LocalCluster
+
+    from test_eval import strip_timing
+    from vistrack.data_synth.contour import make_contour_clip
+
+    make_contour_clip(tmp_path / "c1", frames=6, size=(96, 72), seed=1, clutter="low", distractor=False)
+    grid = ["eval", str(tmp_path / "c1"), "--algos", "bootstrap", "--particles", "20", "--runs", "2", "-q"]
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+        code, _, err = run([*grid, "--scheduler", cluster.scheduler_address, "--out", str(tmp_path / "ext")], capsys)
+    assert code == 0, err
+    code, _, err = run([*grid, "--in-process", "--out", str(tmp_path / "own")], capsys)
+    assert code == 0, err
+    ext, own = (json.loads((tmp_path / d / "results.json").read_text()) for d in ("ext", "own"))
+    assert strip_timing(ext) == strip_timing(own)
+    assert not list(tmp_path.glob("ext/.vistrack-probe*"))

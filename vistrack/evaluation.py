@@ -31,8 +31,8 @@ from .filters import ALGORITHMS, make_filter
 from .metrics import IOU_THRESHOLDS, center_error, iou, lost_frames, summarize_runs
 from .models.registry import get_model_spec
 from .runtime import keep_freed_memory
-from .tasks import (OutLocked, execute, load_task_results, lock_out, stale_tasks, task_done, task_fingerprint,
-                    write_atomic, write_task_result)
+from .tasks import (OutLocked, TaskFailed, check_shared, execute, load_task_results, lock_out, stale_tasks, task_done,
+                    task_fingerprint, write_atomic, write_task_result)
 from .tracking import track
 from .video import VideoError
 
@@ -41,7 +41,7 @@ __all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_conf
            "score_boxes", "score_result_file", "result_files",
            # the engine's task files (vistrack.tasks), re-exported
            "execute", "task_fingerprint", "task_done", "stale_tasks", "write_task_result", "write_atomic", "OutLocked",
-           "lock_out", "load_task_results"]
+           "lock_out", "load_task_results", "TaskFailed", "check_shared", "dask_setup"]
 
 #: centre-error thresholds (px) of the precision plot (OTB)
 PRECISION_THRESHOLDS = np.arange(0, 51)
@@ -194,6 +194,20 @@ def prepare_worker():
 
     cv2.setNumThreads(1)
     keep_freed_memory()
+
+
+def dask_setup(worker):
+    """Dask preload hook of the LocalCluster's worker processes (``preload=["vistrack.evaluation"]``).
+
+    Ctrl-C reaches the whole process group; it is the client's to handle (it closes the cluster,
+    which ends the workers), so a worker ignores SIGINT rather than print a traceback, and keeps
+    distributed's warnings (tasks cancelled at shutdown) to itself.
+    """
+    import logging
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    logging.getLogger("distributed").setLevel(logging.ERROR)
 
 
 def run_task(task, out_dir):
