@@ -102,6 +102,8 @@ class Size(click.ParamType):
             self.fail(f"expected WIDTHxHEIGHT such as 320x240, got {value!r}", param, ctx)
         if w < 64 or h < 48:
             self.fail(f"frame size {w}x{h} is too small (at least 64x48)", param, ctx)
+        if max(w, h) > 8192 or w * h > 4096 * 4096:
+            self.fail(f"frame size {w}x{h} is too large (at most 8192 a side and 4096x4096 pixels in all)", param, ctx)
         return (w, h)
 
 

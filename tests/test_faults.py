@@ -373,3 +373,66 @@ def test_eval_through_an_external_scheduler(tmp_path, capsys):
     ext, own = (json.loads((tmp_path / d / "results.json").read_text()) for d in ("ext", "own"))
     assert strip_timing(ext) == strip_timing(own)
     assert not list(tmp_path.glob("ext/.vistrack-probe*"))
+
+
+def _clip_bytes(folder):
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+def test_a_failed_synth_leaves_the_old_clip_whole(tmp_path, monkeypatch):
+    """The writer fails mid-clip (disk full) while a clip is overwritten: the old clip is intact,
+    no partial folder is left, the user's own files in the folder survive a successful overwrite."""
+    import vistrack.data_synth.contour as contour
+    from vistrack.evaluation import find_clips
+
+    clip = tmp_path / "suite" / "c1"
+    kw = dict(frames=4, size=(96, 72), clutter="low", distractor=False)
+    contour.make_contour_clip(clip, seed=1, **kw)
+    (clip / "notes.txt").write_text("mine")
+    old = _clip_bytes(clip)
+
+    class Full(contour.VideoWriter):
+        def write(self, frame):
+            if self.frames == 2:
+                raise OSError(28, "No space left on device")
+            super().write(frame)
+
+    monkeypatch.setattr(contour, "VideoWriter", Full)
+    with pytest.raises(OSError, match="No space left"):
+        contour.make_contour_clip(clip, seed=2, **kw)
+    assert _clip_bytes(clip) == old
+    assert [p.name for p in (tmp_path / "suite").iterdir()] == ["c1"] and find_clips([tmp_path / "suite"]) == [clip]
+    monkeypatch.undo()
+    contour.make_contour_clip(clip, seed=2, **kw)
+    new = _clip_bytes(clip)
+    assert new["notes.txt"] == b"mine" and new["groundtruth.csv"] != old["groundtruth.csv"]
+    assert [p.name for p in (tmp_path / "suite").iterdir()] == ["c1"]
+    with pytest.raises(ValueError, match="holds the current folder"):
+        monkeypatch.chdir(clip)
+        contour.make_contour_clip(".", seed=2, **kw)
+
+
+def test_synth_killed_mid_clip_leaves_the_old_clip_and_no_clip_eval_takes(tmp_path, capsys):
+    """kill -9 of ``vistrack synth`` overwriting a clip: the old video and ground truth are there, as
+    they were; the partial render is a hidden folder that eval does not take for a clip, and the next
+    synth into that folder removes it."""
+    from vistrack.evaluation import find_clips
+
+    clip = tmp_path / "c1"
+    synth = ["synth", "contour", "--size", "96x72", "--clutter", "low", "--no-distractor", "-q"]
+    code, _, err = run([*synth, "--frames", "3", "--out", str(clip)], capsys)
+    assert code == 0, err
+    old = _clip_bytes(clip)
+    proc = subprocess.Popen([sys.executable, "-m", "vistrack.cli", *synth, "--frames", "100000", "--seed", "2",
+                             "--out", "c1"], cwd=tmp_path, stderr=subprocess.PIPE, text=True)
+    partial = tmp_path / f".c1.partial-{proc.pid}" / "video.mp4"
+    deadline = time.time() + 60
+    while proc.poll() is None and time.time() < deadline and not (partial.is_file() and partial.stat().st_size):
+        time.sleep(0.02)
+    proc.kill()
+    proc.communicate()
+    assert partial.is_file() and _clip_bytes(clip) == old
+    assert find_clips([tmp_path]) == [clip]
+    code, _, err = run([*synth, "--frames", "3", "--seed", "3", "--out", str(clip)], capsys)
+    assert code == 0 and "overwriting the clip" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c1"]

@@ -95,7 +95,8 @@ def find_clips(paths):
         if p.is_file() or _is_clip(p):
             clips.append(p)
             continue
-        sub = sorted(q for q in p.iterdir() if q.is_dir() and _is_clip(q))
+        # hidden folders are not clips: synth renders into .NAME.partial-PID before renaming it
+        sub = sorted(q for q in p.iterdir() if q.is_dir() and not q.name.startswith(".") and _is_clip(q))
         if not sub:
             raise VideoError(f"{p} holds no clips (folders with video.mp4 or img/ and ground truth)")
         clips.extend(sub)
