@@ -11,11 +11,12 @@ import click
 import numpy as np
 from tqdm import tqdm
 
-from vistrack.evaluation import (EvalConfig, OutLocked, TaskFailed, check_algos, check_shared, execute, find_clips,
-                                 load_task_results, lock_out, result_files, score_result_file, stale_tasks, summarize,
-                                 task_done, task_list)
+from vistrack.evaluation import (OPENCV_TRACKERS, EvalConfig, OutLocked, TaskFailed, check_algos, check_shared,
+                                 execute, find_clips, load_task_results, lock_out, result_files, score_result_file,
+                                 stale_tasks, summarize, task_done, task_list)
 from vistrack.report import write_eval_outputs
 from vistrack.models.registry import get_model_spec
+from vistrack.runtime import check_particle_memory
 from vistrack.video import VideoError
 
 from .options import SEED, IntList, StrList
@@ -204,8 +205,11 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, 
     if not algos and not results_dirs:
         raise click.UsageError("nothing to evaluate: give --algos or --results-dir")
     try:
-        get_model_spec(model)
+        spec = get_model_spec(model)
         check_algos(algos)
+        for a in algos:  # one task's working memory (tasks run side by side: one per worker)
+            for n in ([] if a in OPENCV_TRACKERS else particles):
+                check_particle_memory(n, spec.bytes_per_particle, a)
         clip_paths = find_clips(clips)
     except (ValueError, VideoError) as e:
         raise click.ClickException(str(e)) from None
@@ -232,7 +236,11 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, 
         except (ValueError, VideoError) as e:
             raise click.ClickException(str(e)) from None
         summaries = summarize(results)
-        plots = write_eval_outputs(out, cfg, summaries, results, chosen)
+        try:
+            plots = write_eval_outputs(out, cfg, summaries, results, chosen)
+        except OSError as e:
+            raise click.ClickException(f"cannot write the results into {out}: {e.strerror or e} (the task files "
+                                       "are kept: --resume writes them without running the tasks again)") from None
     if not quiet:
         click.echo((out / "report.md").read_text().split("\n\n## Per clip")[0].split("## Averages over clips\n\n")[-1])
         click.echo(f"wrote {out / 'results.json'}, results.csv, report.md and {len(plots)} plots")

@@ -186,8 +186,7 @@ def _clip_suite(clips_dir, default, make, frames, size, maker, prefix, quiet, **
     base = Path(clips_dir) if clips_dir else Path(default)
 
     def found():
-        return sorted(p for p in base.iterdir() if not p.name.startswith(".") and (p / "groundtruth.csv").is_file()) \
-            if base.is_dir() else []
+        return sorted(p for p in base.glob("[!.]*") if (p / "groundtruth.csv").is_file()) if base.is_dir() else []
 
     if not found():
         wh = Size().convert(size, None, None)

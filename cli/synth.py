@@ -11,7 +11,7 @@ from vistrack.data_synth.contour import CLUTTER, make_contour_clip
 from vistrack.data_synth.landmarks import make_landmark_clip
 from vistrack.data_synth.plate import make_plate_clip
 
-from .options import SEED, Size
+from .options import SEED, Fraction, Size
 
 __all__ = ["synth"]
 
@@ -27,7 +27,9 @@ def _out_dir(out, clip=True):
     try:
         (p.parent if clip else p).mkdir(parents=True, exist_ok=True)
     except OSError as e:
-        raise click.ClickException(f"cannot create {p}: {e.strerror}") from None
+        blocked = next((q for q in [p, *p.parents] if q.exists() and not q.is_dir()), None)
+        raise click.ClickException(f"cannot create {p}: " + (f"{blocked} is not a folder" if blocked else e.strerror)) \
+            from None
     return p
 
 
@@ -98,7 +100,7 @@ def plate(out, frames, size, seed, cars, layout, overlap, quiet):
 @click.option("--seed", default=0, show_default=True, type=SEED)
 @click.option("--clutter-blobs", default=6, show_default=True, type=click.IntRange(min=0),
               help="Drifting blobs identical to the landmarks.")
-@click.option("--occlusion", default=0.01, show_default=True, type=click.FloatRange(0, 1),
+@click.option("--occlusion", default=0.01, show_default=True, type=Fraction(),
               help="Per-frame probability that a landmark disappears for 3-10 frames.")
 @click.option("--quiet", "-q", is_flag=True)
 def landmarks(out, k, frames, size, seed, clutter_blobs, occlusion, quiet):

@@ -20,13 +20,14 @@ precision at 20 px, frames/s, mean ESS).
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .builders import build_model
-from .clips import load_clip
+from .clips import GroundTruthWarning, load_clip
 from .filters import ALGORITHMS, make_filter
 from .metrics import IOU_THRESHOLDS, center_error, iou, lost_frames, summarize_runs
 from .models.registry import get_model_spec
@@ -101,9 +102,13 @@ def find_clips(paths):
             raise VideoError(f"{p} holds no clips (folders with video.mp4 or img/ and ground truth)")
         clips.extend(sub)
     for c in clips:
-        if load_clip(c).truth is None:
+        truth = load_clip(c).truth
+        if truth is None:
             raise VideoError(f"{c} has no ground truth (groundtruth.csv or groundtruth_rect.txt): "
                              "eval needs ground truth; `vistrack run` does not")
+        if not np.any(truth["visible"] > 0):
+            raise VideoError(f"the ground truth of {c} has no frame with the object in view (every row empty, NaN "
+                             "or 0,0,0,0): eval starts each run from the first box in view")
     return clips
 
 
@@ -215,7 +220,9 @@ def run_task(task, out_dir):
     """Track one clip once; write ``out_dir/tasks/<name>.json``; return its path."""
     prepare_worker()
     out = Path(out_dir) / "tasks" / f"{task['name']}.json"
-    clip = load_clip(task["clip"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", GroundTruthWarning)  # said once, when eval found the clips
+        clip = load_clip(task["clip"])
     frames = list(clip.source)
     algo, n = task["algo"], task["particles"]
     # eval: the object's own size (the plate's vertex rule for plates); reproduce: the thesis's

@@ -72,8 +72,12 @@ def write_task_result(path, result, task=None):
 
 def write_atomic(path, text):
     """Write ``text`` to ``path`` whole or not at all: a temporary file beside it, then a rename
-    (a crash leaves the old file or none, never half of the new one)."""
+    (a crash leaves the old file or none, never half of the new one). A device or pipe such as
+    ``/dev/stdout`` is written directly."""
     path = Path(path)
+    if path.exists() and not path.is_file():  # a device or pipe (/dev/stdout): a rename would replace it
+        path.write_text(text)
+        return
     tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
     try:
         tmp.write_text(text)
