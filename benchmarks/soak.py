@@ -180,6 +180,7 @@ def build_fixtures(fx):
     _otb(fx / "otb_bad", rows[:5] + ["12,13,fourteen,15"] + rows[6:])
     _otb(fx / "otb_absent", ["0,0,0,0"] * 12)
     _otb(fx / "otb_empty", [])
+    _otb(fx / "otb_negative", rows[:6] + ["30,30,-10,12"] * 2 + rows[8:])
     _otb(fx / "otb_grey", rows, mode="grey")
     badimg_gt = fx / "otb_badimg"
     _otb(badimg_gt, _otb_rows(8), n=8)
@@ -371,6 +372,24 @@ def two_evals(argv_a, argv_b):
         return res
 
     return driver
+
+
+def kill_worker(w, argv, timeout):
+    """A driver: kill -9 one Dask worker process of the eval once the first task file is there;
+    the scenario's check compares the results with a fresh run's."""
+    import psutil
+
+    t0 = time.time()
+    p = _popen(argv, w)
+    if _wait_for(p, lambda: _has_task(w), timeout):
+        for c in psutil.Process(p.pid).children():
+            try:
+                if "spawn_main" in " ".join(c.cmdline()):
+                    c.kill()
+                    break
+            except psutil.Error:
+                pass
+    return _finish(p, t0, timeout)
 
 
 def lost_if_flagged(w, res):
@@ -696,6 +715,8 @@ def output_scenarios():
         Scenario("run --track on a full disk", R(v, "--track", "{w}/full.csv"), prepare=link("full.csv")),
         Scenario("run --results on a full disk", R(v, "--results", "{w}/full.txt"), prepare=link("full.txt")),
         Scenario("run --track to /dev/null", R(v, "--track", "/dev/null"), "ok"),
+        Scenario("run --track to /dev/stdout", R(v, "--track", "/dev/stdout"), "ok",
+                 check=lambda w, res: None if res.out.startswith("frame,visible,") else ("silent wrong", "no CSV on stdout")),
         Scenario("run --track into a missing folder", R(v, "--track", "{w}/no/t.csv"), mention="no"),
         Scenario("run --track is a folder", R(v, "--track", "{w}"), mention="director"),
         Scenario("run --out under a file", R(v, "--out", "{fx}/notes.txt/a.mp4"), mention="notes.txt"),
@@ -731,6 +752,8 @@ def interrupt_scenarios():
                  check=lost_if_flagged, driver=interrupt(signal.SIGINT, _has_task, group=True, then=resumed)),
         Scenario("eval SIGTERM mid-grid", grid, "either", codes=(143, 0), prepare=copy("suite"),
                  driver=interrupt(signal.SIGTERM, _has_task)),
+        Scenario("eval kill -9 of a worker mid-grid", grid, "ok", prepare=copy("suite"), driver=kill_worker,
+                 check=equals_fresh(sub(sub(sub(EV("{w}/suite"), "--particles", "400"), "--runs", "3"), "--out", "{w}/F"))),
         Scenario("synth SIGINT while overwriting a clip", synth_over, "ok", codes=(130,), prepare=old_clip,
                  check=clip_intact, driver=interrupt(signal.SIGINT, lambda w: any(w.glob(".c1.partial-*/video.mp4")))),
         Scenario("synth kill -9 while overwriting a clip", synth_over, "ok", codes=(-9,), prepare=old_clip,
@@ -787,6 +810,8 @@ def eval_scenarios():
                  check=warns("ground truth")),
         Scenario("eval ground truth longer than the video", EV("{fx}/otb_long", model="box"), "ok",
                  check=warns("ground truth")),
+        Scenario("eval ground truth with negative sizes (absent)", EV("{fx}/otb_negative", model="box"), "ok",
+                 check=consistent_absent),
         Scenario("eval malformed ground-truth line", EV("{fx}/otb_bad", model="box"), mention="line 6"),
         Scenario("eval ground truth all absent", EV("{fx}/otb_absent", model="box"), mention="ground truth"),
         Scenario("eval empty ground-truth file", EV("{fx}/otb_empty", model="box"), mention="ground truth"),
@@ -848,10 +873,18 @@ def reproduce_scenarios():
         Scenario("reproduce bearings --json on a full disk", BE + ["--json", "{w}/full.json"], prepare=link("full.json")),
         Scenario("reproduce bearings --json into a missing folder", BE + ["--json", "{w}/no/b.json"], mention="no"),
         Scenario("reproduce bearings --plots is a file", BE + ["--plots", "{fx}/notes.txt"], mention="notes.txt"),
-        Scenario("reproduce contour --clips missing", ["reproduce", "contour", "--clips", "{fx}/nothere", "--runs", "1",
-                                                       "--in-process", "--out", "{w}/C", "-q"], mention="nothere"),
-        Scenario("reproduce contour --clips empty folder", ["reproduce", "contour", "--clips", "{fx}/emptydir", "--runs",
-                                                            "1", "--in-process", "--out", "{w}/C", "-q"], "either"),
+        Scenario("reproduce contour --clips missing: made there", ["reproduce", "contour", "--clips", "{w}/made", "--make",
+                                                                   "1", "--frames", "3", "--size", "96x72", "--algos",
+                                                                   "lis:10", "--runs", "1", "--in-process", "--out",
+                                                                   "{w}/C", "-q"], "ok"),
+        Scenario("reproduce contour on two small clips", ["reproduce", "contour", "--clips", "{fx}/suite", "--algos",
+                                                          "lis:20,bootstrap:40", "--runs", "1", "--in-process", "--out",
+                                                          "{w}/C", "--json", "{w}/c.json", "-q"], "ok"),
+        Scenario("reproduce contour --algos lis:0", ["reproduce", "contour", "--clips", "{fx}/suite", "--algos", "lis:0",
+                                                     "--runs", "1", "--in-process", "--out", "{w}/C", "-q"],
+                 mention="lis:0"),
+        Scenario("reproduce contour --frames 1", ["reproduce", "contour", "--clips", "{w}/none", "--frames", "1",
+                                                  "--in-process", "--out", "{w}/C", "-q"], mention="frames"),
         Scenario("fit-plate a missing folder", ["fit-plate", "{fx}/nothere"], mention="nothere"),
         Scenario("fit-plate contour clips", ["fit-plate", "{fx}/suite"], mention="plate"),
         Scenario("unknown command", ["frobnicate"], mention="frobnicate"),

@@ -671,3 +671,11 @@ def test_synth_sigterm_stops_cleanly(tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 143 and err.strip().endswith("\nTerminated.") and "Traceback" not in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c1"] and _clip_bytes(tmp_path / "c1") == old
+
+
+def test_fit_plate_refuses_clips_without_plates(tmp_path, capsys):
+    from vistrack.data_synth.contour import make_contour_clip
+
+    make_contour_clip(tmp_path / "c1", frames=2, size=(96, 72), seed=1, clutter="low", distractor=False)
+    code, _, err = run(["fit-plate", str(tmp_path)], capsys)
+    assert code != 0 and "c1 is not a plate clip (its groundtruth.csv has no plate vertices x0..y3)" in err
