@@ -116,7 +116,7 @@ def test_track_csv_is_whole_after_a_write_error(tmp_path):
 
     t = TrackCSV(tmp_path / "t.csv")
     t.write({"frame": 0, "cx": 1.0})
-    t.write({"frame": 1, "cx": float("nan")})
+    t.write({"frame": 1, "cx": 2.0})
     t._f.close()  # the disk goes away
     with pytest.raises(ValueError):
         t.write({"frame": 2, "cx": 3.0})
@@ -365,7 +365,8 @@ def test_eval_through_an_external_scheduler(tmp_path, capsys):
 
     make_contour_clip(tmp_path / "c1", frames=6, size=(96, 72), seed=1, clutter="low", distractor=False)
     grid = ["eval", str(tmp_path / "c1"), "--algos", "bootstrap", "--particles", "20", "--runs", "2", "-q"]
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None,
+                      scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster:
         code, _, err = run([*grid, "--scheduler", cluster.scheduler_address, "--out", str(tmp_path / "ext")], capsys)
     assert code == 0, err
     code, _, err = run([*grid, "--in-process", "--out", str(tmp_path / "own")], capsys)
@@ -679,3 +680,21 @@ def test_fit_plate_refuses_clips_without_plates(tmp_path, capsys):
     make_contour_clip(tmp_path / "c1", frames=2, size=(96, 72), seed=1, clutter="low", distractor=False)
     code, _, err = run(["fit-plate", str(tmp_path)], capsys)
     assert code != 0 and "c1 is not a plate clip (its groundtruth.csv has no plate vertices x0..y3)" in err
+
+
+def test_local_workers_leave_ctrl_c_to_the_client():
+    """Ctrl-C in a terminal reaches every process of the group: the LocalCluster's workers (their
+    preload hook) ignore it, so that the client alone stops the grid, without worker tracebacks
+    (the whole path: benchmarks/soak.py, 'eval Ctrl-C on the process group')."""
+    import logging
+
+    from vistrack.evaluation import dask_setup
+
+    saved, level = signal.getsignal(signal.SIGINT), logging.getLogger("distributed").level
+    try:
+        dask_setup(None)
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        assert logging.getLogger("distributed").level == logging.ERROR
+    finally:
+        signal.signal(signal.SIGINT, saved)
+        logging.getLogger("distributed").setLevel(level)
