@@ -7,11 +7,14 @@ a traceback.
 from __future__ import annotations
 
 import sys
+import warnings
+from contextlib import contextmanager
 
 import click
 
 from vistrack import __version__
 from vistrack.runtime import keep_freed_memory
+from vistrack.session import Terminated, stop_on_signals
 
 from .demo import demo
 from .eval import eval_cmd
@@ -51,10 +54,33 @@ cli.add_command(synth)
 cli.add_command(synth_suite)
 
 
-def main(argv=None):
-    """Console entry point: run the group, turn usage errors into one line."""
+@contextmanager
+def _one_line_warnings():
+    """Warnings (ground truth of another length, skipped frames, ...) as ``warning: message``
+    lines, not Python's two lines with the source file and line."""
+    saved = warnings.formatwarning
+    warnings.formatwarning = lambda message, category, *args, **kw: f"warning: {message}\n"
     try:
-        code = cli.main(args=argv, prog_name="vistrack", standalone_mode=False)
+        yield
+    finally:
+        warnings.formatwarning = saved
+
+
+def _stopped(e):
+    """Exit on Ctrl-C (130) or SIGTERM (143; :class:`~vistrack.session.Terminated`), which click
+    may have wrapped in ``Abort``."""
+    term = any(isinstance(x, Terminated) for x in (e, e.__cause__, e.__context__))
+    click.echo("Terminated." if term else "Aborted.", err=True)
+    sys.exit(143 if term else 130)
+
+
+def main(argv=None):
+    """Console entry point: run the group, turn usage errors into one line. SIGTERM stops any
+    command as Ctrl-C does (files in progress are finished or removed, never left half-written);
+    an operating-system error (disk full, permission denied) is one line too."""
+    try:
+        with stop_on_signals(), _one_line_warnings():
+            code = cli.main(args=argv, prog_name="vistrack", standalone_mode=False)
     except click.exceptions.NoArgsIsHelpError as e:
         click.echo(e.ctx.get_help() if e.ctx else str(e))
         sys.exit(0)
@@ -62,10 +88,10 @@ def main(argv=None):
         msg = e.format_message().replace("\n", " ")
         click.echo(f"Error: {msg}", err=True)
         sys.exit(e.exit_code)
-    except click.exceptions.Abort:
-        click.echo("Aborted.", err=True)
-        sys.exit(130)
-    except KeyboardInterrupt:
-        click.echo("Interrupted.", err=True)
-        sys.exit(130)
+    except (click.exceptions.Abort, KeyboardInterrupt) as e:
+        _stopped(e)
+    except OSError as e:
+        where = f": {e.filename}" if e.filename else ""
+        click.echo(f"Error: {e.strerror or e}{where}", err=True)
+        sys.exit(1)
     sys.exit(code if isinstance(code, int) else 0)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import os
 from contextlib import contextmanager
 from pathlib import Path
@@ -10,11 +11,12 @@ import click
 import numpy as np
 from tqdm import tqdm
 
-from vistrack.evaluation import (EvalConfig, OutLocked, check_algos, execute, find_clips, load_task_results,
-                                 lock_out, result_files, score_result_file, stale_tasks, summarize, task_done,
-                                 task_list)
+from vistrack.evaluation import (OPENCV_TRACKERS, EvalConfig, OutLocked, TaskFailed, check_algos, check_shared,
+                                 execute, find_clips, load_task_results, lock_out, result_files, score_result_file,
+                                 stale_tasks, summarize, task_done, task_list)
 from vistrack.report import write_eval_outputs
 from vistrack.models.registry import get_model_spec
+from vistrack.runtime import check_particle_memory
 from vistrack.video import VideoError
 
 from .options import SEED, IntList, StrList
@@ -28,13 +30,57 @@ def _client(scheduler, workers, timeout, in_process=False):
         raise click.ClickException("vistrack eval needs dask.distributed: pip install distributed") from None
     if scheduler:
         try:
-            return Client(scheduler, timeout=f"{timeout}s"), None
-        except (OSError, TimeoutError) as e:
-            raise click.ClickException(f"cannot reach the Dask scheduler at {scheduler} within {timeout} s ({e})") \
+            client = Client(scheduler, timeout=f"{timeout}s")
+        except (OSError, TimeoutError, ValueError) as e:
+            raise click.ClickException(f"cannot reach the Dask scheduler at {scheduler} within {timeout} s ({e}); "
+                                       "give its address as tcp://host:8786") from None
+        try:
+            client.wait_for_workers(1, timeout=timeout)
+        except TimeoutError:
+            client.close()
+            raise click.ClickException(f"the Dask scheduler at {scheduler} has no workers (waited {timeout} s)") \
                 from None
+        return client, None
+    # the HTTP server on any free local port (not 8787, which another cluster may hold: a warning);
+    # workers ignore Ctrl-C, which this process handles (vistrack.evaluation.dask_setup)
     cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                           processes=not in_process, dashboard_address=None)
+                           processes=not in_process, dashboard_address=None, silence_logs=logging.CRITICAL,
+                           scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                           **({} if in_process else {"preload": ["vistrack.evaluation"]}))
     return Client(cluster), cluster
+
+
+class _WorkerDeaths(logging.Handler):
+    """Counts the worker processes the nannies restart."""
+
+    def __init__(self):
+        super().__init__(logging.WARNING)
+        self.count = 0
+
+    def emit(self, record):
+        self.count += "Restarting worker" in record.getMessage()
+
+
+@contextmanager
+def _dask_quiet():
+    """distributed's log lines (a lost worker, keys rescheduled) kept from the user for the block:
+    what matters arrives as an exception (:class:`TaskFailed`) or, for a worker that died and was
+    replaced, as one note after the grid. Yields the :class:`_WorkerDeaths` counter."""
+    loggers = [logging.getLogger(n) for n in ("distributed", "distributed.client", "distributed.nanny")]
+    saved = [(lg.level, lg.propagate) for lg in loggers]
+    deaths = _WorkerDeaths()
+    for lg in loggers[:2]:
+        lg.setLevel(logging.CRITICAL)
+    loggers[2].setLevel(logging.WARNING)
+    loggers[2].propagate = False
+    loggers[2].addHandler(deaths)
+    try:
+        yield deaths
+    finally:
+        loggers[2].removeHandler(deaths)
+        for lg, (level, propagate) in zip(loggers, saved):
+            lg.setLevel(level)
+            lg.propagate = propagate
 
 
 @contextmanager
@@ -51,10 +97,14 @@ def run_tasks(tasks, out, *, scheduler=None, workers=0, timeout=10, in_process=F
               desc="tasks", runner=None):
     """Execute ``tasks`` on Dask (a LocalCluster unless ``scheduler``) with a progress bar
     (``runner``: see :func:`vistrack.evaluation.execute`), holding the ``--out`` lock. Task
-    files are only ever replaced whole, as tasks finish: without ``resume`` every task runs again."""
+    files are only ever replaced whole, as tasks finish: without ``resume`` every task runs again.
+    With ``scheduler``, the workers must see ``out`` and the clips (checked first: one error line)."""
     with _locked(out):
-        _run_tasks(tasks, out, scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process,
-                   resume=resume, quiet=quiet, desc=desc, runner=runner)
+        try:
+            _run_tasks(tasks, out, scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process,
+                       resume=resume, quiet=quiet, desc=desc, runner=runner)
+        except TaskFailed as e:
+            raise click.ClickException(str(e)) from None
 
 
 def _run_tasks(tasks, out, *, scheduler, workers, timeout, in_process, resume, quiet, desc, runner):
@@ -65,14 +115,20 @@ def _run_tasks(tasks, out, *, scheduler, workers, timeout, in_process, resume, q
                        "or version (or are damaged): running them again", err=True)
         if all(task_done(t, out) for t in tasks):
             return
-    client, cluster = _client(scheduler, workers, timeout, in_process)
-    try:
-        with tqdm(total=len(tasks), unit="task", desc=desc, disable=quiet) as bar:
-            execute(tasks, out, client, resume=resume, progress=bar.update, runner=runner)
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+    with _dask_quiet() as deaths:
+        client, cluster = _client(scheduler, workers, timeout, in_process)
+        try:
+            if scheduler:
+                check_shared(client, tasks, out)
+            with tqdm(total=len(tasks), unit="task", desc=desc, disable=quiet) as bar:
+                execute(tasks, out, client, resume=resume, progress=bar.update, runner=runner)
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    if deaths.count:  # a note: even with --quiet
+        click.echo(f"note: {deaths.count} worker process(es) died and were replaced; their tasks ran again from "
+                   "their own seeds (the results are those of an uninterrupted run)", err=True)
 
 
 def _equal_time(cfg, clips, frames=30):
@@ -149,8 +205,11 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, 
     if not algos and not results_dirs:
         raise click.UsageError("nothing to evaluate: give --algos or --results-dir")
     try:
-        get_model_spec(model)
+        spec = get_model_spec(model)
         check_algos(algos)
+        for a in algos:  # one task's working memory (tasks run side by side: one per worker)
+            for n in ([] if a in OPENCV_TRACKERS else particles):
+                check_particle_memory(n, spec.bytes_per_particle, a)
         clip_paths = find_clips(clips)
     except (ValueError, VideoError) as e:
         raise click.ClickException(str(e)) from None
@@ -177,7 +236,11 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, 
         except (ValueError, VideoError) as e:
             raise click.ClickException(str(e)) from None
         summaries = summarize(results)
-        plots = write_eval_outputs(out, cfg, summaries, results, chosen)
+        try:
+            plots = write_eval_outputs(out, cfg, summaries, results, chosen)
+        except OSError as e:
+            raise click.ClickException(f"cannot write the results into {out}: {e.strerror or e} (the task files "
+                                       "are kept: --resume writes them without running the tasks again)") from None
     if not quiet:
         click.echo((out / "report.md").read_text().split("\n\n## Per clip")[0].split("## Averages over clips\n\n")[-1])
         click.echo(f"wrote {out / 'results.json'}, results.csv, report.md and {len(plots)} plots")

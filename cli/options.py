@@ -6,7 +6,7 @@ import os
 
 import click
 
-__all__ = ["IntList", "FloatList", "StrList", "Box", "Size", "Fraction", "SEED", "check_writable"]
+__all__ = ["IntList", "FloatList", "StrList", "Box", "Size", "Fraction", "SEED", "check_writable", "check_outputs"]
 
 #: ``--seed``: numpy takes any non-negative integer
 SEED = click.IntRange(min=0)
@@ -109,6 +109,8 @@ class Size(click.ParamType):
             self.fail(f"expected WIDTHxHEIGHT such as 320x240, got {value!r}", param, ctx)
         if w < 64 or h < 48:
             self.fail(f"frame size {w}x{h} is too small (at least 64x48)", param, ctx)
+        if max(w, h) > 8192 or w * h > 4096 * 4096:
+            self.fail(f"frame size {w}x{h} is too large (at most 8192 a side and 4096x4096 pixels in all)", param, ctx)
         return (w, h)
 
 
@@ -124,3 +126,31 @@ def check_writable(path, what):
         raise click.ClickException(f"cannot write {what} {path}: folder {parent} does not exist")
     if not os.access(parent, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
         raise click.ClickException(f"cannot write {what} {path}: permission denied")
+
+
+#: files of a clip folder that ``run`` reads (besides the frames of ``img/``, ``color/`` or the folder itself)
+CLIP_INPUTS = {"video.mp4", "groundtruth.csv", "groundtruth_rect.txt", "groundtruth.txt", "meta.json"}
+IMAGE_SUFFIXES = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp"}
+
+
+def check_outputs(outputs, video):
+    """Raise ``click.ClickException`` when two of ``outputs`` (``{option: path or None}``) are one
+    file, or one would overwrite what ``video`` reads: the video file itself, or a clip folder's
+    video, ground truth, meta.json or frames. Devices such as ``/dev/null`` may be shared."""
+    video = os.path.realpath(video)
+    seen = {}
+    for opt, path in outputs.items():
+        if path is None:
+            continue
+        real = os.path.realpath(path)
+        if os.path.exists(real) and not os.path.isfile(real):
+            continue
+        if real in seen:
+            raise click.ClickException(f"{seen[real]} and {opt} name the same file {path}")
+        seen[real] = opt
+        parent, name = os.path.split(real)
+        reads = real == video or (os.path.isdir(video) and (
+            (parent == video and (name in CLIP_INPUTS or os.path.splitext(name)[1].lower() in IMAGE_SUFFIXES))
+            or (os.path.dirname(parent) == video and os.path.basename(parent) in ("img", "color"))))
+        if reads:
+            raise click.ClickException(f"{opt} {path} would overwrite the input it reads ({name}); write elsewhere")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+import warnings
 
 import click
 import numpy as np
@@ -15,9 +16,9 @@ from vistrack.models.registry import MODELS as MODEL_REGISTRY
 from vistrack.models.registry import get_model_spec
 from vistrack.runtime import check_particle_memory
 from vistrack.session import stop_on_signals, summary_lines, track_video
-from vistrack.video import VideoError, prefetch
+from vistrack.video import VideoDecodeWarning, VideoError, prefetch
 
-from .options import SEED, Box, Fraction, check_writable
+from .options import SEED, Box, Fraction, check_outputs, check_writable
 
 __all__ = ["run"]
 
@@ -120,6 +121,7 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
     check_writable(track_path, "track file")
     check_writable(out_path, "annotated video")
     check_writable(results_path, "results file")
+    check_outputs({"--track": track_path, "--out": out_path, "--results": results_path}, video)
     if init is not None and init_gt is not None:
         raise click.UsageError("give either --init or --init-gt, not both")
     try:
@@ -159,8 +161,9 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         bar.update(1)
         bar.set_postfix(ess=f"{ess:.1f}", refresh=False)
 
-    try:
-        with stop_on_signals():
+    try:  # skipped frames: one line below, not the decoder's warning too
+        with stop_on_signals(), warnings.catch_warnings():
+            warnings.simplefilter("ignore", VideoDecodeWarning)
             done = track_video(frames(), model, filt, particles, np.random.default_rng(seed), track_path=track_path,
                                out_path=out_path, results_path=results_path, video_info=(src.fps, src.size), show_particles=show_particles,
                                label=f"{algo} N={particles}", progress=progress,

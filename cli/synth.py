@@ -11,22 +11,36 @@ from vistrack.data_synth.contour import CLUTTER, make_contour_clip
 from vistrack.data_synth.landmarks import make_landmark_clip
 from vistrack.data_synth.plate import make_plate_clip
 
-from .options import SEED, Size
+from .options import SEED, Fraction, Size
 
 __all__ = ["synth"]
 
 
-def _out_dir(out):
+def _out_dir(out, clip=True):
+    """``out`` as a path, its folder created (a suite's folder, or a clip's parent: the clip itself
+    is rendered beside it and renamed into place, :func:`~vistrack.data_synth.render.atomic_clip`)."""
     p = Path(out)
     if p.exists() and not p.is_dir():
         raise click.ClickException(f"--out {p} exists and is not a folder")
-    if p.is_dir() and (p / "video.mp4").exists():
+    if clip and p.is_dir() and (p / "video.mp4").exists():
         click.echo(f"note: overwriting the clip in {p}", err=True)
     try:
-        p.mkdir(parents=True, exist_ok=True)
+        (p.parent if clip else p).mkdir(parents=True, exist_ok=True)
     except OSError as e:
-        raise click.ClickException(f"cannot create {p}: {e.strerror}") from None
+        blocked = next((q for q in [p, *p.parents] if q.exists() and not q.is_dir()), None)
+        raise click.ClickException(f"cannot create {p}: " + (f"{blocked} is not a folder" if blocked else e.strerror)) \
+            from None
     return p
+
+
+def _make(make, out, **kw):
+    """``make(out, **kw)`` with its refusals (``ValueError``, an unwritable folder) as one error line."""
+    try:
+        return make(out, **kw)
+    except ValueError as e:
+        raise click.ClickException(str(e)) from None
+    except OSError as e:
+        raise click.ClickException(f"cannot write the clip {out}: {e.strerror or e}") from None
 
 
 @click.group()
@@ -50,7 +64,7 @@ def contour(out, frames, size, seed, clutter, distractor, shape, quiet):
     rotation) over edge clutter, with lighting change, blur and noise."""
     out = _out_dir(out)
     with tqdm(total=frames, unit="frame", disable=quiet, desc="synth contour") as bar:
-        make_contour_clip(out, frames=frames, size=size, seed=seed, clutter=clutter, distractor=distractor,
+        _make(make_contour_clip, out, frames=frames, size=size, seed=seed, clutter=clutter, distractor=distractor,
                           shape=shape, progress=bar.update)
     if not quiet:
         click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({frames} frames, {size[0]}x{size[1]})")
@@ -72,7 +86,7 @@ def plate(out, frames, size, seed, cars, layout, overlap, quiet):
         raise click.ClickException(f"frame size {size[0]}x{size[1]} is too small for plates (at least 160x120)")
     out = _out_dir(out)
     with tqdm(total=frames, unit="frame", disable=quiet, desc="synth plate") as bar:
-        make_plate_clip(out, frames=frames, size=size, seed=seed, cars=cars, layout=layout, overlap=overlap,
+        _make(make_plate_clip, out, frames=frames, size=size, seed=seed, cars=cars, layout=layout, overlap=overlap,
                         progress=bar.update)
     if not quiet:
         click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({frames} frames, {size[0]}x{size[1]})")
@@ -86,7 +100,7 @@ def plate(out, frames, size, seed, cars, layout, overlap, quiet):
 @click.option("--seed", default=0, show_default=True, type=SEED)
 @click.option("--clutter-blobs", default=6, show_default=True, type=click.IntRange(min=0),
               help="Drifting blobs identical to the landmarks.")
-@click.option("--occlusion", default=0.01, show_default=True, type=click.FloatRange(0, 1),
+@click.option("--occlusion", default=0.01, show_default=True, type=Fraction(),
               help="Per-frame probability that a landmark disappears for 3-10 frames.")
 @click.option("--quiet", "-q", is_flag=True)
 def landmarks(out, k, frames, size, seed, clutter_blobs, occlusion, quiet):
@@ -97,7 +111,7 @@ def landmarks(out, k, frames, size, seed, clutter_blobs, occlusion, quiet):
         raise click.ClickException(f"frame size {size[0]}x{size[1]} is too small for landmarks (at least 128x96)")
     out = _out_dir(out)
     with tqdm(total=frames, unit="frame", disable=quiet, desc="synth landmarks") as bar:
-        make_landmark_clip(out, k=k, frames=frames, size=size, seed=seed, clutter_blobs=clutter_blobs,
+        _make(make_landmark_clip, out, k=k, frames=frames, size=size, seed=seed, clutter_blobs=clutter_blobs,
                            occlusion=occlusion, progress=bar.update)
     if not quiet:
         click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({frames} frames, {size[0]}x{size[1]}, K={k})")
@@ -124,12 +138,9 @@ def synth_suite(kind, n_clips, seed, frames, size, out, quiet):
     make, frames_default, size_default = SUITES[kind]
     frames = frames or frames_default
     size = size or size_default
-    out = _out_dir(out)
+    out = _out_dir(out, clip=False)
     with tqdm(total=n_clips * frames, unit="frame", disable=quiet, desc=f"synth-suite {kind}") as bar:
         for s in range(seed, seed + n_clips):
-            try:
-                make(out / f"{kind}-{s:02d}", frames=frames, size=size, seed=s, progress=bar.update)
-            except ValueError as e:
-                raise click.ClickException(str(e)) from None
+            _make(make, out / f"{kind}-{s:02d}", frames=frames, size=size, seed=s, progress=bar.update)
     if not quiet:
         click.echo(f"wrote {n_clips} {kind} clips into {out}")

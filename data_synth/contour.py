@@ -30,7 +30,7 @@ import numpy as np
 from vistrack.models.contour import BSpline
 from vistrack.video import VideoWriter
 
-from .render import add_noise, clutter_background, lighting, motion_blur, smooth_noise, write_clip_files
+from .render import add_noise, atomic_clip, clutter_background, lighting, motion_blur, smooth_noise, write_clip_files
 
 __all__ = ["contour_template", "make_contour_clip", "CLUTTER"]
 
@@ -87,6 +87,7 @@ def _paste(frame, sprite, mask, half, cx, cy, scale, angle_deg, velocity=(0.0, 0
     frame += obj
 
 
+@atomic_clip
 def make_contour_clip(out, *, frames=300, size=(320, 240), seed=0, clutter="high", distractor=True,
                       shape="hand", n_support=24, fps=30.0, jump_prob=0.02, jump_size=(0.025, 0.045),
                       progress=None):

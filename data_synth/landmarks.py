@@ -10,7 +10,7 @@ from vistrack.models.landmarks import VIDEO_DYNAMICS, Landmarks, simulate
 from vistrack.models.landmarks import sample_observations as observe
 from vistrack.video import VideoWriter
 
-from .render import add_noise, clutter_background, lighting, smooth_noise, write_clip_files
+from .render import add_noise, atomic_clip, clutter_background, lighting, smooth_noise, write_clip_files
 
 __all__ = ["simulate", "observe", "make_landmark_clip", "draw_blob"]
 
@@ -29,6 +29,7 @@ def draw_blob(img, x, y, sigma, amplitude):
     img[y0:y1, x0:x1] += patch[:, :, None] if img.ndim == 3 else patch
 
 
+@atomic_clip
 def make_landmark_clip(out, *, k=5, frames=200, size=(640, 480), seed=0, clutter_blobs=6, occlusion=0.01,
                        fps=30.0, progress=None):
     """Render a landmark clip into ``out`` (video.mp4, groundtruth.csv, meta.json).

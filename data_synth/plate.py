@@ -27,7 +27,7 @@ import numpy as np
 from vistrack.models.plate_layout import LAYOUTS, plate_vertices
 from vistrack.video import VideoWriter
 
-from .render import add_noise, lighting, motion_blur, smooth_noise, write_clip_files
+from .render import add_noise, atomic_clip, lighting, motion_blur, smooth_noise, write_clip_files
 
 __all__ = ["render_plate", "make_plate_clip"]
 
@@ -130,6 +130,7 @@ def _car_sprite(plate, rng):
     return img, alpha, (px0, py0)
 
 
+@atomic_clip
 def make_plate_clip(out, *, frames=300, size=(640, 480), seed=0, cars=3, layout="jp", overlap=False, fps=30.0,
                     progress=None):
     """Render a road clip into ``out`` (video.mp4, groundtruth.csv, meta.json); returns the meta dict."""

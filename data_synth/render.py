@@ -2,14 +2,19 @@
 
 from __future__ import annotations
 
+import functools
 import json
+import os
+import shutil
+from pathlib import Path
 
 import cv2
 import numpy as np
 
 from vistrack.clips import write_track_csv
 
-__all__ = ["smooth_noise", "clutter_background", "motion_blur", "lighting", "add_noise", "write_clip_files"]
+__all__ = ["smooth_noise", "clutter_background", "motion_blur", "lighting", "add_noise", "write_clip_files",
+           "atomic_clip"]
 
 
 def smooth_noise(shape, rng, scale=8.0):
@@ -85,3 +90,60 @@ def write_clip_files(out, rows, columns, meta):
     write_track_csv(out / "groundtruth.csv", rows, columns)
     with open(out / "meta.json", "w") as f:
         json.dump(meta, f, indent=2)
+
+
+def _pid_alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass
+    return True
+
+
+def _swap_in(new, out):
+    """Put the complete clip folder ``new`` at ``out``: the old folder is renamed aside, ``new``
+    renamed into place, what else the old folder held (the user's files) moved over, then the old
+    clip removed. ``out`` never holds the new video beside the old ground truth."""
+    if not out.exists():
+        new.rename(out)
+        return
+    old = out.with_name(f".{out.name}.old-{os.getpid()}")
+    out.rename(old)
+    new.rename(out)
+    for e in old.iterdir():
+        if not (out / e.name).exists():
+            e.rename(out / e.name)
+    shutil.rmtree(old)
+
+
+def atomic_clip(make):
+    """Decorator of clip makers ``make(out, **kw)``: the clip is rendered into a hidden folder beside
+    ``out`` (``.NAME.partial-PID``, which ``eval`` does not take for a clip) and renamed over ``out``
+    when it is complete, so an interrupted or failed render leaves the old clip as it was and no
+    partial one. Partial folders of dead processes are removed. ``out`` may not hold the current
+    folder (``ValueError``)."""
+
+    @functools.wraps(make)
+    def wrapper(out, *args, **kw):
+        out = Path(out)
+        if Path.cwd().resolve().is_relative_to(out.resolve()):
+            raise ValueError(f"{out} holds the current folder: give the clip a folder of its own (such as clip/)")
+        if out.exists() and not out.is_dir():
+            raise ValueError(f"{out} exists and is not a folder")
+        out.parent.mkdir(parents=True, exist_ok=True)
+        for stale in out.parent.glob(f".{out.name}.partial-*"):
+            pid = stale.name.rpartition("-")[2]
+            if pid.isdigit() and not _pid_alive(int(pid)):
+                shutil.rmtree(stale, ignore_errors=True)
+        tmp = out.with_name(f".{out.name}.partial-{os.getpid()}")
+        shutil.rmtree(tmp, ignore_errors=True)
+        try:
+            result = make(tmp, *args, **kw)
+            _swap_in(tmp, out)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        return result
+
+    return wrapper

@@ -106,6 +106,8 @@ def test_eval_bad_input(suite, tmp_path, capsys):
     code, _, err = run(["eval", str(suite / "c1"), "--runs", "1", "--particles", "5", "--scheduler",
                         "tcp://127.0.0.1:9", "--timeout", "2", "--out", str(tmp_path / "o")], capsys)
     assert code != 0 and "cannot reach the Dask scheduler" in err
+    code, _, err = run(["eval", str(suite / "c1"), "--scheduler", "notaurl", "--out", str(tmp_path / "o")], capsys)
+    assert code != 0 and err.startswith("Error: cannot reach the Dask scheduler at notaurl") and err.count("\n") == 1
 
 
 def test_synth_suite(tmp_path, capsys):

@@ -122,6 +122,10 @@ def test_synth_bad_size(tmp_path, capsys):
     assert code != 0 and "too small" in err
     code, _, err = run(["synth", "contour", "--out", str(tmp_path / "c"), "--size", "big"], capsys)
     assert code != 0 and "WIDTHxHEIGHT" in err
+    code, _, err = run(["synth", "contour", "--out", str(tmp_path / "c"), "--size", "100000x100000"], capsys)
+    assert code != 0 and "100000x100000 is too large" in err and err.count("\n") == 1
+    code, _, err = run(["synth", "landmarks", "--out", str(tmp_path / "c"), "--occlusion", "nan"], capsys)
+    assert code != 0 and "expected a number in [0, 1], got nan" in err
 
 
 @pytest.mark.skipif(not (REAL / "hand_vot2013").is_dir(), reason="../shared/data not present")

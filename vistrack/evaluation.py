@@ -20,19 +20,20 @@ precision at 20 px, frames/s, mean ESS).
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .builders import build_model
-from .clips import load_clip
+from .clips import GroundTruthWarning, load_clip
 from .filters import ALGORITHMS, make_filter
 from .metrics import IOU_THRESHOLDS, center_error, iou, lost_frames, summarize_runs
 from .models.registry import get_model_spec
 from .runtime import keep_freed_memory
-from .tasks import (OutLocked, execute, load_task_results, lock_out, stale_tasks, task_done, task_fingerprint,
-                    write_atomic, write_task_result)
+from .tasks import (OutLocked, TaskFailed, check_shared, execute, load_task_results, lock_out, stale_tasks, task_done,
+                    task_fingerprint, write_atomic, write_task_result)
 from .tracking import track
 from .video import VideoError
 
@@ -41,7 +42,7 @@ __all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_conf
            "score_boxes", "score_result_file", "result_files",
            # the engine's task files (vistrack.tasks), re-exported
            "execute", "task_fingerprint", "task_done", "stale_tasks", "write_task_result", "write_atomic", "OutLocked",
-           "lock_out", "load_task_results"]
+           "lock_out", "load_task_results", "TaskFailed", "check_shared", "dask_setup"]
 
 #: centre-error thresholds (px) of the precision plot (OTB)
 PRECISION_THRESHOLDS = np.arange(0, 51)
@@ -115,14 +116,19 @@ def find_clips(paths):
         if p.is_file() or _is_clip(p):
             clips.append(p)
             continue
-        sub = sorted(q for q in p.iterdir() if q.is_dir() and _is_clip(q))
+        # hidden folders are not clips: synth renders into .NAME.partial-PID before renaming it
+        sub = sorted(q for q in p.iterdir() if q.is_dir() and not q.name.startswith(".") and _is_clip(q))
         if not sub:
             raise VideoError(f"{p} holds no clips (folders with video.mp4 or img/ and ground truth)")
         clips.extend(sub)
     for c in clips:
-        if load_clip(c).truth is None:
+        truth = load_clip(c).truth
+        if truth is None:
             raise VideoError(f"{c} has no ground truth (groundtruth.csv or groundtruth_rect.txt): "
                              "eval needs ground truth; `vistrack run` does not")
+        if not np.any(truth["visible"] > 0):
+            raise VideoError(f"the ground truth of {c} has no frame with the object in view (every row empty, NaN "
+                             "or 0,0,0,0): eval starts each run from the first box in view")
     return clips
 
 
@@ -216,11 +222,27 @@ def prepare_worker():
     keep_freed_memory()
 
 
+def dask_setup(worker):
+    """Dask preload hook of the LocalCluster's worker processes (``preload=["vistrack.evaluation"]``).
+
+    Ctrl-C reaches the whole process group; it is the client's to handle (it closes the cluster,
+    which ends the workers), so a worker ignores SIGINT rather than print a traceback, and keeps
+    distributed's warnings (tasks cancelled at shutdown) to itself.
+    """
+    import logging
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    logging.getLogger("distributed").setLevel(logging.ERROR)
+
+
 def run_task(task, out_dir):
     """Track one clip once; write ``out_dir/tasks/<name>.json``; return its path."""
     prepare_worker()
     out = Path(out_dir) / "tasks" / f"{task['name']}.json"
-    clip = load_clip(task["clip"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", GroundTruthWarning)  # said once, when eval found the clips
+        clip = load_clip(task["clip"])
     frames = list(clip.source)
     algo, n = task["algo"], task["particles"]
     # eval: the object's own size (the plate's vertex rule for plates); reproduce: the thesis's

@@ -19,17 +19,17 @@ CSV_COLUMNS = ["clip", "algo", "particles", "run", "frames", "mean_error", "mean
 
 
 def task_row(r):
-    """One ``results.csv`` row of a task result: ``mean_error`` over the frames not lost,
-    ``mean_error_all`` over every frame with the object in view and an estimate."""
-    err = [e for e, lost in zip(r["error"], r["lost"]) if e is not None and not lost]
-    every = [e for e, v in zip(r["error"], r["visible"]) if e is not None and v]
-    ess = [e for e in r["ess"] if e is not None]
-    return {"clip": r["clip"], "algo": r["algo"], "particles": r["particles"], "run": r["run"], "frames": r["frames"],
-            "mean_error": float(np.mean(err)) if err else "", "mean_error_all": float(np.mean(every)) if every else "",
-            "p_lost": float(np.mean(r["lost"])),
-            "success_auc": float(np.mean([np.mean(np.array(r["iou"]) > t) for t in np.linspace(0, 1, 21)])),
-            "precision_20px": float(np.mean([e is not None and e <= 20 for e in r["error"]])),
-            "frames_per_s": 1e3 / float(np.mean(r["ms"])) if r["ms"] else "", "mean_ess": float(np.mean(ess)) if ess else ""}
+    """One ``results.csv`` row of a task result: the numbers ``results.json`` gives this one run
+    (:func:`~vistrack.evaluation.summarize`), so the two files agree — frames where the ground
+    truth has no object (OTB/VOT absent frames) count in neither. ``mean_error`` is over the
+    frames not lost, ``mean_error_all`` over every frame with the object in view and an estimate;
+    empty where there is none."""
+    from .evaluation import summarize
+
+    s = summarize([r])[0]
+    row = {"clip": r["clip"], "algo": r["algo"], "particles": r["particles"], "run": r["run"], "frames": r["frames"]}
+    row.update({k: "" if s[k] is None else s[k] for k in CSV_COLUMNS[5:]})
+    return row
 
 
 def _eval_plots(out, summaries, labels):

@@ -56,13 +56,16 @@ def stop_on_signals():
 
 class TrackCSV:
     """Track rows (dicts) written as they come: header from the first row, one flushed row per
-    :meth:`write` to ``path.part``; :meth:`close` renames it to ``path`` (module docstring).
+    :meth:`write` to ``path.part``; :meth:`close` renames it to ``path`` (module docstring); a
+    device or pipe (``/dev/stdout``) is written directly.
     ``boxes=True``: the OTB / GOT-10k result format instead — ``x,y,w,h`` per frame, no header,
     0-based pixels, ``0,0,0,0`` where the object is not reported (``visible=0``)."""
 
     def __init__(self, path, boxes=False):
         self.path = Path(path)
-        self.part = self.path.with_name(self.path.name + ".part")
+        # a device or pipe (/dev/stdout) is written directly: a part file renamed over it would replace it
+        self.direct = self.path.exists() and not self.path.is_file()
+        self.part = self.path if self.direct else self.path.with_name(self.path.name + ".part")
         self._f = open(self.part, "w", newline="")
         self._w = csv.writer(self._f)
         self.boxes = bool(boxes)
@@ -95,6 +98,8 @@ class TrackCSV:
             self._f.close()
         except OSError:
             pass
+        if self.direct:
+            return
         if self.rows:
             os.replace(self.part, self.path)
         else:
@@ -215,11 +220,19 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         run.stopped = "interrupt"
     finally:
         run.wall = time.perf_counter() - t0
-        if writer:
-            writer.close()
+        _close_all(outs, writer)
+    return run
+
+
+def _close_all(outs, writer):
+    """Close the track files, then the annotated video: a video that fails to close (a full disk
+    shows when its last packets are written) must not cost the track."""
+    try:
         for o in outs:
             o.close()
-    return run
+    finally:
+        if writer:
+            writer.close()
 
 
 def summary_lines(run, particles, *, model_name, model, truth, frame_width):

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["task_fingerprint", "write_task_result", "write_atomic", "task_done", "stale_tasks", "load_task_results",
-           "execute", "OutLocked", "lock_out"]
+           "execute", "TaskFailed", "check_shared", "OutLocked", "lock_out"]
 
 
 def _clip_signature(clip):
@@ -72,8 +72,12 @@ def write_task_result(path, result, task=None):
 
 def write_atomic(path, text):
     """Write ``text`` to ``path`` whole or not at all: a temporary file beside it, then a rename
-    (a crash leaves the old file or none, never half of the new one)."""
+    (a crash leaves the old file or none, never half of the new one). A device or pipe such as
+    ``/dev/stdout`` is written directly."""
     path = Path(path)
+    if path.exists() and not path.is_file():  # a device or pipe (/dev/stdout): a rename would replace it
+        path.write_text(text)
+        return
     tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
     try:
         tmp.write_text(text)
@@ -107,28 +111,70 @@ def load_task_results(tasks, out_dir):
     return [json.loads((Path(out_dir) / "tasks" / f"{t['name']}.json").read_text()) for t in tasks]
 
 
+class TaskFailed(RuntimeError):
+    """A task of the grid could not finish (its workers died, or it met a broken input file); the
+    task files finished so far are kept, so ``--resume`` runs only the rest."""
+
+
 def execute(tasks, out_dir, client, *, resume=False, progress=None, key_prefix="vistrack", runner=None):
     """Run the tasks not yet done on a ``distributed.Client``; each writes its own file.
 
     ``runner(task, out_dir)`` does one task (default :func:`run_task`, one tracking run
-    of a clip); it must write ``out_dir/tasks/<name>.json``.
+    of a clip); it must write ``out_dir/tasks/<name>.json``. A worker that dies (killed, out of
+    memory) is replaced and its task runs again from its own seed stream, so the results are those
+    of an uninterrupted run; a task whose workers keep dying, or that fails on a broken file
+    (``OSError``, ``VideoError``), raises :class:`TaskFailed` naming it.
 
     ``progress(k)`` is called as tasks finish (and once for those skipped on resume).
     """
-    from distributed import as_completed
+    from distributed import KilledWorker, as_completed
+
+    from .video import VideoError
 
     pending = [t for t in tasks if not (resume and task_done(t, out_dir))]
     if progress and len(tasks) > len(pending):
         progress(len(tasks) - len(pending))
     if runner is None:
         from .evaluation import run_task as runner
-    futs = [client.submit(runner, t, str(out_dir), key=f"{key_prefix}-{t['name']}", retries=2, pure=False)
-            for t in pending]
-    for f in as_completed(futs):
-        f.result()
+    futs = {client.submit(runner, t, str(out_dir), key=f"{key_prefix}-{t['name']}", retries=2, pure=False): t["name"]
+            for t in pending}
+    for f in as_completed(list(futs)):
+        try:
+            f.result()
+        except KilledWorker as e:
+            raise TaskFailed(f"task {futs[f]} ended the process of every worker that ran it ({e.allowed_failures + 1}; "
+                             "out of memory?); the finished task files are kept: --resume runs the rest") from None
+        except (OSError, VideoError) as e:
+            raise TaskFailed(f"task {futs[f]} failed: {e}; the finished task files are kept: "
+                             "--resume runs the rest") from None
         if progress:
             progress(1)
     return len(pending)
+
+
+def _sees(probe, paths):
+    """On a worker: which of ``probe`` and ``paths`` it cannot see (the paths as the tasks give them)."""
+    return [p for p in [probe, *paths] if not os.path.exists(p)]
+
+
+def check_shared(client, tasks, out_dir):
+    """Raise ``TaskFailed`` unless every worker of ``client`` sees ``out_dir`` (a file written there
+    now) and the tasks' clips at the paths the tasks give: workers write their task files into
+    ``out_dir``, so with a scheduler on other machines it must be on a filesystem they share."""
+    import uuid
+
+    probe = Path(out_dir) / f".vistrack-probe-{uuid.uuid4().hex[:12]}"
+    probe.write_text("")
+    try:
+        clips = sorted({t["clip"] for t in tasks if "clip" in t})
+        missing = {w: m for w, m in client.run(_sees, str(probe), clips).items() if m}
+    finally:
+        probe.unlink(missing_ok=True)
+    if missing:
+        worker, paths = next(iter(missing.items()))
+        what = f"--out {out_dir}" if paths[0] == str(probe) else f"clip {paths[0]}"
+        raise TaskFailed(f"{len(missing)} worker(s) of the scheduler (e.g. {worker}) cannot see {what}: --out and "
+                         "the clips must be on a filesystem the workers share, at the same paths")
 
 
 class OutLocked(RuntimeError):

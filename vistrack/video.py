@@ -24,6 +24,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+# FFmpeg's own lines for a damaged stream ("header damaged", one per packet) are noise: a skipped
+# frame is counted and reported once (VideoDecodeWarning). Read when the first capture opens.
+os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+
 __all__ = [
     "VideoError",
     "VideoDecodeWarning",
@@ -285,7 +289,8 @@ class VideoWriter:
         self.codec = "mp4v"
         self._w = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"mp4v"), float(fps), self.size)
         if not self._w.isOpened():
-            raise VideoError(f"cannot open {self.path} for writing")
+            hint = "" if self.path.suffix.lower() == ".mp4" else " (give a file name ending in .mp4)"
+            raise VideoError(f"cannot open {self.path} for writing{hint}")
 
     def _open_h264(self, fps):
         import av  # noqa: PLC0415  (optional: PyAV)

@@ -190,9 +190,13 @@ def fit_plate_coefficients(clips_dir, layout="jp", *, rounds=2, scales=None):
         (``pos``, ``near``, ``far``, ``hard``) the count and the 1/50/99 % log-odds
         percentiles and the share scored above 0.
     """
-    clips = sorted(p for p in Path(clips_dir).iterdir() if (p / "groundtruth.csv").is_file())
+    clips = sorted(p for p in Path(clips_dir).glob("[!.]*") if (p / "groundtruth.csv").is_file())
     if not clips:
         raise ValueError(f"{clips_dir}: no plate clip folders (with groundtruth.csv)")
+    for c in clips:  # the plate vertices x0..y3 are what is fitted: other clips would fit nonsense
+        if "x3" not in (c / "groundtruth.csv").read_text().partition("\n")[0].split(","):
+            raise ValueError(f"{c} is not a plate clip (its groundtruth.csv has no plate vertices x0..y3): "
+                             "make plate clips with vistrack synth plate")
     (w, b), (x, y, kinds) = fit_weights(clips, layout, rounds=rounds, scales=scales)
     score = x @ w + b
     samples = {str(k): {"n": int(np.sum(kinds == k)),

@@ -8,7 +8,8 @@ __all__ = ["clip_suite"]
 
 
 def clip_suite(base, make, frames, size, maker, prefix, progress=None, **kw):
-    """The clip folders in ``base`` (those with a ``groundtruth.csv``), sorted.
+    """The clip folders in ``base`` (those with a ``groundtruth.csv``; hidden ones, such as a clip
+    being written, are skipped), sorted.
 
     When ``base`` holds none, ``make`` clips of seeds ``1..make`` are generated there first,
     each by ``maker(base / f"{prefix}-{seed:02d}", frames=frames, size=size, seed=seed,
@@ -29,7 +30,7 @@ def clip_suite(base, make, frames, size, maker, prefix, progress=None, **kw):
     base = Path(base)
 
     def found():
-        return sorted(p for p in base.iterdir() if (p / "groundtruth.csv").is_file()) if base.is_dir() else []
+        return sorted(p for p in base.glob("[!.]*") if (p / "groundtruth.csv").is_file()) if base.is_dir() else []
 
     if not found():
         base.mkdir(parents=True, exist_ok=True)
