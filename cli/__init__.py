@@ -22,6 +22,7 @@ from .fit import fit_plate
 from .reproduce import reproduce
 from .run import run
 from .synth import synth, synth_suite
+from .train_search import train_search
 
 __all__ = ["cli", "main"]
 
@@ -52,6 +53,7 @@ cli.add_command(fit_plate)
 cli.add_command(run)
 cli.add_command(synth)
 cli.add_command(synth_suite)
+cli.add_command(train_search)
 
 
 @contextmanager

@@ -13,6 +13,7 @@ from vistrack.builders import MODELS, build_model, read_support_points
 from vistrack.clips import load_clip
 from vistrack.filters import make_filter
 from vistrack.models.registry import MODELS as MODEL_REGISTRY
+from vistrack.models.contour_nn import network_for
 from vistrack.models.registry import get_model_spec
 from vistrack.runtime import check_particle_memory
 from vistrack.session import stop_on_signals, summary_lines, track_video
@@ -69,6 +70,9 @@ def lost_notice(most=5):
               help="Plate layout [default: the clip's, else jp].")
 @click.option("--algo", default=None, type=click.Choice(RUN_ALGOS),
               help="Particle filter [default: lis; pf-eis-mt for landmarks].")
+@click.option("--search", type=click.Choice(["lms", "nn"]), default=None,
+              help="LS-N-IPS on contour: the local search, LMS or the neural network trained on simulated "
+                   "measurements (thesis §4.3.1; trained on first use, cached; see train-search) [default: lms].")
 @click.option("-n", "--particles", default=100, show_default=True, type=click.IntRange(min=1),
               help="Number of particles N.")
 @click.option("--seed", default=0, show_default=True, type=SEED, help="Random seed (same seed, same track).")
@@ -97,7 +101,7 @@ def lost_notice(most=5):
               help="Contour: edges only (no colour term, which is on for colour video). Plate: the plate "
                    "likelihood only (no appearance learned from the --init box).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary.")
-def run(video, model_name, layout, algo, particles, seed, init, init_gt, template_path, track_path, out_path,
+def run(video, model_name, layout, algo, search, particles, seed, init, init_gt, template_path, track_path, out_path,
         results_path, show_particles, resample, ess_threshold, max_frames, no_colour, quiet):
     """Track the object in VIDEO (a video file, an image folder or a clip folder).
 
@@ -138,11 +142,17 @@ def run(video, model_name, layout, algo, particles, seed, init, init_gt, templat
         extra = model_options(name, layout=layout, no_colour=no_colour,
                               template=read_support_points(template_path) if template_path else None)
         algo = algo or spec.default_algo
+        if search is not None:
+            if algo != "ls-n-ips" or name != "contour":
+                raise click.UsageError("--search is for --algo ls-n-ips on the contour model")
+            extra["search"] = search
         if algo not in spec.algos:
             raise click.UsageError(f"--algo {algo} does not run on the {name} model; "
                                    f"choose from {', '.join(spec.algos)}")
         check_particle_memory(particles, spec.bytes_per_particle, algo)
         model = build_model(name, clip, init=init, init_gt=init_gt, **extra)
+        if search == "nn":  # train (once per template) or load before the progress bar starts
+            network_for(model, notify=None if quiet else lambda m: click.echo(m, err=True))
     except (VideoError, ValueError) as e:
         raise click.ClickException(str(e)) from None
     filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)

@@ -302,7 +302,7 @@ def _contour(clip, size, init, init_gt, template, params):
 _THESIS = ("lis", "bootstrap", "condensation", "ls-n-ips", "lls", "avpf")
 register(ModelSpec("box", _THESIS, "any object from a box: colour + template appearance learned from the first frame",
                    from_box=_box_from_box, bytes_per_particle=32_000))
-register(ModelSpec("contour", _THESIS, "B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
+register(ModelSpec("contour", _THESIS + ("ls-n-ips-nn",), "B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
                    from_box=_contour_from_box, from_clip=_contour_from_clip, bytes_per_particle=48_000))
 register(ModelSpec("plate", ("lis", "bootstrap", "condensation", "lls", "avpf"),
                    "license-plate template (thesis 001 §1.3.2); acquires plates without a box",

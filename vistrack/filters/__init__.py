@@ -8,7 +8,7 @@ from .base import ParticleFilter, filter_steps
 from .bootstrap import Bootstrap
 from .lis import LIS, GaussMixtureProposal
 from .lls import LLS, Window
-from .ls_n_ips import LSNIPS
+from .ls_n_ips import LSNIPS, LSNIPSNN
 from .pf_doucet import PFDoucet
 from .pf_eis import PFEIS
 from .pf_eis_mt import PFEISMT
@@ -24,6 +24,7 @@ __all__ = [
     "Window",
     "LIS",
     "LSNIPS",
+    "LSNIPSNN",
     "PFDoucet",
     "PFEIS",
     "PFEISMT",
@@ -42,6 +43,7 @@ ALGORITHMS = {
     "lls": LLS,
     "lis": LIS,
     "ls-n-ips": LSNIPS,
+    "ls-n-ips-nn": LSNIPSNN,
     "pf-doucet": PFDoucet,
     "pf-eis": PFEIS,
     "pf-eis-mt": PFEISMT,

@@ -15,7 +15,7 @@ from __future__ import annotations
 from ..models.protocol import LocalSearch, StateSpaceModel, require
 from .base import ParticleFilter
 
-__all__ = ["LSNIPS"]
+__all__ = ["LSNIPS", "LSNIPSNN"]
 
 
 class LSNIPS(ParticleFilter):
@@ -51,3 +51,15 @@ class LSNIPS(ParticleFilter):
         else:
             ll = self.model.loglik(obs, z)
         return z, ll, x, ll
+
+
+class LSNIPSNN(LSNIPS):
+    """LS-N-IPS with the model's learned local search (``model.searcher("nn")``: the contour
+    model's neural network, §4.3.1 Fig. 4.5), whatever the model's default search."""
+
+    name = "ls-n-ips-nn"
+
+    def __init__(self, model, **kwargs):
+        if not hasattr(model, "searcher"):
+            raise ValueError(f"{self.name} needs a model with a learned local search (contour)")
+        super().__init__(model, local_search=model.searcher("nn"), **kwargs)

@@ -118,6 +118,9 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, Vide
     gradient_sigma : float
         Std (px) of the Gaussian that smooths the image before the Sobel gradient
         that every measurement line reads (0: the raw Sobel maps).
+    search : {"lms", "nn"}
+        The local search of LS-N-IPS (§4.3.1): the LMS fit, or the neural network trained on
+        simulated measurements (:mod:`~vistrack.models.contour_nn`, Fig. 4.5).
     """
 
     dim = 8
@@ -131,7 +134,7 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, Vide
                  damping=0.8, prior_std=None, sigma_edge=None, half_line=None, q_miss=0.1,
                  clutter_density=0.05, edge_threshold=2.0, cos_min=0.85, search_length=16.0,
                  search_lambda=(7.0, 7.0, 0.15, 0.1), search_grid_step=1.5,
-                 search_check=True, measure_per_segment=2, polarity=None, gradient_sigma=1.0):
+                 search_check=True, measure_per_segment=2, polarity=None, gradient_sigma=1.0, search="lms"):
         q0 = np.asarray(template, dtype=float)
         if q0.ndim != 2 or q0.shape[1] != 2 or len(q0) < 4:
             raise ValueError("template must be an (n, 2) array of at least 4 support points")
@@ -187,6 +190,10 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, Vide
         lam = np.asarray(search_lambda, dtype=float).copy()
         lam[:2] *= frame_ref
         self.search_lambda = lam
+        if search not in ("lms", "nn"):
+            raise ValueError(f"unknown local search {search!r}; choose lms or nn")
+        self.search = search
+        self.nn_search = None  # the network of search="nn", trained or loaded on first use (contour_nn)
 
     def _template_normals(self, t):
         tang = self.spline.curve_matrix(t, deriv=1) @ self.q0

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..proposals import GaussMixtureProposal, Window
+from .contour_nn import nn_candidates
 from .kernel import is_prior
 from .spline import edge_peaks, pose_params
 
@@ -34,8 +35,11 @@ class ContourMoves:
         d = np.concatenate([q_hat[..., 0] - self.q0[:, 0], q_hat[..., 1] - self.q0[:, 1]], axis=1)
         return d @ self.W_plus.T
 
-    def local_search(self, obs, states):
+    def local_search(self, obs, states, search=None):
         """``LS_λ`` of §4.3 / eq. 4.1 for contours: refine predicted poses ``z_t``.
+
+        ``search``: ``"lms"`` (below) or ``"nn"`` (:mod:`~vistrack.models.contour_nn`, Fig. 4.5, from
+        the prediction); default :attr:`search`. Both go through the same ``λ`` bound and eq. 4.1 check.
 
         One set of measurement lines, long enough for every move, serves both steps:
 
@@ -55,6 +59,8 @@ class ContourMoves:
         Returns the states and their log-likelihoods.
         """
         z = states[:, :4]
+        if (search or self.search) == "nn":
+            return self._accept(obs, states, nn_candidates(self, obs, z), z, lambda: self.loglik(obs, states))
         lx, ly = self.search_lambda[:2]
         step = max(1.0, self.grid_step * self.sigma_edge)
         gx = np.arange(-np.floor(lx / step), np.floor(lx / step) + 1) * step
@@ -81,20 +87,35 @@ class ContourMoves:
         p_hat = pts + delta[:, None, :] + nu[..., None] * nrm
         d = np.concatenate([p_hat[..., 0] - self.meas0[:, 0], p_hat[..., 1] - self.meas0[:, 1]], axis=1)
         z_hat = d @ self.W_meas_plus.T
-        near = np.all(np.abs(z_hat - z) <= self.search_lambda, axis=1)
+
+        def ll_prediction():  # r at the prediction, exactly as loglik: the middle samples of the long lines
+            r = (len(off) - len(self.line_offsets)) // 2
+            ll_x = self._loglik_from_profiles(gn[..., r:r + len(self.line_offsets)], thresh)
+            return ll_x + self.colour_loglik(obs, z) if self.colour is not None else ll_x
+
+        return self._accept(obs, states, z_hat, z_t, ll_prediction)
+
+    def _accept(self, obs, states, z_hat, z_else, ll_prediction):
+        """The searched poses ``z_hat`` where within ``λ`` of the prediction (max norm per
+        coordinate; else ``z_else``), kept only where they do not lower ``r`` (eq. 4.1, with
+        :attr:`search_check`; ``ll_prediction()``: ``log r`` at ``states``). Returns the states
+        and their log-likelihoods."""
+        near = np.all(np.abs(z_hat - states[:, :4]) <= self.search_lambda, axis=1)
         cand = states.copy()
-        cand[:, :4] = np.where(near[:, None], z_hat, z_t)  # the grid step is within λ by construction
+        cand[:, :4] = np.where(near[:, None], z_hat, z_else)
         ll = self.loglik(obs, cand)
         if not self.search_check:
             return cand, ll
-        # r at the prediction, exactly as loglik: its lines are the middle samples of the long ones
-        r = (len(off) - len(self.line_offsets)) // 2
-        ll_x = self._loglik_from_profiles(gn[..., r:r + len(self.line_offsets)], thresh)
-        if self.colour is not None:
-            ll_x = ll_x + self.colour_loglik(obs, z)
+        ll_x = ll_prediction()
         keep = ll < ll_x  # the move lowered r: stay at the prediction
         cand[keep] = states[keep]
         return cand, np.where(keep, ll_x, ll)
+
+    def searcher(self, search):
+        """``local_search`` with ``search`` (``"lms"`` or ``"nn"``) whatever :attr:`search` is."""
+        if search not in ("lms", "nn"):
+            raise ValueError(f"unknown local search {search!r}; choose lms or nn")
+        return lambda obs, states: self.local_search(obs, states, search=search)
 
     def lms_step(self, obs, states, samples=33):
         """The plain LMS step of §4.3.1 at the support points: the edge nearest to the

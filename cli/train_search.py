@@ -1,0 +1,45 @@
+"""``vistrack train-search``: train (and cache) the contour model's neural-network local search."""
+
+from __future__ import annotations
+
+import click
+
+from vistrack.builders import read_support_points
+from vistrack.models.contour import Contour
+from vistrack.models.contour_nn import NNSearchConfig, load_or_train
+from vistrack.video import VideoError
+
+from .options import SEED, Size
+
+__all__ = ["train_search"]
+
+
+@click.command("train-search")
+@click.option("--template", "template_path", required=True, type=click.Path(dir_okay=False),
+              help="Contour support points in pixels as tracked (x y per line, JSON, or a clip's meta.json).")
+@click.option("--size", default="320x240", show_default=True, type=Size(),
+              help="Frame size of the video (λ's translation scales with the frame width).")
+@click.option("--samples", default=NNSearchConfig.samples, show_default=True, type=click.IntRange(min=100),
+              help="Simulated training poses.")
+@click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the simulation and the network.")
+@click.option("--out", "out_path", type=click.Path(dir_okay=False),
+              help="Write the network here [default: the cache, $VISTRACK_CACHE or ~/.cache/vistrack].")
+def train_search(template_path, size, samples, seed, out_path):
+    """Train the neural-network local search of LS-N-IPS (thesis §4.3.1, Fig. 4.5) for a contour
+    template, ahead of `vistrack run --algo ls-n-ips --search nn` (which otherwise trains it on
+    first use, once per template, size and frame width) and cache it.
+
+    \b
+    Example:
+      vistrack train-search --template clip/meta.json --size 320x240
+    """
+    try:
+        model = Contour(read_support_points(template_path), (0.0, 0.0, 0.0, 0.0), size)
+    except (VideoError, ValueError) as e:
+        raise click.ClickException(str(e)) from None
+    cfg = NNSearchConfig(samples=samples, seed=seed)
+    net, info = load_or_train(model, cfg, path=out_path, notify=lambda m: click.echo(m, err=True))
+    if info["trained"]:
+        click.echo(f"trained in {info['seconds']:.1f} s ({info['cpu_seconds']:.1f} s CPU): {info['path']}")
+    else:
+        click.echo(f"already trained: {info['path']}")
