@@ -128,6 +128,17 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     check_outputs({"--track": track_path, "--out": out_path, "--results": results_path}, video)
     if init is not None and init_gt is not None:
         raise click.UsageError("give either --init or --init-gt, not both")
+    clip, name, algo, model = _setup(video, model_name, algo, search, particles, init, init_gt, quiet,
+                                     layout=layout, no_colour=no_colour, template_path=template_path)
+    filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)
+    outputs = {"track_path": track_path, "out_path": out_path, "results_path": results_path}
+    done = _track(clip, model, filt, particles, seed, max_frames, show_particles, quiet, f"{algo} N={particles}",
+                  outputs)
+    _report(video, clip, done, name, model, particles, quiet, outputs)
+
+
+def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, layout, no_colour, template_path):
+    """``(clip, model name, algorithm, model)`` of a run, checked; one error line for bad input."""
     try:
         clip = load_clip(video)
         if init is not None:
@@ -155,7 +166,12 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
             network_for(model, notify=None if quiet else lambda m: click.echo(m, err=True))
     except (VideoError, ValueError) as e:
         raise click.ClickException(str(e)) from None
-    filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)
+    return clip, name, algo, model
+
+
+def _track(clip, model, filt, particles, seed, max_frames, show_particles, quiet, label, outputs):
+    """:func:`~vistrack.session.track_video` over the clip with a progress bar; stops cleanly on
+    SIGINT/SIGTERM (the outputs so far kept)."""
     src = clip.source
     total = src.frame_count if max_frames is None else min(max_frames, src.frame_count or max_frames)
 
@@ -165,7 +181,7 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
                 return
             yield i, f
 
-    bar = tqdm(total=total, unit="frame", disable=quiet, dynamic_ncols=True, desc=f"{algo} N={particles}")
+    bar = tqdm(total=total, unit="frame", disable=quiet, dynamic_ncols=True, desc=label)
 
     def progress(ess):
         bar.update(1)
@@ -174,14 +190,20 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     try:  # skipped frames: one line below, not the decoder's warning too
         with stop_on_signals(), warnings.catch_warnings():
             warnings.simplefilter("ignore", VideoDecodeWarning)
-            done = track_video(frames(), model, filt, particles, np.random.default_rng(seed), track_path=track_path,
-                               out_path=out_path, results_path=results_path, video_info=(src.fps, src.size), show_particles=show_particles,
-                               label=f"{algo} N={particles}", progress=progress,
-                               notify=None if quiet else lost_notice())
+            return track_video(frames(), model, filt, particles, np.random.default_rng(seed),
+                               video_info=(src.fps, src.size), show_particles=show_particles, label=label,
+                               progress=progress, notify=None if quiet else lost_notice(), **outputs)
     except (VideoError, OSError) as e:
         raise click.ClickException(str(e)) from None
     finally:
         bar.close()
+
+
+def _report(video, clip, done, name, model, particles, quiet, outputs):
+    """Print what happened (interrupts, skipped frames, the summary, the files written); exit 130/143
+    after an interrupt."""
+    track_path, out_path, results_path = outputs["track_path"], outputs["out_path"], outputs["results_path"]
+    src = clip.source
     if not done.rows:
         if done.stopped:
             raise click.exceptions.Exit(done.exit_code)
