@@ -20,7 +20,8 @@ import numpy as np
 from numba import njit, types
 from numba.extending import intrinsic
 
-__all__ = ["corner", "lerp4", "fma", "corner_float", "lerp_fma", "sample", "pairwise_sum", "NONFINITE"]
+__all__ = ["corner", "lerp4", "fma", "corner_float", "lerp_fma", "fma_lerp", "inside", "sample", "pairwise_sum",
+           "NONFINITE"]
 
 _F32 = np.float32
 #: the corner :func:`corner` gives a point with a NaN or infinite coordinate
@@ -107,9 +108,25 @@ def lerp_fma(img, ix, iy, a, b, c, border, nonfinite):
         p01 = img[iy, ix + 1, c] if r0 and in1 else border
         p10 = img[iy + 1, ix, c] if r1 and in0 else border
         p11 = img[iy + 1, ix + 1, c] if r1 and in1 else border
+    return fma_lerp(p00, p01, p10, p11, a, b)
+
+
+@njit(cache=True, forceinline=True)
+def fma_lerp(p00, p01, p10, p11, a, b):
+    """``cv2.remap``'s interpolation of four float32 pixels for 1-, 3- and 4-channel images:
+    ``t0 = fma(a, p01 - p00, p00)``, ``t1 = fma(a, p11 - p10, p10)``, ``fma(b, t1 - t0, t0)``
+    (scalars only: a kernel's inner loop reads the pixels itself, see :func:`inside`)."""
     t0 = fma(a, p01 - p00, p00)
     t1 = fma(a, p11 - p10, p10)
     return fma(b, t1 - t0, t0)
+
+
+@njit(cache=True, forceinline=True)
+def inside(ix, iy, w, h):
+    """Whether the four pixels at corner ``ix, iy`` lie in a ``w x h`` image (the unchecked path;
+    numba counts references on every call that passes an array, so hot loops read pixels inline
+    and call :func:`lerp4` / :func:`lerp_fma` only at the border)."""
+    return 0 <= ix < w - 1 and 0 <= iy < h - 1
 
 
 @njit(cache=True)

@@ -42,6 +42,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from .. import kernels
 from ..features import bin_integrals, box_sums, colour_bins, is_grey, n_colour_bins, remap_points
 
 __all__ = ["Appearance", "AppearanceFrame", "TargetColour"]
@@ -259,6 +260,11 @@ class Appearance:
         and ``T_d``, ``√½ [g·T_g / |g - ḡ| + d·T_d / |d|]`` (the sum of ``T_g`` is zero, so the
         mean drops out of the dot product)."""
         b = np.asarray(boxes, float)
+        if kernels.use():
+            from ..kernels.appearance import ncc
+
+            return ncc(obs.texture, np.ascontiguousarray(b), self.grid, float(obs.x0), float(obs.y0), float(obs.f),
+                       self.template, np.empty(len(b)))
         x = b[:, None, 0] + self.grid[None, :, 0] * b[:, None, 2]
         y = b[:, None, 1] + self.grid[None, :, 1] * b[:, None, 3]
         t = obs.sample_texture(x, y)  # (N, M, 3) float32
