@@ -220,7 +220,7 @@ def run_task(task, out_dir):
             ms.append(res.ms)
             ess.append(res.ess)
             if spec.lost_rule == "plate":  # the maps are overwritten by the next frame: report now
-                reported.append(bool(model.visible(res.maps, res.estimate)))
+                reported.append(bool(model.visible(res.obs, res.estimate)))
                 vertices.append(model.vertices(res.estimate)[0])
         est = np.array(est)
         wh = model.box(est)[:, 2:]

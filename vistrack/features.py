@@ -210,8 +210,12 @@ class FeatureMaps:
         self._gradients = {}
         self._labels = {}
         self._buffers = buffers
-        #: a model's own maps of this frame (the plate's appearance maps), set by its ``observe``
-        self.appearance = None
+
+    def buffer(self, name, shape, dtype=np.float32):
+        """An output array for a map of this frame: from the buffer pool (overwritten by the next
+        frame's), or a fresh one without a pool."""
+        b = self._buf(name, shape, dtype)
+        return np.empty(shape, dtype) if b is None else b
 
     def _buf(self, name, shape, dtype=np.float32):
         """A reusable output array (fresh arrays cost a page fault per 4 KiB, DESIGN.md);

@@ -170,7 +170,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
             warnings.simplefilter("ignore", DegenerateWeightsWarning)
             for res in track(frames, filt, particles, rng):
-                vis = model.visible(res.maps, res.estimate)
+                vis = model.visible(res.obs, res.estimate)
                 row = {"frame": res.index, "visible": int(vis)}
                 row.update(model.describe(res.estimate))
                 row["ess"], row["ms"] = res.ess, res.ms

@@ -104,4 +104,4 @@ class Tracker:
 
     @property
     def visible(self):
-        return bool(self.model.visible(self.result.maps, self.result.estimate))
+        return bool(self.model.visible(self.result.obs, self.result.estimate))

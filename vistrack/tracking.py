@@ -29,6 +29,8 @@ class FrameResult:
     estimate: np.ndarray
     ms: float
     maps: object = None
+    #: the model's observation of the frame (``model.observe``; what ``visible`` and ``loglik`` read)
+    obs: object = None
 
     @property
     def ess(self):
@@ -54,7 +56,9 @@ class FrameStepper:
     :class:`~vistrack.models.protocol.VideoModel`: ``observe(maps, previous_particles)``
     turns each frame's maps into its observation ``Y_t`` (the maps themselves by default;
     landmarks: blob detection and association; box: the appearance maps over the region
-    the particles can reach), ``estimate(particles)`` gives the point estimate (unless
+    the particles can reach; plate: its 4-channel map and appearance maps), an object of the
+    model's own that holds whatever the model computes from the frame (nothing is stored on the
+    shared maps), ``estimate(particles)`` gives the point estimate (unless
     ``estimator`` is given) and ``adapt(obs, estimate)`` is told each frame's estimate
     after the step (the box model's appearance). The feature maps of a frame live in
     buffers that the next frame overwrites: use them before stepping again.
@@ -80,7 +84,7 @@ class FrameStepper:
         est = self.estimator(self.particles)
         self.model.adapt(obs, est)
         ms = (time.perf_counter() - t0) * 1e3
-        return FrameResult(index, frame, self.particles, est, ms, maps)
+        return FrameResult(index, frame, self.particles, est, ms, maps, obs)
 
 
 def track(frames, filt, n, rng, *, estimator=None):

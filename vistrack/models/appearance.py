@@ -143,6 +143,9 @@ class AppearanceFrame:
         self.labels = colour_bins(crop, grey)
         self.n_bins = n_colour_bins(grey)
         self.ii = bin_integrals(self.labels, self.n_bins)
+        #: the LIS proposal map of this frame (:meth:`Appearance.proposal_map`, ``()`` where there is
+        #: none), set by the box model on first use
+        self.proposal = None
 
     def to_work(self, x, y):
         """Frame pixel coordinates to working coordinates (same continuous convention)."""

@@ -170,11 +170,10 @@ class Box(TranslationMoves, VideoModelBase):
         """The map's ``log q`` at centres ``points (N, G, 2)`` (frame px), for the LIS proposal:
         :meth:`Appearance.proposal_map` at the particles' mean size, tempered by one half and
         mixed with 5 % of a flat floor (a defensive share)."""
-        key = "_qmap"
-        if getattr(obs, key, None) is None:
+        if obs.proposal is None:  # once per frame, at the particles' mean size
             w, h = self.size0 * np.exp(np.mean(states[:, 2]))
-            setattr(obs, key, self.app.proposal_map(obs, w, h) or ())
-        qmap = getattr(obs, key)
+            obs.proposal = self.app.proposal_map(obs, w, h) or ()
+        qmap = obs.proposal
         n, g, _ = points.shape
         if not qmap:
             return np.zeros((n, g))

@@ -7,11 +7,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..proposals import Window
-from .plate_likelihood import LEARNT_WEIGHTS, PlateLikelihood, scale_band, thesis_weights
+from .plate_likelihood import LEARNT_WEIGHTS, PlateLikelihood, PlateObservation, scale_band, thesis_weights
 from .plate_proposal import PlateLISProposal
 from .protocol import VideoModelBase
 
-__all__ = ["Plate", "PlateLikelihood", "PlateLISProposal", "thesis_weights", "scale_band", "LEARNT_WEIGHTS"]
+__all__ = ["Plate", "PlateLikelihood", "PlateObservation", "PlateLISProposal", "thesis_weights", "scale_band",
+           "LEARNT_WEIGHTS"]
 
 
 class Plate(VideoModelBase):
@@ -203,13 +204,14 @@ class Plate(VideoModelBase):
         return self.app
 
     def observe(self, maps, particles):
-        """The feature maps, with (when the model has an appearance) the appearance maps of the
-        whole frame at the appearance's working resolution as ``maps.appearance`` (entering
-        cars can be anywhere)."""
+        """The frame's :class:`~vistrack.models.plate_likelihood.PlateObservation`: the feature maps,
+        the likelihood's 4-channel map and (when the model has an appearance) the appearance maps
+        of the whole frame at the appearance's working resolution (entering cars can be anywhere)."""
+        app = None
         if self.app is not None:
             h, w = maps.shape
-            maps.appearance = self.app.frame(maps.frame, (0, 0, w, h))
-        return maps
+            app = self.app.frame(maps.frame, (0, 0, w, h))
+        return PlateObservation(maps, self.lik.maps(maps), app)
 
     def _app_boxes(self, states):
         x, y, w, h = self.box(states).T

@@ -61,8 +61,8 @@ def run_plate_task(task, out_dir):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DegenerateWeightsWarning)
         for res in track(clip.source, filt, task["particles"], rng):
-            reported.append(int(model.visible(res.maps, res.estimate)))
-            ll.append(round(float(model.loglik(res.maps, res.estimate[None])[0]), 3))
+            reported.append(int(model.visible(res.obs, res.estimate)))
+            ll.append(round(float(model.loglik(res.obs, res.estimate[None])[0]), 3))
             verts.append(np.round(model.vertices(res.estimate)[0].ravel(), 3).tolist())
             ms.append(round(res.ms, 4))
             ess.append(round(res.ess, 3))
