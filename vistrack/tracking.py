@@ -16,7 +16,7 @@ from .features import FeatureMaps
 from .models.protocol import VideoModel, require
 from .particles import ParticleSet
 
-__all__ = ["FrameResult", "FrameStepper", "track", "top_particles"]
+__all__ = ["FrameResult", "FrameStepper", "track", "top_particles", "warm_up"]
 
 
 @dataclass
@@ -85,6 +85,29 @@ class FrameStepper:
         self.model.adapt(obs, est)
         ms = (time.perf_counter() - t0) * 1e3
         return FrameResult(index, frame, self.particles, est, ms, maps, obs)
+
+
+def warm_up(filt, n, frame):
+    """Run ``filt``'s first step and one more step with ``n`` particles on a blank frame shaped like
+    ``frame``, with a throwaway generator and no adaptation, so that the compiled kernels the model
+    and filter call (:mod:`vistrack.kernels`) are loaded before tracking starts: their loading
+    (0.1–1 s) is start-up, not tracking. The model and filter are left as they were (a model that
+    cannot track a blank frame just skips this: the real frames will say what is wrong)."""
+    import warnings
+
+    from . import kernels
+
+    if not kernels.use():
+        return
+    blank = np.zeros_like(np.asarray(frame))
+    model, rng = filt.model, np.random.default_rng(0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            particles = filt.first_step(model.observe(FeatureMaps(blank), None), n, rng)
+            filt.step(particles, model.observe(FeatureMaps(blank), particles), rng)
+        except Exception:  # noqa: BLE001 - best effort: tracking raises the real error itself
+            pass
 
 
 def track(frames, filt, n, rng, *, estimator=None):
