@@ -282,9 +282,17 @@ class Appearance:
     def terms(self, obs, boxes):
         """``(log r_c, log r_t, ncc)`` of ``boxes (N, 4)``, each of shape ``(N,)``."""
         b = np.asarray(boxes, float)
-        grow = self.ring * 0.5 * (b[:, 2] + b[:, 3])
-        inner, ring = obs.histograms(b[:, 0], b[:, 1], b[:, 2], b[:, 3], grow=grow)
-        log_rc = self.colour.loglik(inner, ring)
+        if kernels.use():
+            from ..kernels.appearance import colour_loglik
+
+            c = self.colour
+            log_rc = colour_loglik(obs.ii, float(obs.x0), float(obs.y0), float(obs.f), np.ascontiguousarray(b),
+                                   float(self.ring), c.bg_weight, c.q, c._bp, float(c.lambda_colour), float(c.kappa),
+                                   np.empty(len(b)))
+        else:
+            grow = self.ring * 0.5 * (b[:, 2] + b[:, 3])
+            inner, ring = obs.histograms(b[:, 0], b[:, 1], b[:, 2], b[:, 3], grow=grow)
+            log_rc = self.colour.loglik(inner, ring)
         ncc = self.ncc(obs, b)
         return log_rc, self.lambda_template * (ncc - 1.0), ncc
 
@@ -333,8 +341,9 @@ class Appearance:
                               borderType=cv2.BORDER_CONSTANT)
         hh, ww = ncc.shape
         inside = s_in[:hh, :ww] / (tw * th)
-        # the ring box of the template at (i, j) starts at (i - g, j - g): pad to align
-        out_pad = np.pad(s_out, ((g, 0), (g, 0)))[:hh, :ww]
+        # the ring box of the template at (i, j) starts at (i - g, j - g): shifted by g, zeros before
+        out_pad = np.zeros((hh, ww), s_out.dtype)
+        out_pad[g:, g:] = s_out[:max(hh - g, 0), :max(ww - g, 0)]
         ring = (out_pad - s_in[:hh, :ww]) / ((tw + 2 * g) * (th + 2 * g) - tw * th)
         log_q = self.lambda_template * (np.nan_to_num(ncc) - 1.0) + self.lambda_colour * (inside - ring)
         return log_q.astype(np.float32), tw / 2.0, th / 2.0
