@@ -1,9 +1,9 @@
 """The plate likelihood's maps and pixel-set means (:mod:`~vistrack.models.plate_likelihood`), compiled.
 
-- :func:`plate_map` is ``PlateLikelihood.maps`` before the division by the means:
-  ``(|∇_x I|, |∇_y I|, |G_s I|, |G_l I|)`` in one pass from the Sobel maps and the box filters' integer
+- :func:`plate_map` is ``PlateLikelihood.maps``: ``(|∇_x I|, |∇_y I|, |G_s I|, |G_l I|)`` in one pass from the Sobel maps and the box filters' integer
   sums (scaled in double as OpenCV's normalised box filter does), and the four means (summed in
-  double: the sums of these values are exact, so their order does not matter): equal to the numpy path.
+  double: the sums of these values are exact, so their order does not matter), then each channel
+  divided by its mean: equal to the numpy path.
 - :func:`set_means` is ``PlateLikelihood._set_means`` of the sampled points: the points placed
   as ``plate_points`` places them (the same float64 arithmetic, ``tan θ`` given), each sampled in
   the channels its pixel set's features read only, as ``cv2.remap`` samples (bit for bit), and each
@@ -22,7 +22,7 @@ __all__ = ["plate_map", "set_means"]
 
 @njit(cache=True)
 def plate_map(gx, gy, sums, sizes, out):
-    """The 4-channel map ``out (H, W, 4)`` float32 before its division by the means: ``|gx|``, ``|gy|``
+    """The 4-channel map ``out (H, W, 4)`` float32, each channel over its frame mean: ``|gx|``, ``|gy|``
     (Sobel, float32) and the two DoGs ``|box_i - box_o|`` from the box sums ``sums (4, H, W)`` int32
     of the boxes ``sizes`` (s_inner, s_outer, l_inner, l_outer), each ``float32(sum / size²)`` as
     OpenCV's normalised box filter (in double). Returns the four channels' means (summed in double)."""
@@ -42,7 +42,17 @@ def plate_map(gx, gy, sums, sizes, out):
             m2 += c
             m3 += d
     scale = 1.0 / (h * w)
-    return np.array([m0 * scale, m1 * scale, m2 * scale, m3 * scale])
+    means = np.array([m0 * scale, m1 * scale, m2 * scale, m3 * scale])
+    # each channel over its mean, as the numpy path: c / float32(max(mean, 1e-6))
+    d0, d1 = np.float32(max(means[0], 1e-6)), np.float32(max(means[1], 1e-6))
+    d2, d3 = np.float32(max(means[2], 1e-6)), np.float32(max(means[3], 1e-6))
+    flat = out.reshape(-1)
+    for i in range(0, flat.shape[0], 4):
+        flat[i] /= d0
+        flat[i + 1] /= d1
+        flat[i + 2] /= d2
+        flat[i + 3] /= d3
+    return means
 
 
 @njit(cache=True)
@@ -66,16 +76,20 @@ def set_means(img, pose, tan, aspect, pts, sets, feats, offsets, border, out):
     for k in range(n_sets):
         width = max(width, sets[k, 1])
     buf = np.empty(n_feats * width, np.float32)
+    base = np.empty((pts.shape[0], 2))
     for n in range(pose.shape[0]):
         u, v, s, t = pose[n, 0], pose[n, 1], pose[n, 3], tan[n]
+        for i in range(pts.shape[0]):  # placed once per pose, then shifted (as _shifted_samples)
+            a, b = pts[i, 0], pts[i, 1]
+            base[i, 0] = u + (a - 0.5) * s
+            base[i, 1] = v + (b - 0.5) * s / aspect + (a - 0.5) * s * t
         for c in range(offsets.shape[1]):
             ox, oy = offsets[n, c, 0], offsets[n, c, 1]
             for k in range(n_sets):
                 start, count = sets[k, 0], sets[k, 1]
                 for i in range(count):
-                    a, b = pts[start + i, 0], pts[start + i, 1]
-                    x = np.float32(u + (a - 0.5) * s + ox)
-                    y = np.float32(v + (b - 0.5) * s / aspect + (a - 0.5) * s * t + oy)
+                    x = np.float32(base[start + i, 0] + ox)
+                    y = np.float32(base[start + i, 1] + oy)
                     ix, iy, fa, fb = corner_float(x, y)
                     fast = inside(ix, iy, w, h)
                     if fast:

@@ -70,8 +70,7 @@ def plate_map(maps):
         for k, size in enumerate(sizes):
             cv2.boxFilter(g8, cv2.CV_32S, (size, size), dst=sums[k], normalize=False, borderType=cv2.BORDER_REFLECT)
         out = maps.buffer("plate", (h, w, 4))
-        means = compiled(gx, gy, sums, np.array(sizes, np.int64), out)
-        out /= np.maximum(means, 1e-6).astype(np.float32)  # as the numpy path: c / float32(mean), per channel
+        compiled(gx, gy, sums, np.array(sizes, np.int64), out)
         return out
     chans = [np.abs(maps.gx), np.abs(maps.gy), np.abs(maps.dog_small), np.abs(maps.dog_large)]
     chans = [c / max(float(cv2.mean(c)[0]), 1e-6) for c in chans]
