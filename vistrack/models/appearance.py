@@ -130,6 +130,8 @@ class AppearanceFrame:
     def __init__(self, frame, roi, f, grey):
         x0, y0, x1, y1 = roi
         self.x0, self.y0, self.f = x0, y0, f
+        #: the region ``(x0, y0, x1, y1)`` in frame pixels
+        self.roi = (x0, y0, x1, y1)
         crop = frame[y0:y1, x0:x1]
         if f < 1.0:
             size = (max(1, int(round((x1 - x0) * f))), max(1, int(round((y1 - y0) * f))))

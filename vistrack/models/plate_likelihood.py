@@ -24,32 +24,12 @@ import numpy as np
 from .. import kernels
 from ..features import remap_points
 from .plate_layout import LAYOUTS, plate_points
+from .plate_observation import PlateObservation
 
 __all__ = ["PlateLikelihood", "PlateObservation", "plate_map", "thesis_weights", "scale_band", "LEARNT_WEIGHTS"]
 
 #: the maps' values outside the frame (Sobel channels 0, DoG channels 5: a plate half outside scores low)
 _BORDER = (0.0, 0.0, 5.0, 5.0)
-
-
-class PlateObservation:
-    """One frame as the plate model observes it (:meth:`~vistrack.models.plate.Plate.observe`).
-
-    Attributes
-    ----------
-    maps : FeatureMaps
-        The frame's feature maps.
-    plate : ndarray of shape (H, W, 4) float32
-        :func:`plate_map` of the frame.
-    appearance : AppearanceFrame or None
-        The learned appearance's maps (:meth:`~vistrack.models.plate.Plate.learn_appearance`).
-    """
-
-    def __init__(self, maps, plate, appearance=None):
-        self.maps, self.plate, self.appearance = maps, plate, appearance
-
-    @property
-    def shape(self):
-        return self.maps.shape
 
 
 def plate_map(maps):
