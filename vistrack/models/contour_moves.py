@@ -62,8 +62,7 @@ class ContourMoves:
         thresh = self._threshold(obs)
         fast = kernels.use()
         peaks = None if fast else edge_peaks(gn, thresh)
-        ll_grid = self._grid_from_peaks(off, gn, nrm, grid, thresh) if fast else \
-            self._grid_from_peaks(off, peaks, nrm, grid)
+        ll_grid = self._grid_from_peaks(off, gn if fast else peaks, nrm, grid, thresh if fast else None)
         delta = grid[np.argmax(ll_grid, axis=1)]  # (N, 2)
         z_t = z.copy()
         z_t[:, :2] += delta
