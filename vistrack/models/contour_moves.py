@@ -59,8 +59,7 @@ class ContourMoves:
         reach_lms = step
         pts, nrm = self.measurement_lines(z)
         off, gn = self._profiles_wide(obs, z, np.hypot(*self.search_lambda[:2]) + reach_lms, lines=(pts, nrm))
-        thresh = self._threshold(obs)
-        fast = kernels.use()
+        thresh, fast = self._threshold(obs), kernels.use()
         peaks = None if fast else edge_peaks(gn, thresh)
         ll_grid = self._grid_from_peaks(off, gn if fast else peaks, nrm, grid, thresh if fast else None)
         delta = grid[np.argmax(ll_grid, axis=1)]  # (N, 2)
