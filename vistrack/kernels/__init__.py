@@ -9,8 +9,15 @@ as the reference and as the fallback where numba is missing:
   1/32-pixel fixed point) and numpy's pairwise summation;
 - :mod:`~vistrack.kernels.contour`: the contour's measurement lines, edge features, likelihood and
   the local-search grid;
+- :mod:`~vistrack.kernels.plate`: the plate likelihood's 4-channel map and pixel-set means (the
+  likelihood, the sparse search and the line scans);
+- :mod:`~vistrack.kernels.appearance`: the box model's colour bins, per-bin integral images,
+  colour term and template correlation.
 
-Kernels are compiled on first use and cached on disk (``cache=True``). :func:`use` says whether
+Kernels are compiled on first use and cached on disk (``cache=True``; loading them takes 0.1–1 s,
+which :func:`vistrack.tracking.warm_up` does before a run's clock starts). Hot loops pass only
+scalars to helper functions: numba counts references on every call that passes an array, which
+cost more than the sampling itself. :func:`use` says whether
 the models call them: numba importable and the environment variable ``VISTRACK_NUMBA`` not ``0``;
 :func:`numpy_paths` turns them off within a block (tests, benchmarks).
 """
