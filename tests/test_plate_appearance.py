@@ -60,6 +60,11 @@ def test_appearance_adds_to_the_plate_likelihood_and_can_be_turned_off():
     states = np.tile(with_app.prior_mean, (3, 1))
     states[1, 0] += 12
     states[2, 1] -= 9
-    extra = with_app.app.loglik(maps.appearance, with_app._app_boxes(states))
+    # each box's appearance term is read on a frame that covers it (the tracked region's, or one of its own)
+    log_rc, log_rt, _ = with_app._app_terms(maps, states)
+    extra = log_rc + log_rt
+    inside = maps.appearance_frames(with_app._app_boxes(states[:1]), np.zeros(1), 0.0)[0][0] is maps.appearance
+    assert inside  # the start pose's box lies in the tracked region
+    np.testing.assert_allclose(extra[0], with_app.app.loglik(maps.appearance, with_app._app_boxes(states[:1]))[0])
     np.testing.assert_allclose(with_app.loglik(maps, states), plain.loglik(maps, states) + extra, atol=1e-9)
     assert np.argmax(extra) == 0  # the appearance term peaks at the learned plate

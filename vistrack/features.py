@@ -17,6 +17,8 @@ from functools import cached_property
 import cv2
 import numpy as np
 
+from . import kernels
+
 __all__ = ["FeatureMaps", "box_dog", "remap_points", "blob_peaks", "is_grey", "colour_bins", "n_colour_bins",
            "bin_integrals", "box_sums"]
 
@@ -65,6 +67,10 @@ def colour_bins(image, grey=False, dst=None):
         g = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
         return np.floor_divide(g, 256 // GREY_BINS, out=dst, dtype=np.uint8, casting="unsafe")
     hsv = cv2.cvtColor(image, cv2.COLOR_BGR2HSV)
+    if kernels.use():
+        from .kernels.appearance import colour_labels
+
+        return colour_labels(hsv, np.empty(hsv.shape[:2], np.uint8) if dst is None else dst)
     h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
     hue = (h.astype(np.uint16) * HUE_BINS // 180).astype(np.uint8)
     sat = ((s.astype(np.uint16) - MIN_SATURATION).clip(0) * SAT_BINS // (256 - MIN_SATURATION)).astype(np.uint8)
@@ -90,6 +96,10 @@ def bin_integrals(labels, n_bins):
     -------
     ndarray of shape (H + 1, W + 1, n_bins) int32
     """
+    if kernels.use():
+        from .kernels.appearance import bin_integrals as compiled
+
+        return compiled(np.ascontiguousarray(labels), int(n_bins))
     onehot = np.eye(n_bins, dtype=np.uint8)[labels]
     return cv2.integral(onehot, sdepth=cv2.CV_32S)
 
@@ -200,8 +210,12 @@ class FeatureMaps:
         self._gradients = {}
         self._labels = {}
         self._buffers = buffers
-        #: a model's own maps of this frame (the plate's appearance maps), set by its ``observe``
-        self.appearance = None
+
+    def buffer(self, name, shape, dtype=np.float32):
+        """An output array for a map of this frame: from the buffer pool (overwritten by the next
+        frame's), or a fresh one without a pool."""
+        b = self._buf(name, shape, dtype)
+        return np.empty(shape, dtype) if b is None else b
 
     def _buf(self, name, shape, dtype=np.float32):
         """A reusable output array (fresh arrays cost a page fault per 4 KiB, DESIGN.md);

@@ -11,6 +11,7 @@ exit path, so the frames so far play.
 from __future__ import annotations
 
 import csv
+import itertools
 import os
 import signal
 import time
@@ -26,7 +27,7 @@ from .metrics import center_error, iou, landmark_error, lost_frames, plate_frame
 from .particles import DegenerateWeightsWarning
 from .profiling import STAGES, Timer, profile_stages
 from .render import annotate
-from .tracking import top_particles, track
+from .tracking import top_particles, track, warm_up
 from .video import VideoWriter
 
 __all__ = ["TrackCSV", "VideoRun", "track_row", "track_video", "summary_lines", "Terminated", "stop_on_signals"]
@@ -188,6 +189,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     """
     run = VideoRun()
     run.timer = Timer() if profile else None
+    frames = _warmed(frames, filt, particles)
     if profile:
         frames = run.timer.timed_iter(frames, "decode")
     writer = VideoWriter(out_path, *video_info, codec="auto") if out_path else None
@@ -200,24 +202,11 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
             warnings.simplefilter("ignore", DegenerateWeightsWarning)
             for res in track(frames, filt, particles, rng):
-                vis = res.visible
-                row = track_row(model, res)
-                run.note_lost(res, notify)
-                run.rows.append(row)
-                for o in outs:
-                    o.write(row)
-                run.ess_sum += res.ess
-                run.degenerate += bool(res.particles.degenerate)
-                if writer:
-                    writer.write(annotate(res.frame, model.outline(res.estimate) if vis else [],
-                                          model.outline(top_particles(res.particles, show_particles)),
-                                          f"#{res.index}  {label}  ESS {res.ess:.1f}"))
+                _record(run, res, model, outs, writer, show_particles, label, notify)
                 if progress:
                     progress(res.ess)
-    except Terminated:
-        run.stopped = "terminate"
-    except KeyboardInterrupt:
-        run.stopped = "interrupt"
+    except (KeyboardInterrupt, SystemError) as e:  # Terminated is a KeyboardInterrupt
+        run.stopped = _stop_reason(e)
     finally:
         run.wall = time.perf_counter() - t0
         _close_all(outs, writer)
@@ -233,6 +222,44 @@ def _close_all(outs, writer):
     finally:
         if writer:
             writer.close()
+
+
+def _stop_reason(exc):
+    """``"terminate"`` (SIGTERM) or ``"interrupt"`` (Ctrl-C) for the exception that stopped a run;
+    re-raises any other. A signal that arrives while a compiled kernel is being called surfaces as
+    a ``SystemError`` caused by the handler's exception (numba's dispatcher returns with it set)."""
+    cause = exc.__cause__ if isinstance(exc, SystemError) else exc
+    if not isinstance(cause, KeyboardInterrupt):
+        raise exc
+    return "terminate" if isinstance(cause, Terminated) else "interrupt"
+
+
+def _warmed(frames, filt, particles):
+    """``frames`` with the filter's kernels loaded on a blank frame shaped like the first
+    (:func:`~vistrack.tracking.warm_up`) before they are taken: start-up, not tracking time."""
+    frames = iter(frames)
+    first = next(frames, None)
+    if first is None:
+        return frames
+    warm_up(filt, particles, first[1])
+    return itertools.chain([first], frames)
+
+
+def _record(run, res, model, outs, writer, show_particles, label, notify=None):
+    """One frame's result into ``run``: its track row (to ``outs``), the loss notice (``notify``)
+    and the annotated frame (to ``writer``)."""
+    vis = res.visible
+    row = track_row(model, res)
+    run.note_lost(res, notify)
+    run.rows.append(row)
+    for o in outs:
+        o.write(row)
+    run.ess_sum += res.ess
+    run.degenerate += bool(res.particles.degenerate)
+    if writer:
+        writer.write(annotate(res.frame, model.outline(res.estimate) if vis else [],
+                              model.outline(top_particles(res.particles, show_particles)),
+                              f"#{res.index}  {label}  ESS {res.ess:.1f}"))
 
 
 def summary_lines(run, particles, *, model_name, model, truth, frame_width):

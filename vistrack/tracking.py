@@ -16,7 +16,7 @@ from .features import FeatureMaps
 from .models.protocol import VideoModel, require
 from .particles import ParticleSet
 
-__all__ = ["FrameResult", "FrameStepper", "track", "top_particles"]
+__all__ = ["FrameResult", "FrameStepper", "track", "top_particles", "warm_up"]
 
 
 @dataclass
@@ -29,6 +29,8 @@ class FrameResult:
     estimate: np.ndarray
     ms: float
     maps: object = None
+    #: the model's observation of the frame (``model.observe``; what ``visible`` and ``loglik`` read)
+    obs: object = None
     #: ``""`` when the object is reported at the estimate, else why not
     #: (:data:`~vistrack.models.collapse.REASONS`), and a sentence with the numbers
     lost_reason: str = ""
@@ -64,7 +66,9 @@ class FrameStepper:
     :class:`~vistrack.models.protocol.VideoModel`: ``observe(maps, previous_particles)``
     turns each frame's maps into its observation ``Y_t`` (the maps themselves by default;
     landmarks: blob detection and association; box: the appearance maps over the region
-    the particles can reach), ``estimate(particles)`` gives the point estimate (unless
+    the particles can reach; plate: its 4-channel map and appearance maps), an object of the
+    model's own that holds whatever the model computes from the frame (nothing is stored on the
+    shared maps), ``estimate(particles)`` gives the point estimate (unless
     ``estimator`` is given), ``check_lost(obs, estimate)`` whether the object is reported
     there (:mod:`vistrack.models.collapse`) and ``adapt(obs, estimate)`` is told each
     frame's estimate after the step (the box model's appearance). The feature maps of a frame live in
@@ -92,7 +96,30 @@ class FrameStepper:
         reason, detail = self.model.check_lost(obs, est)
         self.model.adapt(obs, est)
         ms = (time.perf_counter() - t0) * 1e3
-        return FrameResult(index, frame, self.particles, est, ms, maps, reason, detail)
+        return FrameResult(index, frame, self.particles, est, ms, maps, obs, reason, detail)
+
+
+def warm_up(filt, n, frame):
+    """Run ``filt``'s first step and one more step with ``n`` particles on a blank frame shaped like
+    ``frame``, with a throwaway generator and no adaptation, so that the compiled kernels the model
+    and filter call (:mod:`vistrack.kernels`) are loaded before tracking starts: their loading
+    (0.1–1 s) is start-up, not tracking. The model and filter are left as they were (a model that
+    cannot track a blank frame just skips this: the real frames will say what is wrong)."""
+    import warnings
+
+    from . import kernels
+
+    if not kernels.use():
+        return
+    blank = np.zeros_like(np.asarray(frame))
+    model, rng = filt.model, np.random.default_rng(0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            particles = filt.first_step(model.observe(FeatureMaps(blank), None), n, rng)
+            filt.step(particles, model.observe(FeatureMaps(blank), particles), rng)
+        except Exception:  # noqa: BLE001 - best effort: tracking raises the real error itself
+            pass
 
 
 def track(frames, filt, n, rng, *, estimator=None):

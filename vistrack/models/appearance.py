@@ -42,6 +42,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from .. import kernels
 from ..features import bin_integrals, box_sums, colour_bins, is_grey, n_colour_bins, remap_points
 
 __all__ = ["Appearance", "AppearanceFrame", "TargetColour"]
@@ -129,6 +130,8 @@ class AppearanceFrame:
     def __init__(self, frame, roi, f, grey):
         x0, y0, x1, y1 = roi
         self.x0, self.y0, self.f = x0, y0, f
+        #: the region ``(x0, y0, x1, y1)`` in frame pixels
+        self.roi = (x0, y0, x1, y1)
         crop = frame[y0:y1, x0:x1]
         if f < 1.0:
             size = (max(1, int(round((x1 - x0) * f))), max(1, int(round((y1 - y0) * f))))
@@ -142,6 +145,9 @@ class AppearanceFrame:
         self.labels = colour_bins(crop, grey)
         self.n_bins = n_colour_bins(grey)
         self.ii = bin_integrals(self.labels, self.n_bins)
+        #: the LIS proposal map of this frame (:meth:`Appearance.proposal_map`, ``()`` where there is
+        #: none), set by the box model on first use
+        self.proposal = None
 
     def to_work(self, x, y):
         """Frame pixel coordinates to working coordinates (same continuous convention)."""
@@ -259,6 +265,11 @@ class Appearance:
         and ``T_d``, ``√½ [g·T_g / |g - ḡ| + d·T_d / |d|]`` (the sum of ``T_g`` is zero, so the
         mean drops out of the dot product)."""
         b = np.asarray(boxes, float)
+        if kernels.use():
+            from ..kernels.appearance import ncc
+
+            return ncc(obs.texture, np.ascontiguousarray(b), self.grid, float(obs.x0), float(obs.y0), float(obs.f),
+                       self.template, np.empty(len(b)))
         x = b[:, None, 0] + self.grid[None, :, 0] * b[:, None, 2]
         y = b[:, None, 1] + self.grid[None, :, 1] * b[:, None, 3]
         t = obs.sample_texture(x, y)  # (N, M, 3) float32
@@ -273,9 +284,17 @@ class Appearance:
     def terms(self, obs, boxes):
         """``(log r_c, log r_t, ncc)`` of ``boxes (N, 4)``, each of shape ``(N,)``."""
         b = np.asarray(boxes, float)
-        grow = self.ring * 0.5 * (b[:, 2] + b[:, 3])
-        inner, ring = obs.histograms(b[:, 0], b[:, 1], b[:, 2], b[:, 3], grow=grow)
-        log_rc = self.colour.loglik(inner, ring)
+        if kernels.use():
+            from ..kernels.appearance import colour_loglik
+
+            c = self.colour
+            log_rc = colour_loglik(obs.ii, float(obs.x0), float(obs.y0), float(obs.f), np.ascontiguousarray(b),
+                                   float(self.ring), c.bg_weight, c.q, c._bp, float(c.lambda_colour), float(c.kappa),
+                                   np.empty(len(b)))
+        else:
+            grow = self.ring * 0.5 * (b[:, 2] + b[:, 3])
+            inner, ring = obs.histograms(b[:, 0], b[:, 1], b[:, 2], b[:, 3], grow=grow)
+            log_rc = self.colour.loglik(inner, ring)
         ncc = self.ncc(obs, b)
         return log_rc, self.lambda_template * (ncc - 1.0), ncc
 
@@ -302,33 +321,45 @@ class Appearance:
         return True
 
     # -- maps for local moves ------------------------------------------------------------
-    def proposal_map(self, obs, w, h):
+    def proposal_map(self, obs, w, h, span=None):
         """``log q̃`` over the working region for a box of size ``(w, h)`` (frame px) centred at
         each working pixel: ``λ_t (ncc - 1)`` from ``cv2.matchTemplate`` of the template plus
         ``λ_c`` times the back-projection's contrast between the box and its ring. Returns
-        ``(map (H', W'), u0, v0)`` with map pixel ``(i, j)`` at working centre ``(u0 + j, v0 + i)``."""
+        ``(map (H', W'), u0, v0)`` with map pixel ``(i, j)`` at working centre ``(u0 + j, v0 + i)``.
+        ``span = (u_min, u_max, v_min, v_max)``: when centres in that working range read (bilinearly)
+        inside the whole map, only the part they need, with the template's and its ring's reach;
+        the values there are those of the whole region's map (up to the filters' float sums)."""
         f = obs.f
         tw, th = max(2, int(round(w * f))), max(2, int(round(h * f)))
+        g = max(1, int(round(self.ring * 0.5 * (tw + th))))
         gh, gw = obs.grey.shape
-        if tw >= gw or th >= gh:
+        r0, r1, c0, c1 = 0, gh, 0, gw
+        u_lo, u_hi, v_lo, v_hi = (np.floor(a - b / 2) for a, b in zip(span, (tw, tw, th, th))) if span else (-1,) * 4
+        if u_lo >= 0 and u_hi + 1 <= gw - tw and v_lo >= 0 and v_hi + 1 <= gh - th:
+            # every read inside the whole map (none takes its minimum as the border value): the part read
+            c0 = int(min(max(u_lo - g - 1, 0), gw))
+            c1 = int(min(max(u_hi + tw + g + 3, c0), gw))
+            r0 = int(min(max(v_lo - g - 1, 0), gh))
+            r1 = int(min(max(v_hi + th + g + 3, r0), gh))
+        if tw >= c1 - c0 or th >= r1 - r0:
             return None
         my, mx = self.grid_shape
         m = my * mx
         img = np.dstack([self.template[:m].reshape(my, mx), self.template[m:].reshape(my, mx, 2)])
         t = cv2.resize(img.astype(np.float32), (tw, th), interpolation=cv2.INTER_LINEAR)
-        ncc = cv2.matchTemplate(obs.texture, t, cv2.TM_CCOEFF_NORMED)
-        bp = self.backprojection[obs.labels]
-        g = max(1, int(round(self.ring * 0.5 * (tw + th))))
+        ncc = cv2.matchTemplate(obs.texture[r0:r1, c0:c1], t, cv2.TM_CCOEFF_NORMED)
+        bp = self.backprojection[obs.labels[r0:r1, c0:c1]]
         s_in = cv2.boxFilter(bp, -1, (tw, th), normalize=False, anchor=(0, 0), borderType=cv2.BORDER_CONSTANT)
         s_out = cv2.boxFilter(bp, -1, (tw + 2 * g, th + 2 * g), normalize=False, anchor=(0, 0),
                               borderType=cv2.BORDER_CONSTANT)
         hh, ww = ncc.shape
         inside = s_in[:hh, :ww] / (tw * th)
-        # the ring box of the template at (i, j) starts at (i - g, j - g): pad to align
-        out_pad = np.pad(s_out, ((g, 0), (g, 0)))[:hh, :ww]
+        # the ring box of the template at (i, j) starts at (i - g, j - g): shifted by g, zeros before
+        out_pad = np.zeros((hh, ww), s_out.dtype)
+        out_pad[g:, g:] = s_out[:max(hh - g, 0), :max(ww - g, 0)]
         ring = (out_pad - s_in[:hh, :ww]) / ((tw + 2 * g) * (th + 2 * g) - tw * th)
         log_q = self.lambda_template * (np.nan_to_num(ncc) - 1.0) + self.lambda_colour * (inside - ring)
-        return log_q.astype(np.float32), tw / 2.0, th / 2.0
+        return log_q.astype(np.float32), c0 + tw / 2.0, r0 + th / 2.0
 
     def mean_shift(self, obs, boxes, iterations=3):
         """Mean shift of box centres on the back-projection (Comaniciu, Ramesh and Meer 2000):

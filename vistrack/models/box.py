@@ -179,16 +179,15 @@ class Box(CollapseCheck, TranslationMoves, VideoModelBase):
         """The map's ``log q`` at centres ``points (N, G, 2)`` (frame px), for the LIS proposal:
         :meth:`Appearance.proposal_map` at the particles' mean size, tempered by one half and
         mixed with 5 % of a flat floor (a defensive share)."""
-        key = "_qmap"
-        if getattr(obs, key, None) is None:
+        u, v = obs.to_work(points[..., 0], points[..., 1])
+        if obs.proposal is None:  # once per frame, at the particles' mean size, where the points are
             w, h = self.size0 * np.exp(np.mean(states[:, 2]))
-            setattr(obs, key, self.app.proposal_map(obs, w, h) or ())
-        qmap = getattr(obs, key)
+            obs.proposal = self.app.proposal_map(obs, w, h, span=(u.min(), u.max(), v.min(), v.max())) or ()
+        qmap = obs.proposal
         n, g, _ = points.shape
         if not qmap:
             return np.zeros((n, g))
         m, u0, v0 = qmap
-        u, v = obs.to_work(points[..., 0], points[..., 1])
         lo = float(m.min())
         val = remap_points(m, u - u0, v - v0, border=lo).astype(float)
         val = 0.5 * (val - val.max(axis=1, keepdims=True))

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import kernels
 from ..proposals import GaussMixtureProposal, Window
 from .contour_nn import nn_candidates
 from .kernel import is_prior
@@ -61,36 +62,35 @@ class ContourMoves:
         z = states[:, :4]
         if (search or self.search) == "nn":
             return self._accept(obs, states, nn_candidates(self, obs, z), z, lambda: self.loglik(obs, states))
-        lx, ly = self.search_lambda[:2]
-        step = max(1.0, self.grid_step * self.sigma_edge)
-        gx = np.arange(-np.floor(lx / step), np.floor(lx / step) + 1) * step
-        gy = np.arange(-np.floor(ly / step), np.floor(ly / step) + 1) * step
-        grid = np.stack(np.meshgrid(gx, gy), axis=-1).reshape(-1, 2)
-        scale, _ = pose_params(z)
+        grid, step = self._search_grid()
         reach_lms = step
-        off, gn = self._profiles_wide(obs, z, np.hypot(lx, ly) + reach_lms)
-        thresh = self._threshold(obs)
-        peaks = edge_peaks(gn, thresh)
         pts, nrm = self.measurement_lines(z)
-        ll_grid = self._grid_from_peaks(off, peaks, nrm, grid)
+        off, gn = self._profiles_wide(obs, z, np.hypot(*self.search_lambda[:2]) + reach_lms, lines=(pts, nrm))
+        thresh, fast = self._threshold(obs), kernels.use()
+        peaks = None if fast else edge_peaks(gn, thresh)
+        ll_grid = self._grid_from_peaks(off, gn if fast else peaks, nrm, grid, thresh if fast else None)
         delta = grid[np.argmax(ll_grid, axis=1)]  # (N, 2)
         z_t = z.copy()
         z_t[:, :2] += delta
         # LMS: nearest feature to the shifted curve on each line (offsets along the old line)
         shift = np.einsum("kmd,kd->km", nrm, delta)  # (N, M)
-        dist = np.where(peaks, np.abs(off - shift[..., None]), np.inf)
-        j = np.argmin(dist, axis=-1)
-        found = np.take_along_axis(dist, j[..., None], -1)[..., 0] <= reach_lms
+        if fast:
+            from ..kernels.contour import nearest_edge
+
+            nu = nearest_edge(gn, np.float32(thresh), off, shift, reach_lms, np.empty(shift.shape))
+        else:
+            dist = np.where(peaks, np.abs(off - shift[..., None]), np.inf)
+            j = np.argmin(dist, axis=-1)
+            found = np.take_along_axis(dist, j[..., None], -1)[..., 0] <= reach_lms
+            nu = np.where(found, off[j] - shift, 0.0)
         # the edge found on the old line, moved along the contour with the shift
         # (edges are locally parallel to the contour): p + δ + (ν - n·δ) n
-        nu = np.where(found, off[j] - shift, 0.0)
         p_hat = pts + delta[:, None, :] + nu[..., None] * nrm
         d = np.concatenate([p_hat[..., 0] - self.meas0[:, 0], p_hat[..., 1] - self.meas0[:, 1]], axis=1)
         z_hat = d @ self.W_meas_plus.T
 
         def ll_prediction():  # r at the prediction, exactly as loglik: the middle samples of the long lines
-            r = (len(off) - len(self.line_offsets)) // 2
-            ll_x = self._loglik_from_profiles(gn[..., r:r + len(self.line_offsets)], thresh)
+            ll_x = self._loglik_from_profiles(gn, thresh, lo=(len(off) - len(self.line_offsets)) // 2)
             return ll_x + self.colour_loglik(obs, z) if self.colour is not None else ll_x
 
         return self._accept(obs, states, z_hat, z_t, ll_prediction)
@@ -117,6 +117,18 @@ class ContourMoves:
             raise ValueError(f"unknown local search {search!r}; choose lms or nn")
         return lambda obs, states: self.local_search(obs, states, search=search)
 
+    def _search_grid(self):
+        """The local search's grid of translations ``(G, 2)`` within ``(λ_x, λ_y)`` and its step
+        (cached while ``search_lambda``, ``grid_step`` and ``sigma_edge`` stay)."""
+        lx, ly = self.search_lambda[:2]
+        step = max(1.0, self.grid_step * self.sigma_edge)
+        cached = getattr(self, "_grid_cache", None)
+        if cached is None or cached[0] != (lx, ly, step):
+            gx = np.arange(-np.floor(lx / step), np.floor(lx / step) + 1) * step
+            gy = np.arange(-np.floor(ly / step), np.floor(ly / step) + 1) * step
+            self._grid_cache = ((lx, ly, step), np.stack(np.meshgrid(gx, gy), axis=-1).reshape(-1, 2))
+        return self._grid_cache[1], step
+
     def lms_step(self, obs, states, samples=33):
         """The plain LMS step of §4.3.1 at the support points: the edge nearest to the
         curve on each normal within ``l = l0 · scale``, ``ẑ = W⁺ (q̂ - q0)`` with the
@@ -131,12 +143,12 @@ class ContourMoves:
         step: :mod:`~vistrack.models.kernel`)."""
         return self.prior_std[:2] if is_prior(kernel) else self.sigma[:2]
 
-    def _profiles_wide(self, obs, z, reach):
+    def _profiles_wide(self, obs, z, reach, lines=None):
         """Offsets and edge strengths on lines long enough for shifts up to ``reach`` px
-        (:attr:`line_offsets` are their middle samples)."""
+        (:attr:`line_offsets` are their middle samples); ``lines``: :meth:`measurement_lines` of ``z``."""
         h = int(np.ceil(reach)) + self.half_line
         off = np.arange(-h, h + 1, dtype=float)
-        return off, self._profiles(obs, z, off)
+        return off, self._profiles(obs, z, off, lines=lines)
 
     def _peaks_wide(self, obs, z, reach):
         """Edge features on lines long enough for shifts up to ``reach`` px."""
@@ -157,8 +169,17 @@ class ContourMoves:
             ll = ll + self.colour_loglik(obs, z, offsets)
         return ll
 
-    def _grid_from_peaks(self, off, peaks, nrm, offsets):
-        kern = np.exp(-0.5 * ((off[:, None] - off[None, :]) / self.sigma_edge) ** 2).astype(np.float32)
+    def _grid_from_peaks(self, off, peaks, nrm, offsets, thresh=None):
+        """``log r`` of each pose moved by each of ``offsets (G, 2)`` from the edge features
+        ``peaks (N, M, L)`` on lines at ``off``; with ``thresh``, ``peaks`` are the edge strengths
+        and the features are found here (the compiled path, :func:`vistrack.kernels.contour.grid`)."""
+        kern = self._pair_kernel(off)
+        if thresh is not None:
+            from ..kernels.contour import grid
+
+            out = np.empty((len(peaks), len(offsets)), np.float32)
+            return grid(peaks, np.float32(thresh), np.float32(off[0] - 0.5), nrm.astype(np.float32),
+                        np.asarray(offsets, np.float32), kern, np.float32(np.exp(self.log_c)), out)
         smooth = peaks.astype(np.float32) @ kern  # (N, M, L): S_i(ν') at ν' = off
         shift = nrm.astype(np.float32) @ np.asarray(offsets, np.float32).T  # (N, M, G): n_i · δ
         # nearest line sample (1 px apart; index = floor(n_i · δ - off[0] + 0.5)): one flat gather
@@ -170,6 +191,15 @@ class ContourMoves:
         val = smooth.reshape(-1)[idx]
         val *= np.float32(np.exp(self.log_c))
         return np.sum(np.log1p(val, out=val), axis=1)
+
+    def _pair_kernel(self, off):
+        """``exp(-(ν_j - ν_k)² / 2σ²)`` float32 ``(L, L)`` of the line offsets ``off`` (cached per ``off``, ``σ``)."""
+        key = (len(off), float(off[0]), self.sigma_edge)
+        cached = getattr(self, "_pair_cache", None)
+        if cached is None or cached[0] != key:
+            kern = np.exp(-0.5 * ((off[:, None] - off[None, :]) / self.sigma_edge) ** 2).astype(np.float32)
+            self._pair_cache = (key, kern)
+        return self._pair_cache[1]
 
     def local_mixture(self, obs, states, defensive=0.2):
         """LIS proposal on translation: a Gaussian from the edges nearest to the predicted

@@ -8,11 +8,12 @@ import numpy as np
 
 from ..gaussian import diag_logpdf
 from ..proposals import Window
-from .plate_likelihood import LEARNT_WEIGHTS, PlateLikelihood, scale_band, thesis_weights
+from .plate_likelihood import LEARNT_WEIGHTS, PlateLikelihood, PlateObservation, scale_band, thesis_weights
 from .plate_proposal import PlateLISProposal
 from .protocol import VideoModelBase
 
-__all__ = ["Plate", "PlateLikelihood", "PlateLISProposal", "thesis_weights", "scale_band", "LEARNT_WEIGHTS"]
+__all__ = ["Plate", "PlateLikelihood", "PlateObservation", "PlateLISProposal", "thesis_weights", "scale_band",
+           "LEARNT_WEIGHTS"]
 
 
 class Plate(VideoModelBase):
@@ -205,13 +206,37 @@ class Plate(VideoModelBase):
         return self.app
 
     def observe(self, maps, particles):
-        """The feature maps, with (when the model has an appearance) the appearance maps of the
-        whole frame at the appearance's working resolution as ``maps.appearance`` (entering
-        cars can be anywhere)."""
+        """The frame's :class:`~vistrack.models.plate_likelihood.PlateObservation`: the feature maps,
+        the likelihood's 4-channel map and (when the model has an appearance) the appearance maps at
+        the appearance's working resolution over the region the tracked particles can reach — their
+        predicted boxes grown by 8 innovation stds (the start box and 4 of its stds on the first
+        frame); births elsewhere get small frames of their own when their term is needed
+        (:meth:`PlateObservation.appearance_frames`)."""
+        app = build = None
         if self.app is not None:
-            h, w = maps.shape
-            maps.appearance = self.app.frame(maps.frame, (0, 0, w, h))
-        return maps
+            frame = maps.frame
+            if particles is None:
+                states = self.prior_mean[None]
+                reach = 4 * float(np.max(self.start[1][:2])) if self.start is not None else 0.0
+            else:
+                tracked = ~self.entering(particles.states)
+                states = self.predict_mean(particles.states[tracked] if tracked.any() else particles.states)
+                reach = 8 * float(np.max(self.sigma[:2])) + 2 * float(self.sigma[3])
+            app = self.app.frame(frame, self.app.roi(self._app_boxes(states), reach))
+
+            def build(roi):
+                return self.app.frame(frame, roi)
+        return PlateObservation(maps, self.lik.maps(maps), app, build)
+
+    def _app_terms(self, obs, states):
+        """The appearance's ``(log r_c, log r_t, ncc)`` of ``states``, each box read on a frame that
+        covers it (:meth:`PlateObservation.appearance_frames`)."""
+        b = self._app_boxes(states)
+        grow = self.app.ring * 0.5 * (b[:, 2] + b[:, 3])
+        out = np.empty((3, len(b)))
+        for frame, idx in obs.appearance_frames(b, grow, margin=float(np.median(b[:, 2]))):
+            out[:, idx] = self.app.terms(frame, b[idx])
+        return out
 
     def _app_boxes(self, states):
         x, y, w, h = self.box(states).T
@@ -221,7 +246,9 @@ class Plate(VideoModelBase):
         """Adapt the appearance on a confident frame (:meth:`Appearance.adapt`)."""
         if self.app is None:
             return False
-        return self.app.adapt(obs.appearance, self._app_boxes(estimate)[0])
+        b = self._app_boxes(estimate)
+        frame = obs.appearance_frames(b, self.app.ring * 0.5 * (b[:, 2] + b[:, 3]), margin=float(b[0, 2]))[0][0]
+        return self.app.adapt(frame, b[0])
 
     # -- likelihood and output ------------------------------------------------------
     def loglik(self, obs, states):
@@ -229,7 +256,8 @@ class Plate(VideoModelBase):
         when there is one."""
         ll = self.lik.loglik(obs, states)
         if self.app is not None:
-            ll = ll + self.app.loglik(obs.appearance, self._app_boxes(states))
+            log_rc, log_rt, _ = self._app_terms(obs, states)
+            ll = ll + (log_rc + log_rt)
         return ll
 
     def vertices(self, states):
@@ -266,8 +294,7 @@ class Plate(VideoModelBase):
             return True
         if self.app is None:
             return False
-        _, _, ncc = self.app.terms(obs.appearance, self._app_boxes(s))
-        return bool(ncc[0] >= self.app.adapt_min_ncc)
+        return bool(self._app_terms(obs, s)[2, 0] >= self.app.adapt_min_ncc)
 
     def describe(self, state):
         """Track-file fields of one state: ``cx, cy, w, h, angle_deg, scale`` and the vertices ``x0..x3, y0..y3``."""

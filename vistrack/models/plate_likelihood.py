@@ -21,10 +21,40 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from .. import kernels
 from ..features import remap_points
 from .plate_layout import LAYOUTS, plate_points
+from .plate_observation import PlateObservation
 
-__all__ = ["PlateLikelihood", "thesis_weights", "scale_band", "LEARNT_WEIGHTS"]
+__all__ = ["PlateLikelihood", "PlateObservation", "plate_map", "thesis_weights", "scale_band", "LEARNT_WEIGHTS"]
+
+#: the maps' values outside the frame (Sobel channels 0, DoG channels 5: a plate half outside scores low)
+_BORDER = (0.0, 0.0, 5.0, 5.0)
+
+
+def plate_map(maps):
+    """The 4-channel map ``(|∇_x I|, |∇_y I|, |G_s I|, |G_l I|)`` of a frame's
+    :class:`~vistrack.features.FeatureMaps`, each channel over its frame mean (float32 ``(H, W, 4)``).
+    Compiled where numba is (:func:`vistrack.kernels.plate.plate_map`, equal), into the maps'
+    buffer pool."""
+    if kernels.use():
+        from ..kernels.plate import plate_map as compiled
+
+        f = maps.frame
+        g8 = f if f.ndim == 2 else cv2.cvtColor(f, cv2.COLOR_BGR2GRAY, dst=maps.buffer("gray8", f.shape[:2], np.uint8))
+        h, w = g8.shape
+        gx = cv2.Sobel(g8, cv2.CV_32F, 1, 0, dst=maps.buffer("plate_gx", (h, w)), ksize=3, borderType=cv2.BORDER_REFLECT)
+        gy = cv2.Sobel(g8, cv2.CV_32F, 0, 1, dst=maps.buffer("plate_gy", (h, w)), ksize=3, borderType=cv2.BORDER_REFLECT)
+        sizes = maps.dog_sizes["small"] + maps.dog_sizes["large"]
+        sums = maps.buffer("plate_box", (4, h, w), np.int32)
+        for k, size in enumerate(sizes):
+            cv2.boxFilter(g8, cv2.CV_32S, (size, size), dst=sums[k], normalize=False, borderType=cv2.BORDER_REFLECT)
+        out = maps.buffer("plate", (h, w, 4))
+        compiled(gx, gy, sums, np.array(sizes, np.int64), out)
+        return out
+    chans = [np.abs(maps.gx), np.abs(maps.gy), np.abs(maps.dog_small), np.abs(maps.dog_large)]
+    chans = [c / max(float(cv2.mean(c)[0]), 1e-6) for c in chans]
+    return cv2.merge([c.astype(np.float32) for c in chans])
 
 
 def thesis_weights(kappa=2.0):
@@ -172,6 +202,8 @@ class PlateLikelihood:
         self.scan_points = {k: _grid_points(sets[k], scan_per_unit) for k in _SETS}
         self.scan_points.update({k: _grid_points(r, max(2, scan_per_unit // 2)) for k, r in extra_sets.items()})
         self._all, self._slices = self._stack(self.points)
+        #: the compiled path's point, set and feature tables per (point sets, features)
+        self._kernel_tables = {}
 
     def _stack(self, points, names=None):
         """The sample points of pixel sets ``names`` (default all) in one array, and each set's slice."""
@@ -191,14 +223,10 @@ class PlateLikelihood:
         return (1 - a)[:, None] * self.w[0] + a[:, None] * self.w[1], (1 - a) * self.bias[0] + a * self.bias[1]
 
     def maps(self, obs):
-        """The 4-channel map ``(|∇_x I|, |∇_y I|, |G_s I|, |G_l I|)``, each over its frame mean (cached)."""
-        m = getattr(obs, "_plate_maps", None)
-        if m is None:
-            chans = [np.abs(obs.gx), np.abs(obs.gy), np.abs(obs.dog_small), np.abs(obs.dog_large)]
-            chans = [c / max(float(cv2.mean(c)[0]), 1e-6) for c in chans]
-            m = cv2.merge([c.astype(np.float32) for c in chans])
-            obs._plate_maps = m
-        return m
+        """The 4-channel map ``(|∇_x I|, |∇_y I|, |G_s I|, |G_l I|)``, each over its frame mean: a
+        :class:`PlateObservation`'s, else computed from the :class:`~vistrack.features.FeatureMaps`
+        (:func:`plate_map`)."""
+        return obs.plate if isinstance(obs, PlateObservation) else plate_map(obs)
 
     #: the Table 1.1 columns of :meth:`features` (an instance's ``FEATURES`` adds the layout's extra sets)
     BASE_FEATURES = ("h_edge", "h_free_s", "h_free_l", "v_edge", "v_free_s", "v_free_l", "small_s", "small_l",
@@ -209,13 +237,34 @@ class PlateLikelihood:
         free stripes and character areas on each DoG separately, then the layout's extra sets
         (columns :attr:`FEATURES`)."""
         pose = np.atleast_2d(states)[:, :4]
+        if kernels.use():
+            return self._kernel_means(obs, pose, self.points, np.zeros((len(pose), 1, 2)))[:, 0]
         pts = plate_points(pose, self._all, self.layout.aspect)
         v = remap_points(self.maps(obs), pts[..., 0].astype(np.float32), pts[..., 1].astype(np.float32),
-                         border=(0.0, 0.0, 5.0, 5.0))
+                         border=_BORDER)
         return self._set_means(v, self._slices)
 
     def _set_means(self, v, sl):
         return np.stack([v[:, sl[ps], ch].mean(axis=1) for _, ps, ch, _ in self.spec], axis=1)
+
+    def _kernel_means(self, obs, pose, points, offsets, cols=None):
+        """:func:`vistrack.kernels.plate.set_means` of the features ``cols`` (default all) on the
+        point sets ``points`` (:attr:`points` or :attr:`scan_points`) at ``pose`` shifted by
+        ``offsets (N, C, 2)``: ``(N, C, F)``."""
+        from ..kernels.plate import set_means
+
+        key = (id(points), cols)
+        if key not in self._kernel_tables:
+            names = tuple(dict.fromkeys(self.spec[i][1] for i in (cols or range(len(self.spec)))))
+            pts, sl = self._stack(points, names)
+            sets = np.array([[sl[k].start, sl[k].stop - sl[k].start] for k in names], np.int64)
+            feats = np.array([[names.index(self.spec[i][1]), self.spec[i][2]] for i in (cols or range(len(self.spec)))],
+                             np.int64)
+            self._kernel_tables[key] = (pts, sets, feats)
+        pts, sets, feats = self._kernel_tables[key]
+        out = np.empty(offsets.shape[:2] + (len(feats),), np.float32)
+        return set_means(self.maps(obs), np.ascontiguousarray(pose, float), np.tan(pose[:, 2]), float(self.layout.aspect),
+                         pts, sets, feats, np.ascontiguousarray(offsets, float), np.array(_BORDER, np.float32), out)
 
     def _shifted_samples(self, obs, states, points, offsets):
         """The 4 maps at the plate points ``points`` of every pose shifted by ``offsets (N, C, 2)``
@@ -223,7 +272,7 @@ class PlateLikelihood:
         base = plate_points(np.atleast_2d(states)[:, :4], points, self.layout.aspect)  # (N, P, 2)
         mx = (base[:, None, :, 0] + offsets[:, :, None, 0]).astype(np.float32)  # (N, C, P)
         my = (base[:, None, :, 1] + offsets[:, :, None, 1]).astype(np.float32)
-        return remap_points(self.maps(obs), mx, my, border=(0.0, 0.0, 5.0, 5.0))
+        return remap_points(self.maps(obs), mx, my, border=_BORDER)
 
     def loglik_sparse(self, obs, states, offsets):
         """``log r`` from the sparser point sets of the scans (``scan_per_unit``) at every pose
@@ -233,9 +282,12 @@ class PlateLikelihood:
             self._sparse = self._stack(self.scan_points)
         points, sl = self._sparse
         n, c = offsets.shape[:2]
-        v = self._shifted_samples(obs, states, points, offsets).reshape(n * c, -1, 4)
+        if kernels.use():
+            means = self._kernel_means(obs, np.atleast_2d(states)[:, :4], self.scan_points, offsets)
+        else:
+            means = self._set_means(self._shifted_samples(obs, states, points, offsets).reshape(n * c, -1, 4), sl)
         w, b = self.coef(states)
-        f = self.transform(self._set_means(v, sl)).reshape(n, c, -1)
+        f = self.transform(means).reshape(n, c, -1)
         return np.einsum("ncf,nf->nc", f, w) + b[:, None]
 
     def terms(self, obs, states):
@@ -262,8 +314,12 @@ class PlateLikelihood:
                 pts, sl = self._stack(self.scan_points, names)
                 self._scan_sets[t] = (pts, [(sl[self.spec[i][1]], self.spec[i][2], i) for i in idx])
         pts, cols = self._scan_sets[which]
-        v = self._shifted_samples(obs, states, pts, offsets)
         t, w = self.transform, self.coef(states)[0]
+        if kernels.use():
+            idx = tuple(i for _, _, i in cols)
+            means = self._kernel_means(obs, np.atleast_2d(states)[:, :4], self.scan_points, offsets, idx)
+            return sum(w[:, i, None] * t(means[..., j]) for j, i in enumerate(idx))
+        v = self._shifted_samples(obs, states, pts, offsets)
         return sum(w[:, i, None] * t(v[..., sl, ch].mean(axis=-1)) for sl, ch, i in cols)
 
     def loglik(self, obs, states):

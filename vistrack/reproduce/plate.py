@@ -76,7 +76,7 @@ def run_plate_task(task, out_dir):
         warnings.simplefilter("ignore", DegenerateWeightsWarning)
         for res in track(clip.source, filt, task["particles"], rng):
             reported.append(int(res.visible))
-            ll.append(round(float(model.loglik(res.maps, res.estimate[None])[0]), 3))
+            ll.append(round(float(model.loglik(res.obs, res.estimate[None])[0]), 3))
             verts.append(np.round(model.vertices(res.estimate)[0].ravel(), 3).tolist())
             ms.append(round(res.ms, 4))
             ess.append(round(res.ess, 3))
