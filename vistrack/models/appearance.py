@@ -125,17 +125,31 @@ class AppearanceFrame:
         Working scale (``<= 1``: the region is shrunk by ``f``).
     grey : bool
         Grey-level bins instead of colour.
+    work : ndarray or None
+        The whole frame at the working resolution (:meth:`Appearance.work_image`): the region is
+        cut from it (the working pixels that cover ``roi``) rather than resized on its own, so that
+        regions of one frame share its resampling (their maps agree where they overlap, away from
+        their borders).
     """
 
-    def __init__(self, frame, roi, f, grey):
+    def __init__(self, frame, roi, f, grey, work=None):
         x0, y0, x1, y1 = roi
-        self.x0, self.y0, self.f = x0, y0, f
+        self.f = f
+        if work is not None and f < 1.0:
+            (h, w), (wh, ww) = frame.shape[:2], work.shape[:2]
+            c0, r0 = min(int(np.floor(x0 * f)), ww - 1), min(int(np.floor(y0 * f)), wh - 1)
+            c1, r1 = max(min(int(np.ceil(x1 * f)), ww), c0 + 1), max(min(int(np.ceil(y1 * f)), wh), r0 + 1)
+            crop = work[r0:r1, c0:c1]
+            x0, y0 = c0 / f, r0 / f
+            x1, y1 = (w if c1 == ww else c1 / f), (h if r1 == wh else r1 / f)
+        else:
+            crop = frame[y0:y1, x0:x1]
+            if f < 1.0:
+                size = (max(1, int(round((x1 - x0) * f))), max(1, int(round((y1 - y0) * f))))
+                crop = cv2.resize(crop, size, interpolation=cv2.INTER_AREA)
+        self.x0, self.y0 = x0, y0
         #: the region ``(x0, y0, x1, y1)`` in frame pixels
         self.roi = (x0, y0, x1, y1)
-        crop = frame[y0:y1, x0:x1]
-        if f < 1.0:
-            size = (max(1, int(round((x1 - x0) * f))), max(1, int(round((y1 - y0) * f))))
-            crop = cv2.resize(crop, size, interpolation=cv2.INTER_AREA)
         self.image = crop
         self.grey = crop if crop.ndim == 2 else cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY)
         self.grey_f = self.grey.astype(np.float32)
@@ -237,13 +251,22 @@ class Appearance:
         y1 = np.max(b[:, 1] + b[:, 3] / 2) + g
         return tuple(int(v) for v in (np.floor(x0), np.floor(y0), np.ceil(x1), np.ceil(y1)))
 
-    def frame(self, frame, roi):
-        """The :class:`AppearanceFrame` of ``frame`` over ``roi`` clipped to the frame."""
+    def frame(self, frame, roi, work=None):
+        """The :class:`AppearanceFrame` of ``frame`` over ``roi`` clipped to the frame (cut from
+        ``work``, :meth:`work_image` of the frame, when given)."""
         h, w = frame.shape[:2]
         x0, y0, x1, y1 = roi
         x0, x1 = min(max(x0, 0), w - 1), min(max(x1, 1), w)
         y0, y1 = min(max(y0, 0), h - 1), min(max(y1, 1), h)
-        return AppearanceFrame(frame, (x0, y0, max(x1, x0 + 1), max(y1, y0 + 1)), self.f, self.grey)
+        return AppearanceFrame(frame, (x0, y0, max(x1, x0 + 1), max(y1, y0 + 1)), self.f, self.grey, work)
+
+    def work_image(self, frame):
+        """The whole ``frame`` at the working resolution (as :meth:`frame` over the whole frame resizes it)."""
+        if self.f >= 1.0:
+            return frame
+        h, w = frame.shape[:2]
+        return cv2.resize(frame, (max(1, int(round(w * self.f))), max(1, int(round(h * self.f)))),
+                          interpolation=cv2.INTER_AREA)
 
     # -- the likelihood ------------------------------------------------------------------
     def patches(self, obs, boxes):

@@ -211,7 +211,8 @@ class Plate(VideoModelBase):
         the appearance's working resolution over the region the tracked particles can reach — their
         predicted boxes grown by 8 innovation stds (the start box and 4 of its stds on the first
         frame); births elsewhere get small frames of their own when their term is needed
-        (:meth:`PlateObservation.appearance_frames`)."""
+        (:meth:`PlateObservation.appearance_frames`). All are cut from one resize of the whole
+        frame, so a box scores as it would on the whole frame's maps whichever region holds it."""
         app = build = None
         if self.app is not None:
             frame = maps.frame
@@ -222,10 +223,11 @@ class Plate(VideoModelBase):
                 tracked = ~self.entering(particles.states)
                 states = self.predict_mean(particles.states[tracked] if tracked.any() else particles.states)
                 reach = 8 * float(np.max(self.sigma[:2])) + 2 * float(self.sigma[3])
-            app = self.app.frame(frame, self.app.roi(self._app_boxes(states), reach))
+            work = self.app.work_image(frame)  # one resampling for every region of this frame
+            app = self.app.frame(frame, self.app.roi(self._app_boxes(states), reach), work)
 
             def build(roi):
-                return self.app.frame(frame, roi)
+                return self.app.frame(frame, roi, work)
         return PlateObservation(maps, self.lik.maps(maps), app, build)
 
     def _app_terms(self, obs, states):

@@ -36,11 +36,12 @@ class PlateObservation:
         return self.maps.shape
 
     def _covers(self, frame, boxes, grow):
-        """Which ``boxes (N, 4)`` (cx, cy, w, h), grown by ``grow (N,)`` px and 2 px, lie in ``frame``'s
-        region (a side at the frame's border covers everything beyond it)."""
+        """Which ``boxes (N, 4)`` (cx, cy, w, h), grown by ``grow (N,)`` px and two working pixels, lie in
+        ``frame``'s region (a side at the frame's border covers everything beyond it)."""
         x0, y0, x1, y1 = frame.roi
         h, w = self.shape
-        half_w, half_h = boxes[:, 2] / 2 + grow + 2, boxes[:, 3] / 2 + grow + 2
+        pad = 2 + 2 / frame.f  # two working pixels off the region's border (its Sobel reflects there)
+        half_w, half_h = boxes[:, 2] / 2 + grow + pad, boxes[:, 3] / 2 + grow + pad
         return (((x0 <= 0) | (boxes[:, 0] - half_w >= x0)) & ((x1 >= w) | (boxes[:, 0] + half_w <= x1))
                 & ((y0 <= 0) | (boxes[:, 1] - half_h >= y0)) & ((y1 >= h) | (boxes[:, 1] + half_h <= y1)))
 
@@ -59,7 +60,7 @@ class PlateObservation:
         while left.any():
             i = int(np.argmax(left))
             b = boxes[i]
-            g = grow[i] + margin + 2
+            g = grow[i] + margin + 2 + 2 / self.appearance.f
             roi = tuple(int(v) for v in (np.floor(b[0] - b[2] / 2 - g), np.floor(b[1] - b[3] / 2 - g),
                                          np.ceil(b[0] + b[2] / 2 + g), np.ceil(b[1] + b[3] / 2 + g)))
             frame = self.build(roi)
