@@ -150,7 +150,7 @@ def test_options_are_checked():
     from vistrack.models.box import Box
 
     assert "ls-n-ips-nn" in __import__("vistrack.filters", fromlist=["ALGORITHMS"]).ALGORITHMS
-    with pytest.raises(ValueError, match="needs a model with a learned local search"):
+    with pytest.raises(ValueError, match=r"ls-n-ips-nn \(a learned local search\) needs a model with searcher"):
         make_filter("ls-n-ips-nn", Box.__new__(Box))
 
 

@@ -12,7 +12,7 @@ The local search is model-supplied: ``model.local_search(obs, states)``
 
 from __future__ import annotations
 
-from ..models.protocol import LocalSearch, StateSpaceModel, require
+from ..models.protocol import LearnedSearch, LocalSearch, StateSpaceModel, require
 from .base import ParticleFilter
 
 __all__ = ["LSNIPS", "LSNIPSNN"]
@@ -60,6 +60,5 @@ class LSNIPSNN(LSNIPS):
     name = "ls-n-ips-nn"
 
     def __init__(self, model, **kwargs):
-        if not hasattr(model, "searcher"):
-            raise ValueError(f"{self.name} needs a model with a learned local search (contour)")
+        require(model, (LearnedSearch,), f"{self.name} (a learned local search)")
         super().__init__(model, local_search=model.searcher("nn"), **kwargs)

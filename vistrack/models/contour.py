@@ -69,7 +69,7 @@ from .collapse import CollapseCheck
 from .contour_colour import ContourColour
 from .contour_moves import ContourMoves
 from .protocol import VideoModelBase
-from .spline import BSpline, edge_peaks, ellipse_template, pose_from, pose_params
+from .spline import BSpline, shape_matrices, edge_peaks, ellipse_template, pose_from, pose_params
 
 __all__ = ["BSpline", "Contour", "ellipse_template", "pose_from", "pose_params"]
 
@@ -149,24 +149,9 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, Vide
         if not self.size > 0:
             raise ValueError("template has zero size")
         ref = self.size / 60.0
-        # W (eq. 1.1), spline norm U = diag(B, B) and W+ = (W^T U W)^-1 W^T U (§4.3.1)
-        qx, qy = self.q0[:, 0], self.q0[:, 1]
-        one, zero = np.ones(self.n), np.zeros(self.n)
-        self.W = np.block([[one[:, None], zero[:, None], qx[:, None], -qy[:, None]],
-                           [zero[:, None], one[:, None], qy[:, None], qx[:, None]]])
-        U = np.kron(np.eye(2), self.spline.B)
-        self.W_plus = np.linalg.solve(self.W.T @ U @ self.W, self.W.T @ U)
-        # outward unit normals of the template at the support points and at the
-        # measurement points (``measure_per_segment`` per spline segment)
-        self.normals0 = self._template_normals(np.arange(self.n))
-        t_meas = np.arange(self.n * measure_per_segment) / measure_per_segment
-        self.meas0 = self.spline.curve_matrix(t_meas) @ self.q0
-        self.meas_normals0 = self._template_normals(t_meas)
-        mx, my = self.meas0[:, 0], self.meas0[:, 1]
-        one_m, zero_m = np.ones(len(mx)), np.zeros(len(mx))
-        w_m = np.block([[one_m[:, None], zero_m[:, None], mx[:, None], -my[:, None]],
-                        [zero_m[:, None], one_m[:, None], my[:, None], mx[:, None]]])
-        self.W_meas_plus = np.linalg.pinv(w_m)
+        m = shape_matrices(self.spline, self.q0, measure_per_segment)  # W, W⁺ (eq. 1.1, §4.3.1), normals
+        self.W, self.W_plus, self.normals0 = m["W"], m["W_plus"], m["normals0"]
+        self.meas0, self.meas_normals0, self.W_meas_plus = m["meas0"], m["meas_normals0"], m["W_meas_plus"]
         self.dense_matrix = self.spline.dense()
         self.polarity = polarity
         self.gradient_sigma = float(gradient_sigma)
@@ -196,13 +181,6 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, Vide
             raise ValueError(f"unknown local search {search!r}; choose lms or nn")
         self.search = search
         self.nn_search = None  # the network of search="nn", trained or loaded on first use (contour_nn)
-
-    def _template_normals(self, t):
-        tang = self.spline.curve_matrix(t, deriv=1) @ self.q0
-        nrm = np.stack([tang[:, 1], -tang[:, 0]], axis=1)
-        nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
-        pts = self.spline.curve_matrix(t) @ self.q0
-        return -nrm if np.sum(np.einsum("ij,ij->i", nrm, pts)) < 0 else nrm
 
     @classmethod
     def from_box(cls, box, frame_size, *, n=24, **kwargs):

@@ -171,12 +171,8 @@ class PlateLISProposal:
            ``q`` counts the second scan only.
 
         Every cell is drawn ∝ ``r^β`` (``birth_beta``; β = 2 tempers the draws towards the best
-        cell, and ``q`` is that distribution). Steps 1–3 alone (the scale uniform in its 14 %
-        cell, the angle the entering draw's) left the births 5–10 px per vertex off the plate
-        at log-odds −2 to −4 where the plate scores 6, so a track on a car's body or a sign
-        kept the lead for up to 10 frames after a plate came in; births drawn about a plate
-        (25 px, 12 px, 0.1 rad, 20 % off) on 15 suite frames ended within a third of the plate
-        height 11 % of the time, and 22 % with the whole search. Every step draws a cell of a
+        cell, and ``q`` is that distribution; steps 4–5 are measured against steps 1–3 alone in
+        ``docs/experiments.md``, plates). Every step draws a cell of a
         fixed partition, so ``q`` is exact: the product of the cells' probabilities over their
         sizes (``1 / s_Z`` for the uniform density in ``log s``). For the weight, the backward
         window ``g(X|Z)`` is the box of the plate size at ``X``'s scale about ``Z`` times the
@@ -208,6 +204,18 @@ class PlateLISProposal:
         if not self.rescan:
             log_q += lq
         xz[:, :2] = uv
+        log_s = self._refine_angle_scale(obs, x, xz, log_s, log_q, rng)
+        if self.rescan:
+            uv, lq = self._line_scans(xz, obs, rng, centre, cell_half, self.fine, beta=self.birth_beta)
+            log_q += lq
+            xz[:, :2] = uv
+        return xz[:, :2], xz[:, 2], xz[:, 3], log_q
+
+    def _refine_angle_scale(self, obs, x, xz, log_s, log_q, rng):
+        """Steps 4–5 of :meth:`_search` on the scanned poses ``xz``: an angle cell, then a
+        sub-cell of the scale cell about ``log_s``, each uniform inside. ``xz`` and ``log_q``
+        (``log q - log g_{θ,s}``) are updated in place; returns the new ``log_s``."""
+        n, k, span = len(x), self.scale_cells, self.scale_span
         if self.angle_cells > 1:
             ka, span_a = self.angle_cells, self.angle_span
             ga = ((np.arange(ka) + 0.5) / ka * 2 - 1) * span_a
@@ -225,8 +233,4 @@ class PlateLISProposal:
             xz[:, 3] = np.exp(log_s)
             # q's density of s_Z in its sub-cell over g's density of s_X: (1 / (sub s_Z)) / (1 / (2 span s_X))
             log_q += lqf - np.log(sub) - log_s + np.log(2 * span) + np.log(x[:, 3])
-        if self.rescan:
-            uv, lq = self._line_scans(xz, obs, rng, centre, cell_half, self.fine, beta=self.birth_beta)
-            log_q += lq
-            xz[:, :2] = uv
-        return xz[:, :2], xz[:, 2], xz[:, 3], log_q
+        return log_s

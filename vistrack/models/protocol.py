@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from typing import Protocol, runtime_checkable
 
-__all__ = ["StateSpaceModel", "PredictMean", "LocalSearch", "LocalMoves", "LLSModel", "GridLikelihood",
+__all__ = ["StateSpaceModel", "PredictMean", "LocalSearch", "LearnedSearch", "LocalMoves", "LLSModel", "GridLikelihood",
            "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
 
 
@@ -97,6 +97,16 @@ class LocalMoves(Protocol):
     def with_local_prior(self, states, u):
         """:meth:`with_local` for the first step (``X_1 ~ p_0``): a state that carries the
         previous pose moves it too (a zero initial velocity); ``(N, d)``, ``(N, m)`` -> ``(N, d)``."""
+
+
+@runtime_checkable
+class LearnedSearch(Protocol):
+    """A learned local search for LS-N-IPS (thesis 001 §4.3.1, Fig. 4.5): the contour model's
+    neural network."""
+
+    def searcher(self, search):
+        """``local_search(obs, states (N, d)) -> (states (N, d), loglik (N,))`` with the search
+        named ``search`` (``"lms"`` or ``"nn"``)."""
 
 
 @runtime_checkable

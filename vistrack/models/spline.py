@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["BSpline", "ellipse_template", "pose_from", "pose_params", "edge_peaks"]
+__all__ = ["BSpline", "ellipse_template", "pose_from", "pose_params", "edge_peaks", "shape_matrices", "template_normals"]
 
 _M = np.array([[-1.0, 3, -3, 1], [3, -6, 3, 0], [-3, 0, 3, 0], [1, 4, 1, 0]]) / 6.0
 
@@ -81,3 +81,39 @@ def edge_peaks(gn, thresh):
     peak[..., 1:] &= m[..., 1:] >= m[..., :-1]
     peak[..., :-1] &= m[..., :-1] > m[..., 1:]
     return peak
+
+
+def template_normals(spline, q0, t):
+    """Outward unit normals ``(len(t), 2)`` of the curve of support points ``q0 (n, 2)`` at
+    spline parameters ``t``."""
+    tang = spline.curve_matrix(t, deriv=1) @ q0
+    nrm = np.stack([tang[:, 1], -tang[:, 0]], axis=1)
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    pts = spline.curve_matrix(t) @ q0
+    return -nrm if np.sum(np.einsum("ij,ij->i", nrm, pts)) < 0 else nrm
+
+
+def shape_matrices(spline, q0, measure_per_segment):
+    """The contour's fixed matrices for the centred template ``q0 (n, 2)`` (thesis §1.3.1, §4.3.1).
+
+    Returns a dict: ``W (2n, 4)`` (eq. 1.1, ``q = W z + q0``), ``W_plus (4, 2n)``
+    (``(Wᵀ U W)⁻¹ Wᵀ U`` with the spline norm ``U = diag(B, B)``), ``normals0 (n, 2)`` (outward
+    normals at the support points), ``meas0 (M, 2)`` and ``meas_normals0 (M, 2)`` (the
+    ``M = n · measure_per_segment`` measurement points and their normals) and
+    ``W_meas_plus (4, 2M)`` (the least-squares pose of measured points).
+    """
+    n = len(q0)
+    qx, qy = q0[:, 0], q0[:, 1]
+    one, zero = np.ones(n), np.zeros(n)
+    W = np.block([[one[:, None], zero[:, None], qx[:, None], -qy[:, None]],
+                  [zero[:, None], one[:, None], qy[:, None], qx[:, None]]])
+    U = np.kron(np.eye(2), spline.B)
+    t_meas = np.arange(n * measure_per_segment) / measure_per_segment
+    meas0 = spline.curve_matrix(t_meas) @ q0
+    mx, my = meas0[:, 0], meas0[:, 1]
+    one_m, zero_m = np.ones(len(mx)), np.zeros(len(mx))
+    w_m = np.block([[one_m[:, None], zero_m[:, None], mx[:, None], -my[:, None]],
+                    [zero_m[:, None], one_m[:, None], my[:, None], mx[:, None]]])
+    return {"W": W, "W_plus": np.linalg.solve(W.T @ U @ W, W.T @ U),
+            "normals0": template_normals(spline, q0, np.arange(n)), "meas0": meas0,
+            "meas_normals0": template_normals(spline, q0, t_meas), "W_meas_plus": np.linalg.pinv(w_m)}
