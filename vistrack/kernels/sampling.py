@@ -40,27 +40,37 @@ def corner(x, y):
 
 
 @njit(cache=True, forceinline=True)
+def _pixels(img, ix, iy, c, border):
+    """``(any inside, p00, p01, p10, p11)``: channel ``c`` of the 2×2 pixels of ``img (H, W, C)``
+    at the corner ``ix, iy``, ``border`` for those outside the image."""
+    h, w = img.shape[0], img.shape[1]
+    if 0 <= ix < w - 1 and 0 <= iy < h - 1:  # unsigned indices: no negative-index wraparound
+        y0, x0, cc, one = np.uint64(iy), np.uint64(ix), np.uint64(c), np.uint64(1)
+        p00, p01 = img[y0, x0, cc], img[y0, x0 + one, cc]
+        p10, p11 = img[y0 + one, x0, cc], img[y0 + one, x0 + one, cc]
+        return True, p00, p01, p10, p11
+    if ix >= w or ix + 1 < 0 or iy >= h or iy + 1 < 0:
+        return False, border, border, border, border
+    in0, in1 = 0 <= ix < w, 0 <= ix + 1 < w
+    r0, r1 = 0 <= iy < h, 0 <= iy + 1 < h
+    p00 = img[iy, ix, c] if r0 and in0 else border
+    p01 = img[iy, ix + 1, c] if r0 and in1 else border
+    p10 = img[iy + 1, ix, c] if r1 and in0 else border
+    p11 = img[iy + 1, ix + 1, c] if r1 and in1 else border
+    return True, p00, p01, p10, p11
+
+
+@njit(cache=True, forceinline=True)
 def lerp4(img, ix, iy, ax, ay, c, border, nonfinite):
     """Channel ``c`` of ``img (H, W, C)`` float32 interpolated at the corner ``ix, iy`` with the
     fractions ``ax, ay`` (:func:`corner`); ``border`` outside, ``nonfinite`` at :data:`NONFINITE`."""
     if ix == NONFINITE:
         return nonfinite
-    h, w = img.shape[0], img.shape[1]
     bx, by = _F32(1.0) - ax, _F32(1.0) - ay
     w00, w01, w10, w11 = by * bx, by * ax, ay * bx, ay * ax
-    if 0 <= ix < w - 1 and 0 <= iy < h - 1:  # unsigned indices: no negative-index wraparound
-        y0, x0, cc, one = np.uint64(iy), np.uint64(ix), np.uint64(c), np.uint64(1)
-        p00, p01 = img[y0, x0, cc], img[y0, x0 + one, cc]
-        p10, p11 = img[y0 + one, x0, cc], img[y0 + one, x0 + one, cc]
-    elif ix >= w or ix + 1 < 0 or iy >= h or iy + 1 < 0:
+    inside, p00, p01, p10, p11 = _pixels(img, ix, iy, c, border)
+    if not inside:
         return border
-    else:
-        in0, in1 = 0 <= ix < w, 0 <= ix + 1 < w
-        r0, r1 = 0 <= iy < h, 0 <= iy + 1 < h
-        p00 = img[iy, ix, c] if r0 and in0 else border
-        p01 = img[iy, ix + 1, c] if r0 and in1 else border
-        p10 = img[iy + 1, ix, c] if r1 and in0 else border
-        p11 = img[iy + 1, ix + 1, c] if r1 and in1 else border
     return p00 * w00 + p01 * w01 + p10 * w10 + p11 * w11
 
 
@@ -94,20 +104,9 @@ def lerp_fma(img, ix, iy, a, b, c, border, nonfinite):
     ``border`` for pixels outside, ``nonfinite`` at :data:`NONFINITE`."""
     if ix == NONFINITE:
         return nonfinite
-    h, w = img.shape[0], img.shape[1]
-    if 0 <= ix < w - 1 and 0 <= iy < h - 1:  # unsigned indices: no negative-index wraparound
-        y0, x0, cc, one = np.uint64(iy), np.uint64(ix), np.uint64(c), np.uint64(1)
-        p00, p01 = img[y0, x0, cc], img[y0, x0 + one, cc]
-        p10, p11 = img[y0 + one, x0, cc], img[y0 + one, x0 + one, cc]
-    elif ix >= w or ix + 1 < 0 or iy >= h or iy + 1 < 0:
+    inside, p00, p01, p10, p11 = _pixels(img, ix, iy, c, border)
+    if not inside:
         return border
-    else:
-        in0, in1 = 0 <= ix < w, 0 <= ix + 1 < w
-        r0, r1 = 0 <= iy < h, 0 <= iy + 1 < h
-        p00 = img[iy, ix, c] if r0 and in0 else border
-        p01 = img[iy, ix + 1, c] if r0 and in1 else border
-        p10 = img[iy + 1, ix, c] if r1 and in0 else border
-        p11 = img[iy + 1, ix + 1, c] if r1 and in1 else border
     return fma_lerp(p00, p01, p10, p11, a, b)
 
 
