@@ -143,6 +143,7 @@ def _learn_contour(model, frame, polarity, colour):
         colour = not is_grey(frame)
     if colour:
         model.learn_colour(frame)
+    model.learn_blob(frame)  # the colour-blob proposal of the history-sampling filters and sir
     return model
 
 

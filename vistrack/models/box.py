@@ -30,13 +30,14 @@ from ..gaussian import diag_logpdf
 from ..proposals import MapProposal, Window
 from ..proposals.translation import TranslationMoves
 from .appearance import Appearance
+from .innovation import ARInnovation
 from .kernel import is_prior
 from .protocol import VideoModelBase
 
 __all__ = ["Box"]
 
 
-class Box(TranslationMoves, VideoModelBase):
+class Box(TranslationMoves, ARInnovation, VideoModelBase):
     """Box tracking model with appearance learned from the first frame.
 
     Parameters
@@ -76,6 +77,8 @@ class Box(TranslationMoves, VideoModelBase):
         self.init_pose = np.array([x + w / 2, y + h / 2, 0.0])
         self.prior_mean = np.concatenate([self.init_pose, self.init_pose])
         self.window = float(window)
+        self.blob_cell = 0.25 * side  # the colour-blob proposal's cell (frame px)
+        self.learn_blob(frame)
 
     # -- geometry ---------------------------------------------------------------------
     def boxes(self, states):
@@ -106,6 +109,14 @@ class Box(TranslationMoves, VideoModelBase):
         sd = np.broadcast_to(self.sigma, (len(old), 3)).copy()
         sd[:, :2] *= np.exp(old[:, 2:3])
         return sd
+
+    def innovation_std(self, old):
+        """Std ``(N, 3)`` of the current values given ``old`` (:class:`~vistrack.models.innovation.ARInnovation`)."""
+        return self._std(old)
+
+    def blob_image(self, obs):
+        """The colour-blob proposal looks at the observation's region at the working resolution."""
+        return obs.image, obs.x0, obs.y0, obs.f
 
     def sample_prior(self, n, rng):
         z = self.init_pose + self.prior_std * rng.standard_normal((n, 3))

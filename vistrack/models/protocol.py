@@ -35,6 +35,19 @@ for optional parts. Shapes: ``N`` particles, ``d`` the state dimension.
     ``sample_motion(states, rng)`` and ``c_logpdf(c, states)``.
 :class:`SIRModel`
     ``sir_proposal(kernel)``: the image-only proposal of plain SIR.
+:class:`InnovationSplit` (the history-sampling family, §3.2, Assumption 3.2.1)
+    The state is the innovation ``X_{t,1}`` (``innovation_dim`` leading components, e.g. the
+    pose) followed by the history ``X_{t,2} = history(X_{t-1})`` (e.g. the previous pose).
+    The innovation splits into ``X_{t,1a}`` (the ``subspace_dim`` leading components, where
+    the image-only proposal acts: translation) and ``X_{t,1b}`` (the rest: scale, rotation),
+    ``K_1 = K_1b(x_1b | x_1a, X_{t-1}) K_1a(x_1a | X_{t-1})``. Broadcasting over leading axes
+    (``x (N, 1, ·)`` against ``prev (1, C, d)`` gives the ``(N, C)`` pairs):
+    ``subspace_logpdf(x1a, prev)`` (``log K_1a``), ``rest_logpdf(x1b, x1a, prev)``
+    (``log K_1b``), ``sample_rest(x1a, prev, rng)`` (a draw from ``K_1b``); for the first
+    step's ``p_0``: ``prior_subspace_logpdf(x1a)``, ``prior_rest_logpdf(x1b, x1a)``,
+    ``sample_prior_rest(x1a, rng)`` and ``join_prior(x1) -> (N, d)`` (``X_1`` with the
+    history ``p_0`` gives it); ``innovation_proposal(kernel)``: ``π(X_{t,1a} | Y_t)``, an
+    object with ``sample(n, obs, rng) -> (n, subspace_dim)`` and ``logpdf(x1a, obs) -> (n,)``.
 :class:`VideoModel` (the frame loop, ``run``, ``eval`` and ``vistrack.Tracker``)
     ``observe(maps, particles) -> obs`` (the frame's observation ``Y_t`` from its feature
     maps), ``adapt(obs, estimate)``, ``estimate(particles) -> (d,)``, ``visible(obs, state)
@@ -49,7 +62,7 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 __all__ = ["StateSpaceModel", "PredictMean", "LocalSearch", "LocalMoves", "LLSModel", "GridLikelihood",
-           "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
+           "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "InnovationSplit", "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
 
 
 @runtime_checkable
@@ -130,6 +143,30 @@ class EISModel(Protocol):
 @runtime_checkable
 class SIRModel(Protocol):
     def sir_proposal(self, kernel=None): ...
+
+
+@runtime_checkable
+class InnovationSplit(Protocol):
+    innovation_dim: int
+    subspace_dim: int
+
+    def history(self, prev): ...
+
+    def subspace_logpdf(self, x1a, prev): ...
+
+    def rest_logpdf(self, x1b, x1a, prev): ...
+
+    def sample_rest(self, x1a, prev, rng): ...
+
+    def prior_subspace_logpdf(self, x1a): ...
+
+    def prior_rest_logpdf(self, x1b, x1a): ...
+
+    def sample_prior_rest(self, x1a, rng): ...
+
+    def join_prior(self, x1): ...
+
+    def innovation_proposal(self, kernel=None): ...
 
 
 @runtime_checkable
