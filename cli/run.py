@@ -20,7 +20,7 @@ from .options import SEED, Box, Fraction, check_writable
 __all__ = ["run"]
 
 RUN_ALGOS = ("bootstrap", "ls-n-ips", "lls", "lis", "avpf", "condensation",
-             "pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt")
+             "pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt", "sir", "basic-sir", "hs-sir", "rb-hs-sir", "rb-ss-hs-sir")
 
 
 def model_options(name, *, layout, no_colour, template):
@@ -51,7 +51,10 @@ def model_options(name, *, layout, no_colour, template):
 @click.option("--layout", type=click.Choice(["jp", "single-row"]), default=None,
               help="Plate layout [default: the clip's, else jp].")
 @click.option("--algo", default=None, type=click.Choice(RUN_ALGOS),
-              help="Particle filter [default: lis; pf-eis-mt for landmarks].")
+              help="Particle filter [default: lis; pf-eis-mt for landmarks]. Contour and box also run sir and "
+                   "the history-sampling family of thesis §3.2 (basic-sir, hs-sir, rb-hs-sir, rb-ss-hs-sir), "
+                   "whose innovations come from the image only: the colour-blob proposal (the target's "
+                   "Gaussian colour learned from the first frame, drawn over a grid of cells).")
 @click.option("-n", "--particles", default=100, show_default=True, type=click.IntRange(min=1),
               help="Number of particles N.")
 @click.option("--seed", default=0, show_default=True, type=SEED, help="Random seed (same seed, same track).")

@@ -78,7 +78,7 @@ class Box(TranslationMoves, ARInnovation, VideoModelBase):
         self.prior_mean = np.concatenate([self.init_pose, self.init_pose])
         self.window = float(window)
         self.blob_cell = 0.25 * side  # the colour-blob proposal's cell (frame px)
-        self.learn_blob(frame)
+        self.learn_blob(frame, _inner_ellipse(frame.shape[:2], (x, y, w, h)))
 
     # -- geometry ---------------------------------------------------------------------
     def boxes(self, states):
@@ -212,3 +212,14 @@ class Box(TranslationMoves, ARInnovation, VideoModelBase):
         ll_z = np.where(ok, self.loglik(obs, moved), -np.inf)
         keep = ll_z >= ll_x
         return np.where(keep[:, None], moved, states), np.where(keep, ll_z, ll_x)
+
+
+def _inner_ellipse(shape, box, share=0.8):
+    """Mask ``(H, W)`` of the ellipse inscribed in ``share`` of the box (its corners are background)."""
+    import cv2
+
+    x, y, w, h = box
+    mask = np.zeros(shape, np.uint8)
+    cv2.ellipse(mask, (int(round(x + w / 2)), int(round(y + h / 2))),
+                (max(1, int(round(share * w / 2))), max(1, int(round(share * h / 2)))), 0, 0, 360, 1, -1)
+    return mask

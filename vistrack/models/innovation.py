@@ -83,14 +83,15 @@ class ARInnovation:
         return np.concatenate([x1, x1], axis=-1)
 
     # -- the colour-blob proposal (§3.2.5) ---------------------------------------------------
-    def learn_blob(self, frame):
+    def learn_blob(self, frame, mask=None):
         """Learn the target's :class:`~vistrack.proposals.GaussianColour` from ``frame``'s pixels
-        inside the outline at the initial pose; returns it."""
+        in ``mask`` (default: inside the outline at the initial pose); returns it."""
         import cv2
 
-        poly = np.round(self.outline(self.prior_mean[None])[0]).astype(np.int32)
-        mask = np.zeros(frame.shape[:2], np.uint8)
-        cv2.fillPoly(mask, [poly], 1)
+        if mask is None:
+            poly = np.round(self.outline(self.prior_mean[None])[0]).astype(np.int32)
+            mask = np.zeros(frame.shape[:2], np.uint8)
+            cv2.fillPoly(mask, [poly], 1)
         self.blob_colour = GaussianColour.fit(frame, mask)
         return self.blob_colour
 
