@@ -96,13 +96,17 @@ def associate(law, n, c, rng, scheme, budget=1 << 21):
     so memory stays bounded (the draws do not depend on the blocks)."""
     u = row_uniforms(scheme, n, rng)
     idx, log_sum = np.empty(n, np.intp), np.empty(n)
-    step = max(1, budget // max(c, 1))
-    for start in range(0, n, step):
-        rows = slice(start, min(n, start + step))
+    for rows in row_blocks(n, c, budget):
         block = law(rows)
         log_sum[rows] = logsumexp(block, axis=1)
         idx[rows] = draw_rows(block, rng, u=u[rows])
     return idx, log_sum
+
+
+def row_blocks(n, c, budget=1 << 21):
+    """Slices of ``n`` rows with about ``budget`` of the ``(N, C)`` pairs each."""
+    step = max(1, budget // max(c, 1))
+    return [slice(start, min(n, start + step)) for start in range(0, n, step)]
 
 
 class HistorySampling(ParticleFilter):
@@ -154,7 +158,10 @@ class HistorySampling(ParticleFilter):
         u = row_uniforms(self.resampler.scheme, n, rng) * cdf[-1]
         src = hist.states[np.minimum(np.searchsorted(cdf, u, side="right"), len(cdf) - 1)]
         x1b = kernel.sample_rest(x1a, src, rng)
-        mix = logsumexp(hist.log_w + kernel.rest_logpdf(x1b[:, None], x1a[:, None], hist.states[None]), axis=1)
+        mix = np.empty(n)
+        for rows in row_blocks(n, len(hist.log_w)):
+            k1b = kernel.rest_logpdf(x1b[rows, None], x1a[rows, None], hist.states[None])
+            mix[rows] = logsumexp(hist.log_w + k1b, axis=1)
         return np.concatenate([x1a, x1b], axis=1), log_pi + mix - logsumexp(hist.log_w)
 
     def _proposed(self, n, obs, rng):
