@@ -8,6 +8,7 @@ error over all frames (a failed OpenCV update holds its last box) and frames/s, 
 box model's time split at 640x480 (car4 resized) beside the OpenCV trackers on the same frames.
 
     python benchmarks/bench_real.py [--entries lis:100,bootstrap:100,contour/lis:100,plate/lis:100] [--seeds 3]
+                                    [--clips girl_otb,hand_vot2013,plate_in_polo_dashcam] [--opencv '']
 
 Entries are ``[model/]algo:N``: the box model by default; ``contour/`` (colour term on for
 colour video) and ``plate/`` (the plate clip only, ``--layout single-row``, its appearance
@@ -118,20 +119,22 @@ def main():
                          "single-row layout)")
     ap.add_argument("--opencv", default="MIL,KCF,CSRT")
     ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--clips", default=",".join(CLIPS), help="clips of the real-clip folder, comma-separated")
     args = ap.parse_args()
+    clips = [c for c in args.clips.split(",") if c]
     cv2.setNumThreads(1)
     entries = []
     for e in args.entries.split(","):
         spec, n = e.split(":")
         model, algo = spec.split("/") if "/" in spec else ("box", spec)
         entries.append((model, algo, int(n)))
-    cvs = [c for c in args.opencv.split(",") if opencv_tracker(c) is not None]
-    missing = sorted(set(args.opencv.split(",")) - set(cvs))
+    cvs = [c for c in args.opencv.split(",") if c and opencv_tracker(c) is not None]
+    missing = sorted(set(args.opencv.split(",")) - set(cvs) - {""})
     if missing:
         print(f"not in this OpenCV ({cv2.__version__}): {', '.join(missing)} (opencv-contrib-python-headless has them)")
     print(f"{'clip':<24} {'tracker':<16} {'AUC':>6} {'P@20':>6} {'err px':>7} {'frames/s':>9}")
     means = {}
-    for clip in CLIPS:
+    for clip in clips:
         if not (DATA / clip).is_dir():
             print(f"{clip}: not found under {DATA}")
             continue
@@ -151,7 +154,7 @@ def main():
             means.setdefault(name, []).append(sc[0])
             print(f"{clip:<24} {name:<16} {sc[0]:>6.3f} {sc[1]:>6.3f} {sc[2]:>7.1f} {fps:>9.0f}")
     print("mean AUC: " + ", ".join(f"{k} {np.mean(v):.3f}" for k, v in means.items()))
-    if (DATA / "car4_otb_first100").is_dir():
+    if "car4_otb_first100" in clips and (DATA / "car4_otb_first100").is_dir():
         frames, gt = load("car4_otb_first100", size=(640, 480))
         timer = Timer()
         split(frames, gt[0], 100, timer)

@@ -14,6 +14,7 @@ from vistrack.reproduce.landmarks import (LANDMARK_ALGOS, LandmarksConfig, landm
 from vistrack.reproduce.plate import PlateConfig, plate_results, plate_tasks, run_plate_task
 from vistrack.evaluation import entries_config, write_atomic
 from vistrack.reproduce.contour import ContourConfig, contour_results, contour_tasks
+from vistrack.reproduce.hs_sir import HSConfig, equal_time_entries, hs_results, hs_tasks
 from vistrack.reproduce.report import format_table, write_plots
 
 from .options import SEED, Fraction, IntList, StrList, check_writable
@@ -41,14 +42,14 @@ def engine_options(default_out):
     return deco
 
 
-def suite_options(clips_help, size, algos, algos_help, runs):
+def suite_options(clips_help, size, algos, algos_help, runs, frames=300):
     """A clip suite's options (``--clips --make --frames --size --algos --runs --seed``), shared by
     the ``reproduce`` commands that track synthetic clips."""
     opts = [
         click.option("--clips", "clips_dir", type=click.Path(file_okay=False), help=clips_help),
         click.option("--make", "make", default=10, show_default=True, type=click.IntRange(min=1),
                      help="Clips to generate (seeds 1..MAKE) when --clips has none."),
-        click.option("--frames", default=300, show_default=True, type=click.IntRange(min=2),
+        click.option("--frames", default=frames, show_default=True, type=click.IntRange(min=2),
                      help="Frames per made clip."),
         click.option("--size", default=size, show_default=True, help="Frame size of made clips."),
         click.option("--algos", "entries", default=algos, show_default=True, type=Entries(), help=algos_help),
@@ -305,3 +306,56 @@ def plate(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler
                in_process=in_process, resume=resume, quiet=quiet)
     click.echo(f"{len(clips)} clips x {runs} runs")
     _report("plate", {"results": plate_results(cfg, tasks, out)}, entries_config(cfg), json_path, plots_dir)
+
+
+@reproduce.command("hs-sir")
+@suite_options("Folder of colour contour clip folders; made there with --make if missing "
+               "[default: hs-sir-clips].", "240x180", "basic-sir:3000,rb-ss-hs-sir:400",
+               "ALGO:N pairs: basic-sir, hs-sir, rb-hs-sir, rb-ss-hs-sir (and bootstrap, ls-n-ips, lis, ...).",
+               10, frames=150)
+@click.option("--equal-time", is_flag=True,
+              help="Set every N after the first so that its time per frame matches the first entry's (timed on "
+                   "the first clip), as Table 3.1's counts were chosen.")
+@engine_options("hs-sir-results")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
+@click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
+              help="Write P(lost) vs frame (Fig. 3.10) and error vs frame (Fig. 3.9) PNGs here.")
+@click.option("--quiet", "-q", is_flag=True)
+def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, workers, scheduler, in_process, out_dir,
+           resume, json_path, plots_dir, quiet):
+    """SIR with history sampling on colour contour clips (thesis §3.2.5, Table 3.1, Figs. 3.9-3.10).
+
+    \b
+    The innovations (the pose) come from the image only: the colour-blob
+    proposal draws a cell of a ~24x18 grid ∝ the target's Gaussian colour
+    likelihood averaged over it, then a uniform fine displacement (±5.5 px at
+    240-px width), with its exact density. The history (the previous pose) is
+    joined to them by
+      basic-sir      at random (Fig. 3.2),
+      hs-sir         resampling history-innovation pairs ∝ their weights (Fig. 3.4),
+      rb-hs-sir      drawing the history ∝ ŵ K_1, weighted by the mixture (Fig. 3.5),
+      rb-ss-hs-sir   the same on translation only, scale and rotation from K (Fig. 3.7).
+    The clips (seeds 1..MAKE) have a coloured object and an identical distractor,
+    so the proposal keeps drawing fake positions. Tracks every clip RUNS times
+    with every ALGO:N as tasks of the evaluation engine (--resume continues);
+    prints P(lost) (centre error > 50 px at 240-px width) at the last frame and
+    averaged, the mean error of runs not lost and the time per frame.
+    """
+    from vistrack.data_synth.contour import make_contour_clip
+
+    _check_entries(entries)
+    check_writable(json_path, "--json file")
+    _plots_dir(plots_dir, "p_lost_vs_frame.png")
+    clips = _clip_suite(clips_dir, "hs-sir-clips", make, frames, size, make_contour_clip, "contour-color", quiet,
+                        clutter="high", distractor=True, color=True)
+    if equal_time:
+        entries, times = equal_time_entries(clips[0], entries)
+        click.echo("equal time: " + ", ".join(f"{a}:{n}" for a, n in entries) + " ("
+                   + ", ".join(f"{k} {v:.1f} ms/frame" for k, v in times.items()) + ")")
+    cfg = HSConfig(clips=clips, entries=entries, runs=runs, seed=seed)
+    tasks = hs_tasks(cfg)
+    out = _run(tasks, out_dir, "hs-sir", scheduler=scheduler, workers=workers, in_process=in_process, resume=resume,
+               quiet=quiet)
+    click.echo(f"{len(clips)} clips x {runs} runs")
+    _report("hs-sir", {"results": hs_results(tasks, out)}, entries_config(cfg), json_path, plots_dir)
+

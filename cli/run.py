@@ -24,7 +24,7 @@ from .options import SEED, Box, Fraction, check_outputs, check_writable
 __all__ = ["run"]
 
 RUN_ALGOS = ("bootstrap", "ls-n-ips", "lls", "lis", "avpf", "condensation",
-             "pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt")
+             "pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt", "sir", "basic-sir", "hs-sir", "rb-hs-sir", "rb-ss-hs-sir")
 
 
 def model_options(name, *, layout, no_colour, template):
@@ -69,7 +69,10 @@ def lost_notice(most=5):
 @click.option("--layout", type=click.Choice(["jp", "single-row"]), default=None,
               help="Plate layout [default: the clip's, else jp].")
 @click.option("--algo", default=None, type=click.Choice(RUN_ALGOS),
-              help="Particle filter [default: lis; pf-eis-mt for landmarks].")
+              help="Particle filter [default: lis; pf-eis-mt for landmarks]. Contour and box also run sir and "
+                   "the history-sampling family of thesis §3.2 (basic-sir, hs-sir, rb-hs-sir, rb-ss-hs-sir), "
+                   "whose innovations come from the image only: the colour-blob proposal (the target's "
+                   "Gaussian colour learned from the first frame, drawn over a grid of cells).")
 @click.option("--search", type=click.Choice(["lms", "nn"]), default=None,
               help="LS-N-IPS on contour: the local search, LMS or the neural network trained on simulated "
                    "measurements (thesis §4.3.1; trained on first use, cached; see train-search) [default: lms].")

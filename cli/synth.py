@@ -58,14 +58,17 @@ def synth():
 @click.option("--distractor/--no-distractor", default=True, show_default=True,
               help="An identical object lying still in the scene (thesis §3.2.5).")
 @click.option("--shape", default="hand", show_default=True, type=click.Choice(["hand", "head"]))
+@click.option("--color", "color", is_flag=True,
+              help="Give the object (and the distractor) a distinctive saturated colour: the clips of the "
+                   "colour-blob proposal (thesis §3.2.5, `vistrack reproduce hs-sir`).")
 @click.option("--quiet", "-q", is_flag=True)
-def contour(out, frames, size, seed, clutter, distractor, shape, quiet):
+def contour(out, frames, size, seed, clutter, distractor, shape, color, quiet):
     """A textured object with a B-spline outline moving (AR(2) with sudden jumps, scale,
     rotation) over edge clutter, with lighting change, blur and noise."""
     out = _out_dir(out)
     with tqdm(total=frames, unit="frame", disable=quiet, desc="synth contour") as bar:
         _make(make_contour_clip, out, frames=frames, size=size, seed=seed, clutter=clutter, distractor=distractor,
-                          shape=shape, progress=bar.update)
+                          shape=shape, color=color, progress=bar.update)
     if not quiet:
         click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({frames} frames, {size[0]}x{size[1]})")
 

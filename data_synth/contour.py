@@ -12,7 +12,8 @@ over a static background full of edges:
 - global and sweeping illumination change, motion blur along the motion
   (exposure half the frame interval),
   Gaussian sensor noise;
-- optionally an identical distractor lying still in the scene (thesis §3.2.5).
+- optionally an identical distractor lying still in the scene (thesis §3.2.5);
+- optionally (``color``) a distinctive saturated colour for the object (and the distractor).
 
 Ground truth per frame: ``frame, visible, cx, cy, w, h, angle_deg, scale`` and
 the support points ``qx0..qx{n-1}, qy0..qy{n-1}``. ``cx, cy`` is the mean of the
@@ -55,8 +56,9 @@ def contour_template(kind, radius, n=24):
     return q - q.mean(axis=0)
 
 
-def _object_sprite(template, rng, pad=1.35):
-    """Texture and alpha mask of the object in template coordinates (origin at the sprite centre)."""
+def _object_sprite(template, rng, pad=1.35, color=False):
+    """Texture and alpha mask of the object in template coordinates (origin at the sprite centre);
+    ``color``: a saturated colour of random hue instead of a dark or bright grey-ish one."""
     spline = BSpline(len(template))
     outline = spline.dense(16) @ template
     half = int(np.ceil(np.max(np.abs(outline)) * pad))
@@ -65,6 +67,9 @@ def _object_sprite(template, rng, pad=1.35):
     # a colour well apart from the background's mid-grey: clearly darker or brighter
     level = rng.uniform(30, 60) if rng.random() < 0.5 else rng.uniform(190, 225)
     base = (level + rng.uniform(-25, 25, 3)).astype(np.float32)
+    if color:  # a distinctive colour (thesis §3.2.5: the colour-blob proposal's target)
+        hsv = np.array([[[rng.uniform(0, 180), rng.uniform(190, 240), rng.uniform(170, 220)]]], np.uint8)
+        base = cv2.cvtColor(hsv, cv2.COLOR_HSV2BGR)[0, 0].astype(np.float32)
     sprite = np.clip(base + 30 * (tex - 0.5), 0, 255).astype(np.float32)
     mask = np.zeros((side * 4, side * 4), np.uint8)
     pts = np.round((outline + half + 0.5) * 4 - 0.5).astype(np.int32)
@@ -90,12 +95,13 @@ def _paste(frame, sprite, mask, half, cx, cy, scale, angle_deg, velocity=(0.0, 0
 @atomic_clip
 def make_contour_clip(out, *, frames=300, size=(320, 240), seed=0, clutter="high", distractor=True,
                       shape="hand", n_support=24, fps=30.0, jump_prob=0.02, jump_size=(0.025, 0.045),
-                      progress=None):
+                      color=False, progress=None):
     """Render a contour clip into folder ``out`` (video.mp4, groundtruth.csv, meta.json).
 
     ``jump_prob``: the chance of a sudden jump per frame; ``jump_size``: its length range as
-    shares of the frame width. Returns the meta dictionary. ``progress(k)`` is called after
-    every frame when given.
+    shares of the frame width. ``color``: the object (and the distractor, identical) has a
+    distinctive saturated colour, the set-up of the colour-blob proposal of thesis §3.2.5.
+    Returns the meta dictionary. ``progress(k)`` is called after every frame when given.
     """
     if clutter not in CLUTTER:
         raise ValueError(f"clutter must be one of {', '.join(CLUTTER)}, got {clutter!r}")
@@ -111,7 +117,7 @@ def make_contour_clip(out, *, frames=300, size=(320, 240), seed=0, clutter="high
     template = contour_template(shape, radius, n_support)
     shapes, noise = CLUTTER[clutter]
     bg = clutter_background((w, h), rng, int(shapes * w * h / (320 * 240)))
-    sprite, mask, half = _object_sprite(template, rng)
+    sprite, mask, half = _object_sprite(template, rng, color=color)
     margin = 1.2 * radius
     pos = np.array([rng.uniform(0.3, 0.7) * w, rng.uniform(0.3, 0.7) * h])
     vel = np.zeros(2)
@@ -178,6 +184,7 @@ def make_contour_clip(out, *, frames=300, size=(320, 240), seed=0, clutter="high
         "seed": seed,
         "clutter": clutter,
         "shape": shape,
+        "color": bool(color),
         "template": {"support_points": np.round(template, 4).tolist(),
                      "note": "support points at scale 1, angle 0, centred; pose (cx, cy, scale, angle_deg)"},
         "distractor": distractor_pose,

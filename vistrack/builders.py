@@ -95,7 +95,7 @@ def model_from_box(name, frame, box, **params):
 
     ``box``: the appearance learned from the frame; ``contour``: the ellipse in the box, its
     edge polarity and (colour video; ``colour="auto"``) its colour term learned from the
-    frame; ``plate``: a plate in the box (layout: ``layout``
+    frame (both: the target's colour for the colour-blob proposal); ``plate``: a plate in the box (layout: ``layout``
     or the one nearest the box's aspect ratio), its appearance learned from the frame
     (``appearance=False``: the plate likelihood alone).
     """
@@ -143,6 +143,7 @@ def _learn_contour(model, frame, polarity, colour):
         colour = not is_grey(frame)
     if colour:
         model.learn_colour(frame)
+    model.learn_blob(frame)  # the colour-blob proposal of the history-sampling filters and sir
     return model
 
 
@@ -300,9 +301,11 @@ def _contour(clip, size, init, init_gt, template, params):
 
 # -- the built-in models -------------------------------------------------------------------
 _THESIS = ("lis", "bootstrap", "condensation", "ls-n-ips", "lls", "avpf")
-register(ModelSpec("box", _THESIS, "any object from a box: colour + template appearance learned from the first frame",
+#: SIR and the history-sampling family (§3.2) with the colour-blob proposal: models with an innovation split
+_HISTORY = ("sir", "basic-sir", "hs-sir", "rb-hs-sir", "rb-ss-hs-sir")
+register(ModelSpec("box", _THESIS + _HISTORY, "any object from a box: colour + template appearance learned from the first frame",
                    from_box=_box_from_box, bytes_per_particle=32_000))
-register(ModelSpec("contour", _THESIS + ("ls-n-ips-nn",), "B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
+register(ModelSpec("contour", _THESIS + _HISTORY + ("ls-n-ips-nn",), "B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
                    from_box=_contour_from_box, from_clip=_contour_from_clip, bytes_per_particle=48_000))
 register(ModelSpec("plate", ("lis", "bootstrap", "condensation", "lls", "avpf"),
                    "license-plate template (thesis 001 §1.3.2); acquires plates without a box",

@@ -5,13 +5,18 @@ See DESIGN.md's algorithm table; aliases follow the literature's names.
 
 from .avpf import AVPF
 from .base import ParticleFilter, filter_steps
+from .basic_sir import BasicSIR
 from .bootstrap import Bootstrap
+from .history import HistorySampling
+from .hs_sir import HSSIR
 from .lis import LIS, GaussMixtureProposal
 from .lls import LLS, Window
 from .ls_n_ips import LSNIPS, LSNIPSNN
 from .pf_doucet import PFDoucet
 from .pf_eis import PFEIS
 from .pf_eis_mt import PFEISMT
+from .rb_hs_sir import RBHSSIR
+from .rb_ss_hs_sir import RBSSHSSIR
 from .sir import SIR
 
 __all__ = [
@@ -19,6 +24,11 @@ __all__ = [
     "filter_steps",
     "Bootstrap",
     "SIR",
+    "HistorySampling",
+    "BasicSIR",
+    "HSSIR",
+    "RBHSSIR",
+    "RBSSHSSIR",
     "AVPF",
     "LLS",
     "Window",
@@ -39,6 +49,10 @@ ALGORITHMS = {
     "n-ips": Bootstrap,
     "pf-gordon": Bootstrap,
     "sir": SIR,
+    "basic-sir": BasicSIR,
+    "hs-sir": HSSIR,
+    "rb-hs-sir": RBHSSIR,
+    "rb-ss-hs-sir": RBSSHSSIR,
     "avpf": AVPF,
     "lls": LLS,
     "lis": LIS,

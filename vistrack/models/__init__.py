@@ -1,6 +1,6 @@
 """Tracking problems: dynamics + likelihood (+ local proposal), one module each."""
 
 from .bearings import Bearings
-from .toy import GaussMixtureToy
+from .toy import AR2Toy, GaussMixtureToy
 
-__all__ = ["Bearings", "GaussMixtureToy"]
+__all__ = ["AR2Toy", "Bearings", "GaussMixtureToy"]

@@ -33,6 +33,7 @@ from ..gaussian import diag_logpdf
 from ..proposals import MapProposal, Window
 from ..proposals.translation import TranslationMoves
 from .appearance import Appearance
+from .innovation import ARInnovation
 from .kernel import is_prior
 from .collapse import CollapseCheck
 from .protocol import VideoModelBase
@@ -40,7 +41,7 @@ from .protocol import VideoModelBase
 __all__ = ["Box"]
 
 
-class Box(CollapseCheck, TranslationMoves, VideoModelBase):
+class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
     """Box tracking model with appearance learned from the first frame.
 
     Parameters
@@ -84,6 +85,8 @@ class Box(CollapseCheck, TranslationMoves, VideoModelBase):
         self.init_pose = np.array([x + w / 2, y + h / 2, 0.0])
         self.prior_mean = np.concatenate([self.init_pose, self.init_pose])
         self.window = float(window)
+        self.blob_cell = 0.25 * side  # the colour-blob proposal's cell (frame px)
+        self.learn_blob(frame, _inner_ellipse(frame.shape[:2], (x, y, w, h)))
 
     # -- geometry ---------------------------------------------------------------------
     def boxes(self, states):
@@ -114,6 +117,14 @@ class Box(CollapseCheck, TranslationMoves, VideoModelBase):
         sd = np.broadcast_to(self.sigma, (len(old), 3)).copy()
         sd[:, :2] *= np.exp(old[:, 2:3])
         return sd
+
+    def innovation_std(self, old):
+        """Std ``(N, 3)`` of the current values given ``old`` (:class:`~vistrack.models.innovation.ARInnovation`)."""
+        return self._std(old)
+
+    def blob_image(self, obs):
+        """The colour-blob proposal looks at the observation's region at the working resolution."""
+        return obs.image, obs.x0, obs.y0, obs.f
 
     def sample_prior(self, n, rng):
         """``n`` states ``(n, 6)`` from ``p_0``: a Gaussian about the first box, zero velocity (previous = current)."""
@@ -214,3 +225,14 @@ class Box(CollapseCheck, TranslationMoves, VideoModelBase):
         ll_z = np.where(ok, self.loglik(obs, moved), -np.inf)
         keep = ll_z >= ll_x
         return np.where(keep[:, None], moved, states), np.where(keep, ll_z, ll_x)
+
+
+def _inner_ellipse(shape, box, share=0.8):
+    """Mask ``(H, W)`` of the ellipse inscribed in ``share`` of the box (its corners are background)."""
+    import cv2
+
+    x, y, w, h = box
+    mask = np.zeros(shape, np.uint8)
+    cv2.ellipse(mask, (int(round(x + w / 2)), int(round(y + h / 2))),
+                (max(1, int(round(share * w / 2))), max(1, int(round(share * h / 2)))), 0, 0, 360, 1, -1)
+    return mask

@@ -68,13 +68,14 @@ from ..proposals.translation import TranslationMoves
 from .collapse import CollapseCheck
 from .contour_colour import ContourColour
 from .contour_moves import ContourMoves
+from .innovation import ARInnovation
 from .protocol import VideoModelBase
 from .spline import BSpline, shape_matrices, edge_peaks, ellipse_template, pose_from, pose_params
 
 __all__ = ["BSpline", "Contour", "ellipse_template", "pose_from", "pose_params"]
 
 
-class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, VideoModelBase):
+class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARInnovation, VideoModelBase):
     """Contour tracking model with similarity pose and AR(2) dynamics.
 
     Parameters
@@ -269,6 +270,19 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, Vide
     def transition_logpdf(self, new, old):
         """``log K(new|old)``: Gaussian in ``z_t``; ``z_{t-1}`` of ``new`` is ``z_t`` of ``old``."""
         return diag_logpdf(new[:, :4], self.predict_mean(old)[:, :4], self.sigma)
+
+    def innovation_std(self, old):
+        """Std ``(N, 4)`` of ``z_t`` given ``old`` (:class:`~vistrack.models.innovation.ARInnovation`)."""
+        return np.broadcast_to(self.sigma, (len(old), 4))
+
+    @property
+    def blob_cell(self):
+        """The colour-blob proposal's cell: 1/24 of the frame width (10 px at 240 x 180, §3.2.5)."""
+        return self.frame_size[0] / 24.0
+
+    def blob_image(self, obs):
+        """The colour-blob proposal looks at the whole frame."""
+        return obs.frame, 0.0, 0.0, 1.0
 
     # -- likelihood -------------------------------------------------------------
     def _lines32(self, obs, z, support=False, lines=None):

@@ -8,7 +8,10 @@ figures start from ``p_0``). :class:`Transition` is ``K``;
 state. A filter hands the step's kernel to its proposal, and the model parts
 whose spread follows the kernel's (the LIS and LLS windows, §4.4.1: ``g``
 matched to the spread of ``K``) are built per kernel
-(``model.lis_proposal(kernel)``, ``model.lls_window(kernel)``).
+(``model.lis_proposal(kernel)``, ``model.lls_window(kernel)``). The history-sampling
+filters (§3.2) read ``K_1 = K_1b K_1a`` and the history through the kernel too, so their
+first step is their ordinary step with ``p_0``'s split
+(:class:`~vistrack.models.protocol.InnovationSplit`).
 """
 
 from __future__ import annotations
@@ -50,6 +53,23 @@ class Transition:
         """``states (N, d)`` with their local coordinates set to ``u (N, m)`` (§4.4.3)."""
         return self.model.with_local(states, u)
 
+    # -- the innovation/history split (§3.2); arrays broadcast over leading axes ----------
+    def subspace_logpdf(self, x1a, prev):
+        """``log K_1a(x1a | prev)``."""
+        return self.model.subspace_logpdf(x1a, prev)
+
+    def rest_logpdf(self, x1b, x1a, prev):
+        """``log K_1b(x1b | x1a, prev)``."""
+        return self.model.rest_logpdf(x1b, x1a, prev)
+
+    def sample_rest(self, x1a, prev, rng):
+        """A draw ``x1b ~ K_1b(. | x1a, prev)``."""
+        return self.model.sample_rest(x1a, prev, rng)
+
+    def join(self, x1, prev):
+        """The new states ``(x1, f(prev))`` of innovations ``x1 (N, n1)`` and histories ``prev (N, d)``."""
+        return np.concatenate([x1, self.model.history(prev)], axis=-1)
+
 
 class PriorKernel(Transition):
     """``p_0`` in the place of ``K``: the kernel of the first step.
@@ -77,6 +97,22 @@ class PriorKernel(Transition):
     def with_local(self, states, u):
         """``model.with_local_prior``: ``states (N, d)`` with local coordinates ``u (N, m)`` on a prior draw."""
         return self.model.with_local_prior(states, u)
+
+    @staticmethod
+    def _over(value, prev):
+        return np.broadcast_to(value, np.broadcast_shapes(np.shape(value), np.shape(prev)[:-1]))
+
+    def subspace_logpdf(self, x1a, prev):
+        return self._over(self.model.prior_subspace_logpdf(x1a), prev)
+
+    def rest_logpdf(self, x1b, x1a, prev):
+        return self._over(self.model.prior_rest_logpdf(x1b, x1a), prev)
+
+    def sample_rest(self, x1a, prev, rng):
+        return self.model.sample_prior_rest(x1a, rng)
+
+    def join(self, x1, prev):
+        return self.model.join_prior(x1)
 
 
 def is_prior(kernel):

@@ -15,6 +15,8 @@ local coordinates; each method's docstring gives its arguments and results.
   objects (the plate model's entering cars, §4.5.3).
 * :class:`LaplaceModel`, :class:`EISModel`: PF-Doucet, PF-EIS, PF-EIS-MT (seed 000 §2–3).
 * :class:`SIRModel`: plain SIR's proposal (§3.1).
+* :class:`InnovationSplit`: the history-sampling family (§3.2): innovation, history and the
+  1a/1b subspace split, with the image-only proposal of the innovation.
 * :class:`VideoModel`: the frame loop, ``run``, ``eval`` and ``vistrack.Tracker``. Subclass
   :class:`VideoModelBase` for the defaults (the maps are the observation, no adaptation,
   the weighted mean, always visible, lost where ``visible`` says no; ``check_lost``
@@ -26,7 +28,7 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 __all__ = ["StateSpaceModel", "PredictMean", "LocalSearch", "LearnedSearch", "LocalMoves", "LLSModel", "GridLikelihood",
-           "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
+           "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "InnovationSplit", "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
 
 
 @runtime_checkable
@@ -206,6 +208,30 @@ class SIRModel(Protocol):
         """The proposal for a step with ``kernel``: an object with ``sample(prev (N, d), obs,
         rng) -> (N, d)`` and ``logpdf(new (N, d), prev (N, d), obs) -> (N,)``, positive wherever
         ``K`` is."""
+
+
+@runtime_checkable
+class InnovationSplit(Protocol):
+    innovation_dim: int
+    subspace_dim: int
+
+    def history(self, prev): ...
+
+    def subspace_logpdf(self, x1a, prev): ...
+
+    def rest_logpdf(self, x1b, x1a, prev): ...
+
+    def sample_rest(self, x1a, prev, rng): ...
+
+    def prior_subspace_logpdf(self, x1a): ...
+
+    def prior_rest_logpdf(self, x1b, x1a): ...
+
+    def sample_prior_rest(self, x1a, rng): ...
+
+    def join_prior(self, x1): ...
+
+    def innovation_proposal(self, kernel=None): ...
 
 
 @runtime_checkable

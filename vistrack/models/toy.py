@@ -1,4 +1,5 @@
-"""A 1-D Gaussian random walk with a Gauss-mixture likelihood (thesis 001, Figs. 4.1, 4.9).
+"""A 1-D Gaussian random walk with a Gauss-mixture likelihood (thesis 001, Figs. 4.1, 4.9), and
+its AR(2) form for the history-sampling filters (§3.2).
 
 The known-answer problem for proper weighting: the prediction ``p`` is Gaussian
 and the likelihood ``f`` a Gauss mixture, so the posterior ``f p / I(f p)`` is a
@@ -9,10 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..gaussian import diag_logpdf, gaussian_product
 from ..proposals import GaussMixtureProposal, Window
-from ..gaussian import gaussian_product
+from .innovation import ARInnovation
 
-__all__ = ["GaussMixtureToy"]
+__all__ = ["GaussMixtureToy", "AR2Toy", "GaussProposal"]
 
 
 class GaussMixtureToy:
@@ -104,3 +106,83 @@ class GaussMixtureToy:
         lw -= np.max(lw)
         lw -= np.log(np.sum(np.exp(lw)))
         return lw, mu[:, 0], cov[:, 0, 0]
+
+
+class GaussProposal:
+    """An image-only proposal ``N(mean, std²)`` on ``X_{t,1a}`` (ignores ``obs``)."""
+
+    def __init__(self, mean, std):
+        self.mean, self.std = np.atleast_1d(np.asarray(mean, float)), np.atleast_1d(np.asarray(std, float))
+
+    def sample(self, n, obs, rng):
+        return self.mean + self.std * rng.standard_normal((n, len(self.mean)))
+
+    def logpdf(self, x, obs):
+        return diag_logpdf(x, self.mean, self.std)
+
+
+class AR2Toy(ARInnovation, GaussMixtureToy):
+    """A 1-D AR(2) toy with a closed-form posterior for the history-sampling filters (§3.2).
+
+    State ``(u_t, u_{t-1})``, or with ``rest=True`` ``(u_t, v_t, u_{t-1}, v_{t-1})``:
+    ``u_t = u_{t-1} + a (u_{t-1} - u_{t-2}) + N(0, q)``; ``v_t`` (the ``1b`` part, which ``r``
+    does not see) the same with noise ``q_v``. ``r(y | X) = Σ_i p_i N(u_t; μ_i, s_i²)`` as
+    :class:`GaussMixtureToy`'s; ``p_0``: ``u ~ N(prior_mean, prior_var)`` (``v ~ N(0, 1)``) at
+    rest; the image-only proposal :class:`GaussProposal` on ``u``.
+    """
+
+    subspace_dim = 1
+
+    def __init__(self, a=0.5, q=0.09, q_v=0.25, rest=False, proposal=(0.5, 1.5), **kwargs):
+        super().__init__(q=q, **kwargs)
+        self.k = 2 if rest else 1
+        self.dim = 2 * self.k
+        self.damping = np.full(self.k, float(a))
+        self.noise_std = np.sqrt([q, q_v][:self.k])
+        self.init_pose = np.array([self.prior_mean, 0.0][:self.k])
+        self.prior_std = np.array([np.sqrt(self.prior_var), 1.0][:self.k])
+        self.proposal = GaussProposal(*proposal)
+
+    def innovation_std(self, old):
+        return np.broadcast_to(self.noise_std, (len(old), self.k))
+
+    def predict_mean(self, states):
+        z1, z2 = states[:, :self.k], states[:, self.k:]
+        return np.concatenate([z1 + self.damping * (z1 - z2), z1], axis=1)
+
+    def predict(self, states, rng):
+        out = self.predict_mean(states)
+        out[:, :self.k] += self.noise_std * rng.standard_normal((len(states), self.k))
+        return out
+
+    def transition_logpdf(self, new, old):
+        return diag_logpdf(new[:, :self.k], self.predict_mean(old)[:, :self.k], self.noise_std)
+
+    def sample_prior(self, n, rng):
+        return self.join_prior(self.init_pose + self.prior_std * rng.standard_normal((n, self.k)))
+
+    def prior_logpdf(self, states):
+        return diag_logpdf(states[:, :self.k], self.init_pose, self.prior_std)
+
+    def innovation_proposal(self, kernel=None):
+        return self.proposal
+
+    def exact_moments(self, prev=None, weights=None):
+        """``∫ h(X_t) r K_1(. | X_{t-1}) p(dX_{t-1})`` for ``p = Σ_l weights_l δ(prev_l)`` (``prev``
+        ``None``: ``∫ h r p_0``, the first step) and ``h = 1, u_t, u_t², u_{t-1}, u_t u_{t-1}`` and (``rest``)
+        ``v_t, v_t u_{t-1}``; a dict."""
+        if prev is None:
+            m, var, weights = self.init_pose[None], self.prior_var, np.ones(1)
+        else:
+            m, var = self.predict_mean(np.asarray(prev, float))[:, :self.k], self.q  # (C, k)
+        mu, cov, log_c = gaussian_product(self.mu[:, None, None], self.var[:, None, None, None],
+                                          m[None, :, :1], np.full((1, len(m), 1, 1), var))
+        c = np.exp(self.log_p[:, None] + log_c) * np.asarray(weights)[None]  # (I, C)
+        mean_u, mean_u2 = mu[..., 0], mu[..., 0] ** 2 + cov[..., 0, 0]
+        u1 = mean_u if prev is None else np.asarray(prev)[None, :, 0]  # p_0 starts at rest
+        out = {"1": c.sum(), "u": np.sum(c * mean_u), "u2": np.sum(c * mean_u2), "hist": np.sum(c * u1),
+               "u_hist": np.sum(c * (mean_u2 if prev is None else mean_u * u1))}
+        if self.k == 2:
+            out["v"] = np.sum(c * m[:, 1])
+            out["v_hist"] = np.sum(c * m[:, 1] * u1)
+        return out

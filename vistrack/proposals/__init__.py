@@ -1,7 +1,8 @@
 """Local proposals and windows shared by models and filters (models never import filters)."""
 
+from .blob import BlobProposal, GaussianColour, SubspaceProposal
 from .grid import MapProposal, categorical_rows
 from .mixture import GaussMixtureProposal
 from .window import Window
 
-__all__ = ["MapProposal", "GaussMixtureProposal", "Window", "categorical_rows"]
+__all__ = ["BlobProposal", "GaussianColour", "SubspaceProposal", "MapProposal", "GaussMixtureProposal", "Window", "categorical_rows"]

@@ -21,6 +21,10 @@ TABLES = {
                 ("P(lost) mean", "p_lost_mean", ">12.3f"), ("mean err px", "mean_error", ">11.2f"),
                 ("ms/frame", "ms_per_frame", ">9.2f"), ("frames/s", "frames_per_s", ">9.0f"),
                 ("mean ESS", "mean_ess", ">9.1f")],
+    "hs-sir": [("algo", "algo", "<13"), ("N", "particles", ">6d"), ("P(lost) final", "p_lost_final", ">13.3f"),
+               ("P(lost) mean", "p_lost_mean", ">12.3f"), ("mean err px", "mean_error", ">11.2f"),
+               ("ms/frame", "ms_per_frame", ">9.2f"), ("frames/s", "frames_per_s", ">9.0f"),
+               ("mean ESS", "mean_ess", ">9.1f")],
     "landmarks": [("algo", "algo", "<10"), ("N", "particles", ">4d"), ("K", "k", ">2d"),
                   ("mean MSE", "mean_mse", ">9.4f"), ("final MSE", "final_mse", ">10.4f"),
                   ("median run", "median_run_mse", ">10.4f"), ("ms/run", "ms_per_run", ">8.1f")],
@@ -63,12 +67,13 @@ def write_plots(experiment, out, plots_dir, title=""):
         return [plots.plot_error_vs_time(out["curves"], path("mse_vs_time.png"), ylabel="MSE of the configuration",
                                          title=f"{title} (Fig. 2)")]
     lab = {f"{r['algo']}, N={r['particles']}": r for r in results}
-    if experiment == "contour":
+    if experiment in ("contour", "hs-sir"):
+        what = "Contour" if experiment == "contour" else "History sampling"
         return [plots.plot_per_frame({k: r["p_lost_per_frame"] for k, r in lab.items()}, path("p_lost_vs_frame.png"),
-                                     ylabel="P(lost)", title="Contour: probability of losing the object (Fig. 3.10)"),
+                                     ylabel="P(lost)", title=f"{what}: probability of losing the object (Fig. 3.10)"),
                 plots.plot_per_frame({k: r["error_per_frame"] for k, r in lab.items()}, path("error_vs_frame.png"),
                                      ylabel="mean centre error (px), runs not lost",
-                                     title="Contour: tracking error (Fig. 3.9)")]
+                                     title=f"{what}: tracking error (Fig. 3.9)")]
     curves = {k: [float("nan") if v is None else v for v in r["p_lost_per_frame"]]
               for k, r in lab.items() if r["p_lost_per_frame"] is not None}
     return [plots.plot_per_frame(curves, path("p_lost_vs_frame.png"), ylabel="P(lost), frames with a plate",
