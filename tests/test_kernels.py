@@ -160,6 +160,8 @@ def test_appearance_kernels_equal_the_numpy_path():
     boxes[0, :2] = (3.0, 2.0)  # reaching over the region's border
     a, b = both(lambda: app.ncc(obs, boxes))
     np.testing.assert_allclose(b, a, rtol=1e-12)
+    a, b = both(lambda: app.loglik(obs, boxes))
+    np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12)
 
 
 def test_warm_up_leaves_the_track_as_it_was(contour_clip):
@@ -172,5 +174,3 @@ def test_warm_up_leaves_the_track_as_it_was(contour_clip):
         stepper = FrameStepper(filt, 30, np.random.default_rng(0))
         b = [stepper.step(i, f).particles.states.copy() for (i, f), _ in zip(contour_clip.source, range(5))]
     np.testing.assert_array_equal(np.array(b), np.array(a))
-    a, b = both(lambda: app.loglik(obs, boxes))
-    np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12)
