@@ -38,14 +38,9 @@ Local search ``LS_λ`` (§4.3, eq. 4.1; LMS of §4.3.1)
     ``U = diag(B, B)`` the spline norm, search length ``l = l0 · (size/60) · scale``
     (``l0 = 16``), is :meth:`Contour.lms_step`.
 Colour term (real footage; beyond the seeds; :meth:`Contour.learn_colour`)
-    On colour video the likelihood gains the colour term of the box model
-    (:class:`~vistrack.models.appearance.TargetColour`), ``log r = log r_edges + log r_c``:
-    the target histogram ``q`` is learned from the pixels inside the initial curve against a
-    band around it; per pose, the colour labels at points inside the curve (two shrunk
-    copies of the measurement points and the centre) and in a band outside it (two
-    copies pushed out along the normals, 0.1 and 0.25 of the size) give ``h_in`` and
-    ``h_ring``. ``colour=None`` (the default of the class, and of the thesis experiments):
-    edges only.
+    On colour video ``log r = log r_edges + log r_c``, the box model's colour term on points
+    inside the curve against a band outside it (:mod:`~vistrack.models.contour_colour`);
+    ``colour=None`` (the class default, and the thesis experiments): edges only.
 Local moves for LLS and LIS act on translation only (§4.4.3): the edge
     features along the normals already sampled give, for a translation ``δ``,
     the shifted edge distances ``ν_j - n_i · δ``, so ``r`` on a whole grid of
@@ -274,15 +269,6 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
     def innovation_std(self, old):
         """Std ``(N, 4)`` of ``z_t`` given ``old`` (:class:`~vistrack.models.innovation.ARInnovation`)."""
         return np.broadcast_to(self.sigma, (len(old), 4))
-
-    @property
-    def blob_cell(self):
-        """The colour-blob proposal's cell: 1/24 of the frame width (10 px at 240 x 180, §3.2.5)."""
-        return self.frame_size[0] / 24.0
-
-    def blob_image(self, obs):
-        """The colour-blob proposal looks at the whole frame."""
-        return obs.frame, 0.0, 0.0, 1.0
 
     # -- likelihood -------------------------------------------------------------
     def _lines32(self, obs, z, support=False, lines=None):

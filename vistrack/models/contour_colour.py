@@ -13,11 +13,20 @@ __all__ = ["ContourColour"]
 
 
 class ContourColour:
-    """Mixin of :class:`~vistrack.models.contour.Contour`: :meth:`learn_colour` and
-    :meth:`colour_loglik`."""
+    """Mixin of :class:`~vistrack.models.contour.Contour`: :meth:`learn_colour`,
+    :meth:`colour_loglik` and the colour-blob proposal's view of the frame (§3.2.5)."""
 
     #: the colour term (:meth:`learn_colour`); ``None``: edges only
     colour = None
+
+    @property
+    def blob_cell(self):
+        """The colour-blob proposal's cell: 1/24 of the frame width (10 px at 240 x 180, §3.2.5)."""
+        return self.frame_size[0] / 24.0
+
+    def blob_image(self, obs):
+        """The colour-blob proposal looks at the whole frame."""
+        return obs.frame, 0.0, 0.0, 1.0
 
     def learn_colour(self, frame, *, lambda_colour=15.0, kappa=1.0, band=(0.1, 0.25), grey=None):
         """Turn on the colour term, learned from ``frame`` at the initial pose (module docstring).
