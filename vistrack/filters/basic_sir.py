@@ -21,6 +21,7 @@ class BasicSIR(HistorySampling):
     name = "basic-sir"
 
     def sample(self, hist, obs, rng, kernel):
+        """Draw the new states ``(N, d)`` and their log-weight increments ``(N,)`` (Fig. 3.2)."""
         x1a, log_pi = self._proposed(len(hist.member), obs, rng)
         prev = hist.states[hist.member]
         x1 = x1a if self.k == self.a else np.concatenate([x1a, kernel.sample_rest(x1a, prev, rng)], axis=1)

@@ -37,6 +37,7 @@ class ARInnovation:
 
     @property
     def innovation_dim(self):
+        """Components of the innovation ``X_{t,1}``: the current pose (half the state)."""
         return self.dim // 2
 
     def history(self, prev):
@@ -51,29 +52,35 @@ class ARInnovation:
         return self.predict_mean(flat)[:, :self.dim // 2].reshape(shape), self.innovation_std(flat).reshape(shape)
 
     def subspace_logpdf(self, x1a, prev):
+        """``log K_1a(x1a | prev)``, broadcast over leading axes (``(N, C)`` pairs)."""
         m, s = self._moments(prev)
         a = self.subspace_dim
         return diag_logpdf(x1a, m[..., :a], s[..., :a])
 
     def rest_logpdf(self, x1b, x1a, prev):
+        """``log K_1b(x1b | x1a, prev)``, broadcast over leading axes."""
         m, s = self._moments(prev)
         a = self.subspace_dim
         return diag_logpdf(x1b, m[..., a:], s[..., a:])
 
     def sample_rest(self, x1a, prev, rng):
+        """A draw of ``X_{t,1b} ~ K_1b(. | x1a, prev)`` (Gaussian), shape ``(..., k - a)``."""
         m, s = self._moments(prev)
         a = self.subspace_dim
         return m[..., a:] + s[..., a:] * rng.standard_normal(m[..., a:].shape)
 
     def prior_subspace_logpdf(self, x1a):
+        """``log p_0`` of the subspace part ``x1a (..., a)``."""
         a = self.subspace_dim
         return diag_logpdf(x1a, self.init_pose[:a], self.prior_std[:a])
 
     def prior_rest_logpdf(self, x1b, x1a):
+        """``log p_0`` of the rest ``x1b`` (independent of ``x1a`` here)."""
         a = self.subspace_dim
         return diag_logpdf(x1b, self.init_pose[a:], self.prior_std[a:])
 
     def sample_prior_rest(self, x1a, rng):
+        """A draw of the rest ``X_{1,1b}`` from ``p_0``, shape ``(..., k - a)``."""
         a = self.subspace_dim
         rest = self.init_pose[a:]
         return rest + self.prior_std[a:] * rng.standard_normal(np.shape(x1a)[:-1] + rest.shape)

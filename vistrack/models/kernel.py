@@ -103,15 +103,19 @@ class PriorKernel(Transition):
         return np.broadcast_to(value, np.broadcast_shapes(np.shape(value), np.shape(prev)[:-1]))
 
     def subspace_logpdf(self, x1a, prev):
+        """``log p_0`` of ``x1a`` whatever ``prev`` (broadcast to the pairs)."""
         return self._over(self.model.prior_subspace_logpdf(x1a), prev)
 
     def rest_logpdf(self, x1b, x1a, prev):
+        """``log p_0`` of ``x1b`` given ``x1a`` whatever ``prev`` (broadcast to the pairs)."""
         return self._over(self.model.prior_rest_logpdf(x1b, x1a), prev)
 
     def sample_rest(self, x1a, prev, rng):
+        """A draw of ``x1b`` from ``p_0`` given ``x1a``."""
         return self.model.sample_prior_rest(x1a, rng)
 
     def join(self, x1, prev):
+        """The state ``(N, d)`` of innovation ``x1`` with the history ``p_0`` gives it."""
         return self.model.join_prior(x1)
 
 

@@ -33,6 +33,7 @@ class PlateObservation:
 
     @property
     def shape(self):
+        """``(H, W)`` of the frame observed."""
         return self.maps.shape
 
     def _covers(self, frame, boxes, grow):

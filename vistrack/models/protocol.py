@@ -212,26 +212,36 @@ class SIRModel(Protocol):
 
 @runtime_checkable
 class InnovationSplit(Protocol):
+    """A state split into innovation and history for the history-sampling family (thesis 001 §3.2, Assumption 3.2.1); see the module docstring."""
     innovation_dim: int
     subspace_dim: int
 
-    def history(self, prev): ...
+    def history(self, prev):
+        """The history part ``X_{t,2} = f(X_{t-1})`` of new states, from ``prev (..., d)``."""
 
-    def subspace_logpdf(self, x1a, prev): ...
+    def subspace_logpdf(self, x1a, prev):
+        """``log K_1a(x1a | prev)`` broadcast over leading axes: ``x1a (N, 1, a)`` against ``prev (1, C, d)`` gives ``(N, C)``."""
 
-    def rest_logpdf(self, x1b, x1a, prev): ...
+    def rest_logpdf(self, x1b, x1a, prev):
+        """``log K_1b(x1b | x1a, prev)``, broadcast as :meth:`subspace_logpdf`."""
 
-    def sample_rest(self, x1a, prev, rng): ...
+    def sample_rest(self, x1a, prev, rng):
+        """A draw of ``X_{t,1b} ~ K_1b(. | x1a, prev)``."""
 
-    def prior_subspace_logpdf(self, x1a): ...
+    def prior_subspace_logpdf(self, x1a):
+        """``log p_0`` of ``x1a``, for the first step."""
 
-    def prior_rest_logpdf(self, x1b, x1a): ...
+    def prior_rest_logpdf(self, x1b, x1a):
+        """``log p_0(x1b | x1a)``, for the first step."""
 
-    def sample_prior_rest(self, x1a, rng): ...
+    def sample_prior_rest(self, x1a, rng):
+        """A draw of ``X_{1,1b}`` from ``p_0`` given ``x1a``."""
 
-    def join_prior(self, x1): ...
+    def join_prior(self, x1):
+        """The state ``(N, d)`` of innovation ``x1 (N, k)`` with the history ``p_0`` gives it."""
 
-    def innovation_proposal(self, kernel=None): ...
+    def innovation_proposal(self, kernel=None):
+        """``π(X_{t,1a} | Y_t)``: an object with ``sample(n, obs, rng) -> (n, a)`` and ``logpdf(x1a, obs) -> (n,)`` (§3.2.5's colour blobs)."""
 
 
 @runtime_checkable

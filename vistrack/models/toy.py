@@ -115,9 +115,11 @@ class GaussProposal:
         self.mean, self.std = np.atleast_1d(np.asarray(mean, float)), np.atleast_1d(np.asarray(std, float))
 
     def sample(self, n, obs, rng):
+        """``n`` draws ``(n, 1)`` of the fixed Gaussian (the observation is ignored)."""
         return self.mean + self.std * rng.standard_normal((n, len(self.mean)))
 
     def logpdf(self, x, obs):
+        """Its log-density at ``x (n, 1)``, ``(n,)``."""
         return diag_logpdf(x, self.mean, self.std)
 
 
@@ -144,27 +146,34 @@ class AR2Toy(ARInnovation, GaussMixtureToy):
         self.proposal = GaussProposal(*proposal)
 
     def innovation_std(self, old):
+        """Std ``(N, 1)`` of the innovation given ``old``."""
         return np.broadcast_to(self.noise_std, (len(old), self.k))
 
     def predict_mean(self, states):
+        """The mean of ``K(.|states)``, ``(N, 2)``: AR(2) on the current value, the history its old value."""
         z1, z2 = states[:, :self.k], states[:, self.k:]
         return np.concatenate([z1 + self.damping * (z1 - z2), z1], axis=1)
 
     def predict(self, states, rng):
+        """A draw ``(N, 2)`` from ``K(.|states)``."""
         out = self.predict_mean(states)
         out[:, :self.k] += self.noise_std * rng.standard_normal((len(states), self.k))
         return out
 
     def transition_logpdf(self, new, old):
+        """``log K(new|old)`` per particle, ``(N,)``."""
         return diag_logpdf(new[:, :self.k], self.predict_mean(old)[:, :self.k], self.noise_std)
 
     def sample_prior(self, n, rng):
+        """``n`` draws ``(n, 2)`` from ``p_0``."""
         return self.join_prior(self.init_pose + self.prior_std * rng.standard_normal((n, self.k)))
 
     def prior_logpdf(self, states):
+        """``log p_0`` per state, ``(N,)``."""
         return diag_logpdf(states[:, :self.k], self.init_pose, self.prior_std)
 
     def innovation_proposal(self, kernel=None):
+        """The innovation's image-only proposal: a fixed Gaussian (:class:`GaussProposal`)."""
         return self.proposal
 
     def exact_moments(self, prev=None, weights=None):

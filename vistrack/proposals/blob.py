@@ -161,10 +161,12 @@ class SubspaceProposal:
         self.a, self.k = int(subspace_dim), int(innovation_dim)
 
     def sample(self, prev, obs, rng):
+        """``n`` draws ``(n, a)`` of ``X_{t,1a}`` from the frame's colour-blob map."""
         x1a = self.image.sample(len(prev), obs, rng)
         x1b = self.kernel.sample_rest(x1a, prev, rng)
         return self.kernel.join(np.concatenate([x1a, x1b], axis=1), prev)
 
     def logpdf(self, new, prev, obs):
+        """The proposal's exact log-density ``(n,)`` at ``x1a (n, a)``."""
         x1a = new[:, :self.a]
         return self.image.logpdf(x1a, obs) + self.kernel.rest_logpdf(new[:, self.a:self.k], x1a, prev)

@@ -28,6 +28,7 @@ DEFAULT_ENTRIES = [("basic-sir", 3000), ("rb-ss-hs-sir", 400)]
 
 @dataclass
 class HSConfig:
+    """The §3.2.5 experiment: colour contour clips, ``(algo, N)`` entries, runs per clip and the root seed."""
     clips: list
     entries: list = field(default_factory=lambda: list(DEFAULT_ENTRIES))
     runs: int = 10
