@@ -22,6 +22,16 @@ from .options import SEED, Fraction, IntList, StrList, check_writable
 __all__ = ["reproduce"]
 
 
+def _stacked(opts):
+    """A decorator applying the click options ``opts`` in their order (as ``--help`` lists them)."""
+    def deco(f):
+        for opt in reversed(opts):
+            f = opt(f)
+        return f
+
+    return deco
+
+
 def engine_options(default_out):
     """The evaluation engine's options, shared by every ``reproduce`` command."""
     opts = [
@@ -33,13 +43,7 @@ def engine_options(default_out):
                      help="Folder for the per-task result files (OUT/tasks)."),
         click.option("--resume", is_flag=True, help="Keep finished tasks in --out and run only the rest."),
     ]
-
-    def deco(f):
-        for opt in reversed(opts):
-            f = opt(f)
-        return f
-
-    return deco
+    return _stacked(opts)
 
 
 def suite_options(clips_help, size, algos, algos_help, runs, frames=300):
@@ -56,13 +60,17 @@ def suite_options(clips_help, size, algos, algos_help, runs, frames=300):
         click.option("--runs", default=runs, show_default=True, type=click.IntRange(min=1), help="Runs per clip."),
         click.option("--seed", default=0, show_default=True, type=SEED),
     ]
+    return _stacked(opts)
 
-    def deco(f):
-        for opt in reversed(opts):
-            f = opt(f)
-        return f
 
-    return deco
+def output_options(plots_help):
+    """``--json``, ``--plots`` (with ``plots_help``) and ``--quiet``, shared by the ``reproduce`` commands."""
+    opts = [
+        click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here."),
+        click.option("--plots", "plots_dir", type=click.Path(file_okay=False), help=plots_help),
+        click.option("--quiet", "-q", is_flag=True, help="No progress bar."),
+    ]
+    return _stacked(opts)
 
 
 @click.group()
@@ -200,10 +208,7 @@ def _run(tasks, out_dir, desc, runner=None, **engine):
                "made there with --make if missing.", "320x240", "ls-n-ips:30,bootstrap:2000",
                "ALGO:N pairs (bootstrap, ls-n-ips, lls, lis, avpf).", 10)
 @engine_options("contour-results")
-@click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
-@click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
-              help="Write P(lost) vs frame and error vs frame PNGs here.")
-@click.option("--quiet", "-q", is_flag=True)
+@output_options("Write P(lost) vs frame and error vs frame PNGs here.")
 def contour(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler, in_process, out_dir, resume,
             json_path, plots_dir, quiet):
     """Contour tracking in clutter with a distractor (thesis §4.3.2, Table 4.1).
@@ -243,9 +248,7 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
 @click.option("--mt-dims", default=None, type=click.IntRange(min=0),
               help="PF-EIS-MT: trailing entries of c that are mode-tracked [default: 10 for K=8, 4 for K=5].")
 @engine_options("landmarks-results")
-@click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
-@click.option("--plots", "plots_dir", type=click.Path(file_okay=False), help="Write mse_vs_time.png here.")
-@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+@output_options("Write mse_vs_time.png here.")
 def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, scheduler, in_process, out_dir, resume,
               json_path, plots_dir, quiet):
     """Landmark shape tracking (seed 000, §4, Fig. 2).
@@ -279,9 +282,7 @@ def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, schedule
 @suite_options("Folder of plate clip folders; made there with --make if missing [default: plate-clips].",
                "640x480", "lis:100,bootstrap:750", "ALGO:N pairs (lis, bootstrap, lls, avpf).", 20)
 @engine_options("plate-results")
-@click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
-@click.option("--plots", "plots_dir", type=click.Path(file_okay=False), help="Write P(lost) vs frame PNG here.")
-@click.option("--quiet", "-q", is_flag=True)
+@output_options("Write P(lost) vs frame PNG here.")
 def plate(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler, in_process, out_dir, resume,
           json_path, plots_dir, quiet):
     """License-plate tracking on synthetic road clips (thesis §4.5.3, Figs. 4.15-4.16).
@@ -317,10 +318,7 @@ def plate(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler
               help="Set every N after the first so that its time per frame matches the first entry's (timed on "
                    "the first clip), as Table 3.1's counts were chosen.")
 @engine_options("hs-sir-results")
-@click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
-@click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
-              help="Write P(lost) vs frame (Fig. 3.10) and error vs frame (Fig. 3.9) PNGs here.")
-@click.option("--quiet", "-q", is_flag=True)
+@output_options("Write P(lost) vs frame (Fig. 3.10) and error vs frame (Fig. 3.9) PNGs here.")
 def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, workers, scheduler, in_process, out_dir,
            resume, json_path, plots_dir, quiet):
     """SIR with history sampling on colour contour clips (thesis §3.2.5, Table 3.1, Figs. 3.9-3.10).
