@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..evaluation import entry_tasks, load_task_results, pooled_summary
+from .contour import ContourConfig, contour_results, contour_tasks
 
 __all__ = ["HSConfig", "DEFAULT_ENTRIES", "hs_tasks", "hs_results", "equal_time_entries"]
 
@@ -27,22 +27,15 @@ DEFAULT_ENTRIES = [("basic-sir", 3000), ("rb-ss-hs-sir", 400)]
 
 
 @dataclass
-class HSConfig:
-    """The §3.2.5 experiment: colour contour clips, ``(algo, N)`` entries, runs per clip and the root seed."""
-    clips: list
+class HSConfig(ContourConfig):
+    """The §3.2.5 experiment: colour contour clips, ``(algo, N)`` entries, runs per clip and the
+    root seed (the contour experiment's tasks and summaries)."""
+
     entries: list = field(default_factory=lambda: list(DEFAULT_ENTRIES))
-    runs: int = 10
-    seed: int = 0
 
 
-def hs_tasks(cfg):
-    """The experiment's tasks (see :func:`vistrack.evaluation.task_list`)."""
-    return entry_tasks(cfg, "contour")
-
-
-def hs_results(tasks, out_dir):
-    """Pooled summaries per (algo, N) over clips and runs, in the order of the entries."""
-    return pooled_summary(load_task_results(tasks, out_dir))
+#: the tasks and pooled summaries are the contour experiment's
+hs_tasks, hs_results = contour_tasks, contour_results
 
 
 def _ms_per_frame(frames, model, algo, n, repeats=2):

@@ -32,30 +32,19 @@ from ..metrics import plate_frame_measures
 from ..filters import make_filter
 from ..particles import DegenerateWeightsWarning
 from ..tracking import track
+from .contour import ContourConfig
 
 __all__ = ["PlateConfig", "plate_tasks", "run_plate_task", "plate_results"]
 
 
 @dataclass
-class PlateConfig:
-    """The plate experiment (§4.5.3): ``runs`` per clip and ``(algo, N)`` entry, root ``seed``.
+class PlateConfig(ContourConfig):
+    """The plate experiment (§4.5.3): ``runs`` per clip and ``(algo, N)`` entry, root ``seed``
+    (:class:`~vistrack.reproduce.contour.ContourConfig`), and ``acquire_within``: a plate counts
+    as acquired in time when the tracker is on it within this many frames."""
 
-    Attributes
-    ----------
-    clips : list
-        Clip folders.
-    entries : list of (str, int)
-        ``(algorithm, N)`` pairs.
-    runs : int
-    seed : int
-    acquire_within : int
-        A plate counts as acquired in time when the tracker is on it within this many frames.
-    """
-
-    clips: list
     entries: list = field(default_factory=lambda: [("lis", 100), ("bootstrap", 750)])
     runs: int = 20
-    seed: int = 0
     acquire_within: int = 10
 
 
