@@ -40,17 +40,10 @@ from vistrack.session import track_video
 from vistrack.tracking import FrameStepper, warm_up
 from vistrack.video import groundtruth_origin, open_video, prefetch, read_rects
 
+from bench_real import opencv_tracker  # noqa: E402 (run from benchmarks/)
+
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 REAL = ["girl_otb", "hand_vot2013", "car4_otb_first100", "plate_in_polo_dashcam"]
-
-
-def opencv_tracker(name):
-    """``cv2.Tracker<name>`` from this OpenCV build, or ``None``."""
-    for ns in (cv2, getattr(cv2, "legacy", None)):
-        if ns is not None and hasattr(ns, f"Tracker{name}_create"):
-            return getattr(ns, f"Tracker{name}_create")()
-    cls = getattr(cv2, f"Tracker{name}", None)
-    return cls.create() if cls is not None and hasattr(cls, "create") else None
 
 
 def real_clip(name):

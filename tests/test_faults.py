@@ -227,18 +227,25 @@ def test_an_undecodable_image_is_skipped_and_counted(tmp_path, capsys):
     assert "failed to decode and were skipped" in err
 
 
+def _moving_box_frames(folder, n=8):
+    """``n`` OTB image frames of a red box moving 2 px per frame into ``folder``; returns their
+    ground-truth lines (1-based ``x,y,w,h``)."""
+    folder.mkdir(parents=True)
+    rows = []
+    for i in range(n):
+        img = np.full((H, W, 3), 100, np.uint8)
+        cv2.rectangle(img, (40 + 2 * i, 50), (64 + 2 * i, 68), (30, 60, 220), -1)
+        cv2.imwrite(str(folder / f"{i + 1:04d}.png"), img)
+        rows.append(f"{41 + 2 * i},51,25,19")  # OTB: 1-based
+    return rows
+
+
 def test_eval_keeps_frames_aligned_with_the_truth_past_a_bad_frame(tmp_path, capsys):
     """The bad frame counts as lost (no estimate) and the frames after it are scored against their own
     ground truth, not shifted by one."""
     import json
 
-    (tmp_path / "clip" / "img").mkdir(parents=True)
-    rows = []
-    for i in range(8):
-        img = np.full((H, W, 3), 100, np.uint8)
-        cv2.rectangle(img, (40 + 2 * i, 50), (64 + 2 * i, 68), (30, 60, 220), -1)
-        cv2.imwrite(str(tmp_path / "clip" / "img" / f"{i + 1:04d}.png"), img)
-        rows.append(f"{41 + 2 * i},51,25,19")  # OTB: 1-based
+    rows = _moving_box_frames(tmp_path / "clip" / "img")
     (tmp_path / "clip" / "img" / "0004.png").write_bytes(b"not a png")
     (tmp_path / "clip" / "groundtruth_rect.txt").write_text("\n".join(rows) + "\n")
     code, _, err = run(["eval", str(tmp_path / "clip"), "--model", "box", "--algos", "lis", "--particles", "50",
@@ -602,13 +609,7 @@ def test_absent_frames_count_alike_in_results_json_and_csv(tmp_path, capsys):
     a task has results.json's numbers for that one run."""
     import json
 
-    (tmp_path / "clip" / "img").mkdir(parents=True)
-    rows = []
-    for i in range(8):
-        img = np.full((H, W, 3), 100, np.uint8)
-        cv2.rectangle(img, (40 + 2 * i, 50), (64 + 2 * i, 68), (30, 60, 220), -1)
-        cv2.imwrite(str(tmp_path / "clip" / "img" / f"{i + 1:04d}.png"), img)
-        rows.append(f"{41 + 2 * i},51,25,19")
+    rows = _moving_box_frames(tmp_path / "clip" / "img")
     rows[3], rows[4] = "NaN,NaN,NaN,NaN", "0,0,0,0"
     (tmp_path / "clip" / "groundtruth_rect.txt").write_text("\n".join(rows) + "\n")
     code, _, err = run(["eval", str(tmp_path / "clip"), "--model", "box", "--algos", "bootstrap", "--particles", "30",
