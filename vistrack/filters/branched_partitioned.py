@@ -49,7 +49,7 @@ class BranchedPartitioned(PartitionedBase):
         orderings = cyclic_orderings(self.tau) if orderings is None else [tuple(int(j) for j in o) for o in orderings]
         for o in orderings:
             if sorted(o) != list(range(self.tau)):
-                raise ValueError(f"ordering {list(o)} is not a permutation of the {self.tau} partitions 0..{self.tau - 1}")
+                raise ValueError(f"ordering {list(o)} is not a permutation of the partitions 0..{self.tau - 1}")
         if not orderings:
             raise ValueError("branched partitioning needs at least one ordering")
         self.orderings = orderings

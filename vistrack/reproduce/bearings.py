@@ -108,20 +108,24 @@ def _sequence(cfg, model, s):
 
 
 def _timed_run(filt, obs, n, seed):
-    """One run of ``filt`` with ``n`` particles from ``seed``: ``(means (steps, d), seconds)``."""
+    """One run of ``filt`` with ``n`` particles from ``seed``: ``(means (steps, d), seconds)``,
+    the seconds of CPU time of this thread (on a shared machine, wall time depends on the load)."""
     rng = np.random.default_rng(seed)
-    t0 = time.perf_counter()
+    t0 = time.thread_time()
     means = np.array([p.mean() for p in filter_steps(filt, obs, n, rng)])
-    return means, time.perf_counter() - t0
+    return means, time.thread_time() - t0
 
 
-def equal_time_pairs(cfg, runs=3, repeats=3):
+def equal_time_pairs(cfg, runs=3, repeats=3, steps=3):
     """``(algo, N)`` pairs at equal time per run (as ``eval --equal-time``): for every N of
     ``cfg.particles``, the first algorithm at N and every other at the N whose time per run
-    matches it (linear in N between N and 2N; the best of ``repeats`` timings of ``runs``
-    runs on the first sequence, in this process). Returns ``(pairs, {"algo:N": ms per run})``."""
+    matches it. Times are the best of ``repeats`` timings, in CPU time, of ``runs`` runs on the
+    first sequence in this process; N is found by ``steps`` secant steps on ``t(N) = budget``
+    from ``N`` scaled by the time ratio (a straight line through N and 2N, as eval fits, is
+    thrown far off by one noisy timing when the answer lies far from N). Returns ``(pairs,
+    {"algo:N": ms per run})``, the times at the answers."""
     model = Bearings(cfg.ships)
-    truth, obs, seeds = _sequence(cfg, model, 0)
+    _, obs, seeds = _sequence(cfg, model, 0)
     seeds = seeds[:runs]
 
     def ms(algo, n):
@@ -129,16 +133,28 @@ def equal_time_pairs(cfg, runs=3, repeats=3):
         return 1e3 * min(sum(_timed_run(filt, obs, n, ss)[1] for ss in seeds) for _ in range(repeats)) / len(seeds)
 
     pairs, times = [], {}
-    ref = cfg.algos[0]
     for n in cfg.particles:
-        budget = times[f"{ref}:{n}"] = ms(ref, n)
-        pairs.append((ref, int(n)))
-        for algo in cfg.algos[1:]:
-            t1, t2 = ms(algo, n), ms(algo, 2 * n)
-            per = max((t2 - t1) / n, 1e-6)  # ms per particle; t(N) = t1 + per (N - n)
-            pairs.append((algo, int(max(1, round(n + (budget - t1) / per)))))
-            times[f"{algo}:{n}"] = t1
+        budget = ms(cfg.algos[0], n)
+        for algo in cfg.algos:
+            m = int(n) if algo == cfg.algos[0] else _secant(lambda k: ms(algo, k), int(n), budget, steps)
+            pairs.append((algo, m))
+            times[f"{algo}:{m}"] = budget if algo == cfg.algos[0] else ms(algo, m)
     return pairs, times
+
+
+def _secant(t, n, budget, steps):
+    """An ``N`` with ``t(N) ≈ budget``: from ``n``, a step ∝ the time ratio, then secant steps
+    (each kept within a factor 4 of the last N)."""
+    a, ta = n, t(n)
+    b = max(1, round(n * budget / ta))
+    for _ in range(steps):
+        if b == a:
+            break
+        tb = t(b)
+        slope = (tb - ta) / (b - a)
+        c = b + (budget - tb) / slope if slope > 0 else b * budget / tb
+        a, ta, b = b, tb, int(max(1, round(min(max(c, b / 4), 4 * b))))
+    return b
 
 
 def bearing_tasks(cfg):
