@@ -67,8 +67,13 @@ class CollapseWatch:
 
     @property
     def level(self):
-        """The running level of ``log r`` (``None`` before any frame was reported)."""
-        return float(np.median(self.history)) if self.history else None
+        """The running level of ``log r`` (``None`` before any frame was reported): the median of the
+        history (finite values), as ``np.median`` computes it, by a sort of at most ``window`` floats."""
+        if not self.history:
+            return None
+        s = sorted(self.history)
+        k = len(s) // 2
+        return float(s[k]) if len(s) % 2 else float((s[k - 1] + s[k]) / 2.0)
 
     def _likelihood(self, loglik):
         if not np.isfinite(loglik):
