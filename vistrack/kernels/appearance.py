@@ -40,16 +40,20 @@ def colour_labels(hsv, out):
 @njit(cache=True)
 def bin_integrals(labels, n_bins):
     """``ii (H + 1, W + 1, n_bins)`` int32: ``ii[y, x, b]`` counts the pixels of bin ``b`` in
-    ``[0, x) x [0, y)``."""
+    ``[0, x) x [0, y)`` (each row the one above plus the row's running counts, over flat rows)."""
     h, w = labels.shape
-    ii = np.zeros((h + 1, w + 1, n_bins), np.int32)
+    ii = np.empty((h + 1, w + 1, n_bins), np.int32)
+    ii[0, :, :] = 0
     row = np.zeros(n_bins, np.int32)
     for y in range(h):
         row[:] = 0
+        ii[y + 1, 0, :] = 0
+        prev, cur = ii[y].reshape(-1), ii[y + 1].reshape(-1)
         for x in range(w):
             row[labels[y, x]] += 1
+            o = (x + 1) * n_bins
             for b in range(n_bins):
-                ii[y + 1, x + 1, b] = ii[y, x + 1, b] + row[b]
+                cur[o + b] = prev[o + b] + row[b]
     return ii
 
 

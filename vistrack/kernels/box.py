@@ -184,3 +184,23 @@ def map_sample(states, sig, offsets, log_g_unit, cell, uw, vw, qmap, u0, v0, bor
         log_alpha[n] = lse + 2 * math.log(cell * sig[n]) + log_g
         log_q[n] = lq[n, j]
     return z_u
+
+
+@njit(cache=True)
+def map_scores(ncc, s_in, s_out, g, area_in, area_ring, lam_t, lam_c, out):
+    """The end of ``Appearance.proposal_map`` in float32, as numpy computes it with Python-float
+    scalars: ``λ_t (nan_to_num(ncc) - 1) + λ_c (s_in / area_in - (s_out shifted by g - s_in) / area_ring)``
+    into ``out (hh, ww)`` (``ncc``'s shape; ``s_out`` read ``g`` rows and columns back, 0 before)."""
+    one, lt, lc = np.float32(1.0), np.float32(lam_t), np.float32(lam_c)
+    ai, ar = np.float32(area_in), np.float32(area_ring)
+    big = np.finfo(np.float32).max
+    for i in range(out.shape[0]):
+        for j in range(out.shape[1]):
+            v = ncc[i, j]
+            if np.isnan(v):
+                v = np.float32(0.0)
+            elif np.isinf(v):
+                v = big if v > 0 else -big
+            o = s_out[i - g, j - g] if i >= g and j >= g else np.float32(0.0)
+            out[i, j] = lt * (v - one) + lc * (s_in[i, j] / ai - (o - s_in[i, j]) / ar)
+    return out

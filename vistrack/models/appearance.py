@@ -331,11 +331,18 @@ class Appearance:
         s_out = cv2.boxFilter(bp, -1, (tw + 2 * g, th + 2 * g), normalize=False, anchor=(0, 0),
                               borderType=cv2.BORDER_CONSTANT)
         hh, ww = ncc.shape
+        area_ring = (tw + 2 * g) * (th + 2 * g) - tw * th
+        if kernels.use() and all(type(v) in (int, float) for v in (self.lambda_template, self.lambda_colour)):
+            from ..kernels.box import map_scores
+
+            out = map_scores(ncc, s_in, s_out, g, tw * th, area_ring, self.lambda_template, self.lambda_colour,
+                             np.empty((hh, ww), np.float32))
+            return out, c0 + tw / 2.0, r0 + th / 2.0
         inside = s_in[:hh, :ww] / (tw * th)
         # the ring box of the template at (i, j) starts at (i - g, j - g): shifted by g, zeros before
         out_pad = np.zeros((hh, ww), s_out.dtype)
         out_pad[g:, g:] = s_out[:max(hh - g, 0), :max(ww - g, 0)]
-        ring = (out_pad - s_in[:hh, :ww]) / ((tw + 2 * g) * (th + 2 * g) - tw * th)
+        ring = (out_pad - s_in[:hh, :ww]) / area_ring
         log_q = self.lambda_template * (np.nan_to_num(ncc) - 1.0) + self.lambda_colour * (inside - ring)
         return log_q.astype(np.float32), c0 + tw / 2.0, r0 + th / 2.0
 
