@@ -122,6 +122,12 @@ class CollapseCheck:
         if self._collapse is None:
             self._collapse = CollapseWatch(**self.collapse_options)
         s = np.asarray(state, float).reshape(1, -1)
-        d = self.describe(s[0])
-        return self._collapse.check(float(self.loglik(obs, s)[0]), float(d["scale"]), (float(d["cx"]), float(d["cy"])),
+        scale, cx, cy = self.collapse_pose(s[0])
+        return self._collapse.check(float(self.loglik(obs, s)[0]), float(scale), (float(cx), float(cy)),
                                     self.frame_size)
+
+    def collapse_pose(self, state):
+        """``(scale, cx, cy)`` of ``state`` that the test reads: :meth:`describe`'s (a model whose
+        :meth:`describe` does more, e.g. the contour's outline, gives them directly)."""
+        d = self.describe(state)
+        return d["scale"], d["cx"], d["cy"]
