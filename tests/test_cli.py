@@ -106,3 +106,6 @@ def test_reproduce_tables_align_every_column_and_mark_missing_measures():
                                 "mean", "acq", "ms/frame", "frames/s", "ESS"]
     assert lines[2].split()[3] == "-" and lines[3].split()[3] == "3.25"
     assert lines[2].index(" - ") + 2 == lines[3].index("3.25") + 4  # the '-' sits where the number ends
+    long = format_table("plate", [row, dict(row, algo="branched-partitioned")]).splitlines()
+    assert len({len(line) for line in long}) == 1  # a name longer than the column widens it
+    assert long[3].startswith("branched-partitioned ") and long[2].index(" 100 ") == long[3].index(" 100 ")
