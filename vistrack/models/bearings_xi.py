@@ -97,35 +97,47 @@ class XiProposal:
         qx, qy = prev[:, self._ix] + prev[:, self._vx], prev[:, self._iy] + prev[:, self._vy]
         return c, sn, a, u, qy * c - qx * sn, self._s
 
-    def log_evidence(self, a, m, s):
-        """The two parts' approximate masses ``log(a N(0; m, s² + γ²a²))`` (the Laplace peak on
-        the ray) and ``log(γ a² / (π (m² + s² + γ²a²)))`` (the likelihood's Cauchy tail at ``m``);
-        the sum of the masses approximates ``p(y | a, Z_{t-1})``. ``a`` clipped above 0."""
+    def parts(self, a, m, s):
+        """The posterior of ``u`` in two parts, with their approximate masses.
+
+        On the ray, the likelihood's peak: mass ``a N(0; m, s² + γ²a²)``. Off it, the
+        Gaussian times the likelihood's Cauchy tail ``γ a² / (π (u² + c²))``, ``c² = s² + γ²a²``
+        (log-concave): its Laplace fit ``N(u_b, s_b²)`` from two Newton steps from ``m``, and
+        the Laplace mass. The sum of the masses approximates ``p(y | a, Z_{t-1})``.
+        ``a`` is clipped above 0. Returns ``log_m1, log_m2, u_b, s_b``, each ``(N, M)``.
+        """
         gam = self.model.gamma
-        v = s * s + (gam * a) ** 2
-        log_a = np.log(a)
-        log_m1 = log_a - 0.5 * m * m / v - 0.5 * np.log(v) - _LOG_SQRT_2PI
-        return log_m1, np.log(gam / np.pi) + 2 * log_a - np.log(m * m + v)
+        c2 = s * s + (gam * a) ** 2
+        log_m1 = np.log(a) - 0.5 * m * m / c2 - 0.5 * np.log(c2) - _LOG_SQRT_2PI
+        u = m
+        for _ in range(2):
+            q = u * u + c2
+            u = u + ((m - u) / (s * s) - 2 * u / q) / (1.0 / (s * s) + 2 * (c2 - u * u) / (q * q))
+        q = u * u + c2
+        s_b = 1.0 / np.sqrt(1.0 / (s * s) + 2 * (c2 - u * u) / (q * q))
+        log_m2 = np.log(gam * a * a / (np.pi * q) * s_b / s) - 0.5 * ((u - m) / s) ** 2
+        return log_m1, log_m2, u, s_b
 
     def mixture(self, a, m, s):
         """The mixture's parts: ``log p_1, log p_2`` (normalised), the Cauchy's centre ``δ0``
-        and scale ``g`` on the bearing error, and ``lo, hi`` (the truncation, ``atan`` of the
-        standardised ends ``±π/2``). ``a`` clipped above 0."""
-        log_m1, log_m2 = self.log_evidence(a, m, s)
+        and scale ``g`` on the bearing error, ``lo, hi`` (the truncation, ``atan`` of the
+        standardised ends ``±π/2``), and the off-ray part's ``u_b, s_b`` (:meth:`parts`).
+        ``a`` clipped above 0."""
+        log_m1, log_m2, u_b, s_b = self.parts(a, m, s)
         log_p1 = -np.logaddexp(0.0, log_m2 - log_m1)
         h = 2.0 / (self.model.gamma * a) ** 2 + 1.0 / (s * s)  # curvature of -log(N r) at the mode
         delta0 = np.arctan(m / (s * s * h * a))
         g = np.sqrt(2.0 / h) / a  # a Cauchy on δ with that curvature
         lo, hi = np.arctan((-0.5 * np.pi - delta0) / g), np.arctan((0.5 * np.pi - delta0) / g)
-        return log_p1, log_m2 - log_m1 + log_p1, delta0, g, lo, hi
+        return log_p1, log_m2 - log_m1 + log_p1, delta0, g, lo, hi, u_b, s_b
 
-    def _log_mix(self, u, a, m, s, parts):
+    def _log_mix(self, u, a, parts):
         """``log π(u)`` for the mixture ``parts`` of :meth:`mixture`."""
-        log_p1, log_p2, delta0, g, lo, hi = parts
+        log_p1, log_p2, delta0, g, lo, hi, u_b, s_b = parts
         e = (np.arctan(u / a) - delta0) / g
         # a truncated Cauchy on δ = atan(u / a), times the Jacobian dδ/du = a / (a² + u²)
         log_t = np.log(a / (g * (hi - lo) * (a * a + u * u))) - np.log1p(e * e)
-        return np.logaddexp(log_p1 + log_t, log_p2 + _norm_logpdf(u, m, s))
+        return np.logaddexp(log_p1 + log_t, log_p2 + _norm_logpdf(u, u_b, s_b))
 
     # -- the LIS contract ---------------------------------------------------------------
     def sample(self, x, obs, rng, prev=None):
@@ -138,12 +150,12 @@ class XiProposal:
         c, sn, a, u, m, s = self.frame(x, np.asarray(obs, dtype=float), prev)
         a = np.maximum(a, 1e-12)
         parts = self.mixture(a, m, s)
-        log_p1, _, delta0, g, lo, hi = parts
+        log_p1, _, delta0, g, lo, hi, u_b, s_b = parts
         w = rng.random((2,) + a.shape)
         u_t = a * np.tan(delta0 + g * np.tan(lo + w[1] * (hi - lo)))
-        u_g = m + s * special.ndtri(np.maximum(w[1], 1e-300))
+        u_g = u_b + s_b * special.ndtri(np.maximum(w[1], 1e-300))
         u_z = np.where(w[0] < np.exp(log_p1), u_t, u_g)
-        log_q = np.sum(self._log_mix(u_z, a, m, s, parts), axis=1)
+        log_q = np.sum(self._log_mix(u_z, a, parts), axis=1)
         log_alpha = np.sum(_norm_logpdf(u, m, s), axis=1)
         du = u_z - u
         dp = np.empty(du.shape + (2,))
@@ -155,10 +167,10 @@ class XiProposal:
         c, sn, a, _, m, s = self.frame(x, np.asarray(obs, dtype=float), prev)
         a = np.maximum(a, 1e-12)
         u_z = z[:, self._iy] * c - z[:, self._ix] * sn
-        return np.sum(self._log_mix(u_z, a, m, s, self.mixture(a, m, s)), axis=1)
+        return np.sum(self._log_mix(u_z, a, self.mixture(a, m, s)), axis=1)
 
     def look_ahead(self, prev, obs, kernel=None):
-        """First-stage log weights ``log p̂(y | Z_{t-1}) (N,)``: :meth:`log_evidence` at the mean
+        """First-stage log weights ``log p̂(y | Z_{t-1}) (N,)``: the two masses of :meth:`parts` at the mean
         prediction's along-ray coordinate (the fully adapted auxiliary filter's first stage,
         App. B); ``None`` on the first step, where every particle is a fresh prior draw."""
         if self.first:
@@ -166,4 +178,5 @@ class XiProposal:
         qx, qy = prev[:, self._ix] + prev[:, self._vx], prev[:, self._iy] + prev[:, self._vy]
         c, sn = np.cos(obs), np.sin(obs)
         a = np.maximum(qx * c + qy * sn, 1e-12)
-        return np.sum(np.logaddexp(*self.log_evidence(a, qy * c - qx * sn, self._s)), axis=1)
+        log_m1, log_m2, _, _ = self.parts(a, qy * c - qx * sn, self._s)
+        return np.sum(np.logaddexp(log_m1, log_m2), axis=1)
