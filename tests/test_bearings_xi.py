@@ -1,10 +1,12 @@
 """The ξ proposal of the bearings model (vistrack.models.bearings_xi): its density matches its
 samples, LIS with it is properly weighted (the mean weight is p(y | Z_{t-1}), by quadrature),
-moves stay on the support of K, the same seed gives the same output."""
+moves stay on the support of K, the same seed gives the same output, and the compiled kernels
+(vistrack.kernels.bearings) equal the numpy path."""
 
 import numpy as np
 import pytest
 
+from vistrack import kernels
 from vistrack.data_synth.bearings import simulate
 from vistrack.filters import LIS, filter_steps, make_filter
 from vistrack.models.bearings import Bearings, wrapped_cauchy_logpdf
@@ -146,3 +148,25 @@ def test_same_seed_same_output(proposal):
 def test_unknown_proposal_is_one_clear_error():
     with pytest.raises(ValueError, match="LIS proposal must be one of xi, position, got 'nope'"):
         Bearings(1, proposal="nope")
+
+
+@pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
+@pytest.mark.parametrize("ships, first", [(1, False), (3, False), (3, True)])
+def test_compiled_kernels_equal_the_numpy_path(ships, first):
+    """vistrack.kernels.bearings: the same draws, the same moves and densities (1e-12 relative)."""
+    m = Bearings(ships)
+    rng = np.random.default_rng(0)
+    prev = m.sample_prior(200, rng)
+    x = m.sample_prior(200, rng) if first else m.predict(prev, rng)
+    y = m.sample_observation(x[:1], rng)[0]
+    f = LIS(m)
+    prop = f.part("proposal", f.prior_kernel if first else f.kernel)
+    outs = []
+    for numpy_path in (True, False):
+        with kernels.numpy_paths(numpy_path):
+            outs.append((*prop.sample(x, y, np.random.default_rng(1), prev), prop.look_ahead(prev, y)))
+    (z0, la0, lq0, ahead0), (z1, la1, lq1, ahead1) = outs
+    np.testing.assert_allclose(z1, z0, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(la1, la0, rtol=1e-12)
+    np.testing.assert_allclose(lq1, lq0, rtol=1e-12)
+    assert (ahead0 is None) == first and (first or np.allclose(ahead1, ahead0, rtol=1e-12, atol=0))

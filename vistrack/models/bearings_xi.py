@@ -35,6 +35,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import special
 
+from .. import kernels
 from .kernel import is_prior
 
 __all__ = ["XiProposal"]
@@ -53,7 +54,9 @@ class XiProposal:
 
     ``sample(x, obs, rng, prev) -> (z, log_alpha, log_q)`` as every LIS proposal
     (:class:`~vistrack.filters.lis.LIS`), and a first stage ``look_ahead(prev, obs, kernel)``.
-    Arrays are ``(N, M)`` per particle and ship; a few dozen numpy calls per step whatever ``M``.
+    Arrays are ``(N, M)`` per particle and ship; where numba is, :mod:`vistrack.kernels.bearings`
+    does :meth:`sample` and :meth:`look_ahead` in one compiled loop each (the numpy path is the
+    reference).
 
     Parameters
     ----------
@@ -73,6 +76,13 @@ class XiProposal:
         self._mean = model.prior_mean[self._ix], model.prior_mean[self._iy]
         self._var = model.prior_std[self._ix] ** 2, model.prior_std[self._iy] ** 2
         self._s = 0.5 * model.sigma_eta  # std of the position's across-ray noise under K
+        # the compiled kernels' layout: indices of x1, x3, v1, v3 and the prior of x1, x3, (4, M) each
+        self._idx = np.array([self._ix, self._iy, self._vx, self._vy], dtype=np.int64)
+        self._prior = np.array([*self._mean, *self._var])
+        if kernels.use():  # load the compiled kernels now (0.1-1 s), not in a filter's first step
+            x = model.prior_mean[None]
+            self.sample(x, self.model.bearing(x)[0], np.random.default_rng(0), x)
+            self.look_ahead(x, self.model.bearing(x)[0])
 
     def frame(self, x, obs, prev):
         """The rays and the kernel's across-ray conditional.
@@ -145,16 +155,23 @@ class XiProposal:
 
         Returns ``(z (N, 4M), log_alpha (N,), log_q (N,))``: ``log_alpha`` is the kernel's
         across-ray log density of ``x``, ``log_q`` the mixture's of ``z`` (summed over ships).
-        Draws one ``rng.random((2, N, M))``.
+        Draws one ``rng.random((2, N, M))``: the part (``w[0] < p_1``) and its quantile ``w[1]``.
+        Compiled (:func:`vistrack.kernels.bearings.xi_move`, equal) where numba is.
         """
-        c, sn, a, u, m, s = self.frame(x, np.asarray(obs, dtype=float), prev)
+        obs = np.asarray(obs, dtype=float)
+        w = rng.random((2, len(x), len(obs)))
+        gz = special.ndtri(np.maximum(w[1], 1e-300))
+        if kernels.use():
+            from ..kernels.bearings import xi_move
+
+            return xi_move(x, x if prev is None else prev, np.cos(obs), np.sin(obs), w[0], w[1], gz,
+                           self.model.gamma, self._s, self.first, self._idx, self._prior)
+        c, sn, a, u, m, s = self.frame(x, obs, prev)
         a = np.maximum(a, 1e-12)
         parts = self.mixture(a, m, s)
         log_p1, _, delta0, g, lo, hi, u_b, s_b = parts
-        w = rng.random((2,) + a.shape)
         u_t = a * np.tan(delta0 + g * np.tan(lo + w[1] * (hi - lo)))
-        u_g = u_b + s_b * special.ndtri(np.maximum(w[1], 1e-300))
-        u_z = np.where(w[0] < np.exp(log_p1), u_t, u_g)
+        u_z = np.where(w[0] < np.exp(log_p1), u_t, u_b + s_b * gz)
         log_q = np.sum(self._log_mix(u_z, a, parts), axis=1)
         log_alpha = np.sum(_norm_logpdf(u, m, s), axis=1)
         du = u_z - u
@@ -175,6 +192,11 @@ class XiProposal:
         App. B); ``None`` on the first step, where every particle is a fresh prior draw."""
         if self.first:
             return None
+        obs = np.asarray(obs, dtype=float)
+        if kernels.use():
+            from ..kernels.bearings import xi_look_ahead
+
+            return xi_look_ahead(prev, np.cos(obs), np.sin(obs), self.model.gamma, self._s, self._idx)
         qx, qy = prev[:, self._ix] + prev[:, self._vx], prev[:, self._iy] + prev[:, self._vy]
         c, sn = np.cos(obs), np.sin(obs)
         a = np.maximum(qx * c + qy * sn, 1e-12)
