@@ -13,15 +13,18 @@ component ``ξ_⊥`` of the noise moves the position by ``ξ_⊥ / 2``); under `
 The proposal keeps the prediction's ``a`` (a draw from ``K``'s own conditional)
 and replaces its ``u`` by a draw from the two-part mixture
 
-    π(u) = p_1 · T(u) + p_2 · N(u; m, s²),
+    π(u) = p_1 · T(u) + p_2 · N(u; u_b, s_b²).
 
-``T`` the Laplace approximation of ``N(u; m, s²) r(y | u)`` with Cauchy tails: a
-Cauchy on the bearing error ``δ = atan(u / a)`` (truncated to ``|δ| < π/2``) centred
-at the mode of the Laplace fit, whose scale matches the curvature ``2/(γ a)² + 1/s²``;
-the Gaussian part covers the posterior mass the likelihood's Cauchy tail leaves
-near ``m`` when ``m`` is far from the ray. The mixture weights are the two parts'
-approximate masses (``a N(0; m, s² + γ²a²)`` and ``γ a² / (π (m² + s² + γ²a²))``),
-so the importance ratio ``N(u; m, s²) r(y|u) / π(u)`` hardly varies with ``u``.
+``T``, the part on the ray, is the Laplace approximation of ``N(u; m, s²) r(y | u)`` with
+Cauchy tails: a Cauchy on the bearing error ``δ = atan(u / a)`` (truncated to ``|δ| < π/2``)
+centred at the mode of the Laplace fit, whose scale matches the curvature
+``2/(γ a)² + 1/s²``. ``N(u_b, s_b²)``, the part off the ray, is the Laplace fit of the
+Gaussian times the likelihood's Cauchy tail, ``N(u; m, s²) γ a² / (π (u² + c²))``
+(log-concave), which holds the posterior's mass when the prediction is far from the ray.
+``p_1 : p_2`` are the two parts' approximate masses (:meth:`XiProposal.parts`), so the
+importance ratio ``N(u; m, s²) r(y|u) / π(u)`` hardly varies with ``u``, and their sum
+approximates ``p(y | Z_{t-1})``: the first stage (:meth:`XiProposal.look_ahead`) that LIS
+resamples with (the fully adapted auxiliary filter, App. B).
 
 The move changes ``ξ`` only across the ray (velocity follows with ``Δv = 2 Δp``,
 :meth:`~vistrack.models.bearings.Bearings.with_local`), so ``Z`` stays on the
