@@ -273,7 +273,8 @@ def main():
     ap.add_argument("--fixed", action="store_true", help="also particles' filters at N = 3000")
     args = ap.parse_args()
     if particles is None:
-        raise SystemExit("Error: this benchmark needs the particles library: pip install 'vistrack[peers]'")
+        raise SystemExit("Error: this benchmark needs the particles library: pip install --no-deps particles "
+                         "(or 'vistrack[peers]', which pins numpy<2)")
     warnings.simplefilter("ignore")
     data = sequences([int(s) for s in args.seeds.split(",")], args.sequences, args.runs)
     ours = configs(args.n)
