@@ -38,11 +38,11 @@ class BearingsConfig:
     steps: int = 10
     algos: list = field(default_factory=lambda: list(DEFAULT_ALGOS))
     particles: list = field(default_factory=lambda: [100, 500, 3000])
+    #: LIS's local proposal (:data:`~vistrack.models.bearings.LIS_PROPOSALS`)
+    proposal: str = "xi"
     seed: int = 0
     resample: str = "systematic"
     ess_threshold: float | None = None
-    #: LIS's local proposal (:data:`~vistrack.models.bearings.LIS_PROPOSALS`)
-    proposal: str = "xi"
 
     def validate(self):
         """Raise ``ValueError`` with one clear sentence for bad values."""
