@@ -161,6 +161,8 @@ class XiProposal:
         Draws one ``rng.random((2, N, M))``: the part (``w[0] < p_1``) and its quantile ``w[1]``.
         Compiled (:func:`vistrack.kernels.bearings.xi_move`, equal) where numba is.
         """
+        if prev is None and not self.first:
+            raise ValueError("the ξ proposal needs prev (Z_{t-1}) on every step after the first")
         obs = np.asarray(obs, dtype=float)
         w = rng.random((2, len(x), len(obs)))
         gz = special.ndtri(np.maximum(w[1], 1e-300))
