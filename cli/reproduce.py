@@ -92,13 +92,15 @@ def reproduce():
               type=click.Choice(["multinomial", "residual", "stratified", "systematic"]))
 @click.option("--ess-threshold", default=None, type=Fraction(),
               help="Resample when ESS < threshold·N (default: every step).")
+@click.option("--lis-proposal", default="xi", show_default=True, type=click.Choice(["xi", "position"]),
+              help="LIS's proposal: the noise move across the bearing, or §4.5.5's position move.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
               help="Write PNGs of error vs time step and error vs N into this folder.")
 @engine_options("bearings-results")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
-def bearings(ships, sequences, runs, steps, algos, particles, seed, resample, ess_threshold, json_path,
-             plots_dir, workers, scheduler, in_process, out_dir, resume, quiet):
+def bearings(ships, sequences, runs, steps, algos, particles, seed, resample, ess_threshold, lis_proposal,
+             json_path, plots_dir, workers, scheduler, in_process, out_dir, resume, quiet):
     """Bearings-only ship tracking (thesis §1.3.3, §4.5.5).
 
     Runs every algorithm at every N on SEQUENCES fixed sequences, RUNS times
@@ -108,7 +110,8 @@ def bearings(ships, sequences, runs, steps, algos, particles, seed, resample, es
     in OUT/tasks, --resume continues an interrupted reproduction).
     """
     cfg = BearingsConfig(ships=ships, sequences=sequences, runs=runs, steps=steps, algos=algos,
-                         particles=particles, seed=seed, resample=resample, ess_threshold=ess_threshold)
+                         particles=particles, seed=seed, resample=resample, ess_threshold=ess_threshold,
+                         proposal=lis_proposal)
     try:
         cfg.validate()
     except ValueError as e:

@@ -33,6 +33,7 @@ def test_reproduce_bearings_writes_json_and_plots(tmp_path, capsys):
     data = json.loads(js.read_text())
     assert set(data) == {"config", "results"}
     assert data["config"]["particles"] == [10, 20] and data["config"]["seed"] == 3
+    assert data["config"]["proposal"] == "xi"  # LIS's default proposal on the bearings model
     assert len(data["results"]) == 4
     for row in data["results"]:
         assert RESULT_KEYS <= set(row)
@@ -67,6 +68,7 @@ def test_reproduce_bearings_writes_json_and_plots(tmp_path, capsys):
         (["--algos", "bootstrap,magic"], "unknown algorithm 'magic'"),
         (["--json", "/nonexistent-dir/x.json"], "does not exist"),
         (["--ships", "0"], "--ships must be at least 1"),
+        (["--lis-proposal", "nope"], "'nope' is not one of 'xi', 'position'"),
     ],
 )
 def test_bad_input_gives_one_clear_line(args, message, capsys):

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..models.bearings import simulate
 from ..filters import ALGORITHMS, filter_steps, make_filter
-from ..models.bearings import Bearings
+from ..models.bearings import LIS_PROPOSALS, Bearings
 from ..particles import DegenerateWeightsWarning
 
 __all__ = ["BearingsConfig", "run_bearings", "bearing_tasks", "run_bearing_task", "bearing_results", "DEFAULT_ALGOS"]
@@ -38,6 +38,8 @@ class BearingsConfig:
     steps: int = 10
     algos: list = field(default_factory=lambda: list(DEFAULT_ALGOS))
     particles: list = field(default_factory=lambda: [100, 500, 3000])
+    #: LIS's local proposal (:data:`~vistrack.models.bearings.LIS_PROPOSALS`)
+    proposal: str = "xi"
     seed: int = 0
     resample: str = "systematic"
     ess_threshold: float | None = None
@@ -50,6 +52,8 @@ class BearingsConfig:
             v = getattr(self, name)
             if v < 1:
                 raise ValueError(f"--{name} must be a positive integer, got {v}")
+        if self.proposal not in LIS_PROPOSALS:
+            raise ValueError(f"--lis-proposal must be one of {', '.join(LIS_PROPOSALS)}, got {self.proposal!r}")
         if not self.particles:
             raise ValueError("--particles needs at least one particle count")
         bad = [n for n in self.particles if n < 1]
@@ -107,7 +111,7 @@ def run_bearing_task(task, out_dir):
     prepare_worker()
 
     cfg = BearingsConfig(**task["config"])
-    res = _sequence_runs(cfg, Bearings(cfg.ships), task["sequence"])
+    res = _sequence_runs(cfg, Bearings(cfg.ships, proposal=cfg.proposal), task["sequence"])
     result = {"sequence": task["sequence"],
               "entries": [{"algo": a, "particles": n, "errors": e.tolist(), "seconds": sec, "degenerate": deg}
                           for (a, n), (e, sec, deg) in res.items()]}
@@ -156,7 +160,7 @@ def run_bearings(cfg, progress=None):
     ``progress(k)`` is called after every ``k`` finished runs.
     """
     cfg.validate()
-    model = Bearings(cfg.ships)
+    model = Bearings(cfg.ships, proposal=cfg.proposal)
     per = {}
     for s in range(cfg.sequences):
         for key, v in _sequence_runs(cfg, model, s).items():
