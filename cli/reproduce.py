@@ -14,7 +14,7 @@ from vistrack.reproduce.landmarks import (LANDMARK_ALGOS, LandmarksConfig, landm
 from vistrack.reproduce.plate import PlateConfig, plate_results, plate_tasks, run_plate_task
 from vistrack.evaluation import entries_config, write_atomic
 from vistrack.reproduce.contour import ContourConfig, contour_results, contour_tasks
-from vistrack.reproduce.hs_sir import HSConfig, equal_time_entries, hs_results, hs_tasks
+from vistrack.reproduce.hs_sir import HSConfig, equal_time_entries, hs_results, hs_tasks, likelihood_params
 from vistrack.reproduce.report import format_table, write_plots
 
 from .options import SEED, Fraction, IntList, StrList, check_writable
@@ -146,6 +146,21 @@ class Entries(click.ParamType):
                 self.fail(f"number of particles must be positive in {item!r}", param, ctx)
             out.append((algo, n))
         return out
+
+
+class Likelihood(click.ParamType):
+    """``KEY=VALUE`` pairs, comma-separated (:func:`vistrack.reproduce.hs_sir.likelihood_params`)."""
+
+    name = "KEY=VALUE,..."
+
+    def convert(self, value, param, ctx):
+        """Parse ``value`` into a dict; a bad pair fails with click's one-line usage error."""
+        if isinstance(value, dict):
+            return value
+        try:
+            return likelihood_params(value)
+        except ValueError as e:
+            self.fail(str(e), param, ctx)
 
 
 def _report(experiment, out, config, json_path, plots_dir, title=""):
@@ -320,10 +335,14 @@ def plate(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler
 @click.option("--equal-time", is_flag=True,
               help="Set every N after the first so that its time per frame matches the first entry's (timed on "
                    "the first clip), as Table 3.1's counts were chosen.")
+@click.option("--likelihood", default="", type=Likelihood(),
+              help="The edge likelihood's parameters for every algorithm, e.g. sigma_edge=4,q_miss=0.5,"
+                   "clutter_density=0.5 (sigma_edge, q_miss, clutter_density, measure_per_segment, "
+                   "edge_threshold) [default: the contour model's].")
 @engine_options("hs-sir-results")
 @output_options("Write P(lost) vs frame (Fig. 3.10) and error vs frame (Fig. 3.9) PNGs here.")
-def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, workers, scheduler, in_process, out_dir,
-           resume, json_path, plots_dir, quiet):
+def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, likelihood, workers, scheduler, in_process,
+           out_dir, resume, json_path, plots_dir, quiet):
     """SIR with history sampling on colour contour clips (thesis §3.2.5, Table 3.1, Figs. 3.9-3.10).
 
     \b
@@ -350,10 +369,10 @@ def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, worke
     clips = _clip_suite(clips_dir, "hs-sir-clips", make, frames, size, make_contour_clip, "contour-color", quiet,
                         clutter="high", distractor=True, color=True)
     if equal_time:
-        entries, times = equal_time_entries(clips[0], entries)
+        entries, times = equal_time_entries(clips[0], entries, likelihood=likelihood)
         click.echo("equal time: " + ", ".join(f"{a}:{n}" for a, n in entries) + " ("
                    + ", ".join(f"{k} {v:.1f} ms/frame" for k, v in times.items()) + ")")
-    cfg = HSConfig(clips=clips, entries=entries, runs=runs, seed=seed)
+    cfg = HSConfig(clips=clips, entries=entries, runs=runs, seed=seed, likelihood=likelihood)
     tasks = hs_tasks(cfg)
     out = _run(tasks, out_dir, "hs-sir", scheduler=scheduler, workers=workers, in_process=in_process, resume=resume,
                quiet=quiet)
