@@ -54,15 +54,16 @@ def main():
     rng = np.random.default_rng(0)
     xs, ys = seqs[0]
     p = lis.first_step(ys[0], n, rng)
-    parts = dict.fromkeys(["resample", "predict", "local proposal", "likelihood", "transition", "weights"], 0.0)
+    parts = dict.fromkeys(["1st stage+resample", "predict", "local proposal", "likelihood", "transition", "weights"], 0.0)
     reps = 300
     for _ in range(reps):
         t0 = time.perf_counter()
-        prev, lw = lis._resampled(p, rng)
+        idx, lw = lis._ancestors(p, ys[1], rng, lis.kernel)
+        prev = p.states[idx]
         t1 = time.perf_counter()
         x = model.predict(prev, rng)
         t2 = time.perf_counter()
-        z, la, lq = lis.proposal.sample(x, ys[1], rng)
+        z, la, lq = lis.proposal.sample(x, ys[1], rng, prev)
         t3 = time.perf_counter()
         ll = model.loglik(ys[1], z)
         t4 = time.perf_counter()
@@ -75,7 +76,7 @@ def main():
     total = sum(parts.values())
     print(f"\nLIS step split at N={n} ({1e6 * total / reps:.0f} us/step):")
     for key, v in parts.items():
-        print(f"  {key:<15} {1e6 * v / reps:7.1f} us  {100 * v / total:5.1f} %")
+        print(f"  {key:<18} {1e6 * v / reps:7.1f} us  {100 * v / total:5.1f} %")
 
 
 if __name__ == "__main__":

@@ -102,7 +102,7 @@ def split(frames, box, n, timer):
         t = vistrack.Tracker(model="box", algo="lis", particles=n, seed=0)
         t.init(frames[0], box)
         filt = t._stepper.filt
-        filt.resample_scheme = timer.timed(filt.resample_scheme, "resampling")
+        filt.resampler.scheme = timer.timed(filt.resampler.scheme, "resampling")
         t0 = time.perf_counter()
         for f in frames[1:]:
             t.update(f)

@@ -15,7 +15,7 @@ from vistrack.reproduce.landmarks import (LANDMARK_ALGOS, LandmarksConfig, landm
 from vistrack.reproduce.plate import PlateConfig, plate_results, plate_tasks, run_plate_task
 from vistrack.evaluation import entries_config, write_atomic
 from vistrack.reproduce.contour import ContourConfig, contour_results, contour_tasks
-from vistrack.reproduce.hs_sir import HSConfig, equal_time_entries, hs_results, hs_tasks
+from vistrack.reproduce.hs_sir import HSConfig, equal_time_entries, hs_results, hs_tasks, likelihood_params
 from vistrack.reproduce.report import format_table, write_plots
 
 from .options import SEED, Fraction, IntList, StrList, check_writable
@@ -95,13 +95,15 @@ def reproduce():
               type=click.Choice(["multinomial", "residual", "stratified", "systematic"]))
 @click.option("--ess-threshold", default=None, type=Fraction(),
               help="Resample when ESS < threshold·N (default: every step).")
+@click.option("--lis-proposal", default="xi", show_default=True, type=click.Choice(["xi", "position"]),
+              help="LIS's proposal: the noise move across the bearing, or §4.5.5's position move.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
 @click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
               help="Write PNGs of error vs time step and error vs N into this folder.")
 @engine_options("bearings-results")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
-def bearings(ships, sequences, runs, steps, algos, particles, equal_time, seed, resample, ess_threshold, json_path,
-             plots_dir, workers, scheduler, in_process, out_dir, resume, quiet):
+def bearings(ships, sequences, runs, steps, algos, particles, equal_time, seed, resample, ess_threshold, lis_proposal,
+             json_path, plots_dir, workers, scheduler, in_process, out_dir, resume, quiet):
     """Bearings-only ship tracking (thesis §1.3.3, §4.5.5).
 
     Runs every algorithm at every N on SEQUENCES fixed sequences, RUNS times
@@ -113,7 +115,8 @@ def bearings(ships, sequences, runs, steps, algos, particles, equal_time, seed, 
     in OUT/tasks, --resume continues an interrupted reproduction).
     """
     cfg = BearingsConfig(ships=ships, sequences=sequences, runs=runs, steps=steps, algos=algos,
-                         particles=particles, seed=seed, resample=resample, ess_threshold=ess_threshold)
+                         particles=particles, seed=seed, resample=resample, ess_threshold=ess_threshold,
+                         proposal=lis_proposal)
     try:
         cfg.validate()
     except ValueError as e:
@@ -153,6 +156,21 @@ class Entries(click.ParamType):
                 self.fail(f"number of particles must be positive in {item!r}", param, ctx)
             out.append((algo, n))
         return out
+
+
+class Likelihood(click.ParamType):
+    """``KEY=VALUE`` pairs, comma-separated (:func:`vistrack.reproduce.hs_sir.likelihood_params`)."""
+
+    name = "KEY=VALUE,..."
+
+    def convert(self, value, param, ctx):
+        """Parse ``value`` into a dict; a bad pair fails with click's one-line usage error."""
+        if isinstance(value, dict):
+            return value
+        try:
+            return likelihood_params(value)
+        except ValueError as e:
+            self.fail(str(e), param, ctx)
 
 
 def _report(experiment, out, config, json_path, plots_dir, title=""):
@@ -327,10 +345,14 @@ def plate(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler
 @click.option("--equal-time", is_flag=True,
               help="Set every N after the first so that its time per frame matches the first entry's (timed on "
                    "the first clip), as Table 3.1's counts were chosen.")
+@click.option("--likelihood", default="", type=Likelihood(),
+              help="The edge likelihood's parameters for every algorithm, e.g. sigma_edge=4,q_miss=0.5,"
+                   "clutter_density=0.5 (sigma_edge, q_miss, clutter_density, measure_per_segment, "
+                   "edge_threshold) [default: the contour model's].")
 @engine_options("hs-sir-results")
 @output_options("Write P(lost) vs frame (Fig. 3.10) and error vs frame (Fig. 3.9) PNGs here.")
-def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, workers, scheduler, in_process, out_dir,
-           resume, json_path, plots_dir, quiet):
+def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, likelihood, workers, scheduler, in_process,
+           out_dir, resume, json_path, plots_dir, quiet):
     """SIR with history sampling on colour contour clips (thesis §3.2.5, Table 3.1, Figs. 3.9-3.10).
 
     \b
@@ -357,10 +379,10 @@ def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, worke
     clips = _clip_suite(clips_dir, "hs-sir-clips", make, frames, size, make_contour_clip, "contour-color", quiet,
                         clutter="high", distractor=True, color=True)
     if equal_time:
-        entries, times = equal_time_entries(clips[0], entries)
+        entries, times = equal_time_entries(clips[0], entries, likelihood=likelihood)
         click.echo("equal time: " + ", ".join(f"{a}:{n}" for a, n in entries) + " ("
                    + ", ".join(f"{k} {v:.1f} ms/frame" for k, v in times.items()) + ")")
-    cfg = HSConfig(clips=clips, entries=entries, runs=runs, seed=seed)
+    cfg = HSConfig(clips=clips, entries=entries, runs=runs, seed=seed, likelihood=likelihood)
     tasks = hs_tasks(cfg)
     out = _run(tasks, out_dir, "hs-sir", scheduler=scheduler, workers=workers, in_process=in_process, resume=resume,
                quiet=quiet)

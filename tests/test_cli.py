@@ -33,6 +33,7 @@ def test_reproduce_bearings_writes_json_and_plots(tmp_path, capsys):
     data = json.loads(js.read_text())
     assert set(data) == {"config", "results"}
     assert data["config"]["particles"] == [10, 20] and data["config"]["seed"] == 3
+    assert data["config"]["proposal"] == "xi"  # LIS's default proposal on the bearings model
     assert len(data["results"]) == 4
     for row in data["results"]:
         assert RESULT_KEYS <= set(row)
@@ -67,6 +68,7 @@ def test_reproduce_bearings_writes_json_and_plots(tmp_path, capsys):
         (["--algos", "bootstrap,magic"], "unknown algorithm 'magic'"),
         (["--json", "/nonexistent-dir/x.json"], "does not exist"),
         (["--ships", "0"], "--ships must be at least 1"),
+        (["--lis-proposal", "nope"], "'nope' is not one of 'xi', 'position'"),
     ],
 )
 def test_bad_input_gives_one_clear_line(args, message, capsys):
@@ -106,3 +108,6 @@ def test_reproduce_tables_align_every_column_and_mark_missing_measures():
                                 "mean", "acq", "ms/frame", "frames/s", "ESS"]
     assert lines[2].split()[3] == "-" and lines[3].split()[3] == "3.25"
     assert lines[2].index(" - ") + 2 == lines[3].index("3.25") + 4  # the '-' sits where the number ends
+    long = format_table("plate", [row, dict(row, algo="branched-partitioned")]).splitlines()
+    assert len({len(line) for line in long}) == 1  # a name longer than the column widens it
+    assert long[3].startswith("branched-partitioned ") and long[2].index(" 100 ") == long[3].index(" 100 ")

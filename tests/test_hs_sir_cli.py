@@ -86,3 +86,44 @@ def test_equal_time_keeps_the_first_entry(colour_clip):
     entries, times = equal_time_entries(colour_clip, [("basic-sir", 60), ("rb-ss-hs-sir", 20)], frames=4)
     assert entries[0] == ("basic-sir", 60) and entries[1][0] == "rb-ss-hs-sir" and entries[1][1] >= 1
     assert set(times) == {"basic-sir:60", "rb-ss-hs-sir:20"} and all(np.isfinite(list(times.values())))
+
+
+def test_likelihood_params_parse_and_reject():
+    from vistrack.reproduce.hs_sir import likelihood_params
+
+    assert likelihood_params("") == {}
+    assert likelihood_params("sigma_edge=4, q_miss=0.5,measure_per_segment=1") == {
+        "sigma_edge": 4.0, "q_miss": 0.5, "measure_per_segment": 1}
+    with pytest.raises(ValueError, match="^unknown likelihood parameter 'sigma'; choose from sigma_edge, q_miss"):
+        likelihood_params("sigma=4")
+    with pytest.raises(ValueError, match="^measure_per_segment needs an integer, got '1.5'$"):
+        likelihood_params("measure_per_segment=1.5")
+    with pytest.raises(ValueError, match="^q_miss must be positive, got 0$"):
+        likelihood_params("q_miss=0")
+
+
+def test_likelihood_reaches_every_task_model(colour_clip, monkeypatch, tmp_path):
+    import vistrack.evaluation as ev
+    from vistrack.reproduce.hs_sir import HSConfig, hs_tasks
+
+    assert all("model_params" not in t for t in hs_tasks(HSConfig(clips=[colour_clip], runs=1)))
+    tasks = hs_tasks(HSConfig(clips=[colour_clip], runs=1, likelihood={"sigma_edge": 3.0}))
+    assert [t["model_params"] for t in tasks] == [{"sigma_edge": 3.0}] * 2
+    seen = []
+
+    def spy(name, clip, **kw):
+        seen.append(kw)
+        raise KeyboardInterrupt  # stop before tracking
+
+    monkeypatch.setattr(ev, "build_model", spy)
+    with pytest.raises(KeyboardInterrupt):
+        ev.run_task(tasks[0], tmp_path)
+    assert seen == [{"init_gt": "", "sigma_edge": 3.0}]
+
+
+def test_reproduce_hs_sir_rejects_an_unknown_likelihood_key(tmp_path, capsys):
+    code, _, err = run(["reproduce", "hs-sir", "--clips", str(tmp_path), "--likelihood", "sigma=4"], capsys)
+    assert code == 2
+    assert err.strip().splitlines()[-1] == ("Error: Invalid value for '--likelihood': unknown likelihood parameter "
+                                            "'sigma'; choose from sigma_edge, q_miss, clutter_density, "
+                                            "measure_per_segment, edge_threshold")

@@ -252,7 +252,7 @@ def run_task(task, out_dir):
         boxes, ms, ess = _track_opencv(algo, clip, frames)
     else:
         spec = get_model_spec(task["model"])
-        model = build_model(task["model"], clip, init_gt="")
+        model = build_model(task["model"], clip, init_gt="", **task.get("model_params", {}))
         filt = make_filter(algo, model)
         rng = np.random.default_rng(task["seed_seq"])
         est, ms, ess, index = [], [], [], []

@@ -110,9 +110,16 @@ class ParticleSet:
 
     @property
     def weights(self):
-        """Normalised weights (uniform if the set is degenerate)."""
+        """Normalised weights (uniform if the set is degenerate); computed once per
+        ``log_weights`` array (a read-only copy: the resampler, the estimate and the ESS share it)."""
+        cached = self.__dict__.get("_weights")
+        if cached is not None and cached[0] is self.log_weights:
+            return cached[1]
         w = normalized_weights(self.log_weights)
-        return np.full(self.n, 1.0 / self.n) if w is None else w
+        w = np.full(self.n, 1.0 / self.n) if w is None else w
+        w.flags.writeable = False
+        self.__dict__["_weights"] = (self.log_weights, w)
+        return w
 
     @property
     def ess(self):

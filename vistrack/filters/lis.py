@@ -30,7 +30,9 @@ class LIS(ParticleFilter):
     proposal : object or None
         Local proposal with ``sample(x, obs, rng, prev) -> (z, log_alpha, log_q)``;
         ``None`` asks the model (``model.lis_proposal(kernel)``, one per kernel:
-        :meth:`~vistrack.filters.base.ParticleFilter.part`).
+        :meth:`~vistrack.filters.base.ParticleFilter.part`). A proposal that also has
+        ``look_ahead(prev, obs, kernel) -> log p̂ (N,) or None`` gives the filter a first stage
+        (:meth:`look_ahead`).
     """
 
     name = "lis"
@@ -40,6 +42,14 @@ class LIS(ParticleFilter):
     def __init__(self, model, proposal=None, **kwargs):
         super().__init__(model, **kwargs)
         self._set_part("proposal", proposal)
+
+    def look_ahead(self, particles, obs, rng, kernel):
+        """A first stage where the local proposal offers one: ``proposal.look_ahead(prev, obs,
+        kernel) -> log p̂(Y_t|Z_{t-1}) (N,)`` (or ``None``) tilts the weights before resampling and
+        is divided out after, as in AVPF (App. B); ``None`` (no first stage) otherwise."""
+        first = getattr(self.part("proposal", kernel), "look_ahead", None)
+        log_mu = None if first is None else first(particles.states, obs, kernel)
+        return None if log_mu is None else (np.arange(particles.n), log_mu)
 
     def propose(self, prev, obs, rng, kernel):
         """Prop. 4.5.1 / Fig. 4.13: ``X_t ~ K(.|Z_{t-1})``, ``Z_t ~ q g(X_t - .) / α`` from the local

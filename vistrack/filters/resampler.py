@@ -50,7 +50,7 @@ class Resampler:
         """
         m = particles.n
         n = m if n is None else n
-        if n == m and not needs_resampling(particles.ess, m, self.ess_threshold):
+        if n == m and self.ess_threshold is not None and not needs_resampling(particles.ess, m, self.ess_threshold):
             return np.arange(m), particles.log_weights
         pi, log_w = self.probs(particles)
         idx = self.scheme(pi, n, rng)

@@ -12,7 +12,8 @@ as the reference and as the fallback where numba is missing:
 - :mod:`~vistrack.kernels.plate`: the plate likelihood's 4-channel map and pixel-set means (the
   likelihood, the sparse search and the line scans);
 - :mod:`~vistrack.kernels.appearance`: the box model's colour bins, per-bin integral images,
-  colour term and template correlation.
+  colour term and template correlation;
+- :mod:`~vistrack.kernels.bearings`: the bearings ξ proposal's move and first stage.
 
 Kernels are compiled on first use and cached on disk (``cache=True``; loading them takes 0.1–1 s,
 which :func:`vistrack.tracking.warm_up` does before a run's clock starts). Hot loops pass only

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .sampling import corner_float, fma_lerp, inside, lerp_fma, pairwise_sum
+from .sampling import NONFINITE, corner_float, fma_lerp, inside, lerp_fma, pairwise_sum
 
 __all__ = ["colour_labels", "bin_integrals", "ncc", "colour_loglik"]
 
@@ -40,53 +40,71 @@ def colour_labels(hsv, out):
 @njit(cache=True)
 def bin_integrals(labels, n_bins):
     """``ii (H + 1, W + 1, n_bins)`` int32: ``ii[y, x, b]`` counts the pixels of bin ``b`` in
-    ``[0, x) x [0, y)``."""
+    ``[0, x) x [0, y)`` (each row the one above plus the row's running counts, over flat rows)."""
     h, w = labels.shape
-    ii = np.zeros((h + 1, w + 1, n_bins), np.int32)
+    ii = np.empty((h + 1, w + 1, n_bins), np.int32)
+    ii[0, :, :] = 0
     row = np.zeros(n_bins, np.int32)
     for y in range(h):
         row[:] = 0
+        ii[y + 1, 0, :] = 0
+        prev, cur = ii[y].reshape(-1), ii[y + 1].reshape(-1)
         for x in range(w):
             row[labels[y, x]] += 1
+            o = (x + 1) * n_bins
             for b in range(n_bins):
-                ii[y + 1, x + 1, b] = ii[y, x + 1, b] + row[b]
+                cur[o + b] = prev[o + b] + row[b]
     return ii
 
 
 @njit(cache=True)
-def ncc(texture, boxes, grid, x0, y0, f, template, out):
+def ncc(texture, boxes, gx, gy, x0, y0, f, template, out):
     """Template correlation ``out (N,)`` of ``boxes (N, 4)`` (cx, cy, w, h; frame px) on the working
     texture ``(H, W, 3)`` float32 (grey level, gx, gy) of a region at ``(x0, y0)``, scale ``f``:
-    ``√½ [g·T_g / |g - ḡ| + d·T_d / |d|]`` over the grid points ``grid (M, 2)`` (box units)."""
-    m = grid.shape[0]
+    ``√½ [g·T_g / |g - ḡ| + d·T_d / |d|]`` over the grid points ``(gx[c], gy[r])`` (box units) in
+    row-major order (the template's). A point's coordinates depend on its column or its row only:
+    they are computed once per column and row, with the same arithmetic as per point."""
+    mx, my = gx.shape[0], gy.shape[0]
+    m = mx * my
     zero = np.float32(0.0)
     nan = np.float32(np.nan)
     h, w = texture.shape[0], texture.shape[1]
+    cu, ca = np.empty(mx, np.int64), np.empty(mx, np.float32)
+    rv, rb = np.empty(my, np.int64), np.empty(my, np.float32)
     for n in range(boxes.shape[0]):
         cx, cy, bw, bh = boxes[n, 0], boxes[n, 1], boxes[n, 2], boxes[n, 3]
+        for c in range(mx):
+            ix, _, a, _ = corner_float(np.float32((cx + gx[c] * bw - x0) * f - 0.5), zero)
+            cu[c], ca[c] = ix, a
+        for r in range(my):
+            _, iy, _, b = corner_float(zero, np.float32((cy + gy[r] * bh - y0) * f - 0.5))
+            rv[r], rb[r] = iy, b
         gs = gg = gt = dd = dt = 0.0
-        for i in range(m):
-            u = np.float32((cx + grid[i, 0] * bw - x0) * f - 0.5)
-            v = np.float32((cy + grid[i, 1] * bh - y0) * f - 0.5)
-            ix, iy, a, b = corner_float(u, v)
-            if inside(ix, iy, w, h):
-                y0_, x0_ = np.uint64(iy), np.uint64(ix)
-                y1_, x1_ = y0_ + np.uint64(1), x0_ + np.uint64(1)
-                g = np.float64(fma_lerp(texture[y0_, x0_, 0], texture[y0_, x1_, 0], texture[y1_, x0_, 0],
-                                        texture[y1_, x1_, 0], a, b))
-                dx = np.float64(fma_lerp(texture[y0_, x0_, 1], texture[y0_, x1_, 1], texture[y1_, x0_, 1],
-                                         texture[y1_, x1_, 1], a, b))
-                dy = np.float64(fma_lerp(texture[y0_, x0_, 2], texture[y0_, x1_, 2], texture[y1_, x0_, 2],
-                                         texture[y1_, x1_, 2], a, b))
-            else:
-                g = np.float64(lerp_fma(texture, ix, iy, a, b, 0, zero, nan))
-                dx = np.float64(lerp_fma(texture, ix, iy, a, b, 1, zero, nan))
-                dy = np.float64(lerp_fma(texture, ix, iy, a, b, 2, zero, nan))
-            gs += g
-            gg += g * g
-            gt += g * template[i]
-            dd += dx * dx + dy * dy
-            dt += dx * template[m + 2 * i] + dy * template[m + 2 * i + 1]
+        for r in range(my):
+            iy, b = rv[r], rb[r]
+            for c in range(mx):
+                i = r * mx + c
+                ix, a = cu[c], ca[c]
+                if ix != NONFINITE and iy != NONFINITE and inside(ix, iy, w, h):
+                    y0_, x0_ = np.uint64(iy), np.uint64(ix)
+                    y1_, x1_ = y0_ + np.uint64(1), x0_ + np.uint64(1)
+                    g = np.float64(fma_lerp(texture[y0_, x0_, 0], texture[y0_, x1_, 0], texture[y1_, x0_, 0],
+                                            texture[y1_, x1_, 0], a, b))
+                    dx = np.float64(fma_lerp(texture[y0_, x0_, 1], texture[y0_, x1_, 1], texture[y1_, x0_, 1],
+                                             texture[y1_, x1_, 1], a, b))
+                    dy = np.float64(fma_lerp(texture[y0_, x0_, 2], texture[y0_, x1_, 2], texture[y1_, x0_, 2],
+                                             texture[y1_, x1_, 2], a, b))
+                else:
+                    if ix == NONFINITE or iy == NONFINITE:
+                        ix = iy = NONFINITE
+                    g = np.float64(lerp_fma(texture, ix, iy, a, b, 0, zero, nan))
+                    dx = np.float64(lerp_fma(texture, ix, iy, a, b, 1, zero, nan))
+                    dy = np.float64(lerp_fma(texture, ix, iy, a, b, 2, zero, nan))
+                gs += g
+                gg += g * g
+                gt += g * template[i]
+                dd += dx * dx + dy * dy
+                dt += dx * template[m + 2 * i] + dy * template[m + 2 * i + 1]
         g_norm = np.sqrt(max(gg - gs * gs / m, 0.0))
         d_norm = np.sqrt(dd)
         out[n] = np.sqrt(0.5) * (gt / max(g_norm, 1e-6) + dt / max(d_norm, 1e-6))

@@ -19,12 +19,14 @@ with ``K`` 1 (shared) or ``N`` (per pose).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
 from .sampling import corner, lerp4, pairwise_sum
 
-__all__ = ["profiles", "loglik", "loglik_profiles", "grid", "nearest_edge"]
+__all__ = ["profiles", "loglik", "loglik_profiles", "grid", "nearest_edge", "place"]
 
 _ZERO = np.float32(0.0)
 
@@ -221,3 +223,23 @@ def nearest_edge(gn, thresh, off, shift, reach, out):
                         best, at = d, k
             out[n, m] = off[at] - shift[n, m] if at >= 0 and best <= reach else 0.0
     return out
+
+
+@njit(cache=True)
+def place(z, pts0, n0, q, nrm):
+    """``Contour._place`` and ``Contour._turn`` in one pass: template points ``pts0 (M, 2)`` under the
+    poses ``z (N, >=4)`` into ``q (N, M, 2)`` and the unit vectors ``n0 (M, 2)`` rotated by their
+    angles into ``nrm (N, M, 2)``, float64, with numpy's arithmetic in numpy's order (equal)."""
+    for k in range(z.shape[0]):
+        c, s = 1.0 + z[k, 2], z[k, 3]
+        r = math.hypot(c, s)
+        r = r if r > 1e-12 or np.isnan(r) else 1e-12
+        cn, sn = c / r, s / r
+        for i in range(pts0.shape[0]):
+            px, py = pts0[i, 0], pts0[i, 1]
+            q[k, i, 0] = (z[k, 0] + c * px) - s * py
+            q[k, i, 1] = (z[k, 1] + s * px) + c * py
+            nx, ny = n0[i, 0], n0[i, 1]
+            nrm[k, i, 0] = cn * nx - sn * ny
+            nrm[k, i, 1] = sn * nx + cn * ny
+    return q, nrm

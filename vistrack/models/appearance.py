@@ -167,8 +167,9 @@ class Appearance:
         a = w / h
         mx = int(np.clip(round(np.sqrt(template_points * a)), 4, 64))
         my = int(np.clip(round(template_points / mx), 4, 64))
-        self.grid = np.stack(np.meshgrid((np.arange(mx) + 0.5) / mx - 0.5, (np.arange(my) + 0.5) / my - 0.5),
-                             axis=-1).reshape(-1, 2)  # (M, 2) offsets in box units
+        #: the grid's axes (box units) and its points ``(M, 2)``, row-major
+        self.grid_axes = ((np.arange(mx) + 0.5) / mx - 0.5, (np.arange(my) + 0.5) / my - 0.5)
+        self.grid = np.stack(np.meshgrid(*self.grid_axes), axis=-1).reshape(-1, 2)
         self.grid_shape = (my, mx)
         cx, cy = x + w / 2, y + h / 2
         obs = self.frame(frame, self.roi(np.array([[cx, cy, w, h]]), margin=1.5 * (w + h)))
@@ -234,8 +235,8 @@ class Appearance:
         if kernels.use():
             from ..kernels.appearance import ncc
 
-            return ncc(obs.texture, np.ascontiguousarray(b), self.grid, float(obs.x0), float(obs.y0), float(obs.f),
-                       self.template, np.empty(len(b)))
+            return ncc(obs.texture, np.ascontiguousarray(b), *self.grid_axes, float(obs.x0), float(obs.y0),
+                       float(obs.f), self.template, np.empty(len(b)))
         x = b[:, None, 0] + self.grid[None, :, 0] * b[:, None, 2]
         y = b[:, None, 1] + self.grid[None, :, 1] * b[:, None, 3]
         t = obs.sample_texture(x, y)  # (N, M, 3) float32
@@ -268,6 +269,17 @@ class Appearance:
         """``log r`` of ``boxes (N, 4)`` (cx, cy, w, h), shape ``(N,)``."""
         log_rc, log_rt, _ = self.terms(obs, boxes)
         return log_rc + log_rt
+
+    def loglik_states(self, obs, states, size0):
+        """:meth:`loglik` of the boxes ``(cx, cy, w_0 e^l, h_0 e^l)`` of ``states (N, >=3)``
+        (``(cx, cy, l)`` first; ``size0 = (w_0, h_0)``) in one compiled call
+        (:func:`~vistrack.kernels.box.box_loglik`)."""
+        from ..kernels.box import box_loglik
+
+        c = self.colour
+        return box_loglik(states, size0, obs.ii, obs.texture, float(obs.x0), float(obs.y0), float(obs.f),
+                          float(self.ring), c.bg_weight, c.q, c._bp, float(c.lambda_colour), float(c.kappa),
+                          *self.grid_axes, self.template, float(self.lambda_template), np.empty(len(states)))
 
     def adapt(self, obs, box):
         """Move the template and histogram towards the estimate ``box (4,)`` on a
@@ -319,11 +331,18 @@ class Appearance:
         s_out = cv2.boxFilter(bp, -1, (tw + 2 * g, th + 2 * g), normalize=False, anchor=(0, 0),
                               borderType=cv2.BORDER_CONSTANT)
         hh, ww = ncc.shape
+        area_ring = (tw + 2 * g) * (th + 2 * g) - tw * th
+        if kernels.use() and all(type(v) in (int, float) for v in (self.lambda_template, self.lambda_colour)):
+            from ..kernels.box import map_scores
+
+            out = map_scores(ncc, s_in, s_out, g, tw * th, area_ring, self.lambda_template, self.lambda_colour,
+                             np.empty((hh, ww), np.float32))
+            return out, c0 + tw / 2.0, r0 + th / 2.0
         inside = s_in[:hh, :ww] / (tw * th)
         # the ring box of the template at (i, j) starts at (i - g, j - g): shifted by g, zeros before
         out_pad = np.zeros((hh, ww), s_out.dtype)
         out_pad[g:, g:] = s_out[:max(hh - g, 0), :max(ww - g, 0)]
-        ring = (out_pad - s_in[:hh, :ww]) / ((tw + 2 * g) * (th + 2 * g) - tw * th)
+        ring = (out_pad - s_in[:hh, :ww]) / area_ring
         log_q = self.lambda_template * (np.nan_to_num(ncc) - 1.0) + self.lambda_colour * (inside - ring)
         return log_q.astype(np.float32), c0 + tw / 2.0, r0 + th / 2.0
 

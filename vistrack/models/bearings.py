@@ -25,10 +25,11 @@ from scipy import optimize, special
 
 from ..gaussian import diag_logpdf
 from ..proposals import GaussMixtureProposal, Window
+from .bearings_xi import XiProposal
 from .kernel import is_prior
 from .partitions import IndependentTargets
 
-__all__ = ["Bearings", "wrapped_cauchy_logpdf", "gaussian_fit_to_cauchy", "simulate"]
+__all__ = ["Bearings", "LIS_PROPOSALS", "wrapped_cauchy_logpdf", "gaussian_fit_to_cauchy", "simulate"]
 
 F = np.array([[1.0, 1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 0, 1]])
 G = np.array([[0.5, 0], [1, 0], [0, 0.5], [0, 1]])
@@ -43,6 +44,9 @@ SHIP_MEANS = np.array(
 )
 #: prior covariance diagonal, 0.001 * (0.5^2, 0.005^2, 0.3^2, 0.01^2)
 PRIOR_VAR = 0.001 * np.array([0.5**2, 0.005**2, 0.3**2, 0.01**2])
+
+#: LIS proposals of :meth:`Bearings.lis_proposal`
+LIS_PROPOSALS = ("xi", "position")
 
 _POS = np.array([0, 2])
 _VEL = np.array([1, 3])
@@ -107,19 +111,26 @@ class Bearings(IndependentTargets):
         LIS proposal: variance ratio along/across the observed bearing (100).
     sigma_g : float
         LIS window standard deviation on each position coordinate (0.0005).
+    proposal : {"xi", "position"}
+        LIS's local proposal (:meth:`lis_proposal`): the move of the noise ``ξ`` across the
+        observed bearing with its first stage (default), or §4.5.5's position move.
     means : array_like of shape (M, 4), optional
         Prior means; default :func:`ship_means`.
     """
 
-    def __init__(self, ships=1, *, sigma_eta=1e-3, one_minus_rho=0.005**2, kappa=100.0, sigma_g=5e-4, means=None):
+    def __init__(self, ships=1, *, sigma_eta=1e-3, one_minus_rho=0.005**2, kappa=100.0, sigma_g=5e-4, means=None,
+                 proposal="xi"):
         if ships < 1:
             raise ValueError(f"need at least one ship, got {ships}")
+        if proposal not in LIS_PROPOSALS:
+            raise ValueError(f"LIS proposal must be one of {', '.join(LIS_PROPOSALS)}, got {proposal!r}")
         self.ships = int(ships)
         self.dim = 4 * self.ships
         self.sigma_eta = float(sigma_eta)
         self.one_minus_rho = float(one_minus_rho)
         self.kappa = float(kappa)
         self.sigma_g = float(sigma_g)
+        self.proposal = proposal
         self.prior_mean = (ship_means(self.ships) if means is None else np.asarray(means, float)).reshape(-1)
         self.prior_std = np.sqrt(np.tile(PRIOR_VAR, self.ships))
         # Wrapped Cauchy with rho = exp(-gamma) is the wrapped Cauchy(0, gamma).
@@ -226,7 +237,11 @@ class Bearings(IndependentTargets):
         return np.full(2 * self.ships, self.sigma_g)
 
     def lis_proposal(self, kernel=None):
-        """The §4.5.5 LIS proposal with a Gaussian window (:meth:`window_std`) per ship."""
+        """LIS's local proposal: the ``ξ`` move across the observed bearing with a first stage
+        (:class:`~vistrack.models.bearings_xi.XiProposal`), or with ``proposal="position"`` the
+        §4.5.5 proposal with a Gaussian window (:meth:`window_std`) per ship."""
+        if self.proposal == "xi":
+            return XiProposal(self, kernel)
         var = self.window_std(kernel).reshape(self.ships, 2) ** 2
         return GaussMixtureProposal(self, var[:, :, None] * np.eye(2), kernel)
 
@@ -238,7 +253,8 @@ class Bearings(IndependentTargets):
         """Ship ``j`` alone: a one-ship model with this model's parameters (its partition)."""
         if j not in self._targets:
             self._targets[j] = Bearings(1, sigma_eta=self.sigma_eta, one_minus_rho=self.one_minus_rho, kappa=self.kappa,
-                                        sigma_g=self.sigma_g, means=self.prior_mean[self.partitions[j]][None])
+                                        sigma_g=self.sigma_g, means=self.prior_mean[self.partitions[j]][None],
+                                        proposal=self.proposal)
         return self._targets[j]
 
     def target_obs(self, obs, j):

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import kernels
 from ..features import remap_points
 from ..gaussian import diag_logpdf
 from ..proposals import MapProposal, Window
@@ -144,13 +145,24 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
     def predict(self, states, rng):
         """A draw from ``K``: the mean plus ``σ_c e^{l}`` noise on the centre and ``σ_l`` on the log-scale;
         ``(N, 6)`` -> ``(N, 6)``."""
+        noise = rng.standard_normal((len(states), 3))
+        if kernels.use():
+            from ..kernels.box import ar2_predict
+
+            return ar2_predict(np.ascontiguousarray(states, float), self.damping, self.sigma, noise,
+                               np.empty((len(states), 6)))
         out = self.predict_mean(states)
-        out[:, :3] += self._std(states) * rng.standard_normal((len(states), 3))
+        out[:, :3] += self._std(states) * noise
         return out
 
     def transition_logpdf(self, new, old):
         """``log K(new|old)``: Gaussian in the current values; the previous values of ``new``
         are the current values of ``old``."""
+        if kernels.use():
+            from ..kernels.box import ar2_logpdf
+
+            return ar2_logpdf(np.ascontiguousarray(new, float), np.ascontiguousarray(old, float), self.damping,
+                              self.sigma, np.empty(len(new)))
         return diag_logpdf(new[:, :3], self.predict_mean(old)[:, :3], self._std(old))
 
     # -- observation --------------------------------------------------------------------
@@ -168,6 +180,8 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
 
     def loglik(self, obs, states):
         """``log r`` of ``states (N, 6)``, shape ``(N,)``."""
+        if kernels.use():
+            return self.app.loglik_states(obs, np.ascontiguousarray(states, float), self.size0)
         return self.app.loglik(obs, self.boxes(states))
 
     def estimate(self, particles):
@@ -186,23 +200,38 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         base = self.window * (self.prior_std[0] if is_prior(kernel) else self.sigma[0])
         return base if states is None else base * np.exp(states[:, 2])
 
+    #: the LIS map's tempering and flat share: ``log q = logaddexp(t (m - max) + log(1 - s), log s)``
+    proposal_tempering = (0.5, 0.05)
+
+    def proposal_work(self, obs):
+        """``(x0, y0, f)``: frame px ``x`` is working px ``(x - x0) f`` of the proposal map."""
+        return float(obs.x0), float(obs.y0), float(obs.f)
+
+    def proposal_qmap(self, obs, states, span):
+        """The LIS proposal map of the frame ``(map (H', W') float32, u0, v0)`` (map pixel ``(i, j)`` at
+        working centre ``(u0 + j, v0 + i)``) or ``()``: :meth:`Appearance.proposal_map` at the mean
+        size of ``states``, over the working ``span`` ``(u_min, u_max, v_min, v_max)`` the points read;
+        computed on the first call of the frame and kept on ``obs``."""
+        if obs.proposal is None:
+            w, h = self.size0 * np.exp(np.mean(states[:, 2]))
+            obs.proposal = self.app.proposal_map(obs, w, h, span=span) or ()
+        return obs.proposal
+
     def proposal_log_q(self, obs, states, points):
         """The map's ``log q`` at centres ``points (N, G, 2)`` (frame px), for the LIS proposal:
-        :meth:`Appearance.proposal_map` at the particles' mean size, tempered by one half and
-        mixed with 5 % of a flat floor (a defensive share)."""
+        :meth:`proposal_qmap`, tempered by one half and mixed with 5 % of a flat floor (a
+        defensive share; :attr:`proposal_tempering`)."""
         u, v = obs.to_work(points[..., 0], points[..., 1])
-        if obs.proposal is None:  # once per frame, at the particles' mean size, where the points are
-            w, h = self.size0 * np.exp(np.mean(states[:, 2]))
-            obs.proposal = self.app.proposal_map(obs, w, h, span=(u.min(), u.max(), v.min(), v.max())) or ()
-        qmap = obs.proposal
+        qmap = self.proposal_qmap(obs, states, (u.min(), u.max(), v.min(), v.max()))
         n, g, _ = points.shape
         if not qmap:
             return np.zeros((n, g))
         m, u0, v0 = qmap
         lo = float(m.min())
+        t, floor = self.proposal_tempering
         val = remap_points(m, u - u0, v - v0, border=lo).astype(float)
-        val = 0.5 * (val - val.max(axis=1, keepdims=True))
-        return np.logaddexp(val + np.log(0.95), np.log(0.05))
+        val = t * (val - val.max(axis=1, keepdims=True))
+        return np.logaddexp(val + np.log(1 - floor), np.log(floor))
 
     def lis_proposal(self, kernel=None):
         """LIS's proposal for a step with ``kernel``: the colour/template map on a grid."""

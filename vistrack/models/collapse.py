@@ -67,8 +67,13 @@ class CollapseWatch:
 
     @property
     def level(self):
-        """The running level of ``log r`` (``None`` before any frame was reported)."""
-        return float(np.median(self.history)) if self.history else None
+        """The running level of ``log r`` (``None`` before any frame was reported): the median of the
+        history (finite values), as ``np.median`` computes it, by a sort of at most ``window`` floats."""
+        if not self.history:
+            return None
+        s = sorted(self.history)
+        k = len(s) // 2
+        return float(s[k]) if len(s) % 2 else float((s[k - 1] + s[k]) / 2.0)
 
     def _likelihood(self, loglik):
         if not np.isfinite(loglik):
@@ -117,6 +122,12 @@ class CollapseCheck:
         if self._collapse is None:
             self._collapse = CollapseWatch(**self.collapse_options)
         s = np.asarray(state, float).reshape(1, -1)
-        d = self.describe(s[0])
-        return self._collapse.check(float(self.loglik(obs, s)[0]), float(d["scale"]), (float(d["cx"]), float(d["cy"])),
+        scale, cx, cy = self.collapse_pose(s[0])
+        return self._collapse.check(float(self.loglik(obs, s)[0]), float(scale), (float(cx), float(cy)),
                                     self.frame_size)
+
+    def collapse_pose(self, state):
+        """``(scale, cx, cy)`` of ``state`` that the test reads: :meth:`describe`'s (a model whose
+        :meth:`describe` does more, e.g. the contour's outline, gives them directly)."""
+        d = self.describe(state)
+        return d["scale"], d["cx"], d["cy"]

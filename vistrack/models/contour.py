@@ -14,9 +14,8 @@ State
     ``z_t = z_{t-1} + d (z_{t-1} - z_{t-2}) + σ ε`` with the velocity carried over
     (``d = 0.8``) on translation and a random walk (``d = 0``) on ``a, b``.
 Likelihood (Blake and Isard; §1.3.1)
-    Along the outward unit normal ``n_i`` at each measurement point (two per
-    spline segment) the
-    gradient component along the normal, ``g · n_i``, is sampled bilinearly at
+    Along the outward unit normal ``n_i`` at each measurement point (two per spline
+    segment) the gradient component along the normal, ``g · n_i``, is sampled bilinearly at
     offsets ``ν_k = k`` px, ``|k| <= half_line`` (``g``: Sobel of the frame
     smoothed by a Gaussian of std ``gradient_sigma`` = 1 px, which damps sensor
     noise and the loss of motion-blurred edges). Edge features are the local
@@ -223,6 +222,9 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
 
     def measurement_lines(self, z):
         """Measurement points and unit normals ``(N, M, 2)`` each (likelihood lines)."""
+        if kernels.use():
+            from ..kernels.contour import place
+            return place(z, self.meas0, self.meas_normals0, *(np.empty((len(z),) + self.meas0.shape) for _ in "qn"))
         return self._place(z, self.meas0), self._turn(z, self.meas_normals0)
 
     def outline(self, states, per_segment=8):
@@ -378,6 +380,10 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
         return np.sum(np.log1p(np.exp(self.log_c) * (peaks @ self._line_kernel())), axis=1)
 
     # -- output -------------------------------------------------------------------
+    def collapse_pose(self, state):
+        """``(scale, cx, cy)`` of ``state`` as :meth:`describe` gives them, without the outline."""
+        return float(pose_params(np.asarray(state, float).reshape(-1)[:4])[0]), state[0], state[1]
+
     def describe(self, state):
         """Track-file fields of one state: centre, box, angle, scale, support points."""
         state = np.asarray(state, float).reshape(1, -1)

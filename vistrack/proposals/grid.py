@@ -10,12 +10,18 @@ inside it, so the sampling density is ``h(Z) = q(c_j) g(σ o_j) / alpha_hat`` wi
 ``r(Z) K(Z|.) g(X - Z) / (K(X|.) h(Z))`` is LIS's ``alpha r / q · K(Z)/K(X)`` with
 ``log_alpha = log alpha_hat + log g(X - Z)`` and ``log_q = log q(c_j) + log g(σ o_j)``,
 however coarse the grid or rough the map.
+
+With the compiled kernels (:mod:`vistrack.kernels`), a model whose ``log q`` is a map read
+bilinearly (``proposal_work``, ``proposal_qmap`` and ``proposal_tempering``, as the box model's)
+is sampled in two compiled calls (:func:`~vistrack.kernels.box.grid_points`,
+:func:`~vistrack.kernels.box.map_sample`) from the same draws.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .. import kernels
 from ..particles import logsumexp
 
 __all__ = ["MapProposal", "categorical_rows"]
@@ -61,6 +67,8 @@ class MapProposal:
         docstring); returns ``(z, log_alpha (N,), log_q (N,))`` for LIS's weight. ``prev`` is unused.
         """
         model = self.model
+        if kernels.use() and hasattr(model, "proposal_qmap"):
+            return self._sample_map(x, obs, rng)
         u = model.local_coords(x)
         sig = model.window_std(x, self.kernel)[:, None]  # (N, 1)
         pts = u[:, None, :] + sig[..., None] * self.offsets[None]
@@ -71,4 +79,32 @@ class MapProposal:
         log_g = -0.5 * np.sum(d * d, axis=1) - _LOG2PI - 2 * np.log(sig[:, 0])
         log_alpha = logsumexp(log_qg, axis=1) + 2 * np.log(self.cell * sig[:, 0]) + log_g
         log_q = log_qg[np.arange(len(u)), j]
+        return self.with_local(x, z_u), log_alpha, log_q
+
+    def _sample_map(self, x, obs, rng):
+        """:meth:`sample` for a model whose ``log q`` is its map (module docstring), compiled: the
+        same draws (Gumbel-max from ``rng.random``, as ``rng.gumbel`` makes them from the same
+        uniforms, then the shift in the cell), the same arithmetic."""
+        from ..kernels.box import grid_points, map_sample
+
+        model = self.model
+        x = np.ascontiguousarray(x, dtype=float)
+        n, g = len(x), len(self.offsets)
+        sig = np.ascontiguousarray(model.window_std(x, self.kernel), dtype=float)
+        x0, y0, f = model.proposal_work(obs)
+        uw, vw = np.empty((n, g)), np.empty((n, g))
+        span = grid_points(x, sig, self.offsets, x0, y0, f, uw, vw, np.empty(4))
+        qmap = model.proposal_qmap(obs, x, tuple(span))
+        m, u0, v0 = qmap if qmap else (np.zeros((0, 1), np.float32), 0.0, 0.0)
+        t, floor = model.proposal_tempering
+        state = rng.bit_generator.state
+        gumbel = rng.random((n, g))
+        uniforms = bool(gumbel.all())
+        if not uniforms:  # rng.gumbel redraws a uniform of 0 (p = 2^-53): take its draws instead
+            rng.bit_generator.state = state
+            gumbel = rng.gumbel(size=(n, g))
+        z_u, log_alpha, log_q = np.empty((n, 2)), np.empty(n), np.empty(n)
+        map_sample(x, sig, self.offsets, self.log_g_unit, float(self.cell), uw, vw, m[..., None], float(u0), float(v0),
+                   float(m.min()) if qmap else 0.0, float(t), float(np.log(1 - floor)), float(np.log(floor)),
+                   gumbel, uniforms, rng.random((n, 2)), z_u, log_alpha, log_q)
         return self.with_local(x, z_u), log_alpha, log_q

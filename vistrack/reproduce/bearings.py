@@ -22,7 +22,7 @@ import numpy as np
 
 from ..models.bearings import simulate
 from ..filters import ALGORITHMS, filter_steps, make_filter
-from ..models.bearings import Bearings
+from ..models.bearings import LIS_PROPOSALS, Bearings
 from ..particles import DegenerateWeightsWarning
 
 __all__ = ["BearingsConfig", "run_bearings", "bearing_tasks", "run_bearing_task", "bearing_results", "DEFAULT_ALGOS",
@@ -41,6 +41,8 @@ class BearingsConfig:
     steps: int = 10
     algos: list = field(default_factory=lambda: list(DEFAULT_ALGOS))
     particles: list = field(default_factory=lambda: [100, 500, 3000])
+    #: LIS's local proposal (:data:`~vistrack.models.bearings.LIS_PROPOSALS`)
+    proposal: str = "xi"
     seed: int = 0
     resample: str = "systematic"
     ess_threshold: float | None = None
@@ -61,6 +63,8 @@ class BearingsConfig:
             v = getattr(self, name)
             if v < 1:
                 raise ValueError(f"--{name} must be a positive integer, got {v}")
+        if self.proposal not in LIS_PROPOSALS:
+            raise ValueError(f"--lis-proposal must be one of {', '.join(LIS_PROPOSALS)}, got {self.proposal!r}")
         if not self.particles:
             raise ValueError("--particles needs at least one particle count")
         bad = [n for n in self.particles if n < 1]
@@ -68,7 +72,7 @@ class BearingsConfig:
             raise ValueError(f"--particles must be positive integers, got {bad[0]}")
         if not self.algos:
             raise ValueError("--algos needs at least one algorithm")
-        model = Bearings(self.ships)
+        model = Bearings(self.ships, proposal=self.proposal)
         for a in dict.fromkeys(a for a, _ in self.pairs()):
             if a not in ALGORITHMS or a == "sir":
                 choices = ", ".join(sorted(k for k in ALGORITHMS if k != "sir"))
@@ -123,7 +127,7 @@ def equal_time_pairs(cfg, runs=3, repeats=3, steps=4):
     on the first sequence in this process; the N tried are :func:`_search`'s (a straight line
     through N and 2N, as eval fits, is thrown far off by one noisy timing when the answer lies
     far from N). Returns ``(pairs, {"algo:N": ms per run})``, the times at the answers."""
-    model = Bearings(cfg.ships)
+    model = Bearings(cfg.ships, proposal=cfg.proposal)
     _, obs, seeds = _sequence(cfg, model, 0)
     seeds = seeds[:runs]
 
@@ -174,7 +178,7 @@ def run_bearing_task(task, out_dir):
     prepare_worker()
 
     cfg = BearingsConfig(**task["config"])
-    res = _sequence_runs(cfg, Bearings(cfg.ships), task["sequence"])
+    res = _sequence_runs(cfg, Bearings(cfg.ships, proposal=cfg.proposal), task["sequence"])
     result = {"sequence": task["sequence"],
               "entries": [{"algo": a, "particles": n, "ship_errors": e.tolist(), "seconds": sec, "degenerate": deg}
                           for (a, n), (e, sec, deg) in res.items()]}
@@ -238,7 +242,7 @@ def run_bearings(cfg, progress=None):
     ``progress(k)`` is called after every ``k`` finished runs.
     """
     cfg.validate()
-    model = Bearings(cfg.ships)
+    model = Bearings(cfg.ships, proposal=cfg.proposal)
     per = {}
     for s in range(cfg.sequences):
         for key, v in _sequence_runs(cfg, model, s).items():

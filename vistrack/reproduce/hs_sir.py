@@ -8,7 +8,9 @@ filtered out. Every (clip, algorithm, N, run) is a task of the evaluation engine
 (:mod:`vistrack.evaluation`), as the contour experiment's; lost is the centre error above 50 px
 at 240-px width, scaled (Fig. 3.10), and the mean error is over runs not lost (Fig. 3.9).
 Table 3.1 ran Basic-SIR with 3000 particles against RB-SS-HS-SIR with 400, at equal time;
-:func:`equal_time_entries` finds such particle counts on this machine.
+:func:`equal_time_entries` finds such particle counts on this machine. ``HSConfig.likelihood``
+sets the edge likelihood's parameters for every algorithm alike (:func:`likelihood_params`;
+empty: the contour model's defaults).
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ import numpy as np
 
 from .contour import ContourConfig, contour_results, contour_tasks
 
-__all__ = ["HSConfig", "DEFAULT_ENTRIES", "hs_tasks", "hs_results", "equal_time_entries"]
+__all__ = ["HSConfig", "DEFAULT_ENTRIES", "LIKELIHOOD_KEYS", "hs_tasks", "hs_results", "equal_time_entries",
+           "likelihood_params"]
 
 #: Table 3.1's particle counts
 DEFAULT_ENTRIES = [("basic-sir", 3000), ("rb-ss-hs-sir", 400)]
@@ -32,10 +35,45 @@ class HSConfig(ContourConfig):
     root seed (the contour experiment's tasks and summaries)."""
 
     entries: list = field(default_factory=lambda: list(DEFAULT_ENTRIES))
+    #: the contour model's likelihood parameters for every task (:data:`LIKELIHOOD_KEYS`)
+    likelihood: dict = field(default_factory=dict)
 
 
-#: the tasks and pooled summaries are the contour experiment's
-hs_tasks, hs_results = contour_tasks, contour_results
+#: the edge likelihood's parameters that ``likelihood`` may set, with their types
+#: (:class:`~vistrack.models.contour.Contour`)
+LIKELIHOOD_KEYS = {"sigma_edge": float, "q_miss": float, "clutter_density": float, "measure_per_segment": int,
+                   "edge_threshold": float}
+
+
+def likelihood_params(text):
+    """``{key: value}`` from ``"KEY=VALUE,..."`` (keys of :data:`LIKELIHOOD_KEYS`, positive values);
+    a ``ValueError`` with a one-line message otherwise. ``""`` gives ``{}``."""
+    out = {}
+    for item in filter(None, (i.strip() for i in str(text).split(","))):
+        key, _, value = item.partition("=")
+        if key not in LIKELIHOOD_KEYS:
+            raise ValueError(f"unknown likelihood parameter {key!r}; choose from {', '.join(LIKELIHOOD_KEYS)}")
+        try:
+            out[key] = LIKELIHOOD_KEYS[key](value)
+        except ValueError:
+            kind = "an integer" if LIKELIHOOD_KEYS[key] is int else "a number"
+            raise ValueError(f"{key} needs {kind}, got {value!r}") from None
+        if not out[key] > 0:
+            raise ValueError(f"{key} must be positive, got {value}")
+    return out
+
+
+def hs_tasks(cfg):
+    """The contour experiment's tasks, each building its model with ``cfg.likelihood``."""
+    tasks = contour_tasks(cfg)
+    if cfg.likelihood:  # absent by default, so the default tasks (and their --resume files) stay as they were
+        for t in tasks:
+            t["model_params"] = dict(cfg.likelihood)
+    return tasks
+
+
+#: the pooled summaries are the contour experiment's
+hs_results = contour_results
 
 
 def _ms_per_frame(frames, model, algo, n, repeats=2):
@@ -52,10 +90,11 @@ def _ms_per_frame(frames, model, algo, n, repeats=2):
     return best
 
 
-def equal_time_entries(clip_path, entries, frames=20):
+def equal_time_entries(clip_path, entries, frames=20, likelihood=None):
     """``entries`` with every N after the first set so that its time per frame matches the first
-    entry's (time taken on the first ``frames`` frames of ``clip_path``; linear in N between N
-    and 2N), as Table 3.1's counts were chosen. Returns ``(entries, {algo: ms per frame})``."""
+    entry's (time taken on the first ``frames`` frames of ``clip_path``, the model built with
+    ``likelihood``; linear in N between N and 2N), as Table 3.1's counts were chosen. Returns
+    ``(entries, {algo: ms per frame})``."""
     from ..builders import build_model
     from ..clips import load_clip
 
@@ -65,7 +104,7 @@ def equal_time_entries(clip_path, entries, frames=20):
         if i >= frames:
             break
         fr.append((i, f))
-    model = build_model("contour", clip, init_gt="")
+    model = build_model("contour", clip, init_gt="", **(likelihood or {}))
     ref_algo, ref_n = entries[0]
     budget = _ms_per_frame(fr, model, ref_algo, ref_n)
     out, times = [(ref_algo, ref_n)], {f"{ref_algo}:{ref_n}": budget}

@@ -37,9 +37,13 @@ TABLES = {
 
 
 def format_table(experiment, results):
-    """The text table of ``results`` with the columns of ``TABLES[experiment]``."""
+    """The text table of ``results`` with the columns of ``TABLES[experiment]`` (the first column
+    as wide as its longest entry)."""
     cols = TABLES[experiment]
     widths = [int("".join(c for c in fmt.split(".")[0] if c.isdigit())) for _, _, fmt in cols]
+    first = cols[0][1]  # the left-aligned name column widens to the longest name
+    widths[0] = max([widths[0]] + [len(str(r[first])) for r in results if r[first] is not None])
+    cols = [(cols[0][0], first, f"<{widths[0]}")] + list(cols[1:])
     head = " ".join(format(h, f"{fmt[0]}{w}") for (h, _, fmt), w in zip(cols, widths))
     lines = [head, "-" * len(head)]
     for r in results:

@@ -1,0 +1,206 @@
+"""The box model's filter step (:mod:`~vistrack.models.box`, LIS), compiled: fewer, larger calls.
+
+Each kernel does what a chain of small numpy calls does per frame, with the same arithmetic in
+the same order (``tests/test_kernels_box.py`` states each tolerance):
+
+- :func:`ar2_predict` and :func:`ar2_logpdf`: ``Box.predict`` (the normal draws made by numpy,
+  in the same order) and ``Box.transition_logpdf``;
+- :func:`box_loglik`: ``Box.loglik`` (the boxes, the colour term and the template correlation);
+- :func:`grid_points` and :func:`map_sample`: :meth:`MapProposal.sample
+  <vistrack.proposals.grid.MapProposal.sample>` with the box's ``proposal_log_q``: the grid's
+  points and their span in working pixels, then the map read as ``cv2.remap`` reads it, the
+  tempered and floored ``log q``, the cell drawn by Gumbel-max from uniforms
+  (``-log(-log(1 - U))``: what ``Generator.gumbel`` computes from the same draws), the point
+  in its cell, ``log alpha`` and ``log q``.
+
+``exp`` and ``log`` are the C library's here and in numpy's scalar loops (equal where numpy has
+no SIMD loop for them: the tests compare with a 1e-12 tolerance).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .appearance import colour_loglik, ncc
+from .sampling import corner_float, fma_lerp, lerp_fma, pairwise_sum
+
+__all__ = ["ar2_predict", "ar2_logpdf", "box_loglik", "grid_points", "map_sample"]
+
+_LOG2PI = float(np.log(2.0 * np.pi))  # as vistrack.gaussian and vistrack.proposals.grid
+_LN2 = 0.693147180559945309417232121458176568
+
+
+@njit(cache=True)
+def ar2_predict(states, damping, sigma, noise, out):
+    """``Box.predict``: ``out (N, 6)`` = ``(z + d (z - z') + σ e^{l} ε, z)`` with the centre's std
+    scaled by ``e^{l}`` of the old state and ``noise (N, 3)`` the normal draws."""
+    for n in range(states.shape[0]):
+        e = math.exp(states[n, 2])
+        for k in range(3):
+            z1, z2 = states[n, k], states[n, 3 + k]
+            sd = sigma[k] * e if k < 2 else sigma[k]
+            out[n, k] = (z1 + damping[k] * (z1 - z2)) + sd * noise[n, k]
+            out[n, 3 + k] = z1
+    return out
+
+
+@njit(cache=True)
+def ar2_logpdf(new, old, damping, sigma, out):
+    """``Box.transition_logpdf``: ``log K(new|old) (N,)``, Gaussian in the current values about
+    ``z + d (z - z')`` with std ``σ e^{l}`` (centre) and ``σ_l``."""
+    for n in range(new.shape[0]):
+        e = math.exp(old[n, 2])
+        sq = logs = 0.0
+        for k in range(3):
+            z1, z2 = old[n, k], old[n, 3 + k]
+            sd = sigma[k] * e if k < 2 else sigma[k]
+            r = (new[n, k] - (z1 + damping[k] * (z1 - z2))) / sd
+            if k == 0:
+                sq, logs = r * r, math.log(sd)
+            else:
+                sq += r * r
+                logs += math.log(sd)
+        out[n] = -0.5 * sq - logs - 0.5 * 3 * _LOG2PI
+    return out
+
+
+@njit(cache=True)
+def box_loglik(states, size0, ii, texture, x0, y0, f, ring, bg_weight, q, bp, lam_c, kappa, gx, gy, template,
+               lam_t, out):
+    """``Box.loglik``: ``log r (N,)`` of ``states (N, >=3)`` whose boxes are ``(cx, cy, w_0 e^l, h_0 e^l)``:
+    the colour term (:func:`~vistrack.kernels.appearance.colour_loglik`) plus ``λ_t (ncc - 1)``
+    (:func:`~vistrack.kernels.appearance.ncc`)."""
+    n = states.shape[0]
+    boxes = np.empty((n, 4))
+    for i in range(n):
+        e = math.exp(states[i, 2])
+        boxes[i, 0], boxes[i, 1] = states[i, 0], states[i, 1]
+        boxes[i, 2], boxes[i, 3] = size0[0] * e, size0[1] * e
+    rc = colour_loglik(ii, x0, y0, f, boxes, ring, bg_weight, q, bp, lam_c, kappa, np.empty(n))
+    c = ncc(texture, boxes, gx, gy, x0, y0, f, template, np.empty(n))
+    for i in range(n):
+        out[i] = rc[i] + lam_t * (c[i] - 1.0)
+    return out
+
+
+@njit(cache=True)
+def grid_points(states, sig, offsets, x0, y0, f, uw, vw, span):
+    """The grid points ``c + σ o_j`` of each state's centre in working pixels ``uw, vw (N, G)``
+    (``(x - x0) f``) and their span ``(u_min, u_max, v_min, v_max)`` into ``span (4,)``."""
+    for n in range(states.shape[0]):
+        for j in range(offsets.shape[0]):
+            uw[n, j] = ((states[n, 0] + sig[n] * offsets[j, 0]) - x0) * f
+            vw[n, j] = ((states[n, 1] + sig[n] * offsets[j, 1]) - y0) * f
+    span[0], span[1], span[2], span[3] = uw.min(), uw.max(), vw.min(), vw.max()
+    return span
+
+
+@njit(cache=True, forceinline=True)
+def _nanmax(top, x):
+    """The running maximum as ``np.max`` keeps it: NaN once a NaN was met."""
+    if x != x or x > top:
+        return x if top == top else top
+    return top
+
+
+@njit(cache=True, forceinline=True)
+def _logaddexp(x, y):
+    """numpy's ``logaddexp`` of two float64 scalars."""
+    if x == y:
+        return x + _LN2
+    d = x - y
+    if d > 0:
+        return x + math.log1p(math.exp(-d))
+    if d <= 0:
+        return y + math.log1p(math.exp(d))
+    return d
+
+
+@njit(cache=True)
+def _log_q_rows(qmap, u0, v0, border, uw, vw, temper, log_keep, log_floor, out):
+    """The box's ``proposal_log_q`` into ``out (N, G)``: the map ``qmap (H, W, 1)`` float32 read at
+    ``(uw - u0, vw - v0)`` as ``cv2.remap`` reads it (``border`` outside), less each row's maximum,
+    times ``temper``, mixed with a flat floor: ``logaddexp(val + log_keep, log_floor)``."""
+    h, w = qmap.shape[0], qmap.shape[1]
+    nan, border = np.float32(np.nan), np.float32(border)
+    for n in range(uw.shape[0]):
+        for j in range(uw.shape[1]):
+            ix, iy, a, b = corner_float(np.float32(uw[n, j] - u0), np.float32(vw[n, j] - v0))
+            if 0 <= ix < w - 1 and 0 <= iy < h - 1:
+                y0_, x0_ = np.uint64(iy), np.uint64(ix)
+                y1_, x1_ = y0_ + np.uint64(1), x0_ + np.uint64(1)
+                s = fma_lerp(qmap[y0_, x0_, 0], qmap[y0_, x1_, 0], qmap[y1_, x0_, 0], qmap[y1_, x1_, 0], a, b)
+            else:
+                s = lerp_fma(qmap, ix, iy, a, b, 0, border, nan)
+            out[n, j] = np.float64(s)
+        top = out[n, 0]
+        for j in range(1, uw.shape[1]):
+            top = _nanmax(top, out[n, j])
+        for j in range(uw.shape[1]):
+            out[n, j] = _logaddexp(temper * (out[n, j] - top) + log_keep, log_floor)
+    return out
+
+
+@njit(cache=True)
+def map_sample(states, sig, offsets, log_g_unit, cell, uw, vw, qmap, u0, v0, border, temper, log_keep, log_floor,
+               gumbel, uniforms, shift_u, z_u, log_alpha, log_q):
+    """:meth:`MapProposal.sample <vistrack.proposals.grid.MapProposal.sample>` with the box's map
+    ``log q`` (``qmap`` with ``qmap.shape[0] == 0``: a flat ``log q = 0``): the cell of each row
+    drawn by Gumbel-max from ``gumbel (N, G)`` (``uniforms``: the uniforms ``U`` the Gumbel draws
+    ``-log(-log(1 - U))`` are made of, else the draws), the point uniform in it from
+    ``shift_u (N, 2)``; writes ``z_u (N, 2)`` (frame px), ``log_alpha (N,)`` and ``log_q (N,)``."""
+    n_rows, g = uw.shape
+    lq = np.zeros((n_rows, g))
+    if qmap.shape[0] > 0:
+        _log_q_rows(qmap, u0, v0, border, uw, vw, temper, log_keep, log_floor, lq)
+    ex = np.empty(g)
+    for n in range(n_rows):
+        two_log_sig = 2 * math.log(sig[n])
+        best, j = -np.inf, -1
+        top = -np.inf
+        for k in range(g):
+            lq[n, k] = (lq[n, k] + log_g_unit[k]) - two_log_sig
+            gk = (0.0 - 1.0 * math.log(-math.log(1.0 - gumbel[n, k]))) if uniforms else gumbel[n, k]
+            v = lq[n, k] + gk
+            if j < 0 or v > best or (np.isnan(v) and not np.isnan(best)):
+                best, j = v, k
+            top = _nanmax(top, lq[n, k])
+        shift = top if np.isfinite(top) else 0.0
+        for k in range(g):
+            ex[k] = math.exp(lq[n, k] - shift)
+        lse = shift + math.log(pairwise_sum(ex, 0, g))
+        if top == np.inf:
+            lse = np.inf
+        dd = 0.0
+        for c in range(2):
+            zc = (states[n, c] + sig[n] * offsets[j, c]) + sig[n] * cell * (shift_u[n, c] - 0.5)
+            z_u[n, c] = zc
+            r = (states[n, c] - zc) / sig[n]
+            dd = r * r if c == 0 else dd + r * r
+        log_g = -0.5 * dd - _LOG2PI - two_log_sig
+        log_alpha[n] = lse + 2 * math.log(cell * sig[n]) + log_g
+        log_q[n] = lq[n, j]
+    return z_u
+
+
+@njit(cache=True)
+def map_scores(ncc, s_in, s_out, g, area_in, area_ring, lam_t, lam_c, out):
+    """The end of ``Appearance.proposal_map`` in float32, as numpy computes it with Python-float
+    scalars: ``λ_t (nan_to_num(ncc) - 1) + λ_c (s_in / area_in - (s_out shifted by g - s_in) / area_ring)``
+    into ``out (hh, ww)`` (``ncc``'s shape; ``s_out`` read ``g`` rows and columns back, 0 before)."""
+    one, lt, lc = np.float32(1.0), np.float32(lam_t), np.float32(lam_c)
+    ai, ar = np.float32(area_in), np.float32(area_ring)
+    big = np.finfo(np.float32).max
+    for i in range(out.shape[0]):
+        for j in range(out.shape[1]):
+            v = ncc[i, j]
+            if np.isnan(v):
+                v = np.float32(0.0)
+            elif np.isinf(v):
+                v = big if v > 0 else -big
+            o = s_out[i - g, j - g] if i >= g and j >= g else np.float32(0.0)
+            out[i, j] = lt * (v - one) + lc * (s_in[i, j] / ai - (o - s_in[i, j]) / ar)
+    return out
