@@ -14,6 +14,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ..models.bearings_xi import laplace_parts
+
 __all__ = ["xi_move", "xi_look_ahead"]
 
 _LOG_SQRT_2PI = 0.5 * math.log(2 * math.pi)
@@ -25,19 +27,8 @@ def _logaddexp(x, y):
     return hi + math.log1p(math.exp(min(x, y) - hi))
 
 
-@njit(cache=True)
-def _parts(a, m, s, gam):
-    """``log_m1, log_m2, u_b, s_b`` of ``XiProposal.parts`` for one particle and ship."""
-    c2 = s * s + (gam * a) ** 2
-    log_m1 = math.log(a) - 0.5 * m * m / c2 - 0.5 * math.log(c2) - _LOG_SQRT_2PI
-    u = m
-    for _ in range(2):
-        q = u * u + c2
-        u = u + ((m - u) / (s * s) - 2 * u / q) / (1.0 / (s * s) + 2 * (c2 - u * u) / (q * q))
-    q = u * u + c2
-    s_b = 1.0 / math.sqrt(1.0 / (s * s) + 2 * (c2 - u * u) / (q * q))
-    log_m2 = math.log(gam * a * a / (math.pi * q) * s_b / s) - 0.5 * ((u - m) / s) ** 2
-    return log_m1, log_m2, u, s_b
+#: the ξ proposal's Laplace parts, compiled from the numpy path's own function
+_parts = njit(cache=True)(laplace_parts)
 
 
 @njit(cache=True)
