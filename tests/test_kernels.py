@@ -21,17 +21,9 @@ from vistrack.clips import load_clip
 from vistrack.features import FeatureMaps, bin_integrals, colour_bins, remap_points
 from vistrack.filters import make_filter
 from vistrack.tracking import FrameStepper, warm_up
+from kernel_helpers import both
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
-
-
-def both(fn):
-    """``fn()`` on the numpy paths, then on the kernels."""
-    with kernels.numpy_paths():
-        a = fn()
-    with kernels.numpy_paths(False):
-        b = fn()
-    return a, b
 
 
 def track(clip, model_name, algo, n, frames, fast, seed=0, **build):

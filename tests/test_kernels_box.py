@@ -19,17 +19,9 @@ from vistrack import kernels
 from vistrack.features import FeatureMaps
 from vistrack.models.collapse import CollapseWatch
 from vistrack.particles import ParticleSet
+from kernel_helpers import both
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
-
-
-def both(fn):
-    """``fn()`` on the numpy paths, then on the kernels."""
-    with kernels.numpy_paths():
-        a = fn()
-    with kernels.numpy_paths(False):
-        b = fn()
-    return a, b
 
 
 def moving_box_frames(n=20, seed=0):
