@@ -188,7 +188,15 @@ def _contour_from_clip(clip, *, init, init_gt, template, polarity="auto", colour
     return _learn_contour(model, _first_frame(clip), polarity, colour)
 
 
-def _plate_from_clip(clip, *, init, init_gt, template, **params):
+def _plate_from_clip(clip, *, init, init_gt, template, targets=None, **params):
+    if targets is not None:  # several plates at once: acquired by the slots' births
+        if init is not None or init_gt is not None:
+            raise VideoError("--targets finds the plates by itself: give no --init or --init-gt")
+        from .models.plates import Plates
+
+        params.pop("appearance", None)
+        layout = params.pop("layout", None) or (clip.meta or {}).get("layout") or "jp"
+        return Plates(clip.source.size, targets, layout, **params)
     return _plate(clip, clip.source.size, init, init_gt, params)
 
 
