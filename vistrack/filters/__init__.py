@@ -7,11 +7,13 @@ from .avpf import AVPF
 from .base import ParticleFilter, filter_steps
 from .basic_sir import BasicSIR
 from .bootstrap import Bootstrap
+from .branched_partitioned import BranchedPartitioned, BranchedPartitionedLIS
 from .history import HistorySampling
 from .hs_sir import HSSIR
 from .lis import LIS, GaussMixtureProposal
 from .lls import LLS, Window
 from .ls_n_ips import LSNIPS, LSNIPSNN
+from .partitioned import Partitioned, PartitionedLIS
 from .pf_doucet import PFDoucet
 from .pf_eis import PFEIS
 from .pf_eis_mt import PFEISMT
@@ -39,6 +41,10 @@ __all__ = [
     "PFEIS",
     "PFEISMT",
     "GaussMixtureProposal",
+    "Partitioned",
+    "PartitionedLIS",
+    "BranchedPartitioned",
+    "BranchedPartitionedLIS",
     "ALGORITHMS",
     "make_filter",
 ]
@@ -61,6 +67,10 @@ ALGORITHMS = {
     "pf-doucet": PFDoucet,
     "pf-eis": PFEIS,
     "pf-eis-mt": PFEISMT,
+    "partitioned": Partitioned,
+    "partitioned-lis": PartitionedLIS,
+    "branched-partitioned": BranchedPartitioned,
+    "branched-partitioned-lis": BranchedPartitionedLIS,
 }
 
 

@@ -26,6 +26,7 @@ from scipy import optimize, special
 from ..gaussian import diag_logpdf
 from ..proposals import GaussMixtureProposal, Window
 from .kernel import is_prior
+from .partitions import IndependentTargets
 
 __all__ = ["Bearings", "wrapped_cauchy_logpdf", "gaussian_fit_to_cauchy", "simulate"]
 
@@ -90,8 +91,9 @@ def ship_means(m):
     )
 
 
-class Bearings:
-    """Bearings-only tracking of ``ships`` independent ships.
+class Bearings(IndependentTargets):
+    """Bearings-only tracking of ``ships`` independent ships: one partition per ship
+    (:class:`~vistrack.models.partitions.IndependentTargets`, App. C).
 
     Parameters
     ----------
@@ -125,6 +127,8 @@ class Bearings:
         self.sigma_angle = gaussian_fit_to_cauchy(self.gamma)
         self.pos_idx = (4 * np.arange(self.ships)[:, None] + _POS).reshape(-1)
         self.vel_idx = (4 * np.arange(self.ships)[:, None] + _VEL).reshape(-1)
+        self.partitions = tuple(np.arange(4 * k, 4 * k + 4) for k in range(self.ships))
+        self._targets = {}
 
     # -- the model contract ---------------------------------------------------
     def sample_prior(self, n, rng):
@@ -229,6 +233,17 @@ class Bearings:
     def lls_window(self, kernel=None):
         """Gaussian window of std ``sigma_g`` on positions (for LLS)."""
         return Window("gaussian", self.window_std(kernel), grid=7)
+
+    def target_model(self, j):
+        """Ship ``j`` alone: a one-ship model with this model's parameters (its partition)."""
+        if j not in self._targets:
+            self._targets[j] = Bearings(1, sigma_eta=self.sigma_eta, one_minus_rho=self.one_minus_rho, kappa=self.kappa,
+                                        sigma_g=self.sigma_g, means=self.prior_mean[self.partitions[j]][None])
+        return self._targets[j]
+
+    def target_obs(self, obs, j):
+        """Ship ``j``'s bearing ``(1,)`` of ``obs (M,)``."""
+        return np.asarray(obs)[j:j + 1]
 
     # -- errors ---------------------------------------------------------------
     def position_error(self, estimate, truth):

@@ -15,6 +15,9 @@ local coordinates; each method's docstring gives its arguments and results.
   objects (the plate model's entering cars, §4.5.3).
 * :class:`LaplaceModel`, :class:`EISModel`: PF-Doucet, PF-EIS, PF-EIS-MT (seed 000 §2–3).
 * :class:`SIRModel`: plain SIR's proposal (§3.1).
+* :class:`Partitions`, :class:`PartitionLIS`: partitioned and branched partitioned sampling
+  (App. C): the state as τ partitions with kernels ``K_j``, importance functions ``π_j`` and
+  (for LIS inside each partition) local proposals ``q_j``.
 * :class:`InnovationSplit`: the history-sampling family (§3.2): innovation, history and the
   1a/1b subspace split, with the image-only proposal of the innovation.
 * :class:`VideoModel`: the frame loop, ``run``, ``eval`` and ``vistrack.Tracker``. Subclass
@@ -28,7 +31,7 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 __all__ = ["StateSpaceModel", "PredictMean", "LocalSearch", "LearnedSearch", "LocalMoves", "LLSModel", "GridLikelihood",
-           "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "InnovationSplit", "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
+           "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "InnovationSplit", "Partitions", "PartitionLIS", "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
 
 
 @runtime_checkable
@@ -242,6 +245,60 @@ class InnovationSplit(Protocol):
 
     def innovation_proposal(self, kernel=None):
         """``π(X_{t,1a} | Y_t)``: an object with ``sample(n, obs, rng) -> (n, a)`` and ``logpdf(x1a, obs) -> (n,)`` (§3.2.5's colour blobs)."""
+
+
+@runtime_checkable
+class Partitions(Protocol):
+    """The state as ``τ`` partitions sampled one after the other (thesis 001 App. C, Figs. C.1–C.2).
+
+    Partition ``j`` owns the columns ``partitions[j]``; ``K_j`` draws them given a state whose
+    partitions sampled before ``j`` hold ``X_t`` and the rest ``X_{t-1}`` (eq. C.2; ``p_0``
+    factorises alike on the first step). ``π_j`` (:meth:`loglik_part`) weights partition
+    ``j`` before the next resampling: for independent targets, target ``j``'s likelihood
+    factor. Branched partitioning needs eq. C.2 in each of its orders (independent targets:
+    any). Vectorised over particles (``states (N, d)``; ``d_j`` the partition's width).
+
+    Attributes
+    ----------
+    partitions : sequence of int arrays
+        The columns of each partition, ``τ`` disjoint arrays covering ``0..d-1``.
+    factorised_likelihood : bool
+        Whether ``log r(Y_t|x) = Σ_j log π_j`` exactly; the final weights then reuse the
+        ``l_{t,j}`` (Fig. C.1's note) instead of evaluating ``r``.
+    """
+
+    partitions: tuple
+    factorised_likelihood: bool
+
+    def predict_part(self, states, j, rng):
+        """A draw ``(N, d_j)`` of partition ``j`` from ``K_j(.|states)`` (``states (N, d)``: the
+        partitions sampled before ``j`` new, the others previous)."""
+
+    def part_logpdf(self, new, states, j):
+        """``log K_j(new|states)``; ``new (N, d_j)``, ``states (N, d)`` -> ``(N,)``."""
+
+    def sample_prior_part(self, states, j, rng):
+        """A draw ``(N, d_j)`` of partition ``j`` from ``p_0``'s factor given the partitions
+        sampled before it (columns of ``states (N, d)``; the rest is not read)."""
+
+    def prior_part_logpdf(self, new, states, j):
+        """``log p_0``'s factor ``j`` of ``new (N, d_j)`` given ``states (N, d)`` -> ``(N,)``."""
+
+    def loglik_part(self, obs, states, j):
+        """``log π_j(x_j | x_{1:j-1}, Y_t)`` of ``states (N, d)`` -> ``(N,)``: for independent
+        targets, target ``j``'s likelihood factor (``-inf`` where impossible)."""
+
+
+@runtime_checkable
+class PartitionLIS(Protocol):
+    """A local proposal per partition, for LIS inside partitioned sampling (App. C's closing
+    remark; Prop. 4.5.1 applied to ``K_j`` and ``π_j``)."""
+
+    def lis_part_proposal(self, j, kernel=None):
+        """Partition ``j``'s local proposal for a step with ``kernel`` (``None``: ``K``): an
+        object with ``sample(x (N, d), obs, rng, prev (N, d_j)) -> (z (N, d_j), log_alpha (N,),
+        log_q (N,))``, ``z`` drawn from ``q_j g(x_j - .) / α`` about partition ``j`` of the
+        predictions ``x`` (``prev``: partition ``j`` before it was predicted)."""
 
 
 @runtime_checkable
