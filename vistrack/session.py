@@ -331,7 +331,8 @@ def _mot_line(run, objects, model):
 
     cols = {k: np.array([r[k] for r in run.target_rows], float) for k in ("frame", "visible", "id", "scale")
             + tuple(f"{c}{i}" for i in range(4) for c in "xy")}
-    truth = objects_by_frame(objects)
+    frames = int(max(r["frame"] for r in run.rows)) + 1
+    truth = objects_by_frame(objects)[:frames]
     s = clear_mot(truth, objects_by_frame(cols, len(truth)), model.layout.aspect)
     fmt = lambda v: "n/a" if v is None else f"{v:.3f}"  # noqa: E731
     return (f"vs ground truth (objects.csv, {s['objects']} plates over the frames): MOTA {fmt(s['mota'])}, IDF1 "

@@ -40,6 +40,10 @@ SLOT = 10
 
 
 class Plates(VideoModelBase):
+    #: ``log r = Σ_j log π_j`` holds in the slots' order 0..K-1 (the exclusion is against the slots
+    #: before), not in the other orders of branched partitioning: the final weights take ``r``
+    factorised_likelihood = False
+
     """``K`` plate slots with per-slot presence (module docstring).
 
     Parameters
@@ -77,8 +81,8 @@ class Plates(VideoModelBase):
         self.offset, self.gain = float(offset), float(gain)
         self.birth_reserve = self.plate.birth_reserve
         self.reserve_age = self.plate.reserve_age
-        #: τ: one partition per slot (thesis App. C)
-        self.partitions = self.k
+        #: App. C: one partition per slot, its 10 columns
+        self.partitions = tuple(np.arange(SLOT * j, SLOT * (j + 1)) for j in range(self.k))
 
     # -- slots ----------------------------------------------------------------------
     @staticmethod
@@ -100,71 +104,69 @@ class Plates(VideoModelBase):
         """``n`` fresh slot states ``(n, 10)``: entering draws, age 0, present."""
         return np.concatenate([self.plate._enter(n, rng), np.ones((n, 1))], axis=1)
 
-    # -- p_0 and K, per slot and joint ----------------------------------------------------
-    def sample_slot_prior(self, states, j, rng):
-        """``states`` with slot ``j`` drawn from ``p_0``: present with probability
-        :attr:`start_present`, an entering draw either way (absent: its pose is unused)."""
-        out = states.copy()
+    # -- p_0 and K, per slot (the partitions of App. C) and joint -----------------------------
+    def sample_prior_part(self, states, j, rng):
+        """Slot ``j`` ``(N, 10)`` drawn from ``p_0``: present with probability :attr:`start_present`,
+        an entering draw either way (absent: its pose is unused)."""
         new = self._births(len(states), rng)
         new[:, 9] = rng.random(len(states)) < self.start_present
-        out[:, SLOT * j:SLOT * (j + 1)] = new
-        return out
+        return new
 
-    def slot_prior_logpdf(self, states, j):
-        """``log p_0`` of slot ``j`` of ``states (N, 10K)`` -> ``(N,)``."""
-        pres = self.present(states, j)
-        ent = self.plate.enter_logpdf(self.slot(states, j)[:, :4])
-        return np.where(pres, np.log(self.start_present) + ent, np.log1p(-self.start_present))
+    def prior_part_logpdf(self, new, states, j):
+        """``log p_0`` of slot ``j``'s ``new (N, 10)`` -> ``(N,)``."""
+        ent = self.plate.enter_logpdf(new[:, :4])
+        return np.where(new[:, 9] > 0.5, np.log(self.start_present) + ent, np.log1p(-self.start_present))
 
-    def predict_slot(self, states, j, rng):
-        """A draw of slot ``j`` from its kernel ``K_j`` (module docstring); the other slots are kept."""
-        out = states.copy()
+    def predict_part(self, states, j, rng):
+        """A draw ``(N, 10)`` of slot ``j`` from its kernel ``K_j`` given ``states (N, 10K)`` (module docstring)."""
         n = len(states)
-        x = self.slot(states, j)
-        pres = self.present(states, j)
+        x = states[:, SLOT * j:SLOT * (j + 1)]
+        pres = x[:, 9] > 0.5
         u = rng.random(n)
-        moved = self.plate.predict_mean(x)
+        moved = self.plate.predict_mean(x[:, :9])
         moved[:, :4] += self.plate.sigma * rng.standard_normal((n, 4))
         moved[:, 3] = np.clip(moved[:, 3], *self.plate.scale_range)
-        stay = x.copy()
-        stay[:, 8] += 1
-        new = np.where((pres & (u >= self.death))[:, None], moved, stay)
+        keep = pres & (u >= self.death)
+        out = x.copy()
+        out[:, 8] += 1
+        out[keep, :9] = moved[keep]
+        out[:, 9] = keep
         born = ~pres & (u < self.birth)
-        out[:, self.cols(j)] = new
-        out[:, SLOT * j + 9] = pres & (u >= self.death)
         if born.any():
-            out[born, SLOT * j:SLOT * (j + 1)] = self._births(int(born.sum()), rng)
+            out[born] = self._births(int(born.sum()), rng)
         return out
 
-    def slot_transition_logpdf(self, new, old, j):
-        """``log K_j(new_j | old_j)`` -> ``(N,)`` (the branch each slot took)."""
-        a, b = self.present(old, j), self.present(new, j)
-        z, x = self.slot(new, j), self.slot(old, j)
-        ar = np.log1p(-self.death) + diag_logpdf(z[:, :4], self.plate.predict_mean(x)[:, :4], self.plate.sigma)
-        born = np.log(self.birth) + self.plate.enter_logpdf(z[:, :4])
-        return np.select([a & b, a & ~b, ~a & b], [ar, np.full(len(z), np.log(self.death)), born],
+    def part_logpdf(self, new, states, j):
+        """``log K_j(new | states)`` of slot ``j``'s ``new (N, 10)`` -> ``(N,)`` (the branch it took)."""
+        x = states[:, SLOT * j:SLOT * (j + 1)]
+        a, b = x[:, 9] > 0.5, new[:, 9] > 0.5
+        mean = self.plate.predict_mean(x[:, :9])[:, :4]
+        ar = np.log1p(-self.death) + diag_logpdf(new[:, :4], mean, self.plate.sigma)
+        born = np.log(self.birth) + self.plate.enter_logpdf(new[:, :4])
+        return np.select([a & b, a & ~b, ~a & b], [ar, np.full(len(new), np.log(self.death)), born],
                          np.log1p(-self.birth))
 
     def sample_prior(self, n, rng):
-        """``n`` joint states ``(n, 10K)`` from ``p_0`` (every slot by :meth:`sample_slot_prior`)."""
+        """``n`` joint states ``(n, 10K)`` from ``p_0`` (every slot by :meth:`sample_prior_part`)."""
         x = np.zeros((n, self.dim))
-        for j in range(self.k):
-            x = self.sample_slot_prior(x, j, rng)
+        for j, cols in enumerate(self.partitions):
+            x[:, cols] = self.sample_prior_part(x, j, rng)
         return x
 
     def prior_logpdf(self, states):
         """``log p_0`` of ``states (N, 10K)`` -> ``(N,)``."""
-        return sum(self.slot_prior_logpdf(states, j) for j in range(self.k))
+        return sum(self.prior_part_logpdf(states[:, c], states, j) for j, c in enumerate(self.partitions))
 
     def predict(self, states, rng):
         """A draw from the joint ``K``: every slot by its own kernel, in order."""
-        for j in range(self.k):
-            states = self.predict_slot(states, j, rng)
-        return states
+        out = states.copy()
+        for j, cols in enumerate(self.partitions):
+            out[:, cols] = self.predict_part(states, j, rng)
+        return out
 
     def transition_logpdf(self, new, old):
         """``log K(new|old) = Σ_j log K_j`` -> ``(N,)``."""
-        return sum(self.slot_transition_logpdf(new, old, j) for j in range(self.k))
+        return sum(self.part_logpdf(new[:, c], old, j) for j, c in enumerate(self.partitions))
 
     @property
     def prior_mean(self):
@@ -184,7 +186,7 @@ class Plates(VideoModelBase):
         return ((np.abs((ba[:, 0] + ba[:, 2] / 2) - (bb[:, 0] + bb[:, 2] / 2)) < (ba[:, 2] + bb[:, 2]) / 2)
                 & (np.abs((ba[:, 1] + ba[:, 3] / 2) - (bb[:, 1] + bb[:, 3] / 2)) < (ba[:, 3] + bb[:, 3]) / 2))
 
-    def slot_loglik(self, obs, states, j):
+    def loglik_part(self, obs, states, j):
         """``log π_j(x_j | x_{1:j-1}, Y)`` of ``states (N, 10K)`` -> ``(N,)`` (module docstring): 0 where
         slot ``j`` is absent; the plate log-odds over :attr:`offset` where present, with the
         exclusion against every present slot before it."""
@@ -202,7 +204,7 @@ class Plates(VideoModelBase):
 
     def loglik(self, obs, states):
         """``log r(Y|X) = Σ_j log π_j`` -> ``(N,)``."""
-        return sum(self.slot_loglik(obs, states, j) for j in range(self.k))
+        return sum(self.loglik_part(obs, states, j) for j in range(self.k))
 
     # -- births for the resampling reserve ----------------------------------------------
     def entering(self, states):
@@ -216,24 +218,34 @@ class Plates(VideoModelBase):
 
     # -- estimate and report -----------------------------------------------------------
     def estimate(self, particles):
-        """The joint estimate ``(10K,)``: per slot that the best (highest-weight) particle has present,
-        the weighted mean of the particles that have it present within half a plate (centre) and
-        25 % (scale) of the best's, with its presence column the weight they hold; the best's
-        slot with presence 0 otherwise."""
+        """The joint estimate ``(10K,)``: the plates the particles agree on, whatever slot holds
+        them (the slots are exchangeable, and partitioned sampling leaves the weights of the
+        earlier slots equal). Modes are taken one by one: among the present slots of 64 particles
+        drawn evenly from the weights' distribution, the one whose neighbourhood — present slots
+        within half its plate width (centre) and 25 % (scale), over every particle — holds the most
+        weight; the weighted mean of that neighbourhood is the estimate's slot ``k``, with its
+        presence column the weight of the particles that have a slot there. The neighbourhood
+        then leaves the pool; slots without a mode are absent (presence 0)."""
         x, w = particles.states, particles.weights
-        best = x[np.argmax(w)]
-        out = best.copy()
-        for j in range(self.k):
-            c = SLOT * j
-            out[c + 9] = 0.0
-            if best[c + 9] < 0.5:
-                continue
-            b = best[c:c + 4]
-            s = x[:, c:c + 4]
-            near = (self.present(x, j) & (np.hypot(s[:, 0] - b[0], s[:, 1] - b[1]) <= 0.5 * b[3])
-                    & (np.abs(s[:, 3] - b[3]) <= 0.25 * b[3]))
-            out[c:c + 9] = (w[near] @ x[near, c:c + 9]) / w[near].sum()
-            out[c + 9] = w[near].sum()
+        n = len(x)
+        slots = x.reshape(n, self.k, SLOT)
+        i, j = np.nonzero(slots[:, :, 9] > 0.5)
+        ent, ew = slots[i, j, :9], w[i]
+        pick = np.unique(np.minimum(np.searchsorted(np.cumsum(w), (np.arange(64) + 0.5) / 64), n - 1))
+        cand = np.flatnonzero(np.isin(i, pick))
+        out = np.tile(np.concatenate([self.plate.prior_mean, [0.0]]), self.k)
+        alive = np.ones(len(i), bool)
+        for k in range(self.k):
+            cand = cand[alive[cand]]
+            if not len(cand):
+                break
+            c = ent[cand]
+            near = ((np.hypot(c[:, None, 0] - ent[None, :, 0], c[:, None, 1] - ent[None, :, 1]) <= 0.5 * c[:, 3:4])
+                    & (np.abs(ent[None, :, 3] - c[:, 3:4]) <= 0.25 * c[:, 3:4]) & alive)
+            sel = near[np.argmax(near @ ew)]
+            out[SLOT * k:SLOT * k + 9] = (ew[sel] @ ent[sel]) / ew[sel].sum()
+            out[SLOT * k + 9] = w[np.unique(i[sel])].sum()
+            alive &= ~sel
         return out
 
     def targets(self, obs, estimate):
@@ -283,8 +295,9 @@ class Plates(VideoModelBase):
         return self.plate.describe(self.slot(s, int(np.argmax(self.present(s)[0])))[0])
 
     # -- LIS ---------------------------------------------------------------------------
-    def slot_lis_proposal(self, j, kernel=None):
-        """LIS's proposal for slot ``j`` alone (:class:`~vistrack.models.plates_proposal.SlotLISProposal`)."""
+    def lis_part_proposal(self, j, kernel=None):
+        """LIS's proposal for slot ``j`` alone, partition ``j`` of partitioned sampling
+        (:class:`~vistrack.models.plates_proposal.SlotLISProposal`)."""
         from .plates_proposal import SlotLISProposal
 
         return SlotLISProposal(self, j, kernel)

@@ -37,20 +37,17 @@ class SlotLISProposal:
         self.inner = PlateLISProposal(model.plate, kernel=plate_kernel, **params)
 
     def sample(self, x, obs, rng, prev=None):
-        """Draw ``z (N, 10K)`` from the predictions ``x (N, 10K)``, moving slot ``j`` only.
+        """Draw slot ``j`` ``z (N, 10)`` about the predictions ``x (N, 10K)``.
 
-        Returns ``(z, log_alpha (N,), log_q (N,))`` as LIS's proposals do (``prev``: the resampled
-        ``Z_{t-1}``, centring the dynamics window)."""
+        Returns ``(z, log_alpha (N,), log_q (N,))`` as LIS's proposals do (``prev (N, 10)``: the
+        slot before it was predicted, centring the dynamics window)."""
         m, j = self.model, self.j
-        z = x.copy()
+        z = x[:, m.partitions[j]].copy()
         log_alpha, log_q = np.zeros(len(x)), np.zeros(len(x))
-        pres = np.flatnonzero(m.present(x, j))
+        pres = np.flatnonzero(z[:, 9] > 0.5)
         if len(pres):
-            cols = m.cols(j)
-            ps = None if prev is None else prev[pres, cols]
-            zs, la, lq = self.inner.sample(x[pres, cols], obs, rng, ps)
-            z[pres, cols] = zs
-            log_alpha[pres], log_q[pres] = la, lq
+            ps = None if prev is None else prev[pres, :9]
+            z[pres, :9], log_alpha[pres], log_q[pres] = self.inner.sample(z[pres, :9], obs, rng, ps)
         return z, log_alpha, log_q
 
 
@@ -60,13 +57,16 @@ class JointLISProposal:
     own slot and ``q`` factorises over them)."""
 
     def __init__(self, model, kernel=None, **params):
+        self.model = model
         self.slots = [SlotLISProposal(model, j, kernel, **params) for j in range(model.k)]
 
     def sample(self, x, obs, rng, prev=None):
-        """Draw ``z (N, 10K)`` about ``x (N, 10K)``; returns ``(z, log_alpha, log_q)``."""
+        """Draw ``z (N, 10K)`` about ``x (N, 10K)`` (``prev (N, 10K)``: the resampled ``Z_{t-1}``);
+        returns ``(z, log_alpha, log_q)``."""
+        z = x.copy()
         log_alpha, log_q = np.zeros(len(x)), np.zeros(len(x))
-        for p in self.slots:
-            x, la, lq = p.sample(x, obs, rng, prev)
+        for cols, p in zip(self.model.partitions, self.slots):
+            z[:, cols], la, lq = p.sample(x, obs, rng, None if prev is None else prev[:, cols])
             log_alpha += la
             log_q += lq
-        return x, log_alpha, log_q
+        return z, log_alpha, log_q
