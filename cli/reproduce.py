@@ -318,7 +318,9 @@ def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targ
             raise click.UsageError("--plots is not for --overlap (its scores are one table)")
         if ctx.get_parameter_source("entries") == click.core.ParameterSource.DEFAULT:
             entries = [("partitioned-lis", 100), ("bootstrap", 1000)]
-        return _plates(clips_dir, make, frames, size, entries, runs, seed, targets, equal_time, quiet, json_path,
+        from .reproduce_plates import overlap
+
+        return overlap(clips_dir, make, frames, size, entries, runs, seed, targets, equal_time, quiet, json_path,
                        dict(scheduler=scheduler, workers=workers, in_process=in_process, resume=resume, quiet=quiet),
                        out_dir if ctx.get_parameter_source("out_dir") != click.core.ParameterSource.DEFAULT
                        else "plate-overlap-results")
@@ -334,31 +336,6 @@ def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targ
                in_process=in_process, resume=resume, quiet=quiet)
     click.echo(f"{len(clips)} clips x {runs} runs")
     _report("plate", {"results": plate_results(cfg, tasks, out)}, entries_config(cfg), json_path, plots_dir)
-
-
-def _plates(clips_dir, make, frames, size, entries, runs, seed, targets, equal_time, quiet, json_path, engine,
-            out_dir):
-    """``reproduce plate --overlap``: several plates at once (:mod:`vistrack.reproduce.plates`)."""
-    from vistrack.data_synth.plate import make_plate_clip
-    from vistrack.reproduce.plates import PlatesConfig, plates_equal_time, plates_results, plates_tasks, run_plates_task
-
-    _check_entries(entries)
-    check_writable(json_path, "--json file")
-    clips = _clip_suite(clips_dir, "plate-overlap-clips", make, frames, size, make_plate_clip, "plate-overlap", quiet,
-                        overlap=True, cars=6)
-    if equal_time:
-        entries, times = plates_equal_time(clips[0], entries, targets)
-        click.echo("equal time: " + ", ".join(f"{a}:{n}" for a, n in entries) + " ("
-                   + ", ".join(f"{k} {v:.1f} ms/frame" for k, v in times.items()) + ")")
-    cfg = PlatesConfig(clips=clips, entries=entries, runs=runs, seed=seed, targets=targets)
-    tasks = plates_tasks(cfg)
-    out = _run(tasks, out_dir, "plates", runner=run_plates_task, **engine)
-    try:
-        results = plates_results(cfg, tasks, out)
-    except ValueError as e:
-        raise click.ClickException(str(e)) from None
-    click.echo(f"{len(clips)} clips x {runs} runs, K = {targets} plate slots")
-    _report("plates", {"results": results}, entries_config(cfg), json_path, None)
 
 
 @reproduce.command("hs-sir")

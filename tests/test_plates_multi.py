@@ -200,3 +200,21 @@ def test_bad_targets_input_is_one_error_line(road, tmp_path, capsys, monkeypatch
     code, out, err = run(["run", str(road), "-q", "--max-frames", "2"] + argv, capsys)
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert code != 0 and len(lines) == 1 and lines[0].startswith("Error:") and msg in lines[0], err
+
+
+def test_eval_targets_scores_mota_and_idf1(road, tmp_path, capsys, monkeypatch):
+    """eval --targets: one row per task in results.csv with the MOT scores; the report's table; a clip
+    without objects.csv or a non-plate model is one error line."""
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(["eval", str(road), "--model", "plate", "--targets", "2", "--algos",
+                          "partitioned-lis,bootstrap", "--particles", "10", "--runs", "1", "--in-process", "--out",
+                          "ev", "-q"], capsys)
+    assert code == 0, err
+    with open(tmp_path / "ev" / "results.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["algo"] for r in rows] == ["partitioned-lis", "bootstrap"]
+    assert list(rows[0])[:6] == ["clip", "algo", "particles", "run", "mota", "idf1"]
+    assert all(int(r["objects"]) > 0 and int(r["frames_without"]) > 0 for r in rows)
+    assert "| algo | N | runs | MOTA | IDF1 |" in (tmp_path / "ev" / "report.md").read_text()
+    code, out, err = run(["eval", str(road), "--targets", "2", "--out", "e2", "-q"], capsys)
+    assert code != 0 and err.strip() == "Error: --targets is for --model plate"
