@@ -8,7 +8,8 @@ import os
 import click
 from tqdm import tqdm
 
-from vistrack.reproduce.bearings import DEFAULT_ALGOS, BearingsConfig, bearing_results, bearing_tasks, run_bearing_task
+from vistrack.reproduce.bearings import (DEFAULT_ALGOS, BearingsConfig, bearing_results, bearing_tasks,
+                                         equal_time_pairs, format_ship_table, run_bearing_task)
 from vistrack.reproduce.landmarks import (LANDMARK_ALGOS, LandmarksConfig, landmark_results, landmark_tasks,
                                           run_landmark_task)
 from vistrack.reproduce.plate import PlateConfig, plate_results, plate_tasks, run_plate_task
@@ -84,9 +85,11 @@ def reproduce():
 @click.option("--runs", default=100, show_default=True, type=int, help="Filter runs per sequence.")
 @click.option("--steps", default=10, show_default=True, type=int, help="Time steps per sequence.")
 @click.option("--algos", default=",".join(DEFAULT_ALGOS), show_default=True, type=StrList(),
-              help="Algorithms, comma-separated (bootstrap, avpf, lis, lls).")
+              help="Algorithms, comma-separated (bootstrap, avpf, lis, lls, partitioned, branched-partitioned, ...).")
 @click.option("--particles", default="100,500,3000", show_default=True, type=IntList(),
               help="Particle counts N, comma-separated.")
+@click.option("--equal-time", is_flag=True, help="Run the first algorithm at each N and every other at the N that "
+              "takes as long per run (timed here on the first sequence).")
 @click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of sequences and runs.")
 @click.option("--resample", default="systematic", show_default=True,
               type=click.Choice(["multinomial", "residual", "stratified", "systematic"]))
@@ -97,13 +100,15 @@ def reproduce():
               help="Write PNGs of error vs time step and error vs N into this folder.")
 @engine_options("bearings-results")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
-def bearings(ships, sequences, runs, steps, algos, particles, seed, resample, ess_threshold, json_path,
+def bearings(ships, sequences, runs, steps, algos, particles, equal_time, seed, resample, ess_threshold, json_path,
              plots_dir, workers, scheduler, in_process, out_dir, resume, quiet):
     """Bearings-only ship tracking (thesis §1.3.3, §4.5.5).
 
     Runs every algorithm at every N on SEQUENCES fixed sequences, RUNS times
     each, and prints the final-step and time-averaged position error with the
-    CPU time per run (Table 4.3; with --ships 3, Table 4.4 / Fig. 4.22). Each
+    CPU time per run (Table 4.3; with --ships 3, Table 4.4 / Fig. 4.22; with
+    M > 1 ships also each ship's final-step error; ships beyond 3 lie on a
+    circle, Fig. 4.31). Each
     sequence is a task of the evaluation engine (Dask; one file per sequence
     in OUT/tasks, --resume continues an interrupted reproduction).
     """
@@ -115,12 +120,17 @@ def bearings(ships, sequences, runs, steps, algos, particles, seed, resample, es
         raise click.ClickException(str(e)) from None
     _plots_dir(plots_dir, "error_vs_time.png")
     check_writable(json_path, "--json file")
-
+    if equal_time:
+        cfg.entries, times = equal_time_pairs(cfg)
+        click.echo("equal time: " + ", ".join(f"{a}:{n}" for a, n in cfg.entries) + " ("
+                   + ", ".join(f"{k} {v:.1f} ms/run" for k, v in times.items()) + ")")
     tasks = bearing_tasks(cfg)
     out_path = _run(tasks, out_dir, "bearings", runner=run_bearing_task, scheduler=scheduler, workers=workers,
                     in_process=in_process, resume=resume, quiet=quiet)
     out = bearing_results(cfg, tasks, out_path)
     _report("bearings", out, out["config"], json_path, plots_dir, title=f"Bearings-only, {ships} ship(s)")
+    if ships > 1:
+        click.echo(format_ship_table(out["results"]))
 
 
 class Entries(click.ParamType):

@@ -4,16 +4,16 @@ Partitioned sampling (:mod:`~vistrack.filters.partitioned`) impoverishes the par
 draws first: every later resampling thins them. Branched partitioning gives the particles
 different orderings ``σ`` of the partitions, so that every partition is drawn last by some
 of them: after the step's resampling each particle draws an ordering, the particles with
-the same ordering (a group ``H_σ``) sample the partitions in that order with resampling
-inside the group (:mod:`~vistrack.filters.partitioning`: a group keeps its total weight),
-and the groups are joined at the weight normalisation.
+the same ordering (``H_σ``) sample the partitions in that order, the weighted resampling
+between stages runs over all ``N`` particles (an offspring keeps its parent's ordering) and
+the orderings are joined at the weight normalisation (:mod:`~vistrack.filters.partitioning`).
 
 The orderings are the ``τ`` cyclic shifts ``(s, s+1, ..., τ-1, 0, ..., s-1)`` of the model's
 order unless given (e.g. only those that respect an occlusion order, App. C); each must
 satisfy eq. C.2. They are drawn balanced: a uniformly random permutation of the particles is
 cut into as many consecutive blocks as there are orderings, of sizes ``⌈N/S⌉`` then ``⌊N/S⌋``
-(``numpy.array_split``), and block ``s`` takes ordering ``s``, so every ordering has about
-``N/S`` particles (a group small enough to lose its resampling never arises by chance).
+(``numpy.array_split``), and block ``s`` takes ordering ``s``, so every ordering starts with
+about ``N/S`` particles.
 ``branched-partitioned-lis`` moves each partition by its LIS proposal.
 """
 
@@ -49,16 +49,18 @@ class BranchedPartitioned(PartitionedBase):
         orderings = cyclic_orderings(self.tau) if orderings is None else [tuple(int(j) for j in o) for o in orderings]
         for o in orderings:
             if sorted(o) != list(range(self.tau)):
-                raise ValueError(f"ordering {list(o)} is not a permutation of the {self.tau} partitions 0..{self.tau - 1}")
+                raise ValueError(f"ordering {list(o)} is not a permutation of the partitions 0..{self.tau - 1}")
         if not orderings:
             raise ValueError("branched partitioning needs at least one ordering")
         self.orderings = orderings
 
-    def groups(self, n, rng):
-        """``[(rows, σ), ...]``: a random permutation of the ``n`` particles cut into one block
-        per ordering (sizes differ by at most one; empty blocks left out)."""
-        blocks = np.array_split(rng.permutation(n), len(self.orderings))
-        return [(rows, o) for rows, o in zip(blocks, self.orderings) if len(rows)]
+    def assign(self, n, rng):
+        """The ordering of each of ``n`` particles, ``(n,)``: a random permutation of the particles
+        cut into one block per ordering (sizes ``⌈n/S⌉`` then ``⌊n/S⌋``)."""
+        labels = np.empty(n, dtype=np.intp)
+        for s, rows in enumerate(np.array_split(rng.permutation(n), len(self.orderings))):
+            labels[rows] = s
+        return labels
 
 
 class BranchedPartitionedLIS(PartitionedLISMixin, BranchedPartitioned):

@@ -13,21 +13,16 @@ first go through the most resamplings and lose their diversity (App. C's impover
 
 from __future__ import annotations
 
-import numpy as np
-
 from .partitioning import PartitionedBase, PartitionedLISMixin
 
 __all__ = ["Partitioned", "PartitionedLIS"]
 
 
 class Partitioned(PartitionedBase):
-    """Fig. C.1: every particle samples the partitions in the model's order."""
+    """Fig. C.1: every particle samples the partitions in the model's order (:attr:`orderings`:
+    ``[(0, 1, ..., τ-1)]``)."""
 
     name = "partitioned"
-
-    def groups(self, n, rng):
-        """One group, all ``n`` particles, in the order ``0..τ-1``."""
-        return [(np.arange(n), tuple(range(self.tau)))]
 
 
 class PartitionedLIS(PartitionedLISMixin, Partitioned):

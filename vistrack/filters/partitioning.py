@@ -15,11 +15,15 @@ are equal, which they are for a factorised likelihood). After the last partition
 are multiplied by ``r(Y_t|X_t) / Π_j π_j``: ``1`` where the likelihood factorises
 (``factorised_likelihood``: the ``l_{t,j}`` are reused and ``r`` is never evaluated).
 Fig. C.1's resampling after the last partition is the next step's ordinary resampling, so a
-step returns the weighted set (its mean has no resampling noise). Resampling keeps a group's
-total weight (the offspring share it), so groups resampled apart (the branches of
-:mod:`~vistrack.filters.branched_partitioned`) are joined at the normalisation, and the
-unnormalised weights stay unbiased for ``p(Y_t | Y_{1:t-1})``. Every resampling uses the
-filter's resampler (its scheme and ESS policy).
+step returns the weighted set (its mean has no resampling noise). Resampling keeps the total
+weight (the offspring share it), so the unnormalised weights stay unbiased for
+``p(Y_t | Y_{1:t-1})``; it uses the filter's resampler (its scheme and ESS policy).
+
+Orderings (Fig. C.2). Every particle follows one ordering ``σ`` of the partitions (partitioned
+sampling: all the model's order). The particles with the same ordering (a group ``H_σ``)
+sample the partitions in that order, resampled within the group; a group keeps its total
+weight through its resamplings, so after the last partition every group's weights are
+proper for the posterior on the same scale, and the groups are joined at the normalisation.
 """
 
 from __future__ import annotations
@@ -27,15 +31,18 @@ from __future__ import annotations
 import numpy as np
 
 from ..models.protocol import PartitionLIS, Partitions, StateSpaceModel
-from ..particles import ParticleSet, checked_weights, logsumexp
+from ..particles import ParticleSet, checked_weights
+from ..resampling import needs_resampling
 from .base import ParticleFilter
+from .resampler import BirthReserve
 
 __all__ = ["PartitionedBase"]
 
 
 class PartitionedBase(ParticleFilter):
-    """Partitioned sampling's step; subclasses say which particles sample the partitions in
-    which order (:meth:`groups`). ``local = "lis"`` moves each partition by its LIS proposal."""
+    """Partitioned sampling's step; subclasses give the orderings (:attr:`orderings`) and which
+    particle follows which (:meth:`assign`). ``local = "lis"`` moves each partition by its LIS
+    proposal."""
 
     needs = (StateSpaceModel, Partitions)
     #: ``None``: draw each partition from ``K_j``; ``"lis"``: LIS within each partition
@@ -44,54 +51,66 @@ class PartitionedBase(ParticleFilter):
     def __init__(self, model, **kwargs):
         super().__init__(model, **kwargs)
         self.tau = len(model.partitions)
+        #: the orderings ``σ`` (permutations of ``0..τ-1``) the particles sample the partitions in
+        self.orderings = [tuple(range(self.tau))]
         self._proposals = {}
 
-    def groups(self, n, rng):
-        """``[(rows, order), ...]``: which particles (rows of the resampled set, int arrays
-        covering ``0..n-1`` once) sample the partitions in which order (a permutation of
-        ``0..τ-1``)."""
-        raise NotImplementedError
+    def assign(self, n, rng):
+        """The ordering (an index into :attr:`orderings`) of each of ``n`` particles, ``(n,)``."""
+        return np.zeros(n, dtype=np.intp)
 
     def _update(self, particles, obs, rng, kernel):
         idx, log_w = self._ancestors(particles, obs, rng, kernel)
         prev = particles.states[idx]
-        new = prev.copy()
-        log_w = np.array(log_w, dtype=float)
-        lam = np.zeros((len(prev), self.tau))
-        for rows, order in self.groups(len(prev), rng):
-            new[rows], log_w[rows], lam[rows] = self._chain(prev[rows], log_w[rows], order, obs, rng, kernel)
+        x, log_w, lam = self._partitions(prev, np.array(log_w, dtype=float), obs, rng, kernel)
         if self.model.factorised_likelihood:
             loglik = lam.sum(axis=1)
         else:
-            loglik = self.model.loglik(obs, new)
+            loglik = self.model.loglik(obs, x)
             with np.errstate(invalid="ignore"):
                 log_w = log_w + loglik - lam.sum(axis=1)
         log_w, degenerate = checked_weights(log_w, self.name)
         if degenerate:
-            new, loglik = kernel.predict(prev, rng), None
-        return ParticleSet(new, log_w, degenerate, loglik)
+            x, loglik = kernel.predict(prev, rng), None
+        return ParticleSet(x, log_w, degenerate, loglik)
 
-    def _chain(self, x, log_w, order, obs, rng, kernel):
-        """Sample the partitions of ``x (n, d)`` (rows holding ``X_{t-1}``) in ``order``,
-        resampling before every partition after the first; returns ``(x_t (n, d), log_w (n,),
-        λ (n, τ))`` with ``λ[:, j] = log π_j`` at the particle's partition ``j``."""
-        x = x.copy()
+    def _partitions(self, prev, log_w, obs, rng, kernel):
+        """Sample the partitions of ``prev (n, d)`` (``X_{t-1}``): the particles of each ordering
+        (a group ``H_σ``) in that order, resampled within the group before every partition
+        after the first (Fig. C.2). Returns ``(X_t (n, d), log_w (n,), λ (n, τ))``,
+        ``λ[:, j] = log π_j`` at the particle's partition ``j``."""
+        x = prev.copy()
         lam = np.zeros((len(x), self.tau))
-        for k, j in enumerate(order):
-            if k > 0:
-                idx, log_w = self._resample(x, log_w, rng)
-                x, lam = x[idx], lam[idx]
-            incr, lam[:, j] = self._move(x, j, obs, rng, kernel)
-            log_w = log_w + incr
+        labels = self.assign(len(x), rng)
+        for g, order in enumerate(self.orderings):
+            rows = slice(None) if len(self.orderings) == 1 else np.flatnonzero(labels == g)
+            xs, lw, ls = x[rows], log_w[rows], lam[rows]
+            for k, j in enumerate(order if len(xs) else ()):
+                if k > 0:
+                    idx, lw = self._resample(xs, lw, rng)
+                    xs, ls = xs[idx], ls[idx]
+                incr, ls[:, j] = self._move(xs, j, obs, rng, kernel)
+                lw = lw + incr
+            x[rows], log_w[rows], lam[rows] = xs, lw, ls
         return x, log_w, lam
 
     def _resample(self, x, log_w, rng):
-        """The resampler on ``(x, log_w)``; the offspring share the set's total weight."""
-        total = logsumexp(log_w)
-        if not np.isfinite(total):
-            return np.arange(len(x)), log_w
-        idx, lw = self.resampler(ParticleSet(x, log_w - total), rng)
-        return idx, lw + total
+        """Ancestors ``(n,)`` and offspring log-weights ``(n,)`` of the particles ``x (n, d)`` from
+        the filter's resampler (its scheme, ESS policy and birth reserve); the offspring share
+        the group's total weight."""
+        n, top = len(log_w), np.max(log_w)
+        if not np.isfinite(top):
+            return np.arange(n), log_w
+        w = np.exp(log_w - top)
+        total = w.sum()
+        w /= total
+        if not needs_resampling(1.0 / np.dot(w, w), n, self.ess_threshold):
+            return np.arange(n), log_w
+        log_total = top + np.log(total)
+        if isinstance(self.resampler, BirthReserve):
+            idx, lw = self.resampler(ParticleSet(x, log_w - log_total), rng)
+            return idx, lw + log_total
+        return self.resample_scheme(w, n, rng), np.full(n, log_total - np.log(n))
 
     def _move(self, x, j, obs, rng, kernel):
         """Draw partition ``j`` of ``x (n, d)`` in place; returns ``(log weight increment (n,),

@@ -31,7 +31,8 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 __all__ = ["StateSpaceModel", "PredictMean", "LocalSearch", "LearnedSearch", "LocalMoves", "LLSModel", "GridLikelihood",
-           "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "InnovationSplit", "Partitions", "PartitionLIS", "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
+           "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "InnovationSplit", "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
+__all__ += ["Partitions", "PartitionLIS"]
 
 
 @runtime_checkable

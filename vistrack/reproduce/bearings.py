@@ -2,7 +2,9 @@
 
 10 fixed state/observation sequences, ``R`` runs of every (algorithm, N) on
 each; the error is the Euclidean distance of the weighted-mean position to the
-truth (averaged over ships). Randomness: ``SeedSequence(seed)`` spawns one
+truth (averaged over ships: the joint error; each ship's is kept too). With
+``entries`` the (algorithm, N) pairs are given instead of the grid, e.g. the
+equal-time counts of :func:`equal_time_pairs`. Randomness: ``SeedSequence(seed)`` spawns one
 stream for the sequences and one per (sequence, run); a run's stream is the
 same for every algorithm and N (common random numbers), so results do not
 depend on the order the grid is evaluated in.
@@ -23,7 +25,8 @@ from ..filters import ALGORITHMS, filter_steps, make_filter
 from ..models.bearings import Bearings
 from ..particles import DegenerateWeightsWarning
 
-__all__ = ["BearingsConfig", "run_bearings", "bearing_tasks", "run_bearing_task", "bearing_results", "DEFAULT_ALGOS"]
+__all__ = ["BearingsConfig", "run_bearings", "bearing_tasks", "run_bearing_task", "bearing_results", "DEFAULT_ALGOS",
+           "equal_time_pairs", "format_ship_table"]
 
 DEFAULT_ALGOS = ("bootstrap", "avpf", "lis")
 
@@ -41,6 +44,14 @@ class BearingsConfig:
     seed: int = 0
     resample: str = "systematic"
     ess_threshold: float | None = None
+    #: ``[[algo, N], ...]`` run instead of ``algos`` x ``particles`` (``None``: the grid)
+    entries: list | None = None
+
+    def pairs(self):
+        """The ``(algo, N)`` pairs to run: :attr:`entries`, else every algorithm at every N."""
+        if self.entries is not None:
+            return [(a, int(n)) for a, n in self.entries]
+        return [(a, int(n)) for a in self.algos for n in self.particles]
 
     def validate(self):
         """Raise ``ValueError`` with one clear sentence for bad values."""
@@ -57,39 +68,95 @@ class BearingsConfig:
             raise ValueError(f"--particles must be positive integers, got {bad[0]}")
         if not self.algos:
             raise ValueError("--algos needs at least one algorithm")
-        for a in self.algos:
+        model = Bearings(self.ships)
+        for a in dict.fromkeys(a for a, _ in self.pairs()):
             if a not in ALGORITHMS or a == "sir":
                 choices = ", ".join(sorted(k for k in ALGORITHMS if k != "sir"))
                 raise ValueError(f"unknown algorithm {a!r} for bearings; choose from {choices}")
+            make_filter(a, model)  # a filter whose model parts bearings lacks: its one-line ValueError
 
 
 def _sequence_runs(cfg, model, s):
     """Sequence ``s``: its ``runs`` filter runs for every (algorithm, N).
 
-    Returns ``{(algo, N): (errors (runs, steps), seconds, degenerate steps)}``. Run ``r`` draws
-    from ``SeedSequence(seed).spawn(2)[1].spawn(sequences * runs)[s * runs + r]`` for every
-    algorithm and N (common random numbers).
+    Returns ``{(algo, N): (errors (runs, steps, M), seconds, degenerate steps)}``: every ship's
+    position error. Run ``r`` draws from ``SeedSequence(seed).spawn(2)[1].spawn(sequences *
+    runs)[s * runs + r]`` for every algorithm and N (common random numbers).
     """
+    truth, obs, run_seeds = _sequence(cfg, model, s)
+    out = {}
+    for algo, n in cfg.pairs():
+        filt = make_filter(algo, model, resample=cfg.resample, ess_threshold=cfg.ess_threshold)
+        errors = np.empty((cfg.runs, cfg.steps, cfg.ships))
+        elapsed = 0.0
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", DegenerateWeightsWarning)
+            for r, ss in enumerate(run_seeds):
+                means, sec = _timed_run(filt, obs, n, ss)
+                elapsed += sec
+                errors[r] = np.linalg.norm(model.positions(means) - model.positions(truth), axis=-1)
+        degenerate = sum(issubclass(w.category, DegenerateWeightsWarning) for w in caught)
+        out[(algo, n)] = (errors, elapsed, degenerate)
+    return out
+
+
+def _sequence(cfg, model, s):
+    """Sequence ``s``'s ``(truth (steps, d), obs (steps, M), run seeds (runs,))``."""
     seq_ss, run_ss = np.random.SeedSequence(cfg.seed).spawn(2)
     truth, obs = simulate(model, cfg.steps, np.random.default_rng(seq_ss.spawn(cfg.sequences)[s]))
-    run_seeds = run_ss.spawn(cfg.sequences * cfg.runs)[s * cfg.runs:(s + 1) * cfg.runs]
-    out = {}
-    for algo in cfg.algos:
+    return truth, obs, run_ss.spawn(cfg.sequences * cfg.runs)[s * cfg.runs:(s + 1) * cfg.runs]
+
+
+def _timed_run(filt, obs, n, seed):
+    """One run of ``filt`` with ``n`` particles from ``seed``: ``(means (steps, d), seconds)``,
+    the seconds of CPU time of this thread (on a shared machine, wall time depends on the load)."""
+    rng = np.random.default_rng(seed)
+    t0 = time.thread_time()
+    means = np.array([p.mean() for p in filter_steps(filt, obs, n, rng)])
+    return means, time.thread_time() - t0
+
+
+def equal_time_pairs(cfg, runs=3, repeats=3, steps=4):
+    """``(algo, N)`` pairs at equal time per run (as ``eval --equal-time``): for every N of
+    ``cfg.particles``, the first algorithm at N and every other at the N whose time per run
+    is closest to it. Times are the best of ``repeats`` timings, in CPU time, of ``runs`` runs
+    on the first sequence in this process; the N tried are :func:`_search`'s (a straight line
+    through N and 2N, as eval fits, is thrown far off by one noisy timing when the answer lies
+    far from N). Returns ``(pairs, {"algo:N": ms per run})``, the times at the answers."""
+    model = Bearings(cfg.ships)
+    _, obs, seeds = _sequence(cfg, model, 0)
+    seeds = seeds[:runs]
+
+    def ms(algo, n):
         filt = make_filter(algo, model, resample=cfg.resample, ess_threshold=cfg.ess_threshold)
-        for n in cfg.particles:
-            errors = np.empty((cfg.runs, cfg.steps))
-            elapsed = 0.0
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always", DegenerateWeightsWarning)
-                for r, ss in enumerate(run_seeds):
-                    rng = np.random.default_rng(ss)
-                    t0 = time.perf_counter()
-                    means = np.array([p.mean() for p in filter_steps(filt, obs, n, rng)])
-                    elapsed += time.perf_counter() - t0
-                    errors[r] = model.position_error(means, truth)
-            degenerate = sum(issubclass(w.category, DegenerateWeightsWarning) for w in caught)
-            out[(algo, int(n))] = (errors, elapsed, degenerate)
-    return out
+        return 1e3 * min(sum(_timed_run(filt, obs, n, ss)[1] for ss in seeds) for _ in range(repeats)) / len(seeds)
+
+    pairs, times = [], {}
+    for n in cfg.particles:
+        budget = times[f"{cfg.algos[0]}:{n}"] = ms(cfg.algos[0], n)
+        pairs.append((cfg.algos[0], int(n)))
+        for algo in cfg.algos[1:]:
+            m, t = _search(lambda k: ms(algo, k), int(n), budget, steps)
+            pairs.append((algo, m))
+            times[f"{algo}:{m}"] = t
+    return pairs, times
+
+
+def _search(t, n, budget, steps):
+    """``(N, t(N))`` with ``t(N)`` closest to ``budget`` (in ratio) among the N tried: ``n``, then
+    ``steps`` steps, each a secant step through the last two N (kept within a factor 4 of the
+    last), or the last N scaled by ``budget / t`` where the secant has no positive slope."""
+    tried = {n: t(n)}
+    a, b = None, max(1, round(n * budget / tried[n]))
+    for _ in range(steps):
+        if b in tried:
+            break
+        tried[b] = t(b)
+        slope = (tried[b] - tried[a]) / (b - a) if a is not None else 0.0
+        c = b + (budget - tried[b]) / slope if slope > 0 else b * budget / tried[b]
+        a, b = b, int(max(1, round(min(max(c, b / 4), 4 * b))))
+    best = min(tried, key=lambda k: abs(np.log(tried[k] / budget)))
+    return best, tried[best]
 
 
 def bearing_tasks(cfg):
@@ -109,7 +176,7 @@ def run_bearing_task(task, out_dir):
     cfg = BearingsConfig(**task["config"])
     res = _sequence_runs(cfg, Bearings(cfg.ships), task["sequence"])
     result = {"sequence": task["sequence"],
-              "entries": [{"algo": a, "particles": n, "errors": e.tolist(), "seconds": sec, "degenerate": deg}
+              "entries": [{"algo": a, "particles": n, "ship_errors": e.tolist(), "seconds": sec, "degenerate": deg}
                           for (a, n), (e, sec, deg) in res.items()]}
     return write_task_result(Path(out_dir) / "tasks" / f"{task['name']}.json", result, task)
 
@@ -120,7 +187,7 @@ def bearing_results(cfg, tasks, out_dir):
     for t in tasks:
         data = json.loads((Path(out_dir) / "tasks" / f"{t['name']}.json").read_text())
         for e in data["entries"]:
-            per.setdefault((e["algo"], e["particles"]), []).append((np.array(e["errors"]), e["seconds"],
+            per.setdefault((e["algo"], e["particles"]), []).append((np.array(e["ship_errors"]), e["seconds"],
                                                                     e["degenerate"]))
     return _summarize(cfg, per)
 
@@ -128,7 +195,8 @@ def bearing_results(cfg, tasks, out_dir):
 def _summarize(cfg, per):
     results, curves = [], {}
     for (algo, n), parts in per.items():
-        errors = np.concatenate([p[0] for p in parts])
+        ships = np.concatenate([p[0] for p in parts])  # (runs, steps, M)
+        errors = ships.mean(axis=2)
         final = errors[:, -1]
         results.append(
             {
@@ -138,12 +206,26 @@ def _summarize(cfg, per):
                 "mean_error_final": float(final.mean()),
                 "std_error_final": float(final.std(ddof=1)) if len(final) > 1 else 0.0,
                 "mean_error": float(errors.mean()),
+                "ship_error_final": ships[:, -1].mean(axis=0).tolist(),
+                "ship_error_mean": ships.mean(axis=(0, 1)).tolist(),
                 "ms_per_run": 1e3 * sum(p[1] for p in parts) / len(errors),
                 "degenerate_steps": int(sum(p[2] for p in parts)),
             }
         )
         curves[(algo, int(n))] = errors.mean(axis=0)
     return {"config": asdict(cfg), "results": results, "curves": curves}
+
+
+def format_ship_table(results):
+    """Each ship's mean final-step error (rows of :func:`run_bearings`'s ``results``) as a text
+    table: ``algo``, ``N``, then one column per ship and the joint error (their mean)."""
+    m = len(results[0]["ship_error_final"])
+    head = f"{'algo':<24} {'N':>6} " + " ".join(f"{'ship ' + str(k + 1):>8}" for k in range(m)) + f" {'joint':>8}"
+    lines = ["final-step error per ship", head, "-" * len(head)]
+    for r in results:
+        lines.append(f"{r['algo']:<24} {r['particles']:>6d} " + " ".join(f"{v:>8.5f}" for v in r["ship_error_final"])
+                     + f" {r['mean_error_final']:>8.5f}")
+    return "\n".join(lines)
 
 
 def run_bearings(cfg, progress=None):
@@ -162,5 +244,5 @@ def run_bearings(cfg, progress=None):
         for key, v in _sequence_runs(cfg, model, s).items():
             per.setdefault(key, []).append(v)
         if progress:
-            progress(cfg.runs * len(cfg.algos) * len(cfg.particles))
+            progress(cfg.runs * len(cfg.pairs()))
     return _summarize(cfg, per)

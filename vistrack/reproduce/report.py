@@ -14,7 +14,7 @@ __all__ = ["TABLES", "format_table", "write_plots"]
 
 #: per experiment: (header, key, format) of every column; the first column is left-aligned
 TABLES = {
-    "bearings": [("algo", "algo", "<10"), ("N", "particles", ">6d"), ("ships", "ships", ">5d"),
+    "bearings": [("algo", "algo", "<24"), ("N", "particles", ">6d"), ("ships", "ships", ">5d"),
                  ("final err", "mean_error_final", ">10.5f"), ("± std", "std_error_final", ">9.5f"),
                  ("mean err", "mean_error", ">9.5f"), ("ms/run", "ms_per_run", ">8.2f")],
     "contour": [("algo", "algo", "<10"), ("N", "particles", ">6d"), ("P(lost) final", "p_lost_final", ">13.3f"),
