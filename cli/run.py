@@ -9,7 +9,7 @@ import click
 import numpy as np
 from tqdm import tqdm
 
-from vistrack.builders import MODELS, build_model, read_support_points
+from vistrack.builders import MODELS, PLATES_ALGOS, build_model, read_support_points
 from vistrack.clips import load_clip
 from vistrack.filters import make_filter
 from vistrack.models.registry import MODELS as MODEL_REGISTRY
@@ -181,9 +181,13 @@ def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, 
             if algo != "ls-n-ips" or name != "contour":
                 raise click.UsageError("--search is for --algo ls-n-ips on the contour model")
             extra["search"] = search
-        if algo not in spec.algos:
-            raise click.UsageError(f"--algo {algo} does not run on the {name} model; "
-                                   f"choose from {', '.join(spec.algos)}")
+        allowed = PLATES_ALGOS if targets is not None else spec.algos
+        if algo not in allowed:
+            hint = "; partitioned sampling tracks several plates: add --targets K" \
+                if name == "plate" and algo in PLATES_ALGOS else ""
+            raise click.UsageError(f"--algo {algo} does not run on the {name} model"
+                                   f"{' with --targets' if targets is not None else ''}; "
+                                   f"choose from {', '.join(allowed)}{hint}")
         check_particle_memory(particles, spec.bytes_per_particle, algo)
         model = build_model(name, clip, init=init, init_gt=init_gt, **extra)
         if search == "nn":  # train (once per template) or load before the progress bar starts

@@ -191,8 +191,9 @@ def test_target_rows_of_a_frame_with_plates():
     (["--targets", "0"], "0 is not in the range x>=1"),
     (["--targets", "2", "--model", "box", "--init", "1,1,20,20"], "--targets is for the plate model"),
     (["--targets", "2", "--results", "r.txt"], "--results writes one box per frame"),
-    (["--targets", "2", "--algo", "lls"], "lls needs a model with"),
-    (["--algo", "partitioned"], "partitioned needs a model with"),
+    (["--targets", "2", "--algo", "lls"], "--algo lls does not run on the plate model with --targets; choose from "
+                                          "partitioned-lis, partitioned, branched-partitioned-lis"),
+    (["--algo", "partitioned"], "partitioned sampling tracks several plates: add --targets K"),
     (["--targets", "2", "--init", "10,10,40,20"], "--targets finds the plates by itself"),
 ])
 def test_bad_targets_input_is_one_error_line(road, tmp_path, capsys, monkeypatch, argv, msg):

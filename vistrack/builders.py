@@ -318,7 +318,7 @@ register(ModelSpec("contour", _THESIS + _HISTORY + ("ls-n-ips-nn",), "B-spline c
 #: with ``targets`` (several plates at once, :class:`~vistrack.models.plates.Plates`): partitioned sampling too
 PLATES_ALGOS = ("partitioned-lis", "partitioned", "branched-partitioned-lis", "branched-partitioned", "lis",
                 "bootstrap", "condensation")
-register(ModelSpec("plate", ("lis", "bootstrap", "condensation", "lls", "avpf") + PLATES_ALGOS[:4],
+register(ModelSpec("plate", ("lis", "bootstrap", "condensation", "lls", "avpf"),
                    "license-plate template (thesis 001 §1.3.2); acquires plates without a box",
                    from_box=_plate_from_frame_box, from_clip=_plate_from_clip, lost_rule="plate",
                    bytes_per_particle=48_000))
