@@ -167,6 +167,44 @@ def _equal_time(cfg, clips, frames=30):
     return chosen
 
 
+def _eval_targets(cfg, targets, equal_time, results_dirs, out, engine):
+    """``eval --targets K``: several plates at once, scored by MOTA and IDF1 (:mod:`vistrack.mot_report`)."""
+    from vistrack.builders import PLATES_ALGOS
+    from vistrack.mot_report import write_mot_outputs
+    from vistrack.reproduce.plates import plates_equal_time, run_plates_task, score_plates_tasks
+
+    if cfg.model != "plate":
+        raise click.UsageError("--targets is for --model plate")
+    if results_dirs:
+        raise click.UsageError("--results-dir scores one box per frame: not with --targets")
+    bad = [a for a in cfg.algos if a not in PLATES_ALGOS]
+    if bad:
+        raise click.UsageError(f"with --targets, --algos are {', '.join(PLATES_ALGOS)}; not {', '.join(bad)}")
+    missing = [str(c) for c in cfg.clips if not (Path(c) / "objects.csv").is_file()]
+    if missing:
+        raise click.ClickException(f"{missing[0]} has no objects.csv (the per-plate ground truth of synth plate)")
+    chosen = None
+    if equal_time:
+        entries, _ = plates_equal_time(cfg.clips[0], [(a, cfg.particles[0]) for a in cfg.algos], targets)
+        chosen = dict(entries)
+        if not engine["quiet"]:
+            click.echo("equal time per frame: " + ", ".join(f"{a} N={n}" for a, n in chosen.items()))
+        cfg = EvalConfig(**{**cfg.__dict__, "entries": entries})
+    tasks = task_list(cfg, cfg.clips)
+    for t in tasks:
+        t["targets"] = targets
+    with _locked(out):
+        run_tasks(tasks, out, desc="eval", runner=run_plates_task, **engine)
+        try:
+            rows = score_plates_tasks(tasks, out)
+        except ValueError as e:
+            raise click.ClickException(str(e)) from None
+        write_mot_outputs(out, cfg, rows, targets, chosen)
+    if not engine["quiet"]:
+        click.echo((out / "report.md").read_text().split("\n\n## Per clip")[0].split("## Averages over clips\n\n")[-1])
+        click.echo(f"wrote {out / 'results.json'}, results.csv and report.md")
+
+
 @click.command("eval")
 @click.argument("clips", nargs=-1, required=True, type=click.Path())
 @click.option("--algos", default="lis,bootstrap", show_default=True, type=StrList(),
@@ -178,6 +216,10 @@ def _equal_time(cfg, clips, frames=30):
               help="Tracking model, any registered one, started from the first ground-truth box (box: any "
                    "object, appearance learned from the first frame; plate: layout from the box's aspect).")
 @click.option("--equal-time", is_flag=True, help="Pick N per algorithm for equal CPU time per frame.")
+@click.option("--targets", type=click.IntRange(min=1), default=None,
+              help="Plate model: track up to K plates at once (no start box; partitioned-lis, partitioned, "
+                   "branched-partitioned(-lis), lis, bootstrap) and score MOTA and IDF1 against each clip's "
+                   "objects.csv (synth plate).")
 @click.option("--scheduler", help="Address of a running Dask scheduler (tcp://host:8786) [default: a LocalCluster].")
 @click.option("--workers", default=0, show_default=True, type=click.IntRange(min=0),
               help="LocalCluster worker processes (0: one per core).")
@@ -191,8 +233,8 @@ def _equal_time(cfg, clips, frames=30):
                    "Repeat for several trackers; --algos '' scores only these.")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Results folder.")
 @click.option("--quiet", "-q", is_flag=True)
-def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, workers, timeout, in_process, resume,
-             results_dirs, out_dir, quiet):
+def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, scheduler, workers, timeout, in_process,
+             resume, results_dirs, out_dir, quiet):
     """Evaluate algorithms over CLIPS (clip folders, videos with ground truth, or folders of clip folders).
 
     Every clip × algorithm × N × run is one Dask task writing its own file
@@ -219,6 +261,10 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, scheduler, 
     except OSError as e:
         raise click.ClickException(f"cannot create --out {out}: {e.strerror}") from None
     cfg = EvalConfig(clips=clip_paths, algos=list(algos), particles=list(particles), runs=runs, seed=seed, model=model)
+    engine = dict(scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process, resume=resume,
+                  quiet=quiet)
+    if targets is not None:
+        return _eval_targets(cfg, targets, equal_time, results_dirs, out, engine)
     chosen = None
     tasks = task_list(cfg, clip_paths)
     if equal_time:

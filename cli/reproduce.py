@@ -307,12 +307,24 @@ def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, schedule
 
 
 @reproduce.command()
-@suite_options("Folder of plate clip folders; made there with --make if missing [default: plate-clips].",
-               "640x480", "lis:100,bootstrap:750", "ALGO:N pairs (lis, bootstrap, lls, avpf).", 20)
+@suite_options("Folder of plate clip folders; made there with --make if missing [default: plate-clips; "
+               "plate-overlap-clips with --overlap].", "640x480", "lis:100,bootstrap:750",
+               "ALGO:N pairs (lis, bootstrap, lls, avpf; with --overlap: partitioned-lis, partitioned, "
+               "branched-partitioned(-lis), lis, bootstrap) [default with --overlap: "
+               "partitioned-lis:100,bootstrap:1000].", 20)
+@click.option("--overlap", is_flag=True,
+              help="Several plates at once: clips with up to three plates in view (6 cars, synth plate --overlap), "
+                   "tracked with --targets slots and scored by MOTA and IDF1 against objects.csv.")
+@click.option("--targets", default=3, show_default=True, type=click.IntRange(min=1),
+              help="With --overlap: plate slots K.")
+@click.option("--equal-time", is_flag=True,
+              help="With --overlap: set every N after the first so that its time per frame matches the first "
+                   "entry's (timed on the first 60 frames of the first clip).")
 @engine_options("plate-results")
 @output_options("Write P(lost) vs frame PNG here.")
-def plate(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler, in_process, out_dir, resume,
-          json_path, plots_dir, quiet):
+@click.pass_context
+def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targets, equal_time, workers, scheduler,
+          in_process, out_dir, resume, json_path, plots_dir, quiet):
     """License-plate tracking on synthetic road clips (thesis §4.5.3, Figs. 4.15-4.16).
 
     Every clip is tracked RUNS times by every ALGO:N with no initial box: plates
@@ -322,9 +334,26 @@ def plate(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler
     above a third of the plate height), the mean vertex error of frames not
     lost, false reports (a plate reported in a frame without one), the share of
     plate appearances acquired within 10 frames, and the time per frame.
+
+    With --overlap (thesis App. C: several targets), prints per ALGO:N the mean
+    MOTA and IDF1 over runs, identity switches, false positives and misses per
+    run, the plates reported in frames without any, and the time per frame.
     """
     from vistrack.data_synth.plate import make_plate_clip
 
+    if overlap:
+        if plots_dir:
+            raise click.UsageError("--plots is not for --overlap (its scores are one table)")
+        if ctx.get_parameter_source("entries") == click.core.ParameterSource.DEFAULT:
+            entries = [("partitioned-lis", 100), ("bootstrap", 1000)]
+        from .reproduce_plates import overlap
+
+        return overlap(clips_dir, make, frames, size, entries, runs, seed, targets, equal_time, quiet, json_path,
+                       dict(scheduler=scheduler, workers=workers, in_process=in_process, resume=resume, quiet=quiet),
+                       out_dir if ctx.get_parameter_source("out_dir") != click.core.ParameterSource.DEFAULT
+                       else "plate-overlap-results")
+    if equal_time or ctx.get_parameter_source("targets") != click.core.ParameterSource.DEFAULT:
+        raise click.UsageError("--targets and --equal-time are for --overlap")
     _check_entries(entries)
     check_writable(json_path, "--json file")
     _plots_dir(plots_dir, "p_lost_vs_frame.png")

@@ -9,7 +9,7 @@ import click
 import numpy as np
 from tqdm import tqdm
 
-from vistrack.builders import MODELS, build_model, read_support_points
+from vistrack.builders import MODELS, PLATES_ALGOS, build_model, read_support_points
 from vistrack.clips import load_clip
 from vistrack.filters import make_filter
 from vistrack.models.registry import MODELS as MODEL_REGISTRY
@@ -24,13 +24,18 @@ from .options import SEED, Box, Fraction, check_outputs, check_writable
 __all__ = ["run"]
 
 RUN_ALGOS = ("bootstrap", "ls-n-ips", "lls", "lis", "avpf", "condensation",
-             "pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt", "sir", "basic-sir", "hs-sir", "rb-hs-sir", "rb-ss-hs-sir")
+             "pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt", "sir", "basic-sir", "hs-sir", "rb-hs-sir", "rb-ss-hs-sir",
+             "partitioned", "partitioned-lis", "branched-partitioned", "branched-partitioned-lis")
 
 
-def model_options(name, *, layout, no_colour, template):
+def model_options(name, *, layout, no_colour, template, targets=None):
     """The model-specific options of ``run`` as builder parameters; a usage error where they do
     not apply to model ``name``."""
     opts = {}
+    if targets is not None:
+        if name != "plate":
+            raise click.UsageError("--targets is for the plate model")
+        opts["targets"] = targets
     if template is not None:
         if name in ("plate", "box"):
             raise click.UsageError("--template is for the contour and landmarks models")
@@ -99,13 +104,16 @@ def lost_notice(most=5):
               type=click.Choice(["multinomial", "residual", "stratified", "systematic"]))
 @click.option("--ess-threshold", default=None, type=Fraction(),
               help="Resample when ESS < threshold·N [default: every frame].")
+@click.option("--targets", type=click.IntRange(min=1), default=None,
+              help="Plate: track up to K plates at once, one slot each (found by themselves, no --init); the track "
+                   "CSV has a row per frame and plate with its id. Default algorithm: partitioned-lis.")
 @click.option("--max-frames", type=click.IntRange(min=1), help="Stop after this many frames.")
 @click.option("--no-colour", "no_colour", is_flag=True,
               help="Contour: edges only (no colour term, which is on for colour video). Plate: the plate "
                    "likelihood only (no appearance learned from the --init box).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary.")
 def run(video, model_name, layout, algo, search, particles, seed, init, init_gt, template_path, track_path, out_path,
-        results_path, show_particles, resample, ess_threshold, max_frames, no_colour, quiet):
+        results_path, show_particles, resample, ess_threshold, targets, max_frames, no_colour, quiet):
     """Track the object in VIDEO (a video file, an image folder or a clip folder).
 
     \b
@@ -123,6 +131,13 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     summary reports the centre error (landmarks: the mean landmark error).
 
     \b
+    Several plates (--targets K): one row per frame and reported plate,
+    frame, visible, id, cx, ..., y3, ess, ms, lost_reason (a frame without
+    any: one row with visible=0, id=-1); each id has its colour in --out;
+    the summary gives MOTA and IDF1 against the clip's objects.csv.
+      vistrack synth plate --overlap --cars 6 --out road && vistrack run road --targets 3 --out a.mp4
+
+    \b
     Landmarks (seed 000): vistrack synth landmarks --out lm && vistrack run lm --algo pf-eis-mt --out lm.mp4
     """
     check_writable(track_path, "track file")
@@ -131,16 +146,22 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     check_outputs({"--track": track_path, "--out": out_path, "--results": results_path}, video)
     if init is not None and init_gt is not None:
         raise click.UsageError("give either --init or --init-gt, not both")
+    if targets is not None and results_path:
+        raise click.UsageError("--results writes one box per frame: not with --targets (use --track)")
     clip, name, algo, model = _setup(video, model_name, algo, search, particles, init, init_gt, quiet,
-                                     layout=layout, no_colour=no_colour, template_path=template_path)
-    filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)
+                                     layout=layout, no_colour=no_colour, template_path=template_path, targets=targets)
+    try:
+        filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)
+    except ValueError as e:
+        raise click.ClickException(str(e)) from None
     outputs = {"track_path": track_path, "out_path": out_path, "results_path": results_path}
     done = _track(clip, model, filt, particles, seed, max_frames, show_particles, quiet, f"{algo} N={particles}",
                   outputs)
     _report(video, clip, done, name, model, particles, quiet, outputs)
 
 
-def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, layout, no_colour, template_path):
+def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, layout, no_colour, template_path,
+           targets=None):
     """``(clip, model name, algorithm, model)`` of a run, checked; one error line for bad input."""
     try:
         clip = load_clip(video)
@@ -154,15 +175,19 @@ def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, 
             raise click.ClickException(f"{video}: meta.json names model {name!r}, which this version cannot track")
         spec = get_model_spec(name)
         extra = model_options(name, layout=layout, no_colour=no_colour,
-                              template=read_support_points(template_path) if template_path else None)
-        algo = algo or spec.default_algo
+                              template=read_support_points(template_path) if template_path else None, targets=targets)
+        algo = algo or ("partitioned-lis" if targets is not None else spec.default_algo)
         if search is not None:
             if algo != "ls-n-ips" or name != "contour":
                 raise click.UsageError("--search is for --algo ls-n-ips on the contour model")
             extra["search"] = search
-        if algo not in spec.algos:
-            raise click.UsageError(f"--algo {algo} does not run on the {name} model; "
-                                   f"choose from {', '.join(spec.algos)}")
+        allowed = PLATES_ALGOS if targets is not None else spec.algos
+        if algo not in allowed:
+            hint = "; partitioned sampling tracks several plates: add --targets K" \
+                if name == "plate" and algo in PLATES_ALGOS else ""
+            raise click.UsageError(f"--algo {algo} does not run on the {name} model"
+                                   f"{' with --targets' if targets is not None else ''}; "
+                                   f"choose from {', '.join(allowed)}{hint}")
         check_particle_memory(particles, spec.bytes_per_particle, algo)
         model = build_model(name, clip, init=init, init_gt=init_gt, **extra)
         if search == "nn":  # train (once per template) or load before the progress bar starts
@@ -220,7 +245,7 @@ def _report(video, clip, done, name, model, particles, quiet, outputs):
                    + ", ".join(map(str, src.skipped[:10])) + (", ..." if len(src.skipped) > 10 else ""), err=True)
     if not quiet:
         for line in summary_lines(done, particles, model_name=name, model=model, truth=clip.truth,
-                                  frame_width=src.size[0]):
+                                  frame_width=src.size[0], objects=clip.objects):
             click.echo(line)
         if track_path:
             click.echo(f"track: {track_path}")

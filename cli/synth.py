@@ -81,10 +81,15 @@ def contour(out, frames, size, seed, clutter, distractor, shape, color, quiet):
 @click.option("--cars", default=3, show_default=True, type=click.IntRange(min=1), help="Cars driving through.")
 @click.option("--layout", default="jp", show_default=True, type=click.Choice(["jp", "single-row"]),
               help="Plate layout: Japanese (Fig. 1.5) or single-row (European/Indian style).")
-@click.option("--overlap", is_flag=True, help="Let several cars be in view at once.")
+@click.option("--overlap", is_flag=True,
+              help="Cars close together in three lanes: up to three plates in view at once (track them with "
+                   "run --targets K).")
 @click.option("--quiet", "-q", is_flag=True)
 def plate(out, frames, size, seed, cars, layout, overlap, quiet):
-    """A road scene in which cars carrying plates drive through (thesis §1.3.2, §4.5.3)."""
+    """A road scene in which cars carrying plates drive through (thesis §1.3.2, §4.5.3).
+
+    groundtruth.csv has a row per frame (the largest plate in view), objects.csv a row per
+    frame and plate in view with the plate's id (the car's number)."""
     if size[0] < 160 or size[1] < 120:
         raise click.ClickException(f"frame size {size[0]}x{size[1]} is too small for plates (at least 160x120)")
     out = _out_dir(out)
@@ -92,7 +97,8 @@ def plate(out, frames, size, seed, cars, layout, overlap, quiet):
         _make(make_plate_clip, out, frames=frames, size=size, seed=seed, cars=cars, layout=layout, overlap=overlap,
                         progress=bar.update)
     if not quiet:
-        click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({frames} frames, {size[0]}x{size[1]})")
+        click.echo(f"wrote {out}/video.mp4, groundtruth.csv, objects.csv, meta.json ({frames} frames, "
+                   f"{size[0]}x{size[1]})")
 
 
 @synth.command()

@@ -11,10 +11,24 @@ Plates follow a :class:`~vistrack.models.plate_layout.PlateLayout`: the
 Japanese layout of Fig. 1.5 (white, bordered, a top row of small characters,
 a small glyph at the left and four large digits) or a single-row layout.
 
+With ``overlap`` the cars (narrower: 3.4 plate widths) follow one another closely, in three
+lanes in turn (farther lanes higher in the image, with smaller plates, drawn first), so that up
+to three plates are in view at once (a fourth car may be coming in or going out at the border,
+its plate not in view); a nearer car passing in front hides a plate.
+
 Ground truth per frame (``groundtruth.csv``): ``frame, visible, id, cx, cy, w, h,
 angle_deg, scale`` and the vertices ``x0, y0, ..., x3, y3`` (top-left,
-top-right, bottom-right, bottom-left) of the plate in view (``visible = 1``
-when the whole plate is inside the frame; NaN geometry when none is).
+top-right, bottom-right, bottom-left) of the plate in view — the largest when
+there are several (``visible = 1``; NaN geometry and ``id = -1`` when none is).
+A plate is in view when the whole of it is inside the frame and at most
+:data:`MAX_HIDDEN` (10 %) of it is hidden by a car in front.
+
+Ground truth per plate (``objects.csv``, the multi-target truth): the same
+columns plus ``hidden`` (the share of the plate hidden by cars in front), one
+row per frame and plate in view, in order of frame and then of ``id`` (the
+car's number, 0, 1, ... in order of entry, the same in every frame); a frame
+with no plate in view has one row with ``visible = 0``, ``id = -1`` and NaN
+geometry, so every frame has at least one row.
 """
 
 from __future__ import annotations
@@ -26,6 +40,8 @@ import numpy as np
 
 from vistrack.models.plate_layout import LAYOUTS, plate_vertices
 from vistrack.video import VideoWriter
+
+from vistrack.clips import write_track_csv
 
 from .render import add_noise, atomic_clip, lighting, motion_blur, smooth_noise, write_clip_files
 
@@ -105,10 +121,11 @@ def _background(size, rng, signs=6):
     return img.astype(np.float32) + 20 * (tex - 0.5)
 
 
-def _car_sprite(plate, rng):
-    """Car body around the plate: BGR float32 image, alpha and the plate's position in it."""
+def _car_sprite(plate, rng, width=4.2):
+    """Car body around the plate (``width`` plate widths wide): BGR float32 image, alpha and the
+    plate's position in it."""
     ph, pw = plate.shape[:2]
-    cw, ch = int(pw * 4.2), int(pw * 2.1)
+    cw, ch = int(pw * width), int(pw * 2.1)
     img = np.zeros((ch, cw, 3), np.float32)
     alpha = np.zeros((ch, cw), np.float32)
     body = tuple(float(c) for c in rng.uniform(30, 220, 3))
@@ -130,10 +147,139 @@ def _car_sprite(plate, rng):
     return img, alpha, (px0, py0)
 
 
+def _car(k, t0, span, lay, rng, w, h, lane=None):
+    """One car of the schedule: its sprite, direction, and plate width, centre height and angle
+    at its entry and exit (``lane``: 0 far .. 2 near, for ``overlap`` clips; ``None``: the
+    single-car clips' draws)."""
+    plate = render_plate(lay, rng, 240)
+    # overlap clips: narrower cars (3.4 plate widths, as a 52-cm plate on a 1.8-m car), so three fit
+    sprite, alpha, (px0, py0) = _car_sprite(plate, rng, 4.2 if lane is None else 3.4)
+    direction = 1 if rng.random() < 0.5 else -1
+    if lane is None:
+        s0, s1 = rng.uniform(0.09, 0.12) * w, rng.uniform(0.13, 0.17) * w  # plate width px, approaching
+        y0, y1 = rng.uniform(0.6, 0.68) * h, rng.uniform(0.7, 0.78) * h
+    else:  # a lane further away is higher in the image and its plates smaller
+        s0 = (0.085 + 0.02 * lane + rng.uniform(-0.005, 0.005)) * w
+        y0 = (0.6 + 0.055 * lane + rng.uniform(-0.01, 0.01)) * h
+        s1, y1 = s0 + 0.03 * w, y0 + 0.06 * h
+    th0, th1 = np.deg2rad(rng.uniform(-8, 8, 2))
+    return dict(id=k, t0=int(t0), span=span, sprite=sprite, alpha=alpha, plate_xy=(px0, py0), plate_w=plate.shape[1],
+                dir=direction, s=(s0, s1), y=(y0, y1), th=(th0, th1), lane=lane)
+
+
+def _schedule(frames, cars, overlap):
+    """Entry frames and crossing time (frames) of the cars. One at a time: they follow one another
+    with gaps. ``overlap``: evenly spread, each entering 0.27 of a crossing after the one before:
+    a plate is wholly in view for the middle 2/3 of its car's crossing, so up to three plates are
+    in view at once, never four (a fourth car may be coming in or going out at the border)."""
+    if overlap:
+        span = max(20, int(frames / (1 + (cars - 1) * OVERLAP_GAP)))
+    else:
+        span = max(20, int(frames / cars * 0.75))
+    starts = np.linspace(0, max(0, frames - span), cars).astype(int) if cars > 1 else np.array([0])
+    return starts, span
+
+
+#: ``overlap`` clips: a car enters this share of a crossing after the one before it
+OVERLAP_GAP = 0.27
+
+
+def _place(car, t, w, h, aspect):
+    """The car's plate pose ``(u, w, θ, s)`` at frame ``t``, the sprite -> image affine map and the
+    sprite's horizontal speed (px/frame); ``None`` when the car is not on the road."""
+    f = (t - car["t0"]) / car["span"]
+    if not 0.0 <= f <= 1.0:
+        return None
+    s = car["s"][0] + f * (car["s"][1] - car["s"][0])
+    scale = s / car["plate_w"]  # sprite px -> image px
+    cw = car["sprite"].shape[1] * scale
+    x_c = -cw / 2 + f * (w + cw)  # plate centre x crosses the frame
+    if car["dir"] < 0:
+        x_c = w - x_c
+    y_c = car["y"][0] + f * (car["y"][1] - car["y"][0])
+    th = car["th"][0] + f * (car["th"][1] - car["th"][0])
+    pose = np.array([x_c, y_c, th, s])
+    # affine: sprite -> image, plate centre to (x_c, y_c), shear tan(th) on x
+    px0, py0 = car["plate_xy"]
+    pcx, pcy = px0 + car["plate_w"] / 2, py0 + car["plate_w"] / aspect / 2
+    m = np.array([[scale, 0, x_c - scale * pcx],
+                  [scale * np.tan(th), scale, y_c - scale * (pcy + np.tan(th) * pcx)]], np.float32)
+    return pose, m, car["dir"] * (w + cw) / car["span"]
+
+
+def _hidden(verts, covers, size):
+    """The share of the plate ``verts (4, 2)`` hidden by ``covers`` (alpha maps of the cars drawn
+    over it): the mean over the plate's pixels of ``1 - Π (1 - α)``."""
+    if not covers:
+        return 0.0
+    w, h = size
+    lo = np.clip(np.floor(verts.min(axis=0)).astype(int), 0, [w - 1, h - 1])
+    hi = np.clip(np.ceil(verts.max(axis=0)).astype(int) + 1, 1, [w, h])
+    mask = np.zeros((hi[1] - lo[1], hi[0] - lo[0]), np.uint8)
+    cv2.fillConvexPoly(mask, np.round(verts - lo).astype(np.int32), 1)
+    if not mask.any():
+        return 0.0
+    clear = np.ones(mask.shape, np.float32)
+    for al in covers:
+        clear *= 1.0 - al[lo[1]:hi[1], lo[0]:hi[0]]
+    return float(1.0 - clear[mask > 0].mean())
+
+
+#: a plate counts as in view when wholly inside the frame and at most this share of it is hidden
+MAX_HIDDEN = 0.1
+
+
+def _render_frame(frame, cars, t, size, aspect, overlap):
+    """Composite the cars on the road at frame ``t`` onto ``frame`` (in place, far lanes first);
+    returns ``[(id, pose, vertices, inside, hidden share)]`` of their plates."""
+    w, h = size
+    drawn = []
+    for car in sorted(cars, key=lambda c: c["lane"]) if overlap else cars:
+        placed = _place(car, t, w, h, aspect)
+        if placed is None:
+            continue
+        pose, m, v = placed
+        obj = cv2.warpAffine(car["sprite"], m, (w, h), flags=cv2.INTER_LINEAR)
+        al = cv2.warpAffine(car["alpha"], m, (w, h), flags=cv2.INTER_LINEAR)
+        obj = motion_blur(obj * al[..., None], (0.5 * v, 0.0))
+        al = motion_blur(al, (0.5 * v, 0.0))
+        frame *= 1.0 - al[..., None]
+        frame += obj
+        verts = plate_vertices(pose, aspect)[0]
+        inside = np.all((verts[:, 0] >= 0) & (verts[:, 0] <= w - 1) & (verts[:, 1] >= 0) & (verts[:, 1] <= h - 1))
+        drawn.append((car["id"], pose, verts, bool(inside), al))
+    return [(cid, pose, verts, inside, _hidden(verts, [d[4] for d in drawn[k + 1:]], size))
+            for k, (cid, pose, verts, inside, _) in enumerate(drawn)]
+
+
+def _truth_row(t, plate, cols):
+    """A ground-truth row: the plate ``(id, pose, vertices, ...)`` in view, or ``None`` for none."""
+    if plate is None:
+        row = {c: np.nan for c in cols}
+        row.update(frame=t, visible=0, id=-1)
+        return row
+    cid, pose, verts = plate[:3]
+    lo, hi = verts.min(axis=0), verts.max(axis=0)
+    row = {"frame": t, "visible": 1, "id": cid, "cx": pose[0], "cy": pose[1], "w": hi[0] - lo[0],
+           "h": hi[1] - lo[1], "angle_deg": np.rad2deg(pose[2]), "scale": pose[3]}
+    for i in range(4):
+        row[f"x{i}"], row[f"y{i}"] = verts[i]
+    if len(plate) > 3:
+        row["hidden"] = plate[3]
+    return row
+
+
+#: ``groundtruth.csv``'s columns (one row per frame); ``objects.csv`` adds ``hidden``
+COLUMNS = ["frame", "visible", "id", "cx", "cy", "w", "h", "angle_deg", "scale"] + \
+    [f"{c}{i}" for i in range(4) for c in "xy"]
+OBJECT_COLUMNS = COLUMNS + ["hidden"]
+
+
 @atomic_clip
 def make_plate_clip(out, *, frames=300, size=(640, 480), seed=0, cars=3, layout="jp", overlap=False, fps=30.0,
                     progress=None):
-    """Render a road clip into ``out`` (video.mp4, groundtruth.csv, meta.json); returns the meta dict."""
+    """Render a road clip into ``out`` (video.mp4, groundtruth.csv, objects.csv, meta.json); returns
+    the meta dict (module docstring)."""
     if layout not in LAYOUTS:
         raise ValueError(f"layout must be one of {', '.join(LAYOUTS)}, got {layout!r}")
     if frames < 1 or cars < 1:
@@ -146,72 +292,27 @@ def make_plate_clip(out, *, frames=300, size=(640, 480), seed=0, cars=3, layout=
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed)
     bg = _background((w, h), rng)
-    # schedule: each car crosses in `span` frames; cars follow one another with a gap (or overlap)
-    span = max(20, int(frames / cars * (1.4 if overlap else 0.75)))
-    starts = np.linspace(0, max(0, frames - span), cars).astype(int) if cars > 1 else np.array([0])
-    car_list = []
-    for k, t0 in enumerate(starts):
-        plate = render_plate(lay, rng, 240)
-        sprite, alpha, (px0, py0) = _car_sprite(plate, rng)
-        direction = 1 if rng.random() < 0.5 else -1
-        s0, s1 = rng.uniform(0.09, 0.12) * w, rng.uniform(0.13, 0.17) * w  # plate width px, approaching
-        y0, y1 = rng.uniform(0.6, 0.68) * h, rng.uniform(0.7, 0.78) * h
-        th0, th1 = np.deg2rad(rng.uniform(-8, 8, 2))
-        car_list.append(dict(id=k, t0=int(t0), span=span, sprite=sprite, alpha=alpha, plate_xy=(px0, py0),
-                             plate_w=plate.shape[1], dir=direction, s=(s0, s1), y=(y0, y1), th=(th0, th1)))
+    starts, span = _schedule(frames, cars, overlap)
+    car_list = [_car(k, t0, span, lay, rng, w, h, k % 3 if overlap else None) for k, t0 in enumerate(starts)]
     phase = rng.uniform(0, 2 * np.pi)
-    cols = ["frame", "visible", "id", "cx", "cy", "w", "h", "angle_deg", "scale"]
-    cols += [f"{c}{i}" for i in range(4) for c in "xy"]
-    rows = []
+    rows, objects = [], []
     with VideoWriter(out / "video.mp4", fps, (w, h)) as vw:
         for t in range(frames):
             frame = bg * lighting((w, h), t, phase, amplitude=0.2)
-            best = None
-            for car in car_list:
-                f = (t - car["t0"]) / car["span"]
-                if not 0.0 <= f <= 1.0:
-                    continue
-                s = car["s"][0] + f * (car["s"][1] - car["s"][0])
-                scale = s / car["plate_w"]  # sprite px -> image px
-                cw = car["sprite"].shape[1] * scale
-                x_c = -cw / 2 + f * (w + cw)  # plate centre x crosses the frame
-                if car["dir"] < 0:
-                    x_c = w - x_c
-                y_c = car["y"][0] + f * (car["y"][1] - car["y"][0])
-                th = car["th"][0] + f * (car["th"][1] - car["th"][0])
-                pose = np.array([x_c, y_c, th, s])
-                # affine: sprite -> image, plate centre to (x_c, y_c), shear tan(th) on x
-                px0, py0 = car["plate_xy"]
-                pcx, pcy = px0 + car["plate_w"] / 2, py0 + car["plate_w"] / lay.aspect / 2
-                m = np.array([[scale, 0, x_c - scale * pcx],
-                              [scale * np.tan(th), scale, y_c - scale * (pcy + np.tan(th) * pcx)]], np.float32)
-                obj = cv2.warpAffine(car["sprite"], m, (w, h), flags=cv2.INTER_LINEAR)
-                al = cv2.warpAffine(car["alpha"], m, (w, h), flags=cv2.INTER_LINEAR)
-                v = car["dir"] * (w + cw) / car["span"]
-                obj = motion_blur(obj * al[..., None], (0.5 * v, 0.0))
-                al = motion_blur(al, (0.5 * v, 0.0))
-                frame *= 1.0 - al[..., None]
-                frame += obj
-                verts = plate_vertices(pose, lay.aspect)[0]
-                inside = np.all((verts[:, 0] >= 0) & (verts[:, 0] <= w - 1) & (verts[:, 1] >= 0) & (verts[:, 1] <= h - 1))
-                if inside and (best is None or s > best[1][3]):
-                    best = (car["id"], pose, verts)
+            plates = _render_frame(frame, car_list, t, (w, h), lay.aspect, overlap)
             vw.write(add_noise(frame, rng, 4.0))
-            if best is None:
-                row = {c: np.nan for c in cols}
-                row.update(frame=t, visible=0, id=-1)
-            else:
-                cid, pose, verts = best
-                lo, hi = verts.min(axis=0), verts.max(axis=0)
-                row = {"frame": t, "visible": 1, "id": cid, "cx": pose[0], "cy": pose[1], "w": hi[0] - lo[0],
-                       "h": hi[1] - lo[1], "angle_deg": np.rad2deg(pose[2]), "scale": pose[3]}
-                for i in range(4):
-                    row[f"x{i}"], row[f"y{i}"] = verts[i]
-            rows.append(row)
+            seen = [p for p in plates if p[3] and p[4] <= MAX_HIDDEN]
+            best = max(seen, key=lambda p: p[1][3], default=None)  # the largest plate in view
+            rows.append(_truth_row(t, best, COLUMNS))
+            objects += [_truth_row(t, p[:3] + (round(p[4], 4),), OBJECT_COLUMNS)
+                        for p in sorted(seen, key=lambda p: p[0])] or [_truth_row(t, None, OBJECT_COLUMNS)]
             if progress:
                 progress(1)
     meta = {"kind": "plate", "model": "plate", "frames": frames, "size": [w, h], "fps": fps, "seed": seed,
             "cars": cars, "layout": layout, "aspect": lay.aspect, "overlap": overlap,
             "note": "scale = plate width in px; angle_deg = angle of the non-vertical sides; vertices TL, TR, BR, BL"}
-    write_clip_files(out, rows, cols, meta)
+    if overlap:
+        meta["max_in_view"] = 3
+    write_clip_files(out, rows, COLUMNS, meta)
+    write_track_csv(out / "objects.csv", objects, OBJECT_COLUMNS)
     return meta

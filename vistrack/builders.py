@@ -16,7 +16,7 @@ from .models.registry import MODELS as _REGISTRY
 from .models.registry import ModelSpec, get_model_spec, register
 from .video import VideoError, groundtruth_origin, read_rects
 
-__all__ = ["MODELS", "initial_truth", "build_model", "model_from_box", "read_support_points"]
+__all__ = ["MODELS", "PLATES_ALGOS", "initial_truth", "build_model", "model_from_box", "read_support_points"]
 
 
 def initial_truth(clip, init_gt):
@@ -188,7 +188,15 @@ def _contour_from_clip(clip, *, init, init_gt, template, polarity="auto", colour
     return _learn_contour(model, _first_frame(clip), polarity, colour)
 
 
-def _plate_from_clip(clip, *, init, init_gt, template, **params):
+def _plate_from_clip(clip, *, init, init_gt, template, targets=None, **params):
+    if targets is not None:  # several plates at once: acquired by the slots' births
+        if init is not None or init_gt is not None:
+            raise VideoError("--targets finds the plates by itself: give no --init or --init-gt")
+        from .models.plates import Plates
+
+        params.pop("appearance", None)
+        layout = params.pop("layout", None) or (clip.meta or {}).get("layout") or "jp"
+        return Plates(clip.source.size, targets, layout, **params)
     return _plate(clip, clip.source.size, init, init_gt, params)
 
 
@@ -307,6 +315,9 @@ register(ModelSpec("box", _THESIS + _HISTORY, "any object from a box: colour + t
                    from_box=_box_from_box, bytes_per_particle=32_000))
 register(ModelSpec("contour", _THESIS + _HISTORY + ("ls-n-ips-nn",), "B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
                    from_box=_contour_from_box, from_clip=_contour_from_clip, bytes_per_particle=48_000))
+#: with ``targets`` (several plates at once, :class:`~vistrack.models.plates.Plates`): partitioned sampling too
+PLATES_ALGOS = ("partitioned-lis", "partitioned", "branched-partitioned-lis", "branched-partitioned", "lis",
+                "bootstrap", "condensation")
 register(ModelSpec("plate", ("lis", "bootstrap", "condensation", "lls", "avpf"),
                    "license-plate template (thesis 001 §1.3.2); acquires plates without a box",
                    from_box=_plate_from_frame_box, from_clip=_plate_from_clip, lost_rule="plate",

@@ -44,6 +44,13 @@ class Clip:
     truth: dict | None
 
     @property
+    def objects(self):
+        """The per-object ground truth (``objects.csv``: a row per frame and object, with ids;
+        :mod:`vistrack.mot`) as columns, or ``None`` when the clip has none."""
+        path = self.folder / "objects.csv"
+        return read_groundtruth_csv(path) if path.is_file() else None
+
+    @property
     def model_name(self):
         """The model named in ``meta.json`` (a synthetic clip's kind), or ``None``."""
         return (self.meta or {}).get("model")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["draw_polylines", "draw_label", "annotate"]
+__all__ = ["draw_polylines", "draw_label", "annotate", "annotate_targets", "id_colour"]
 
 ESTIMATE = (0, 255, 255)  # yellow
 PARTICLE = (255, 160, 0)  # blue-ish
@@ -37,5 +37,30 @@ def annotate(frame, estimate_curves, particle_curves, text, truth_curves=None):
         draw_polylines(img, truth_curves, TRUTH, 1)
     draw_polylines(img, particle_curves, PARTICLE, 1)
     draw_polylines(img, estimate_curves, ESTIMATE, 2)
+    draw_label(img, text)
+    return img
+
+
+#: BGR colours of target ids, in turn (id k: ``ID_COLOURS[k % 8]``)
+ID_COLOURS = ((0, 255, 255), (255, 0, 255), (0, 255, 0), (255, 128, 0), (0, 128, 255), (255, 255, 0),
+              (128, 0, 255), (0, 0, 255))
+
+
+def id_colour(i):
+    """The BGR colour of target id ``i`` (:data:`ID_COLOURS`)."""
+    return ID_COLOURS[int(i) % len(ID_COLOURS)]
+
+
+def annotate_targets(frame, ids, outlines, particle_curves, text):
+    """A copy of ``frame`` with particles (thin) and each target's outline (thick) in its id's
+    colour with the id written above it, and a label."""
+    img = frame.copy()
+    draw_polylines(img, particle_curves, PARTICLE, 1)
+    scale = max(0.4, img.shape[1] / 1000)
+    for i, curve in zip(ids, outlines):
+        col = id_colour(i)
+        draw_polylines(img, [curve], col, 2)
+        x, y = np.min(curve, axis=0)
+        cv2.putText(img, str(int(i)), (int(x), int(y) - 4), cv2.FONT_HERSHEY_SIMPLEX, scale, col, 1, cv2.LINE_AA)
     draw_label(img, text)
     return img

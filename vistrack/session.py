@@ -26,11 +26,11 @@ from .clips import format_value
 from .metrics import center_error, iou, landmark_error, lost_frames, plate_frame_measures, success_auc
 from .particles import DegenerateWeightsWarning
 from .profiling import STAGES, Timer, profile_stages
-from .render import annotate
+from .render import annotate, annotate_targets
 from .tracking import top_particles, track, warm_up
 from .video import VideoWriter
 
-__all__ = ["TrackCSV", "VideoRun", "track_row", "track_video", "summary_lines", "Terminated", "stop_on_signals"]
+__all__ = ["TrackCSV", "VideoRun", "track_row", "target_rows", "track_video", "summary_lines", "Terminated", "stop_on_signals"]
 
 
 class Terminated(KeyboardInterrupt):
@@ -123,6 +123,8 @@ class VideoRun:
     video_note: str | None = None
     #: ``(index, reason, detail)`` of the first frame of every stretch where the object is lost
     losses: list = field(default_factory=list)
+    #: a model of several targets: the track rows of every frame and target (:func:`target_rows`)
+    target_rows: list = field(default_factory=list)
     _was_lost: bool = False
 
     def note_lost(self, res, notify=None):
@@ -157,6 +159,21 @@ def track_row(model, res):
     row.update(model.describe(res.estimate))
     row["ess"], row["ms"], row["lost_reason"] = res.ess, res.ms, res.lost_reason
     return row
+
+
+def target_rows(model, res):
+    """The track-CSV rows of a frame of a model of several targets (:class:`~vistrack.mot.MultiTarget`):
+    one per reported target, ``frame, visible = 1, id``, the target's :meth:`describe_target`
+    columns, ``ess, ms, lost_reason``; one row with ``visible = 0, id = -1``, NaN geometry and the
+    frame's ``lost_reason`` when none is reported."""
+    ids, states = res.targets
+    tail = {"ess": res.ess, "ms": res.ms}
+    if not len(ids):
+        row = {"frame": res.index, "visible": 0, "id": -1}
+        row.update({k: np.nan for k in model.describe_target(np.zeros(states.shape[1]))})
+        return [{**row, **tail, "lost_reason": res.lost_reason}]
+    return [{"frame": res.index, "visible": 1, "id": int(i), **model.describe_target(x), **tail, "lost_reason": ""}
+            for i, x in zip(ids, states)]
 
 
 def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, results_path=None,
@@ -252,20 +269,30 @@ def _record(run, res, model, outs, writer, show_particles, label, notify=None):
     row = track_row(model, res)
     run.note_lost(res, notify)
     run.rows.append(row)
+    rows = [row] if res.targets is None else target_rows(model, res)
+    if res.targets is not None:
+        run.target_rows += rows
     for o in outs:
-        o.write(row)
+        for r in rows:
+            o.write(r)
     run.ess_sum += res.ess
     run.degenerate += bool(res.particles.degenerate)
     if writer:
-        writer.write(annotate(res.frame, model.outline(res.estimate) if vis else [],
-                              model.outline(top_particles(res.particles, show_particles)),
-                              f"#{res.index}  {label}  ESS {res.ess:.1f}"))
+        text = f"#{res.index}  {label}  ESS {res.ess:.1f}"
+        particles = model.outline(top_particles(res.particles, show_particles))
+        if res.targets is None:
+            img = annotate(res.frame, model.outline(res.estimate) if vis else [], particles, text)
+        else:
+            ids, states = res.targets
+            img = annotate_targets(res.frame, ids, model.target_outline(states), particles, text)
+        writer.write(img)
 
 
-def summary_lines(run, particles, *, model_name, model, truth, frame_width):
+def summary_lines(run, particles, *, model_name, model, truth, frame_width, objects=None):
     """The summary ``vistrack run`` prints: speed and ESS, then the comparison with ground
     truth when there is one (landmark error; plate lost/vertex error/false reports; success
-    AUC, precision at 20 px and centre error for box-level truth)."""
+    AUC, precision at 20 px and centre error for box-level truth; for several targets, MOTA and
+    IDF1 against ``objects``, the columns of the clip's ``objects.csv``)."""
     rows, n = run.rows, len(run.rows)
     ms = np.array([r["ms"] for r in rows])
     lines = [f"{n} frames, {n / max(run.wall, 1e-9):.0f} frames/s end to end ({1e3 / ms.mean():.0f} frames/s in "
@@ -277,6 +304,8 @@ def summary_lines(run, particles, *, model_name, model, truth, frame_width):
                      + f" (total {split['total']:.2f}, drawing and writing included in other)")
     if run.losses:
         lines.append(_lost_line(run))
+    if run.target_rows:  # several targets: scored against the clip's objects.csv
+        return lines + ([] if objects is None else [_mot_line(run, objects, model)])
     if truth is None:
         return lines
     if model_name == "landmarks" and "lx0" in truth:
@@ -294,6 +323,22 @@ def summary_lines(run, particles, *, model_name, model, truth, frame_width):
     elif "w" in truth and "cx" in truth:
         lines.append(_box_summary(rows, truth, frame_width))
     return lines
+
+
+def _mot_line(run, objects, model):
+    """One line: the CLEAR-MOT and identity scores of the run's target rows against ``objects``."""
+    from .mot import clear_mot, objects_by_frame
+
+    cols = {k: np.array([r[k] for r in run.target_rows], float) for k in ("frame", "visible", "id", "scale")
+            + tuple(f"{c}{i}" for i in range(4) for c in "xy")}
+    frames = int(max(r["frame"] for r in run.rows)) + 1
+    truth = objects_by_frame(objects)[:frames]
+    s = clear_mot(truth, objects_by_frame(cols, len(truth)), model.layout.aspect)
+    fmt = lambda v: "n/a" if v is None else f"{v:.3f}"  # noqa: E731
+    return (f"vs ground truth (objects.csv, {s['objects']} plates over the frames): MOTA {fmt(s['mota'])}, IDF1 "
+            f"{fmt(s['idf1'])}, {s['switches']} identity switches, {s['false_positives']} false positives, "
+            f"{s['misses']} misses; {s['empty_frame_reports']} plates reported in the {s['frames_without']} frames "
+            "without one")
 
 
 def _lost_line(run):

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .features import FeatureMaps
-from .models.protocol import VideoModel, require
+from .models.protocol import VideoModel, offers, require
 from .particles import ParticleSet
 
 __all__ = ["FrameResult", "FrameStepper", "track", "top_particles", "warm_up"]
@@ -35,6 +35,10 @@ class FrameResult:
     #: (:data:`~vistrack.models.collapse.REASONS`), and a sentence with the numbers
     lost_reason: str = ""
     lost_detail: str = ""
+    #: a model of several targets (:class:`~vistrack.mot.MultiTarget`): the frame's reported
+    #: targets as ``(ids (M,), states (M, d1))``, the ids kept from frame to frame
+    #: (:class:`~vistrack.mot.Identities`); ``None`` for a single-target model
+    targets: tuple = None
 
     @property
     def ess(self):
@@ -82,6 +86,9 @@ class FrameStepper:
         self.model = filt.model
         self.estimator = estimator or filt.model.estimate
         self._buffers = {}  # feature-map buffers reused from frame to frame
+        from .mot import Identities, MultiTarget
+
+        self.identities = Identities() if offers(self.model, MultiTarget) else None
 
     def step(self, index, frame):
         """Track one BGR (or grey) ``frame``; returns its :class:`FrameResult`."""
@@ -95,8 +102,12 @@ class FrameStepper:
         est = self.estimator(self.particles)
         reason, detail = self.model.check_lost(obs, est)
         self.model.adapt(obs, est)
+        targets = None
+        if self.identities is not None:
+            states = self.model.targets(obs, est)
+            targets = (self.identities.assign(index, self.model.target_box(states)), states)
         ms = (time.perf_counter() - t0) * 1e3
-        return FrameResult(index, frame, self.particles, est, ms, maps, obs, reason, detail)
+        return FrameResult(index, frame, self.particles, est, ms, maps, obs, reason, detail, targets)
 
 
 def warm_up(filt, n, frame):

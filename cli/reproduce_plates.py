@@ -1,0 +1,37 @@
+"""``vistrack reproduce plate --overlap``: several plates at once (:mod:`vistrack.reproduce.plates`)."""
+
+from __future__ import annotations
+
+import click
+
+from vistrack.evaluation import entries_config
+
+from .options import check_writable
+from .reproduce import _check_entries, _clip_suite, _report, _run
+
+__all__ = ["overlap"]
+
+
+def overlap(clips_dir, make, frames, size, entries, runs, seed, targets, equal_time, quiet, json_path, engine,
+            out_dir):
+    """``reproduce plate --overlap``: several plates at once (:mod:`vistrack.reproduce.plates`)."""
+    from vistrack.data_synth.plate import make_plate_clip
+    from vistrack.reproduce.plates import PlatesConfig, plates_equal_time, plates_results, plates_tasks, run_plates_task
+
+    _check_entries(entries)
+    check_writable(json_path, "--json file")
+    clips = _clip_suite(clips_dir, "plate-overlap-clips", make, frames, size, make_plate_clip, "plate-overlap", quiet,
+                        overlap=True, cars=6)
+    if equal_time:
+        entries, times = plates_equal_time(clips[0], entries, targets)
+        click.echo("equal time: " + ", ".join(f"{a}:{n}" for a, n in entries) + " ("
+                   + ", ".join(f"{k} {v:.1f} ms/frame" for k, v in times.items()) + ")")
+    cfg = PlatesConfig(clips=clips, entries=entries, runs=runs, seed=seed, targets=targets)
+    tasks = plates_tasks(cfg)
+    out = _run(tasks, out_dir, "plates", runner=run_plates_task, **engine)
+    try:
+        results = plates_results(cfg, tasks, out)
+    except ValueError as e:
+        raise click.ClickException(str(e)) from None
+    click.echo(f"{len(clips)} clips x {runs} runs, K = {targets} plate slots")
+    _report("plates", {"results": results}, entries_config(cfg), json_path, None)
