@@ -295,7 +295,7 @@ def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, schedule
                "plate-overlap-clips with --overlap].", "640x480", "lis:100,bootstrap:750",
                "ALGO:N pairs (lis, bootstrap, lls, avpf; with --overlap: partitioned-lis, partitioned, "
                "branched-partitioned(-lis), lis, bootstrap) [default with --overlap: "
-               "partitioned-lis:100,bootstrap:1000].", 20)
+               "partitioned-lis:100,bootstrap:2000].", 20)
 @click.option("--overlap", is_flag=True,
               help="Several plates at once: clips with up to three plates in view (6 cars, synth plate --overlap), "
                    "tracked with --targets slots and scored by MOTA and IDF1 against objects.csv.")
@@ -303,7 +303,7 @@ def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, schedule
               help="With --overlap: plate slots K.")
 @click.option("--equal-time", is_flag=True,
               help="With --overlap: set every N after the first so that its time per frame matches the first "
-                   "entry's (timed on the first 60 frames of the first clip).")
+                   "entry's (timed on 60 frames of the first clip, from a quarter of the way in).")
 @engine_options("plate-results")
 @output_options("Write P(lost) vs frame PNG here.")
 @click.pass_context
@@ -329,7 +329,7 @@ def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targ
         if plots_dir:
             raise click.UsageError("--plots is not for --overlap (its scores are one table)")
         if ctx.get_parameter_source("entries") == click.core.ParameterSource.DEFAULT:
-            entries = [("partitioned-lis", 100), ("bootstrap", 1000)]
+            entries = [("partitioned-lis", 100), ("bootstrap", 2000)]
         from .reproduce_plates import overlap
 
         return overlap(clips_dir, make, frames, size, entries, runs, seed, targets, equal_time, quiet, json_path,
