@@ -92,6 +92,73 @@ def _paste(frame, sprite, mask, half, cx, cy, scale, angle_deg, velocity=(0.0, 0
     frame += obj
 
 
+def _motion(rng, pos, ang, frames, size, margin, jump_prob, jump_size):
+    """The object's pose per frame: ``(pos, scale, angle_deg, blur_v)`` for ``t = 0..frames-1``,
+    ``blur_v`` the motion blur's vector (the exposure is half the frame time). The draws for frame
+    ``t`` are taken from ``rng`` when the caller asks for that frame (the renderer's noise follows)."""
+    w, h = size
+    vel = np.zeros(2)
+    log_s, omega = 0.0, 0.0
+    for t in range(frames):
+        blur_v = np.zeros(2)
+        if t > 0:
+            vel = 0.9 * vel + rng.normal(0, 0.005 * w, 2)
+            step = vel.copy()
+            if rng.random() < jump_prob:  # a sudden movement
+                a = rng.uniform(0, 2 * np.pi)
+                step += rng.uniform(*jump_size) * w * np.array([np.cos(a), np.sin(a)])
+            pos = pos + step
+            for k, lim in enumerate((w, h)):
+                if pos[k] < margin or pos[k] > lim - margin:
+                    pos[k] = np.clip(pos[k], margin, lim - margin)
+                    vel[k] = -vel[k]
+            log_s = 0.97 * log_s + rng.normal(0, 0.02)
+            omega = 0.9 * omega + rng.normal(0, 0.6)
+            ang += omega
+            if abs(ang) > 45:
+                ang, omega = float(np.clip(ang, -45, 45)), -omega
+            blur_v = 0.5 * step
+        yield pos, float(np.exp(log_s)), ang, blur_v
+
+
+def _truth_row(t, template, dense, pos, scale, ang):
+    """One ``groundtruth.csv`` row: the pose, the outline's bounding box and the support points."""
+    th = np.deg2rad(ang)
+    rot = scale * np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    q = template @ rot.T + pos
+    outline = dense @ q
+    lo, hi = outline.min(axis=0), outline.max(axis=0)
+    row = {"frame": t, "visible": 1, "cx": pos[0], "cy": pos[1], "w": hi[0] - lo[0], "h": hi[1] - lo[1],
+           "angle_deg": ang, "scale": scale}
+    row.update({f"qx{i}": q[i, 0] for i in range(len(q))})
+    row.update({f"qy{i}": q[i, 1] for i in range(len(q))})
+    return row
+
+
+def _contour_meta(frames, w, h, fps, seed, clutter, shape, color, template, distractor_pose, jump_prob, jump_size):
+    """``meta.json`` of a contour clip."""
+    shapes, noise = CLUTTER[clutter]
+    return {
+        "kind": "contour",
+        "model": "contour",
+        "frames": frames,
+        "size": [w, h],
+        "fps": fps,
+        "seed": seed,
+        "clutter": clutter,
+        "shape": shape,
+        "color": bool(color),
+        "template": {"support_points": np.round(template, 4).tolist(),
+                     "note": "support points at scale 1, angle 0, centred; pose (cx, cy, scale, angle_deg)"},
+        "distractor": distractor_pose,
+        "dynamics": {"velocity_ar": 0.9, "velocity_noise_px": 0.005 * w, "jump_prob": jump_prob,
+                     "jump_px": [jump_size[0] * w, jump_size[1] * w], "log_scale_ar": 0.97, "log_scale_noise": 0.02,
+                     "angle_rate_ar": 0.9, "angle_rate_noise_deg": 0.6, "max_angle_deg": 45},
+        "noise_std": noise,
+        "background_shapes": shapes,
+    }
+
+
 @atomic_clip
 def make_contour_clip(out, *, frames=300, size=(320, 240), seed=0, clutter="high", distractor=True,
                       shape="hand", n_support=24, fps=30.0, jump_prob=0.02, jump_size=(0.025, 0.045),
@@ -120,8 +187,7 @@ def make_contour_clip(out, *, frames=300, size=(320, 240), seed=0, clutter="high
     sprite, mask, half = _object_sprite(template, rng, color=color)
     margin = 1.2 * radius
     pos = np.array([rng.uniform(0.3, 0.7) * w, rng.uniform(0.3, 0.7) * h])
-    vel = np.zeros(2)
-    log_s, ang, omega = 0.0, float(rng.uniform(-15, 15)), 0.0
+    ang = float(rng.uniform(-15, 15))
     distractor_pose = None
     if distractor:
         for _ in range(100):  # lie still somewhere away from the start
@@ -130,69 +196,23 @@ def make_contour_clip(out, *, frames=300, size=(320, 240), seed=0, clutter="high
                 break
         distractor_pose = {"cx": float(d[0]), "cy": float(d[1]), "scale": 1.0, "angle_deg": float(rng.uniform(-30, 30))}
     phase = rng.uniform(0, 2 * np.pi)
-    spline = BSpline(n_support)
-    dense = spline.dense(8)
+    dense = BSpline(n_support).dense(8)
     cols = ["frame", "visible", "cx", "cy", "w", "h", "angle_deg", "scale"]
     cols += [f"qx{i}" for i in range(n_support)] + [f"qy{i}" for i in range(n_support)]
     rows = []
+    motion = _motion(rng, pos, ang, frames, (w, h), margin, jump_prob, jump_size)
     with VideoWriter(out / "video.mp4", fps, (w, h)) as vw:
-        for t in range(frames):
-            if t > 0:
-                vel = 0.9 * vel + rng.normal(0, 0.005 * w, 2)
-                step = vel.copy()
-                if rng.random() < jump_prob:  # a sudden movement
-                    a = rng.uniform(0, 2 * np.pi)
-                    step += rng.uniform(*jump_size) * w * np.array([np.cos(a), np.sin(a)])
-                pos = pos + step
-                for k, lim in enumerate((w, h)):
-                    if pos[k] < margin or pos[k] > lim - margin:
-                        pos[k] = np.clip(pos[k], margin, lim - margin)
-                        vel[k] = -vel[k]
-                log_s = 0.97 * log_s + rng.normal(0, 0.02)
-                omega = 0.9 * omega + rng.normal(0, 0.6)
-                ang += omega
-                if abs(ang) > 45:
-                    ang, omega = float(np.clip(ang, -45, 45)), -omega
-                blur_v = 0.5 * step  # exposure half the frame time
-            else:
-                blur_v = np.zeros(2)
-            scale = float(np.exp(log_s))
+        for t, (pos, scale, ang, blur_v) in enumerate(motion):
             frame = bg * lighting((w, h), t, phase)
             if distractor_pose:
                 _paste(frame, sprite, mask, half, distractor_pose["cx"], distractor_pose["cy"], 1.0,
                        distractor_pose["angle_deg"])
             _paste(frame, sprite, mask, half, pos[0], pos[1], scale, ang, blur_v)
             vw.write(add_noise(frame, rng, noise))
-            th = np.deg2rad(ang)
-            rot = scale * np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
-            q = template @ rot.T + pos
-            outline = dense @ q
-            lo, hi = outline.min(axis=0), outline.max(axis=0)
-            row = {"frame": t, "visible": 1, "cx": pos[0], "cy": pos[1], "w": hi[0] - lo[0], "h": hi[1] - lo[1],
-                   "angle_deg": ang, "scale": scale}
-            row.update({f"qx{i}": q[i, 0] for i in range(n_support)})
-            row.update({f"qy{i}": q[i, 1] for i in range(n_support)})
-            rows.append(row)
+            rows.append(_truth_row(t, template, dense, pos, scale, ang))
             if progress:
                 progress(1)
-    meta = {
-        "kind": "contour",
-        "model": "contour",
-        "frames": frames,
-        "size": [w, h],
-        "fps": fps,
-        "seed": seed,
-        "clutter": clutter,
-        "shape": shape,
-        "color": bool(color),
-        "template": {"support_points": np.round(template, 4).tolist(),
-                     "note": "support points at scale 1, angle 0, centred; pose (cx, cy, scale, angle_deg)"},
-        "distractor": distractor_pose,
-        "dynamics": {"velocity_ar": 0.9, "velocity_noise_px": 0.005 * w, "jump_prob": jump_prob,
-                     "jump_px": [jump_size[0] * w, jump_size[1] * w], "log_scale_ar": 0.97, "log_scale_noise": 0.02,
-                     "angle_rate_ar": 0.9, "angle_rate_noise_deg": 0.6, "max_angle_deg": 45},
-        "noise_std": noise,
-        "background_shapes": shapes,
-    }
+    meta = _contour_meta(frames, w, h, fps, seed, clutter, shape, color, template, distractor_pose, jump_prob,
+                         jump_size)
     write_clip_files(out, rows, cols, meta)
     return meta

@@ -29,6 +29,54 @@ def draw_blob(img, x, y, sigma, amplitude):
     img[y0:y1, x0:x1] += patch[:, :, None] if img.ndim == 3 else patch
 
 
+def _checked(frames, k, size):
+    """The frame size ``(w, h)`` of a landmark clip, after checking the clip's arguments."""
+    if frames < 1:
+        raise ValueError(f"need at least one frame, got {frames}")
+    if k < 3:
+        raise ValueError(f"need at least 3 landmarks, got {k}")
+    w, h = int(size[0]), int(size[1])
+    if w < 128 or h < 96:
+        raise ValueError(f"frame size {w}x{h} is too small for landmark clips (need at least 128x96)")
+    return w, h
+
+
+def _truth_row(t, centre, x, pts, occ):
+    """One ``groundtruth.csv`` row: the landmarks' bounding box, the state's angle and scale, every
+    landmark's position and whether it was hidden."""
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    row = {"frame": t, "visible": 1, "cx": centre[0], "cy": centre[1], "w": hi[0] - lo[0],
+           "h": hi[1] - lo[1], "angle_deg": float(np.rad2deg(x[0, 1])), "scale": float(np.exp(x[0, 0]))}
+    row.update({f"lx{i}": pts[i, 0] for i in range(len(pts))})
+    row.update({f"ly{i}": pts[i, 1] for i in range(len(pts))})
+    row.update({f"occ{i}": int(occ[i]) for i in range(len(pts))})
+    return row
+
+
+def _landmark_meta(frames, w, h, fps, seed, k, centre, scale_px, model, rows, sigma_blob, n_cl, occlusion):
+    """``meta.json`` of a landmark clip (the template: the landmarks of frame 0)."""
+    first = [[rows[0][f"lx{i}"], rows[0][f"ly{i}"]] for i in range(k)]
+    return {
+        "kind": "landmarks",
+        "model": "landmarks",
+        "frames": frames,
+        "size": [w, h],
+        "fps": fps,
+        "seed": seed,
+        "k": k,
+        "centre": centre.tolist(),
+        "scale_px": float(scale_px),
+        "theta0": model.theta0,
+        "template": {"landmarks": np.round(first, 4).tolist(),
+                     "note": "landmark positions (px) in frame 0; configuration h = (p - centre) / scale_px"},
+        "dynamics": {k_: (v if np.isscalar(v) else list(v)) for k_, v in VIDEO_DYNAMICS.items()},
+        "blob_sigma_px": sigma_blob,
+        "clutter_blobs": n_cl,
+        "occlusion_rate": occlusion,
+        "noise_std": 4.0,
+    }
+
+
 @atomic_clip
 def make_landmark_clip(out, *, k=5, frames=200, size=(640, 480), seed=0, clutter_blobs=6, occlusion=0.01,
                        fps=30.0, progress=None):
@@ -43,13 +91,7 @@ def make_landmark_clip(out, *, k=5, frames=200, size=(640, 480), seed=0, clutter
     change and sensor noise. Ground truth: every landmark's position per frame
     (``lx0.., ly0..``) and whether it was drawn (``occ0..`` = 1 when occluded).
     """
-    if frames < 1:
-        raise ValueError(f"need at least one frame, got {frames}")
-    if k < 3:
-        raise ValueError(f"need at least 3 landmarks, got {k}")
-    w, h = int(size[0]), int(size[1])
-    if w < 128 or h < 96:
-        raise ValueError(f"frame size {w}x{h} is too small for landmark clips (need at least 128x96)")
+    w, h = _checked(frames, k, size)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed)
@@ -86,34 +128,9 @@ def make_landmark_clip(out, *, k=5, frames=200, size=(640, 480), seed=0, clutter
             for cx_, cy_ in cl_pos:
                 draw_blob(frame, cx_, cy_, sigma_blob, amp)
             vw.write(add_noise(frame, rng, 4.0))
-            lo, hi = pts.min(axis=0), pts.max(axis=0)
-            row = {"frame": t, "visible": 1, "cx": centre[0], "cy": centre[1], "w": hi[0] - lo[0],
-                   "h": hi[1] - lo[1], "angle_deg": float(np.rad2deg(x[0, 1])), "scale": float(np.exp(x[0, 0]))}
-            row.update({f"lx{i}": pts[i, 0] for i in range(k)})
-            row.update({f"ly{i}": pts[i, 1] for i in range(k)})
-            row.update({f"occ{i}": int(occ[i]) for i in range(k)})
-            rows.append(row)
+            rows.append(_truth_row(t, centre, x, pts, occ))
             if progress:
                 progress(1)
-    first = [[rows[0][f"lx{i}"], rows[0][f"ly{i}"]] for i in range(k)]
-    meta = {
-        "kind": "landmarks",
-        "model": "landmarks",
-        "frames": frames,
-        "size": [w, h],
-        "fps": fps,
-        "seed": seed,
-        "k": k,
-        "centre": centre.tolist(),
-        "scale_px": float(scale_px),
-        "theta0": model.theta0,
-        "template": {"landmarks": np.round(first, 4).tolist(),
-                     "note": "landmark positions (px) in frame 0; configuration h = (p - centre) / scale_px"},
-        "dynamics": {k_: (v if np.isscalar(v) else list(v)) for k_, v in VIDEO_DYNAMICS.items()},
-        "blob_sigma_px": sigma_blob,
-        "clutter_blobs": n_cl,
-        "occlusion_rate": occlusion,
-        "noise_std": 4.0,
-    }
+    meta = _landmark_meta(frames, w, h, fps, seed, k, centre, scale_px, model, rows, sigma_blob, n_cl, occlusion)
     write_clip_files(out, rows, cols, meta)
     return meta
