@@ -13,6 +13,15 @@ each ship is filtered alone by bootstrap with ``--reference`` particles.
 
 ``--group-shares`` instead reports how the branched filter's groups share the joined weight
 after each step (their total weights are their own estimates of ``p(Y_t|Y_{1:t-1})``).
+
+``partitioned-reversed`` in ``--algos`` is partitioned sampling drawing the ships in the
+reversed order (ship M first, ship 1 last), from the same seeds: does a ship's error depend
+on its place in the order? ``--paired`` prints, for every algorithm after the first, the
+paired differences (this algorithm − the first) of ship 1's, ship M's and the joint
+final-step error over the (sequence, run) pairs, mean ± standard error.
+
+    python benchmarks/bench_partitions.py --ships 10 -n 1000 --runs 20 --reference 0 \
+        --algos partitioned,partitioned-reversed,branched-partitioned --paired
 """
 
 import argparse
@@ -36,8 +45,9 @@ class GroupShares(BranchedPartitioned):
         return self._labels
 
     def _partitions(self, prev, log_w, obs, rng, kernel):
-        x, lw, lam = super()._partitions(prev, log_w, obs, rng, kernel)  # rows keep their group
-        tot = np.array([logsumexp(lw[self._labels == g]) for g in range(len(self.orderings))])
+        x, lw, lam = super()._partitions(prev, log_w, obs, rng, kernel)
+        labels = np.sort(self._labels)  # bearings stacks its partitions: the rows come back sorted by group
+        tot = np.array([logsumexp(lw[labels == g]) for g in range(len(self.orderings))])
         self.shares.append(np.sort(np.exp(tot - logsumexp(tot)))[::-1])
         return x, lw, lam
 
@@ -51,6 +61,27 @@ def group_shares(cfg, model, n):
     sh = np.array(GroupShares.shares)
     print(f"M = {model.ships}, N = {n}: heaviest group's share {sh[:, 0].mean():.2f}, two heaviest "
           f"{sh[:, :2].sum(axis=1).mean():.2f}, effective number of groups {np.mean(1 / np.sum(sh**2, axis=1)):.2f}")
+
+
+def make(algo, model):
+    """The filter ``algo`` (``partitioned-reversed``: partitioned with the ships drawn M..1)."""
+    if algo != "partitioned-reversed":
+        return make_filter(algo, model)
+    filt = make_filter("partitioned", model)
+    filt.orderings = [tuple(reversed(range(model.ships)))]
+    return filt
+
+
+def paired(rows):
+    """Print each algorithm's paired differences to the first on ship 1, ship M and the joint error."""
+    names = list(rows)
+    base = np.array(rows[names[0]][0])  # (pairs, M)
+    print(f"paired differences to {names[0]} (final step, mean ± SE over {len(base)} (sequence, run) pairs)")
+    for algo in names[1:]:
+        d = np.array(rows[algo][0]) - base
+        cols = {"ship 1": d[:, 0], f"ship {d.shape[1]}": d[:, -1], "joint": d.mean(axis=1)}
+        print(f"{algo:<22} " + "  ".join(f"{k} {v.mean():+.5f} ± {v.std(ddof=1) / np.sqrt(len(v)):.5f}"
+                                         for k, v in cols.items()))
 
 
 def distinct_ess(particles, cols):
@@ -80,6 +111,7 @@ def main():
     ap.add_argument("--algos", default="bootstrap,lis,partitioned,branched-partitioned")
     ap.add_argument("--reference", type=int, default=200_000, help="particles per ship of the reference (0: none)")
     ap.add_argument("--group-shares", action="store_true", help="only the branched filter's group weights")
+    ap.add_argument("--paired", action="store_true", help="paired differences to the first algorithm")
     a = ap.parse_args()
     cfg = BearingsConfig(ships=a.ships, sequences=a.sequences, runs=a.runs, seed=a.seed)
     model = Bearings(a.ships)
@@ -92,7 +124,7 @@ def main():
         if a.reference:
             ref.append(reference_errors(model, truth, obs, a.reference))
         for algo, (err, div, _) in rows.items():
-            filt = make_filter(algo, model)
+            filt = make(algo, model)
             t0 = time.thread_time()
             for ss in seeds:
                 *_, last = filter_steps(filt, obs, a.particles, np.random.default_rng(ss))
@@ -107,6 +139,8 @@ def main():
         print(f"{algo:<22} {np.mean(err):.5f}  " + " ".join(f"{v:.4f}" for v in np.mean(err, axis=0))
               + f"  ({1e3 * sec / len(err):.0f} ms/run)")
         print(f"{'':<22} {'':7}  " + " ".join(f"{v:6.0f}" for v in np.mean(div, axis=0)))
+    if a.paired:
+        paired(rows)
 
 
 if __name__ == "__main__":
