@@ -14,11 +14,14 @@ each ship is filtered alone by bootstrap with ``--reference`` particles.
 ``--group-shares`` instead reports how the branched filter's groups share the joined weight
 after each step (their total weights are their own estimates of ``p(Y_t|Y_{1:t-1})``).
 
-``partitioned-reversed`` in ``--algos`` is partitioned sampling drawing the ships in the
+An entry ``ALGO:N`` of ``--algos`` runs ``ALGO`` with ``N`` particles instead of ``-n`` (e.g. the
+equal-time counts of ``reproduce bearings --equal-time``). ``partitioned-reversed`` in ``--algos`` is partitioned sampling drawing the ships in the
 reversed order (ship M first, ship 1 last), from the same seeds: does a ship's error depend
 on its place in the order? ``--paired`` prints, for every algorithm after the first, the
 paired differences (this algorithm − the first) of ship 1's, ship M's and the joint
-final-step error over the (sequence, run) pairs, mean ± standard error.
+final-step error over the (sequence, run) pairs, mean ± standard error, and the difference of
+the first half of the ships' mean difference and the second half's (partitioned draws the
+first half early, the reversed order late: negative where a ship gains from coming later).
 
     python benchmarks/bench_partitions.py --ships 10 -n 1000 --runs 20 --reference 0 \
         --algos partitioned,partitioned-reversed,branched-partitioned --paired
@@ -79,7 +82,9 @@ def paired(rows):
     print(f"paired differences to {names[0]} (final step, mean ± SE over {len(base)} (sequence, run) pairs)")
     for algo in names[1:]:
         d = np.array(rows[algo][0]) - base
-        cols = {"ship 1": d[:, 0], f"ship {d.shape[1]}": d[:, -1], "joint": d.mean(axis=1)}
+        half = d.shape[1] // 2  # ships 1..M/2 come later in the reversed order, the others earlier
+        cols = {"ship 1": d[:, 0], f"ship {d.shape[1]}": d[:, -1], "joint": d.mean(axis=1),
+                "first half − second half": d[:, :half].mean(axis=1) - d[:, -half:].mean(axis=1)}
         print(f"{algo:<22} " + "  ".join(f"{k} {v.mean():+.5f} ± {v.std(ddof=1) / np.sqrt(len(v)):.5f}"
                                          for k, v in cols.items()))
 
@@ -124,10 +129,11 @@ def main():
         if a.reference:
             ref.append(reference_errors(model, truth, obs, a.reference))
         for algo, (err, div, _) in rows.items():
-            filt = make(algo, model)
+            name, _, n = algo.partition(":")
+            filt, n = make(name, model), int(n or a.particles)
             t0 = time.thread_time()
             for ss in seeds:
-                *_, last = filter_steps(filt, obs, a.particles, np.random.default_rng(ss))
+                *_, last = filter_steps(filt, obs, n, np.random.default_rng(ss))
                 err.append(np.linalg.norm(model.positions(last.mean()[None]) - model.positions(truth[-1:]), axis=-1)[0])
                 div.append([distinct_ess(last, cols) for cols in model.partitions])
             rows[algo] = (err, div, rows[algo][2] + time.thread_time() - t0)
