@@ -11,6 +11,10 @@ each ship is filtered alone by bootstrap with ``--reference`` particles.
 
     python benchmarks/bench_partitions.py --ships 10 -n 1000 --runs 10
 
+``--speed`` instead times partitioned and branched partitioned sampling at N = 100, 1000, 3000
+(CPU ms per run, best of 6 interleaved repeats of 3 runs), branched both with every group at
+once (bearings' stacked partitions) and group by group (the path of models without them).
+
 ``--group-shares`` instead reports how the branched filter's groups share the joined weight
 after each step (their total weights are their own estimates of ``p(Y_t|Y_{1:t-1})``).
 
@@ -33,6 +37,7 @@ import time
 import numpy as np
 
 from vistrack.filters import BranchedPartitioned, filter_steps, make_filter
+from vistrack.filters.partitioning import PartitionedBase
 from vistrack.models import Bearings
 from vistrack.particles import logsumexp
 from vistrack.reproduce.bearings import BearingsConfig, _sequence
@@ -53,6 +58,31 @@ class GroupShares(BranchedPartitioned):
         tot = np.array([logsumexp(lw[labels == g]) for g in range(len(self.orderings))])
         self.shares.append(np.sort(np.exp(tot - logsumexp(tot)))[::-1])
         return x, lw, lam
+
+
+class GroupByGroup(BranchedPartitioned):
+    """Branched partitioning one group after the other, as for models without stacked partitions."""
+
+    def _partitions(self, prev, log_w, obs, rng, kernel):
+        return PartitionedBase._partitions(self, prev, log_w, obs, rng, kernel)
+
+
+def speed(cfg, model):
+    """Print a table row per N: CPU ms per run of each filter and the ratios to partitioned."""
+    _, obs, _ = _sequence(cfg, model, 0)
+    for n in (100, 1000, 3000):
+        filters = {"partitioned": make_filter("partitioned", model),
+                   "branched": make_filter("branched-partitioned", model), "group by group": GroupByGroup(model)}
+        best = dict.fromkeys(filters, np.inf)
+        for _ in range(6):
+            for name, filt in filters.items():
+                t0 = time.thread_time()
+                for s in range(3):
+                    list(filter_steps(filt, obs, n, np.random.default_rng(s)))
+                best[name] = min(best[name], (time.thread_time() - t0) / 3)
+        p = best["partitioned"]
+        print(f"| {model.ships} | {n} | " + " | ".join(f"{1e3 * v:.1f}" for v in best.values())
+              + f" | {best['branched'] / p:.2f} | {best['group by group'] / p:.2f} |", flush=True)
 
 
 def group_shares(cfg, model, n):
@@ -116,12 +146,15 @@ def main():
     ap.add_argument("--algos", default="bootstrap,lis,partitioned,branched-partitioned")
     ap.add_argument("--reference", type=int, default=200_000, help="particles per ship of the reference (0: none)")
     ap.add_argument("--group-shares", action="store_true", help="only the branched filter's group weights")
+    ap.add_argument("--speed", action="store_true", help="only the timings of partitioned and branched")
     ap.add_argument("--paired", action="store_true", help="paired differences to the first algorithm")
     a = ap.parse_args()
     cfg = BearingsConfig(ships=a.ships, sequences=a.sequences, runs=a.runs, seed=a.seed)
     model = Bearings(a.ships)
     if a.group_shares:
         return group_shares(cfg, model, a.particles)
+    if a.speed:
+        return speed(cfg, model)
     rows = {algo: ([], [], 0.0) for algo in a.algos.split(",")}
     ref = []
     for s in range(a.sequences):
