@@ -11,8 +11,24 @@ each ship is filtered alone by bootstrap with ``--reference`` particles.
 
     python benchmarks/bench_partitions.py --ships 10 -n 1000 --runs 10
 
+``--speed`` instead times partitioned and branched partitioned sampling at N = 100, 1000, 3000
+(CPU ms per run, best of 6 interleaved repeats of 3 runs), branched both with every group at
+once (bearings' stacked partitions) and group by group (the path of models without them).
+
 ``--group-shares`` instead reports how the branched filter's groups share the joined weight
 after each step (their total weights are their own estimates of ``p(Y_t|Y_{1:t-1})``).
+
+An entry ``ALGO:N`` of ``--algos`` runs ``ALGO`` with ``N`` particles instead of ``-n`` (e.g. the
+equal-time counts of ``reproduce bearings --equal-time``). ``partitioned-reversed`` in ``--algos`` is partitioned sampling drawing the ships in the
+reversed order (ship M first, ship 1 last), from the same seeds: does a ship's error depend
+on its place in the order? ``--paired`` prints, for every algorithm after the first, the
+paired differences (this algorithm − the first) of ship 1's, ship M's and the joint
+final-step error over the (sequence, run) pairs, mean ± standard error, and the difference of
+the first half of the ships' mean difference and the second half's (partitioned draws the
+first half early, the reversed order late: negative where a ship gains from coming later).
+
+    python benchmarks/bench_partitions.py --ships 10 -n 1000 --runs 20 --reference 0 \
+        --algos partitioned,partitioned-reversed,branched-partitioned --paired
 """
 
 import argparse
@@ -21,6 +37,7 @@ import time
 import numpy as np
 
 from vistrack.filters import BranchedPartitioned, filter_steps, make_filter
+from vistrack.filters.partitioning import PartitionedBase
 from vistrack.models import Bearings
 from vistrack.particles import logsumexp
 from vistrack.reproduce.bearings import BearingsConfig, _sequence
@@ -36,10 +53,36 @@ class GroupShares(BranchedPartitioned):
         return self._labels
 
     def _partitions(self, prev, log_w, obs, rng, kernel):
-        x, lw, lam = super()._partitions(prev, log_w, obs, rng, kernel)  # rows keep their group
-        tot = np.array([logsumexp(lw[self._labels == g]) for g in range(len(self.orderings))])
+        x, lw, lam = super()._partitions(prev, log_w, obs, rng, kernel)
+        labels = np.sort(self._labels)  # bearings stacks its partitions: the rows come back sorted by group
+        tot = np.array([logsumexp(lw[labels == g]) for g in range(len(self.orderings))])
         self.shares.append(np.sort(np.exp(tot - logsumexp(tot)))[::-1])
         return x, lw, lam
+
+
+class GroupByGroup(BranchedPartitioned):
+    """Branched partitioning one group after the other, as for models without stacked partitions."""
+
+    def _partitions(self, prev, log_w, obs, rng, kernel):
+        return PartitionedBase._partitions(self, prev, log_w, obs, rng, kernel)
+
+
+def speed(cfg, model):
+    """Print a table row per N: CPU ms per run of each filter and the ratios to partitioned."""
+    _, obs, _ = _sequence(cfg, model, 0)
+    for n in (100, 1000, 3000):
+        filters = {"partitioned": make_filter("partitioned", model),
+                   "branched": make_filter("branched-partitioned", model), "group by group": GroupByGroup(model)}
+        best = dict.fromkeys(filters, np.inf)
+        for _ in range(6):
+            for name, filt in filters.items():
+                t0 = time.thread_time()
+                for s in range(3):
+                    list(filter_steps(filt, obs, n, np.random.default_rng(s)))
+                best[name] = min(best[name], (time.thread_time() - t0) / 3)
+        p = best["partitioned"]
+        print(f"| {model.ships} | {n} | " + " | ".join(f"{1e3 * v:.1f}" for v in best.values())
+              + f" | {best['branched'] / p:.2f} | {best['group by group'] / p:.2f} |", flush=True)
 
 
 def group_shares(cfg, model, n):
@@ -51,6 +94,29 @@ def group_shares(cfg, model, n):
     sh = np.array(GroupShares.shares)
     print(f"M = {model.ships}, N = {n}: heaviest group's share {sh[:, 0].mean():.2f}, two heaviest "
           f"{sh[:, :2].sum(axis=1).mean():.2f}, effective number of groups {np.mean(1 / np.sum(sh**2, axis=1)):.2f}")
+
+
+def make(algo, model):
+    """The filter ``algo`` (``partitioned-reversed``: partitioned with the ships drawn M..1)."""
+    if algo != "partitioned-reversed":
+        return make_filter(algo, model)
+    filt = make_filter("partitioned", model)
+    filt.orderings = [tuple(reversed(range(model.ships)))]
+    return filt
+
+
+def paired(rows):
+    """Print each algorithm's paired differences to the first on ship 1, ship M and the joint error."""
+    names = list(rows)
+    base = np.array(rows[names[0]][0])  # (pairs, M)
+    print(f"paired differences to {names[0]} (final step, mean ± SE over {len(base)} (sequence, run) pairs)")
+    for algo in names[1:]:
+        d = np.array(rows[algo][0]) - base
+        half = d.shape[1] // 2  # ships 1..M/2 come later in the reversed order, the others earlier
+        cols = {"ship 1": d[:, 0], f"ship {d.shape[1]}": d[:, -1], "joint": d.mean(axis=1),
+                "first half − second half": d[:, :half].mean(axis=1) - d[:, -half:].mean(axis=1)}
+        print(f"{algo:<22} " + "  ".join(f"{k} {v.mean():+.5f} ± {v.std(ddof=1) / np.sqrt(len(v)):.5f}"
+                                         for k, v in cols.items()))
 
 
 def distinct_ess(particles, cols):
@@ -80,11 +146,15 @@ def main():
     ap.add_argument("--algos", default="bootstrap,lis,partitioned,branched-partitioned")
     ap.add_argument("--reference", type=int, default=200_000, help="particles per ship of the reference (0: none)")
     ap.add_argument("--group-shares", action="store_true", help="only the branched filter's group weights")
+    ap.add_argument("--speed", action="store_true", help="only the timings of partitioned and branched")
+    ap.add_argument("--paired", action="store_true", help="paired differences to the first algorithm")
     a = ap.parse_args()
     cfg = BearingsConfig(ships=a.ships, sequences=a.sequences, runs=a.runs, seed=a.seed)
     model = Bearings(a.ships)
     if a.group_shares:
         return group_shares(cfg, model, a.particles)
+    if a.speed:
+        return speed(cfg, model)
     rows = {algo: ([], [], 0.0) for algo in a.algos.split(",")}
     ref = []
     for s in range(a.sequences):
@@ -92,10 +162,11 @@ def main():
         if a.reference:
             ref.append(reference_errors(model, truth, obs, a.reference))
         for algo, (err, div, _) in rows.items():
-            filt = make_filter(algo, model)
+            name, _, n = algo.partition(":")
+            filt, n = make(name, model), int(n or a.particles)
             t0 = time.thread_time()
             for ss in seeds:
-                *_, last = filter_steps(filt, obs, a.particles, np.random.default_rng(ss))
+                *_, last = filter_steps(filt, obs, n, np.random.default_rng(ss))
                 err.append(np.linalg.norm(model.positions(last.mean()[None]) - model.positions(truth[-1:]), axis=-1)[0])
                 div.append([distinct_ess(last, cols) for cols in model.partitions])
             rows[algo] = (err, div, rows[algo][2] + time.thread_time() - t0)
@@ -107,6 +178,8 @@ def main():
         print(f"{algo:<22} {np.mean(err):.5f}  " + " ".join(f"{v:.4f}" for v in np.mean(err, axis=0))
               + f"  ({1e3 * sec / len(err):.0f} ms/run)")
         print(f"{'':<22} {'':7}  " + " ".join(f"{v:6.0f}" for v in np.mean(div, axis=0)))
+    if a.paired:
+        paired(rows)
 
 
 if __name__ == "__main__":

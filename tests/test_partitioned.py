@@ -196,3 +196,108 @@ def test_reproduce_bearings_many_ships_at_equal_time(tmp_path, capsys):
     for r in rows:
         assert len(r["ship_error_final"]) == 3 and r["ships"] == 3
         assert r["mean_error_final"] == pytest.approx(np.mean(r["ship_error_final"]))
+
+
+class StackedTwoTargets(TwoTargets):
+    """:class:`TwoTargets` drawing and weighing one partition per particle in one call
+    (:class:`~vistrack.models.partitions.StackedPartitions`): branched partitioning runs every
+    group at once."""
+
+    calls = None
+
+    def sample_prior_parts(self, states, parts, rng):
+        return rng.standard_normal((len(states), 1))
+
+    def predict_parts(self, states, parts, rng):
+        if self.calls is not None:
+            self.calls.append(parts.copy())
+        return self.gather_parts(states, parts) + np.sqrt(Q) * rng.standard_normal((len(states), 1))
+
+    def loglik_parts(self, obs, values, states, parts):
+        return stats.norm.logpdf(values[:, 0], Y[parts], S[parts])
+
+
+class TemperedStackedTwoTargets(StackedTwoTargets):
+    factorised_likelihood = False
+
+    def loglik_parts(self, obs, values, states, parts):
+        return 0.5 * super().loglik_parts(obs, values, states, parts)
+
+    def loglik_part(self, obs, states, j):
+        return 0.5 * super().loglik_part(obs, states, j)
+
+
+@pytest.mark.parametrize("model", [StackedTwoTargets, TemperedStackedTwoTargets])
+def test_branched_with_every_group_at_once_is_properly_weighted(model):
+    from vistrack.models.partitions import StackedPartitions
+
+    assert isinstance(model(), StackedPartitions) and not isinstance(TwoTargets(), StackedPartitions)
+    test_properly_weighted_on_a_two_target_gaussian_toy("branched-partitioned", model)
+
+
+def test_every_group_at_once_draws_each_particles_ordering_in_one_call_per_stage():
+    model = StackedTwoTargets()
+    model.calls = []
+    filt = BranchedPartitioned(model, orderings=[(1, 0), (0, 1)])
+    p = filt.step(ParticleSet(np.zeros((7, 2))), None, np.random.default_rng(1))
+    # the particles sorted by group: 4 of ordering (1, 0), then 3 of (0, 1); one call per stage
+    assert [c.tolist() for c in model.calls] == [[1, 1, 1, 1, 0, 0, 0], [0, 0, 0, 0, 1, 1, 1]]
+    assert p.n == 7 and np.all(np.isfinite(p.log_weights))
+
+
+def test_grouped_resampling_stays_in_each_group_with_the_schemes_counts():
+    from vistrack.resampling import Groups, grouped, residual, stratified, systematic
+
+    rng = np.random.default_rng(3)
+    sizes = np.array([5, 1, 8, 3])
+    groups = Groups(sizes)
+    w = rng.random(17) ** 4
+    w /= np.add.reduceat(w, groups.starts)[groups.of]
+    for _ in range(200):
+        idx = grouped(systematic, w, groups, rng)
+        assert np.array_equal(groups.of[idx], groups.of)  # every offspring's parent is in its group
+        counts = np.bincount(idx, minlength=17)
+        expected = sizes[groups.of] * w
+        assert np.all((counts == np.floor(expected)) | (counts == np.ceil(expected)))
+    freq = np.mean([np.bincount(grouped(stratified, w, sizes, rng), minlength=17) for _ in range(2000)], axis=0)
+    np.testing.assert_allclose(freq, sizes[groups.of] * w, atol=0.05)
+    assert grouped(residual, w, groups, rng) is None
+
+
+def test_each_group_keeps_its_total_weight_and_its_own_ess_test():
+    from vistrack.resampling import Groups
+
+    filt = BranchedPartitioned(Bearings(2), ess_threshold=0.5)
+    log_w = np.log(np.array([1.0, 1.0, 1.0, 1.0, 4.0, 0.001, 0.001, 0.001]))
+    x = np.arange(8.0)[:, None]
+    idx, lw = filt._resample_groups(x, log_w, Groups([4, 4]), np.random.default_rng(0))
+    assert idx[:4].tolist() == [0, 1, 2, 3] and lw[:4].tolist() == log_w[:4].tolist()  # ESS 4 of 4: kept
+    assert idx[4:].tolist() == [4, 4, 4, 4]  # ESS about 1 of 4: resampled within the group
+    np.testing.assert_allclose(np.exp(lw[4:]).sum(), np.exp(log_w[4:]).sum())
+    filt = BranchedPartitioned(Bearings(2), resample="residual")  # no grouped form: group by group
+    idx, lw = filt._resample_groups(x, log_w, Groups([4, 4]), np.random.default_rng(0))
+    assert idx[:4].tolist() == [0, 1, 2, 3] and idx[4:].tolist() == [4, 4, 4, 4]
+
+
+def test_bearings_stacked_partitions_equal_the_partitions_one_by_one(rng):
+    model = Bearings(3)
+    old = model.sample_prior(6, rng)
+    new = model.predict(old, rng)
+    obs = model.sample_observation(new, rng)[0]
+    parts = np.array([2, 0, 1, 1, 0, 2])
+    vals = model.gather_parts(new, parts)
+    assert np.array_equal(vals, np.stack([new[i, model.partitions[j]] for i, j in enumerate(parts)]))
+    want = np.array([model.loglik_part(obs, new[i:i + 1], j)[0] for i, j in enumerate(parts)])
+    np.testing.assert_allclose(model.loglik_parts(obs, vals, new, parts), want, rtol=1e-12)
+    for j in range(3):  # the same draws as partition j's own call
+        same = np.full(6, j)
+        assert np.array_equal(model.predict_parts(old, same, np.random.default_rng(j)),
+                              model.predict_part(old, j, np.random.default_rng(j)))
+        np.testing.assert_allclose(model.sample_prior_parts(old, same, np.random.default_rng(j)),
+                                   model.sample_prior_part(old, j, np.random.default_rng(j)), rtol=1e-14)
+    out = old.copy()
+    model.scatter_parts(out, parts, vals)
+    assert np.array_equal(model.gather_parts(out, parts), vals)
+    untouched = np.ones(old.shape, bool)
+    untouched[np.arange(6)[:, None], model.part_columns[parts]] = False
+    assert np.array_equal(out[untouched], old[untouched])

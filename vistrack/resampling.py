@@ -18,6 +18,8 @@ __all__ = [
     "SCHEMES",
     "get_scheme",
     "needs_resampling",
+    "grouped",
+    "Groups",
 ]
 
 
@@ -68,6 +70,70 @@ SCHEMES = {
     "stratified": stratified,
     "systematic": systematic,
 }
+
+
+class Groups:
+    """Consecutive groups of particles (for :func:`grouped`): group ``s`` is the next
+    ``sizes[s]`` particles.
+
+    Attributes
+    ----------
+    sizes, starts : int arrays (S,)
+        Each group's size (positive) and first particle.
+    of, start_of, within : int arrays (N,)
+        Each particle's group, its group's first particle and its place in the group.
+    """
+
+    def __init__(self, sizes):
+        self.sizes = np.asarray(sizes, dtype=np.intp)
+        self.starts = np.cumsum(self.sizes) - self.sizes
+        self.of = np.repeat(np.arange(len(self.sizes)), self.sizes)
+        self.start_of = self.starts[self.of]
+        self.within = np.arange(len(self.of)) - self.start_of
+        self._size_of = self.sizes[self.of].astype(float)
+
+    def uniforms(self, scheme, rng):
+        """The uniforms of ``scheme`` in every group at once, ``(N,)`` in (0, 1]; ``None`` where
+        the scheme has no grouped form."""
+        if scheme is multinomial:
+            return 1.0 - rng.random(len(self.of))
+        if scheme is stratified:
+            return (self.within + 1.0 - rng.random(len(self.of))) / self._size_of
+        if scheme is systematic:
+            return (self.within + 1.0 - rng.random(len(self.sizes))[self.of]) / self._size_of
+        return None
+
+
+def grouped(scheme, w, groups, rng):
+    """``scheme`` run within each group of consecutive particles, all groups in one call.
+
+    Parameters
+    ----------
+    scheme : callable
+        :func:`multinomial`, :func:`stratified` or :func:`systematic` (the others have no
+        grouped form).
+    w : ndarray (N,)
+        Weights normalised within each group (every group's sum is 1).
+    groups : Groups or int array (S,)
+        The groups (or their sizes, positive and summing to ``N``).
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    ndarray (N,) or None
+        Every group draws as many indices as it has particles, into itself, with the
+        scheme's uniforms (the systematic scheme one uniform per group); ``None`` for a
+        scheme without a grouped form.
+    """
+    groups = groups if isinstance(groups, Groups) else Groups(groups)
+    u = groups.uniforms(scheme, rng)
+    if u is None:
+        return None
+    cdf = np.cumsum(w)
+    cdf -= np.repeat(cdf[groups.starts] - w[groups.starts], groups.sizes)  # within each group
+    cdf[groups.starts + groups.sizes - 1] = 1.0  # round-off: every u <= 1 finds an index in its group
+    # shifting group s by s keeps the order; u + s <= s + 1 exactly, u + s > s but for round-off
+    return np.maximum(np.searchsorted(cdf + groups.of, u + groups.of, side="left"), groups.start_of)
 
 
 def get_scheme(name):

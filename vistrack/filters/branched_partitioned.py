@@ -15,13 +15,24 @@ cut into as many consecutive blocks as there are orderings, of sizes ``⌈N/S⌉
 (``numpy.array_split``), and block ``s`` takes ordering ``s``, so every ordering starts with
 about ``N/S`` particles.
 ``branched-partitioned-lis`` moves each partition by its LIS proposal.
+
+All groups at once. Where the model draws and weighs one partition per particle in one call
+(:class:`~vistrack.models.partitions.StackedPartitions`, e.g. bearings) and no local proposal
+is used, stage ``k`` of a step draws partition ``σ_i(k)`` of every particle ``i`` in one model
+call and resamples every group within itself in one call (:func:`~vistrack.resampling.grouped`,
+each group with its own ESS test and total weight): the same draws, in distribution, as the
+groups one after the other, at the cost of partitioned sampling (``τ`` model calls and ``τ - 1``
+resamplings per step, not ``S τ`` and ``S (τ - 1)``). The particles come back sorted by group.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..models.partitions import StackedPartitions
+from ..resampling import Groups, grouped, needs_resampling
 from .partitioning import PartitionedBase, PartitionedLISMixin
+from .resampler import BirthReserve
 
 __all__ = ["BranchedPartitioned", "BranchedPartitionedLIS", "cyclic_orderings"]
 
@@ -61,6 +72,54 @@ class BranchedPartitioned(PartitionedBase):
         for s, rows in enumerate(np.array_split(rng.permutation(n), len(self.orderings))):
             labels[rows] = s
         return labels
+
+    def _partitions(self, prev, log_w, obs, rng, kernel):
+        """Fig. C.2 with every group at once (module docstring) where the model stacks its
+        partitions and no local proposal is used; else the groups one after the other."""
+        m, n = self.model, len(prev)
+        if self.local is not None or not isinstance(m, StackedPartitions):
+            return super()._partitions(prev, log_w, obs, rng, kernel)
+        labels = self.assign(n, rng)
+        order = np.argsort(labels, kind="stable")
+        x, log_w, labels = prev[order], log_w[order], labels[order]
+        sizes = np.bincount(labels, minlength=len(self.orderings))
+        groups = Groups(sizes[sizes > 0])
+        sigma, rows = np.asarray(self.orderings)[labels], np.arange(n)
+        lam = np.zeros((n, self.tau))
+        for k in range(self.tau):
+            if k > 0:
+                idx, log_w = self._resample_groups(x, log_w, groups, rng)
+                x, lam = x[idx], lam[idx]
+            parts = sigma[:, k]
+            draw = m.sample_prior_parts(x, parts, rng) if kernel.first else m.predict_parts(x, parts, rng)
+            m.scatter_parts(x, parts, draw)
+            lam[rows, parts] = incr = m.loglik_parts(obs, draw, x, parts)
+            log_w = log_w + incr
+        return x, log_w, lam
+
+    def _resample_groups(self, x, log_w, groups, rng):
+        """Ancestors ``(n,)`` and offspring log-weights ``(n,)`` of the :class:`~vistrack.resampling.Groups`
+        of ``x (n, d)``, each resampled within itself as :meth:`_resample` would (its ESS test;
+        the offspring share the group's total weight), in one call where the scheme has a
+        grouped form (:func:`~vistrack.resampling.grouped`)."""
+        starts, of, sizes = groups.starts, groups.of, groups.sizes
+        top = np.maximum.reduceat(log_w, starts)
+        live = np.isfinite(top)
+        w = np.exp(log_w - np.where(live, top, 0.0)[of])
+        if not live.all():
+            w[~live[of]] = 1.0
+        total = np.add.reduceat(w, starts)
+        w /= total[of]
+        redo = live & needs_resampling(1.0 / np.add.reduceat(w * w, starts), sizes, self.ess_threshold)
+        idx = None if isinstance(self.resampler, BirthReserve) else grouped(self.resample_scheme, w, groups, rng)
+        if idx is None:  # no grouped form: one group after the other
+            out = [self._resample(x[a:a + s], log_w[a:a + s], rng) for a, s in zip(starts, sizes)]
+            return np.concatenate([i + a for (i, _), a in zip(out, starts)]), np.concatenate([lw for _, lw in out])
+        with np.errstate(divide="ignore"):
+            shared = (top + np.log(total) - np.log(sizes))[of]
+        if redo.all():
+            return idx, shared
+        return np.where(redo[of], idx, np.arange(len(of))), np.where(redo[of], shared, log_w)
 
 
 class BranchedPartitionedLIS(PartitionedLISMixin, BranchedPartitioned):

@@ -261,6 +261,20 @@ class Bearings(IndependentTargets):
         """Ship ``j``'s bearing ``(1,)`` of ``obs (M,)``."""
         return np.asarray(obs)[j:j + 1]
 
+    # -- one ship per particle (StackedPartitions) -----------------------------
+    def sample_prior_parts(self, states, parts, rng):
+        """Row ``i``'s ship ``parts[i]`` from its prior, ``(N, 4)``."""
+        cols = self.part_columns[parts]
+        return self.prior_mean[cols] + self.prior_std[cols] * rng.standard_normal(cols.shape)
+
+    def predict_parts(self, states, parts, rng):
+        """Row ``i``'s ship ``parts[i]`` moved by ``K`` (the same for every ship), ``(N, 4)``."""
+        return self.target_model(0).predict(self.gather_parts(states, parts), rng)
+
+    def loglik_parts(self, obs, x, states, parts):
+        """``log r(y_j | θ_j)`` of row ``i``'s ship ``j = parts[i]`` (its state ``x[i]``), ``(N,)``."""
+        return wrapped_cauchy_logpdf(np.asarray(obs)[parts] - np.arctan2(x[:, 2], x[:, 0]), self.one_minus_rho)
+
     # -- errors ---------------------------------------------------------------
     def position_error(self, estimate, truth):
         """Euclidean position error averaged over ships (§4.5.5)."""

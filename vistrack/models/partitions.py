@@ -9,13 +9,46 @@ the ``l_{t,j}``, Fig. C.1's note). :class:`IndependentTargets` implements
 model mixes it in and supplies ``partitions`` (the columns of each target),
 ``target_model(j)`` (a state-space model of target ``j`` alone) and ``target_obs(obs, j)``
 (the part of ``Y_t`` that observes it). The bearings model (one partition per ship) is one.
+
+:class:`StackedPartitions` is the optional form in which every particle draws and weighs its
+own partition in one call (a partition index per particle), for branched partitioning's
+stages over all its groups at once (:mod:`~vistrack.filters.branched_partitioned`).
 """
 
 from __future__ import annotations
 
+from functools import cached_property
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
 from .kernel import PriorKernel, Transition, is_prior
 
-__all__ = ["IndependentTargets", "TargetProposal"]
+__all__ = ["IndependentTargets", "StackedPartitions", "TargetProposal"]
+
+
+@runtime_checkable
+class StackedPartitions(Protocol):
+    """Partitions of equal width ``w`` drawn and weighed with one partition per particle.
+
+    ``parts (N,)`` holds each particle's partition ``j_i``; the methods equal
+    :class:`~vistrack.models.protocol.Partitions`' ``sample_prior_part``, ``predict_part`` and
+    ``loglik_part`` applied to row ``i`` with ``j = j_i`` (the same distributions, in one call).
+    :class:`IndependentTargets` supplies :meth:`scatter_parts` (and ``gather_parts``).
+    """
+
+    def sample_prior_parts(self, states, parts, rng):
+        """Row ``i``'s partition ``parts[i]`` drawn from ``p_0``'s factor, ``(N, w)``."""
+
+    def predict_parts(self, states, parts, rng):
+        """Row ``i``'s partition ``parts[i]`` drawn from ``K_j(.|states[i])``, ``(N, w)``."""
+
+    def loglik_parts(self, obs, values, states, parts):
+        """``log π_{parts[i]}`` of row ``i`` of ``states (N, d)``, ``(N,)``; ``values (N, w)`` is
+        row ``i``'s partition ``parts[i]`` (already in ``states``)."""
+
+    def scatter_parts(self, states, parts, values):
+        """Write ``values (N, w)`` into row ``i``'s partition ``parts[i]`` of ``states (N, d)``."""
 
 
 class IndependentTargets:
@@ -30,6 +63,31 @@ class IndependentTargets:
 
     def _target(self, states, j):
         return self.target_model(j), states[:, self.partitions[j]]
+
+    @cached_property
+    def part_columns(self):
+        """``(τ, w)``: the columns of every partition, stacked (equal widths only)."""
+        return np.stack(self.partitions)
+
+    @cached_property
+    def _consecutive_parts(self):
+        cols = self.part_columns
+        return np.array_equal(cols.ravel(), np.arange(cols.size))
+
+    def gather_parts(self, states, parts):
+        """Row ``i``'s partition ``parts[i]`` of ``states (N, d)``, ``(N, w)``."""
+        rows = np.arange(len(states))
+        if self._consecutive_parts:  # partition j is columns j w .. (j + 1) w - 1
+            return states.reshape(len(states), *self.part_columns.shape)[rows, parts]
+        return states[rows[:, None], self.part_columns[parts]]
+
+    def scatter_parts(self, states, parts, values):
+        """Write ``values (N, w)`` into row ``i``'s partition ``parts[i]`` of ``states (N, d)``."""
+        rows = np.arange(len(states))
+        if self._consecutive_parts and states.flags.c_contiguous:
+            states.reshape(len(states), *self.part_columns.shape)[rows, parts] = values
+        else:
+            states[rows[:, None], self.part_columns[parts]] = values
 
     def predict_part(self, states, j, rng):
         """Target ``j``'s dynamics from its columns of ``states (N, d)`` -> ``(N, d_j)``."""
