@@ -1,0 +1,66 @@
+"""The contour's LMS local search in two fused compiled passes (:mod:`vistrack.kernels.contour_search`)
+against the step-by-step kernels and numpy steps it replaces (``Contour.fused_search = False``):
+equal bit for bit, states and log-likelihoods, and so are the tracks."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from vistrack import kernels
+from vistrack.builders import build_model
+from vistrack.clips import load_clip
+from vistrack.features import FeatureMaps
+from vistrack.filters import make_filter
+from vistrack.tracking import FrameStepper
+
+pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory):
+    from vistrack.data_synth.contour import make_contour_clip
+
+    d = tmp_path_factory.mktemp("contour")
+    make_contour_clip(d, frames=10, size=(320, 240), seed=5)
+    return load_clip(d)
+
+
+def searched(model, obs, states, fused):
+    model.fused_search = fused
+    with kernels.numpy_paths(False):
+        return model.local_search(obs, states)
+
+
+@pytest.mark.parametrize("polarity, check", [(None, True), (1, True), (-1, False)])
+def test_fused_search_equals_the_step_by_step_path(clip, polarity, check):
+    model = build_model("contour", clip, init_gt="")
+    model.polarity, model.search_check = polarity, check
+    obs = model.observe(FeatureMaps(dict(clip.source)[4]), None)
+    rng = np.random.default_rng(2)
+    x = model.predict(model.sample_prior(60, rng), rng)
+    x[:, :2] += rng.normal(0.0, 6.0, (60, 2))
+    x[:6, :2] = [[2, 3], [318, 120], [160, 238], [-5, 50], [330, 250], [160, 1]]  # lines across the border
+    x[6, 2] = -0.999999999999  # a pose of almost zero scale
+    a, la = searched(model, obs, x, True)
+    b, lb = searched(model, obs, x, False)
+    assert (a[:, :4] != x[:, :4]).any(axis=1).mean() > 0.5  # most poses moved
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(la, lb)
+    a2, la2 = searched(model, obs, x, True)  # the reused work arrays leave no trace
+    np.testing.assert_array_equal(a2, a)
+    np.testing.assert_array_equal(la2, la)
+
+
+def test_fused_search_tracks_identical(clip):
+    def states(fused):
+        with warnings.catch_warnings(), kernels.numpy_paths(False):
+            warnings.simplefilter("ignore")
+            model = build_model("contour", clip, init_gt="")
+            model.fused_search = fused
+            stepper = FrameStepper(make_filter("ls-n-ips", model), 30, np.random.default_rng(7))
+            return np.array([stepper.step(i, f).particles.states for i, f in clip.source])
+
+    np.testing.assert_array_equal(states(True), states(False))
