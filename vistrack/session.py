@@ -221,7 +221,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
             for res in track(frames, filt, particles, rng):
                 _record(run, res, model, outs, writer, show_particles, label, notify)
                 if progress:
-                    progress(res.ess)
+                    progress(run.rows[-1]["ess"])
     except (KeyboardInterrupt, SystemError) as e:  # Terminated is a KeyboardInterrupt
         run.stopped = _stop_reason(e)
     finally:
@@ -275,7 +275,7 @@ def _record(run, res, model, outs, writer, show_particles, label, notify=None):
     for o in outs:
         for r in rows:
             o.write(r)
-    run.ess_sum += res.ess
+    run.ess_sum += row["ess"]
     run.degenerate += bool(res.particles.degenerate)
     if writer:
         text = f"#{res.index}  {label}  ESS {res.ess:.1f}"

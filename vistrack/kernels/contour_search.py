@@ -77,15 +77,16 @@ def _nearest(g, thresh, off, shift, reach):
 
 
 @njit(cache=True, nogil=True)
-def search_lines(gxy, z, pts0, n0, off, line, polarity, cos2, thresh, grid, grid32, kern, c, reach, gn, d, z_t,
-                 ll_x):
+def search_lines(gxy, z, pts0, n0, off, line, polarity, cos2, thresh, grid, grid32, kern, c, pairs, reach, gn, d,
+                 z_t, ll_x):
     """The search up to the matrix product, for poses ``z (N, >=4)`` (module docstring).
 
     ``pts0, n0 (M, 2)``: the template's measurement points and normals; ``off (L,)`` float64 the
     long lines' offsets (1 px apart); ``line = (lo, kernel (n,), c)``: the likelihood's middle
     samples ``lo .. lo + n``, its Gaussian and constant; ``grid (G, 2)`` float64 the translations
     (``grid32`` its float32 cast), ``kern (L, L)`` float32 and ``c`` float32 the grid's pair kernel
-    and constant; ``reach`` the LMS reach. Fills ``gn (N, M, L)`` float32, ``d (N, 2M)`` (``p̂ - p0``,
+    and constant, ``pairs (L, L)`` its table of two-feature terms (:func:`~.contour.grid`; NaN where not
+    computed yet, filled here); ``reach`` the LMS reach. Fills ``gn (N, M, L)`` float32, ``d (N, 2M)`` (``p̂ - p0``,
     x then y), ``z_t (N, 4)`` (the poses moved by the best translation) and ``ll_x (N,)`` (``log r``
     at ``z``); returns ``d``."""
     n_lines, n_samples = pts0.shape[0], off.shape[0]
@@ -104,7 +105,8 @@ def search_lines(gxy, z, pts0, n0, off, line, polarity, cos2, thresh, grid, grid
     for n in range(z.shape[0]):
         _place_one(z, n, pts0, n0, q, nrm, q32, nrm32)
         _pose(gxy, q32, nrm32, 0, off32, polarity, cos2, gn[n])
-        used = _grid_pose(gn[n], thresh, start, nrm32[0], grid32, kern, c, single, feats, table, stamp, used, vals)
+        used = _grid_pose(gn[n], thresh, start, nrm32[0], grid32, kern, c, single, pairs, feats, table, stamp, used,
+                          vals)
         best = _argmax(vals)
         dx, dy = grid[best, 0], grid[best, 1]
         for a in range(4):

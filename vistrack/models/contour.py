@@ -214,6 +214,9 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
 
     def support_points(self, z):
         """Support points ``q = W z + q0`` as ``(N, n, 2)`` for poses ``z (N, 4)``."""
+        if kernels.use():  # equal bit for bit
+            from ..kernels.contour import place
+            return place(z, self.q0, self.normals0, *(np.empty((len(z),) + self.q0.shape) for _ in "qn"))[0]
         return self._place(z, self.q0)
 
     def normals(self, z):
@@ -385,16 +388,15 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
         return float(pose_params(np.asarray(state, float).reshape(-1)[:4])[0]), state[0], state[1]
 
     def describe(self, state):
-        """Track-file fields of one state: centre, box, angle, scale, support points."""
-        state = np.asarray(state, float).reshape(1, -1)
-        z = state[0, :4]
-        q = self.support_points(state[:, :4])
-        pts = self.dense_matrix @ q[0]  # the outline, as box() draws it
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        """Track-file fields of one state: centre, box, angle, scale, support points (Python floats)."""
+        z = np.asarray(state, float).reshape(-1)[:4]
+        q = self.support_points(z[None])[0]
+        pts = self.dense_matrix @ q  # the outline, as box() draws it
+        x, y = pts[:, 0], pts[:, 1]
         scale, angle = pose_params(z)
-        row = {"cx": z[0], "cy": z[1], "w": hi[0] - lo[0], "h": hi[1] - lo[1], "angle_deg": float(angle),
-               "scale": float(scale)}
+        row = dict(zip(("cx", "cy"), z[:2].tolist()), w=float(x.max() - x.min()), h=float(y.max() - y.min()),
+                   angle_deg=float(angle), scale=float(scale))
         if getattr(self, "_point_keys", None) is None:
             self._point_keys = [f"qx{i}" for i in range(self.n)] + [f"qy{i}" for i in range(self.n)]
-        row.update(zip(self._point_keys, q[0].T.ravel()))
+        row.update(zip(self._point_keys, q.T.ravel().tolist()))
         return row

@@ -111,15 +111,15 @@ class ContourMoves:
         gn, d, z_t, ll_x = self._search_scratch(len(states), len(k["off"]))
         pol, cos2 = self.polarity or 0, np.float32(self.cos_min**2)
         search_lines(gxy, states, self.meas0, self.meas_normals0, k["off"], k["line"], pol, cos2, thresh, grid,
-                     k["grid32"], k["pair"], k["c32"], reach_lms, gn, d, z_t, ll_x)
+                     k["grid32"], k["pair"], k["c32"], k["pairs"], reach_lms, gn, d, z_t, ll_x)
         return accept(gxy, states, d @ self.W_meas_plus.T, z_t, self.search_lambda, self.meas0, self.meas_normals0,
                       k["off_line"], pol, cos2, thresh, *k["line"][1:], self.search_check, ll_x, states.copy(),
                       np.empty(len(states)))
 
     def _search_consts(self, grid, reach_lms):
         """What :meth:`_search_compiled` passes every frame: the long lines' offsets, the likelihood's
-        middle samples, kernel and constant, the grid's float32 cast and pair kernel (cached while the
-        model's parameters stay)."""
+        middle samples, kernel and constant, the grid's float32 cast, pair kernel and table of
+        two-feature terms (filled as frames need it; all cached while the model's parameters stay)."""
         key = (tuple(self.search_lambda), reach_lms, self.half_line, self.sigma_edge, self.log_c)
         cached = getattr(self, "_search_cache", None)
         if cached is None or cached[0] != key:
@@ -128,7 +128,8 @@ class ContourMoves:
             line = ((len(off) - len(self.line_offsets)) // 2, self._line_kernel(), np.exp(self.log_c))
             cached = self._search_cache = (key, {
                 "off": off, "line": line, "grid32": np.asarray(grid, np.float32), "pair": self._pair_kernel(off),
-                "c32": np.float32(np.exp(self.log_c)), "off_line": self.line_offsets.astype(np.float32)})
+                "c32": np.float32(np.exp(self.log_c)), "off_line": self.line_offsets.astype(np.float32),
+                "pairs": np.full((len(off), len(off)), np.nan, np.float32)})
         return cached[1]
 
     def _search_scratch(self, n, n_samples):
