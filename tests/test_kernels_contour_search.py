@@ -64,3 +64,44 @@ def test_fused_search_tracks_identical(clip):
             return np.array([stepper.step(i, f).particles.states for i, f in clip.source])
 
     np.testing.assert_array_equal(states(True), states(False))
+
+
+def test_grid_tables_equal_the_direct_sum():
+    """The grid's tables (one feature: by distance; two: by both distances, kept across calls; more:
+    per line) give each line's term exactly as summing the kernel over its features there."""
+    from numba import njit
+
+    from vistrack.kernels.contour import _is_peak, grid
+
+    @njit(cache=False)
+    def direct(gn, thresh, start, nrm, offsets, kern, c, out):
+        n_samples = gn.shape[2]
+        out[:] = 0.0
+        for n in range(gn.shape[0]):
+            for m in range(gn.shape[1]):
+                g = gn[n, m]
+                for j in range(offsets.shape[0]):
+                    v = nrm[n, m, 0] * offsets[j, 0] + nrm[n, m, 1] * offsets[j, 1] - start
+                    i = int(min(max(v, np.float32(0.0)), np.float32(n_samples - 1)))
+                    acc, nf = np.float32(0.0), 0
+                    for k in range(n_samples):
+                        if _is_peak(g[k], g[k - 1] if k > 0 else g[k], g[k + 1] if k < n_samples - 1 else g[k], k,
+                                    n_samples, thresh):
+                            acc += kern[k, i]
+                            nf += 1
+                    if nf:
+                        out[n, j] += np.log1p(acc * c)
+        return out
+
+    rng = np.random.default_rng(4)
+    n_samples = 41
+    off = np.arange(n_samples, dtype=float) - 20
+    kern = np.exp(-0.5 * ((off[:, None] - off[None, :]) / 2.0) ** 2).astype(np.float32)
+    gn = (rng.random((12, 40, n_samples)) ** 6 * 10).astype(np.float32)  # 0 to 10+ features per line
+    nrm = rng.normal(size=(12, 40, 2)).astype(np.float32)
+    nrm /= np.linalg.norm(nrm, axis=-1, keepdims=True)
+    g = np.arange(-4, 5, dtype=np.float32) * 2.5
+    offsets = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
+    args = (np.float32(2.0), np.float32(off[0] - 0.5), nrm, offsets, kern, np.float32(31.0))
+    ref = direct(gn, *args, np.empty((12, len(offsets)), np.float32))
+    np.testing.assert_array_equal(grid(gn, *args, np.empty_like(ref)), ref)

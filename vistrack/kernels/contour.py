@@ -154,12 +154,13 @@ def loglik_profiles(gn, lo, n_samples, thresh, kern, c, out):
 
 
 @njit(cache=True)
-def _grid_pose(g, thresh, start, nrm, offsets, kern, c, single, pairs, feats, table, stamp, line, out):
+def _grid_pose(g, thresh, start, nrm, offsets, kern, c, single, pairs, feats, nfeat, idx, table, stamp, line, out):
     """:func:`grid` for one pose: edge strengths ``g (M, L)``, normals ``nrm (M, 2)``, into ``out (G,)``;
-    returns the last line number used in ``stamp``. ``pairs (L, L)``: the term of a line with two
-    features at distances ``d0, d1`` from the sample, ``log(1 + c (kern(d0) + kern(d1)))`` summed as
-    below, filled where NaN on first use (it depends on ``kern`` and ``c`` only: it may serve many calls)."""
-    n_samples = g.shape[1]
+    each line's features into ``feats (M, L)`` (their sample indices, ``nfeat (M,)`` of them); returns
+    the last line number used in ``stamp``. ``pairs (L, L)``: the term of a line with two features at
+    distances ``d0, d1`` from the sample, ``log(1 + c (kern(d0) + kern(d1)))`` summed as below, filled
+    where NaN on first use (it depends on ``kern`` and ``c`` only: it may serve many calls)."""
+    n_samples, n_grid = g.shape[1], offsets.shape[0]
     top = np.float32(n_samples - 1)
     out[:] = 0.0
     for m in range(g.shape[0]):
@@ -168,30 +169,35 @@ def _grid_pose(g, thresh, start, nrm, offsets, kern, c, single, pairs, feats, ta
             v = g[m, k]
             if _is_peak(v, g[m, k - 1] if k > 0 else v, g[m, k + 1] if k < n_samples - 1 else v, k, n_samples,
                         thresh):
-                feats[nf] = k
+                feats[m, nf] = k
                 nf += 1
+        nfeat[m] = nf
         if nf == 0:
             continue  # log(1 + 0) on every shift
         line += 1
         nx, ny = nrm[m, 0], nrm[m, 1]
-        for j in range(offsets.shape[0]):
-            i = int(min(max(nx * offsets[j, 0] + ny * offsets[j, 1] - start, _ZERO), top))
-            if nf == 1:
-                out[j] += single[abs(i - feats[0])]
-                continue
-            if nf == 2:
-                d0, d1 = abs(i - feats[0]), abs(i - feats[1])
+        for j in range(n_grid):
+            idx[j] = int(min(max(nx * offsets[j, 0] + ny * offsets[j, 1] - start, _ZERO), top))
+        f0, f1 = feats[m, 0], feats[m, 1]
+        if nf == 1:
+            for j in range(n_grid):
+                out[j] += single[abs(idx[j] - f0)]
+        elif nf == 2:
+            for j in range(n_grid):
+                d0, d1 = abs(idx[j] - f0), abs(idx[j] - f1)
                 if pairs[d0, d1] != pairs[d0, d1]:
-                    pairs[d0, d1] = np.log1p(((_ZERO + kern[feats[0], i]) + kern[feats[1], i]) * c)
+                    pairs[d0, d1] = np.log1p(((_ZERO + kern[f0, idx[j]]) + kern[f1, idx[j]]) * c)
                 out[j] += pairs[d0, d1]
-                continue
-            if stamp[i] != line:
-                acc = _ZERO
-                for f in range(nf):
-                    acc += kern[feats[f], i]
-                table[i] = np.log1p(acc * c)
-                stamp[i] = line
-            out[j] += table[i]
+        else:
+            for j in range(n_grid):
+                i = idx[j]
+                if stamp[i] != line:
+                    acc = _ZERO
+                    for f in range(nf):
+                        acc += kern[feats[m, f], i]
+                    table[i] = np.log1p(acc * c)
+                    stamp[i] = line
+                out[j] += table[i]
     return line
 
 
@@ -205,8 +211,8 @@ def grid(gn, thresh, start, nrm, offsets, kern, c, out):
     depends on ``|j - i|`` only (1-px samples), so a line with one or two features reads a table by
     distance."""
     n_samples = gn.shape[2]
-    feats = np.empty(n_samples, np.int64)
-    table = np.empty(n_samples, np.float32)
+    feats, nfeat = np.empty((gn.shape[1], n_samples), np.int64), np.empty(gn.shape[1], np.int64)
+    idx, table = np.empty(offsets.shape[0], np.int64), np.empty(n_samples, np.float32)
     stamp = np.full(n_samples, -1, np.int64)
     single = np.empty(n_samples, np.float32)
     for d in range(n_samples):
@@ -214,8 +220,8 @@ def grid(gn, thresh, start, nrm, offsets, kern, c, out):
     pairs = np.full((n_samples, n_samples), np.nan, np.float32)
     line = 0
     for n in range(gn.shape[0]):
-        line = _grid_pose(gn[n], thresh, start, nrm[n], offsets, kern, c, single, pairs, feats, table, stamp, line,
-                          out[n])
+        line = _grid_pose(gn[n], thresh, start, nrm[n], offsets, kern, c, single, pairs, feats, nfeat, idx, table,
+                          stamp, line, out[n])
     return out
 
 

@@ -23,7 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .contour import _grid_pose, _is_peak, _line_sums, _one_feature, _pose
+from .contour import _grid_pose, _line_sums, _one_feature, _pose
 from .sampling import pairwise_sum
 
 __all__ = ["search_lines", "accept"]
@@ -62,17 +62,15 @@ def _argmax(v):
 
 
 @njit(cache=True, nogil=True)
-def _nearest(g, thresh, off, shift, reach):
-    """:func:`~.contour.nearest_edge` of one line ``g (L,)``: the offset of the edge feature nearest
-    to ``shift`` minus ``shift`` when within ``reach``, else 0."""
-    n_samples = g.shape[0]
+def _nearest(feats, nf, off, shift, reach):
+    """:func:`~.contour.nearest_edge` of one line whose ``nf`` edge features are at samples ``feats``
+    (ascending): the offset of the feature nearest to ``shift`` (the first on a tie) minus ``shift``
+    when within ``reach``, else 0."""
     best, at = np.inf, -1
-    for k in range(n_samples):
-        v = g[k]
-        if _is_peak(v, g[k - 1] if k > 0 else v, g[k + 1] if k < n_samples - 1 else v, k, n_samples, thresh):
-            d = abs(off[k] - shift)
-            if d < best:
-                best, at = d, k
+    for f in range(nf):
+        d = abs(off[feats[f]] - shift)
+        if d < best:
+            best, at = d, feats[f]
     return off[at] - shift if at >= 0 and best <= reach else 0.0
 
 
@@ -94,7 +92,8 @@ def search_lines(gxy, z, pts0, n0, off, line, polarity, cos2, thresh, grid, grid
     q32, nrm32 = np.empty((1, n_lines, 2), np.float32), np.empty((1, n_lines, 2), np.float32)
     off32 = off.astype(np.float32)
     start = np.float32(off[0] - 0.5)
-    feats, table = np.empty(n_samples, np.int64), np.empty(n_samples, np.float32)
+    feats, nfeat = np.empty((n_lines, n_samples), np.int64), np.empty(n_lines, np.int64)
+    idx, table = np.empty(grid.shape[0], np.int64), np.empty(n_samples, np.float32)
     stamp, single = np.full(n_samples, -1, np.int64), np.empty(n_samples, np.float32)
     for k in range(n_samples):
         single[k] = np.log1p((np.float32(0.0) + kern[0, k]) * c)
@@ -105,8 +104,8 @@ def search_lines(gxy, z, pts0, n0, off, line, polarity, cos2, thresh, grid, grid
     for n in range(z.shape[0]):
         _place_one(z, n, pts0, n0, q, nrm, q32, nrm32)
         _pose(gxy, q32, nrm32, 0, off32, polarity, cos2, gn[n])
-        used = _grid_pose(gn[n], thresh, start, nrm32[0], grid32, kern, c, single, pairs, feats, table, stamp, used,
-                          vals)
+        used = _grid_pose(gn[n], thresh, start, nrm32[0], grid32, kern, c, single, pairs, feats, nfeat, idx, table,
+                          stamp, used, vals)
         best = _argmax(vals)
         dx, dy = grid[best, 0], grid[best, 1]
         for a in range(4):
@@ -114,7 +113,7 @@ def search_lines(gxy, z, pts0, n0, off, line, polarity, cos2, thresh, grid, grid
         z_t[n, 0] += dx
         z_t[n, 1] += dy
         for m in range(n_lines):
-            nu = _nearest(gn[n, m], thresh, off, nrm[m, 0] * dx + nrm[m, 1] * dy, reach)
+            nu = _nearest(feats[m], nfeat[m], off, nrm[m, 0] * dx + nrm[m, 1] * dy, reach)
             d[n, m] = ((q[m, 0] + dx) + nu * nrm[m, 0]) - pts0[m, 0]
             d[n, n_lines + m] = ((q[m, 1] + dy) + nu * nrm[m, 1]) - pts0[m, 1]
         _line_sums(gn[n], lo, lkern.shape[0], thresh, lkern, lc, lsingle, v)

@@ -212,12 +212,16 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
         nx, ny = n0[:, 0], n0[:, 1]
         return np.stack([c * nx - s * ny, s * nx + c * ny], axis=-1)
 
+    def _placed(self, z, pts0, n0):
+        """:meth:`_place` and :meth:`_turn` of ``pts0, n0`` (compiled where the kernels are on; equal)."""
+        if kernels.use():
+            from ..kernels.contour import place
+            return place(z, pts0, n0, *(np.empty((len(z),) + pts0.shape) for _ in "qn"))
+        return self._place(z, pts0), self._turn(z, n0)
+
     def support_points(self, z):
         """Support points ``q = W z + q0`` as ``(N, n, 2)`` for poses ``z (N, 4)``."""
-        if kernels.use():  # equal bit for bit
-            from ..kernels.contour import place
-            return place(z, self.q0, self.normals0, *(np.empty((len(z),) + self.q0.shape) for _ in "qn"))[0]
-        return self._place(z, self.q0)
+        return self._placed(z, self.q0, self.normals0)[0] if kernels.use() else self._place(z, self.q0)
 
     def normals(self, z):
         """Unit outward normals ``(N, n, 2)`` at the support points."""
@@ -225,10 +229,7 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
 
     def measurement_lines(self, z):
         """Measurement points and unit normals ``(N, M, 2)`` each (likelihood lines)."""
-        if kernels.use():
-            from ..kernels.contour import place
-            return place(z, self.meas0, self.meas_normals0, *(np.empty((len(z),) + self.meas0.shape) for _ in "qn"))
-        return self._place(z, self.meas0), self._turn(z, self.meas_normals0)
+        return self._placed(z, self.meas0, self.meas_normals0)
 
     def outline(self, states, per_segment=8):
         """Dense curve points ``(N, n·per_segment, 2)`` of the contours of ``states``."""
@@ -280,12 +281,9 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
         """The gradient map and the float32 points and unit normals ``(N, M, 2)`` of the
         measurement lines (at the support points with ``support=True``; ``lines``: the lines
         of ``z`` already placed)."""
-        if lines is not None:
-            q, nrm = lines
-        elif support:
-            q, nrm = self.support_points(z), self.normals(z)
-        else:
-            q, nrm = self.measurement_lines(z)
+        if lines is None:
+            lines = (self.support_points(z), self.normals(z)) if support else self.measurement_lines(z)
+        q, nrm = lines
         return obs.gradient(self.gradient_sigma)[0], q.astype(np.float32), nrm.astype(np.float32)
 
     def _profiles(self, obs, z, offsets, support=False, lines=None):
