@@ -278,7 +278,7 @@ def _record(run, res, model, outs, writer, show_particles, label, notify=None):
     run.ess_sum += row["ess"]
     run.degenerate += bool(res.particles.degenerate)
     if writer:
-        text = f"#{res.index}  {label}  ESS {res.ess:.1f}"
+        text = f"#{res.index}  {label}  ESS {row['ess']:.1f}"
         particles = model.outline(top_particles(res.particles, show_particles))
         if res.targets is None:
             img = annotate(res.frame, model.outline(res.estimate) if vis else [], particles, text)
