@@ -14,7 +14,10 @@ so that machine noise hits them alike).
    (LIS-100) vs OpenCV's KCF on the real clips with ground truth (target: less than KCF). KCF is in
    opencv-contrib-python-headless; without it the column says so.
 
-    python benchmarks/bench_speed.py [--rounds 3] [--contour-frames 200] [--plate-frames 150]
+    python benchmarks/bench_speed.py [--rounds 3] [--contour-frames 200] [--plate-frames 150] [--contour-only]
+
+``--contour-only``: part 1 for the contour and box car4 clips and part 2 for the contour (no plate,
+no KCF).
 
 ``--cpu`` times parts 2 and 3 in process CPU time (``time.process_time``) instead of wall time: on a
 machine loaded by other work, wall time mostly measures the scheduler (part 1 stays wall time: its
@@ -132,7 +135,8 @@ def clips(tmp, args):
     contour = tmp / "contour320"
     make_contour_clip(contour, frames=args.contour_frames, size=(320, 240), seed=1)
     plate = tmp / "plate640"
-    make_plate_clip(plate, frames=args.plate_frames, seed=1)
+    if not args.contour_only:
+        make_plate_clip(plate, frames=args.plate_frames, seed=1)
     box = write_resized("car4_otb_first100", tmp / "car4_640", (640, 480))
     return [("contour 320x240 LS-N-IPS-30", contour, "contour", "ls-n-ips", 30, {"init_gt": ""}),
             ("plate 640x480 LIS-100", plate, "plate", "lis", 100, {}),
@@ -141,15 +145,16 @@ def clips(tmp, args):
 
 
 def one_round(r, paths, mem, real, res):
-    """Every entry once, in turn, with seed ``r``; appends to ``res``."""
+    """Every entry once, in turn, with seed ``r``; appends to ``res`` (``mem`` without ``"plate"``:
+    no plate tracking)."""
     for label, folder, model, algo, n, build in paths:
         res.setdefault(("decode", label), []).append(decode_rate(load_clip(folder).source.path))
         res.setdefault(("e2e", label), []).append(e2e_rate(folder, model, algo, n, r, **build))
     contour, cframes = mem["contour"]
     for algo, n in (("ls-n-ips", 30), ("bootstrap", 2000)):
         res.setdefault(("contour", algo), []).append(tracking_rate(contour, cframes, "contour", algo, n, r, init_gt=""))
-    plate, pframes = mem["plate"]
-    for algo, n in (("lis", 100), ("bootstrap", 750)):
+    for algo, n in (("lis", 100), ("bootstrap", 750)) if "plate" in mem else ():
+        plate, pframes = mem["plate"]
         res.setdefault(("plate", algo), []).append(tracking_rate(plate, pframes, "plate", algo, n, r))
     for name, (frames, gt) in real.items():
         res.setdefault(("box", name), []).append(box_ms(frames, gt[0], r))
@@ -165,6 +170,8 @@ def report(res, paths, real, rounds):
               + " ".join(f"{v:.3f}" for v in e / d))
     for what, (a, b), target in (("contour 320x240", (("ls-n-ips", 30), ("bootstrap", 2000)), 10.0),
                                  ("plate 640x480", (("lis", 100), ("bootstrap", 750)), 1.5)):
+        if (what.split()[0], a[0]) not in res:
+            continue
         x, y = np.array(res[(what.split()[0], a[0])]), np.array(res[(what.split()[0], b[0])])
         print(f"\n2. {what}: tracking frames/s (frames in memory), target ratio >= {target:g} in every round")
         na, nb = f"{a[0]}-{a[1]}", f"{b[0]}-{b[1]}"
@@ -186,6 +193,7 @@ def main():
     ap.add_argument("--plate-frames", type=int, default=150)
     ap.add_argument("--data", type=Path, default=None, help="the real clips' folder [default: ../shared/data/real]")
     ap.add_argument("--cpu", action="store_true", help="process CPU time instead of wall time (parts 2 and 3)")
+    ap.add_argument("--contour-only", action="store_true", help="the contour (parts 1 and 2) and box car4 (part 1) only")
     args = ap.parse_args()
     global DATA, CLOCK
     DATA = args.data or DATA
@@ -193,11 +201,12 @@ def main():
     cv2.setNumThreads(1)
     if opencv_tracker("KCF") is None:
         print(f"KCF is not in this OpenCV ({cv2.__version__}): its column is nan (opencv-contrib-python-headless has it)")
-    real = {name: real_clip(name) for name in REAL if (DATA / name).is_dir()}
+    real = {name: real_clip(name) for name in REAL if (DATA / name).is_dir() and not args.contour_only}
     with tempfile.TemporaryDirectory() as d:
         paths = [p for p in clips(Path(d), args) if Path(p[1]).is_dir()]
         mem = {k: (paths[i][1], [f for _, f in open_video(load_clip(paths[i][1]).source.path)])
-               for i, k in ((0, "contour"), (1, "plate"))}
+               for i, k in ((0, "contour"), (1, "plate"))[:1 + (not args.contour_only)]}
+        paths = [p for p in paths if not (args.contour_only and p[2] == "plate")]
         for frames, gt in real.values():  # start-up: the kernels and OpenCV's trackers loaded
             box_ms(frames[:3], gt[0], 0)
             kcf_ms(frames[:3], gt[0])

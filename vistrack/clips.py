@@ -142,8 +142,13 @@ def write_track_csv(path, rows, columns=None):
             wr.writerow([format_value(r.get(c, "")) for c in columns])
 
 
+_FLOATS = (float, np.float64, np.float32)
+
+
 def format_value(v):
     """A track-CSV cell: integers and flags as integers, numbers with 3 decimals, text as is."""
+    if type(v) in _FLOATS:  # the common case first: a track row is mostly floats
+        return f"{float(v):.3f}"
     if isinstance(v, (bool, np.bool_)):
         return str(int(v))
     if isinstance(v, (int, np.integer)):

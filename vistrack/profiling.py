@@ -2,7 +2,8 @@
 
 Stages: ``decode`` (reading frames), ``features`` (feature maps: Sobel/DoG/colour maps, the
 appearance maps over the region of interest), ``likelihood`` (``log r``), ``proposal`` (local
-proposals and searches, minus the likelihood calls inside them), ``resampling``, ``adapt``
+proposals and searches, minus the likelihood calls inside them; the contour's LMS search computes
+its likelihoods inside its compiled passes, and they count as proposal), ``resampling``, ``adapt``
 (appearance update) and ``other`` (the rest of the filter step: prediction, weights, the
 estimate). A timed call inside another timed call counts once, in its own stage.
 """

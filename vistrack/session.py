@@ -221,7 +221,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
             for res in track(frames, filt, particles, rng):
                 _record(run, res, model, outs, writer, show_particles, label, notify)
                 if progress:
-                    progress(res.ess)
+                    progress(run.rows[-1]["ess"])
     except (KeyboardInterrupt, SystemError) as e:  # Terminated is a KeyboardInterrupt
         run.stopped = _stop_reason(e)
     finally:
@@ -275,10 +275,10 @@ def _record(run, res, model, outs, writer, show_particles, label, notify=None):
     for o in outs:
         for r in rows:
             o.write(r)
-    run.ess_sum += res.ess
+    run.ess_sum += row["ess"]
     run.degenerate += bool(res.particles.degenerate)
     if writer:
-        text = f"#{res.index}  {label}  ESS {res.ess:.1f}"
+        text = f"#{res.index}  {label}  ESS {row['ess']:.1f}"
         particles = model.outline(top_particles(res.particles, show_particles))
         if res.targets is None:
             img = annotate(res.frame, model.outline(res.estimate) if vis else [], particles, text)

@@ -112,8 +112,9 @@ class FrameStepper:
 
 def warm_up(filt, n, frame):
     """Run ``filt``'s first step and one more step with ``n`` particles on a blank frame shaped like
-    ``frame``, with a throwaway generator and no adaptation, so that the compiled kernels the model
-    and filter call (:mod:`vistrack.kernels`) are loaded before tracking starts: their loading
+    ``frame``, with a throwaway generator and no adaptation, and the model's likelihood at one
+    particle (what the collapse test computes at the estimate), so that the compiled kernels the
+    model and filter call (:mod:`vistrack.kernels`) are loaded before tracking starts: their loading
     (0.1–1 s) is start-up, not tracking. The model and filter are left as they were (a model that
     cannot track a blank frame just skips this: the real frames will say what is wrong)."""
     import warnings
@@ -128,7 +129,9 @@ def warm_up(filt, n, frame):
         warnings.simplefilter("ignore")
         try:
             particles = filt.first_step(model.observe(FeatureMaps(blank), None), n, rng)
-            filt.step(particles, model.observe(FeatureMaps(blank), particles), rng)
+            obs = model.observe(FeatureMaps(blank), particles)
+            filt.step(particles, obs, rng)
+            model.loglik(obs, np.array(particles.states[:1], float))
         except Exception:  # noqa: BLE001 - best effort: tracking raises the real error itself
             pass
 

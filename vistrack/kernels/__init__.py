@@ -9,6 +9,7 @@ as the reference and as the fallback where numba is missing:
   1/32-pixel fixed point) and numpy's pairwise summation;
 - :mod:`~vistrack.kernels.contour`: the contour's measurement lines, edge features, likelihood and
   the local-search grid;
+- :mod:`~vistrack.kernels.contour_search`: the contour's LMS local search fused into two passes;
 - :mod:`~vistrack.kernels.plate`: the plate likelihood's 4-channel map and pixel-set means (the
   likelihood, the sparse search and the line scans);
 - :mod:`~vistrack.kernels.appearance`: the box model's colour bins, per-bin integral images,

@@ -15,6 +15,8 @@ with ``K`` 1 (shared) or ``N`` (per pose).
   line's smoothed feature train is summed at the samples the grid reads only. The float32 sums
   may differ from BLAS's in the last bits (1e-5 relative).
 - :func:`nearest_edge` is the LMS step of ``Contour.local_search``: equal to the numpy path.
+
+The entry points release the GIL (``nogil``): the decoding thread of ``vistrack run`` runs beside them.
 """
 
 from __future__ import annotations
@@ -88,7 +90,7 @@ def _pose(gxy, q, nrm, n, off, polarity, cos2, out):
                 out[m, k] = _edge(g0, g1, nx, ny, polarity, cos2)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def profiles(gxy, q, nrm, off, polarity, cos2, out):
     """Edge strengths ``out (N, M, L)`` float32 along the lines (module docstring)."""
     for n in range(q.shape[0]):
@@ -127,7 +129,7 @@ def _line_sums(g, lo, n, thresh, kern, c, single, out):
         out[m] = 0.0 if nf == 0 else (single[at] if nf == 1 else np.log1p(c * s))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def loglik(gxy, q, nrm, off, polarity, cos2, thresh, kern, c, out):
     """``log r (N,)`` of the lines at ``off (L,)``: ``Σ_lines log(1 + c Σ_features kern)``."""
     prof = np.empty((q.shape[1], off.shape[0]), np.float32)
@@ -140,7 +142,7 @@ def loglik(gxy, q, nrm, off, polarity, cos2, thresh, kern, c, out):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def loglik_profiles(gn, lo, n_samples, thresh, kern, c, out):
     """``log r (N,)`` from the samples ``lo .. lo + n_samples`` of the profiles ``gn (N, M, L)``."""
     v = np.empty(gn.shape[1])
@@ -152,10 +154,13 @@ def loglik_profiles(gn, lo, n_samples, thresh, kern, c, out):
 
 
 @njit(cache=True)
-def _grid_pose(g, thresh, start, nrm, offsets, kern, c, single, feats, table, stamp, line, out):
+def _grid_pose(g, thresh, start, nrm, offsets, kern, c, single, pairs, feats, nfeat, idx, table, stamp, line, out):
     """:func:`grid` for one pose: edge strengths ``g (M, L)``, normals ``nrm (M, 2)``, into ``out (G,)``;
-    returns the last line number used in ``stamp``."""
-    n_samples = g.shape[1]
+    each line's features into ``feats (M, L)`` (their sample indices, ``nfeat (M,)`` of them); returns
+    the last line number used in ``stamp``. ``pairs (L, L)``: the term of a line with two features at
+    distances ``d0, d1`` from the sample, ``log(1 + c (kern(d0) + kern(d1)))`` summed as below, filled
+    where NaN on first use (it depends on ``kern`` and ``c`` only: it may serve many calls)."""
+    n_samples, n_grid = g.shape[1], offsets.shape[0]
     top = np.float32(n_samples - 1)
     out[:] = 0.0
     for m in range(g.shape[0]):
@@ -164,49 +169,63 @@ def _grid_pose(g, thresh, start, nrm, offsets, kern, c, single, feats, table, st
             v = g[m, k]
             if _is_peak(v, g[m, k - 1] if k > 0 else v, g[m, k + 1] if k < n_samples - 1 else v, k, n_samples,
                         thresh):
-                feats[nf] = k
+                feats[m, nf] = k
                 nf += 1
+        nfeat[m] = nf
         if nf == 0:
             continue  # log(1 + 0) on every shift
         line += 1
         nx, ny = nrm[m, 0], nrm[m, 1]
-        for j in range(offsets.shape[0]):
-            i = int(min(max(nx * offsets[j, 0] + ny * offsets[j, 1] - start, _ZERO), top))
-            if nf == 1:
-                out[j] += single[abs(i - feats[0])]
-                continue
-            if stamp[i] != line:
-                acc = _ZERO
-                for f in range(nf):
-                    acc += kern[feats[f], i]
-                table[i] = np.log1p(acc * c)
-                stamp[i] = line
-            out[j] += table[i]
+        for j in range(n_grid):
+            idx[j] = int(min(max(nx * offsets[j, 0] + ny * offsets[j, 1] - start, _ZERO), top))
+        f0, f1 = feats[m, 0], feats[m, 1]
+        if nf == 1:
+            for j in range(n_grid):
+                out[j] += single[abs(idx[j] - f0)]
+        elif nf == 2:
+            for j in range(n_grid):
+                d0, d1 = abs(idx[j] - f0), abs(idx[j] - f1)
+                if pairs[d0, d1] != pairs[d0, d1]:
+                    pairs[d0, d1] = np.log1p(((_ZERO + kern[f0, idx[j]]) + kern[f1, idx[j]]) * c)
+                out[j] += pairs[d0, d1]
+        else:
+            for j in range(n_grid):
+                i = idx[j]
+                if stamp[i] != line:
+                    acc = _ZERO
+                    for f in range(nf):
+                        acc += kern[feats[m, f], i]
+                    table[i] = np.log1p(acc * c)
+                    stamp[i] = line
+                out[j] += table[i]
     return line
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def grid(gn, thresh, start, nrm, offsets, kern, c, out):
     """``log r`` on the translations ``offsets (G, 2)`` float32 of every pose: ``out (N, G)`` float32.
 
     For line ``i`` and shift ``δ`` the smoothed features ``S_i = Σ_j kern[j, ·]`` are read at the
     sample nearest ``n_i · δ`` (index ``floor(n_i · δ - start)``, ``start = off[0] - 0.5``,
     clipped to the line), each sample's ``log(1 + c S_i)`` computed once per line. ``kern (L, L)``
-    depends on ``|j - i|`` only (1-px samples), so a line with one feature reads a table by distance."""
+    depends on ``|j - i|`` only (1-px samples), so a line with one or two features reads a table by
+    distance."""
     n_samples = gn.shape[2]
-    feats = np.empty(n_samples, np.int64)
-    table = np.empty(n_samples, np.float32)
+    feats, nfeat = np.empty((gn.shape[1], n_samples), np.int64), np.empty(gn.shape[1], np.int64)
+    idx, table = np.empty(offsets.shape[0], np.int64), np.empty(n_samples, np.float32)
     stamp = np.full(n_samples, -1, np.int64)
     single = np.empty(n_samples, np.float32)
     for d in range(n_samples):
         single[d] = np.log1p((_ZERO + kern[0, d]) * c)
+    pairs = np.full((n_samples, n_samples), np.nan, np.float32)
     line = 0
     for n in range(gn.shape[0]):
-        line = _grid_pose(gn[n], thresh, start, nrm[n], offsets, kern, c, single, feats, table, stamp, line, out[n])
+        line = _grid_pose(gn[n], thresh, start, nrm[n], offsets, kern, c, single, pairs, feats, nfeat, idx, table,
+                          stamp, line, out[n])
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def nearest_edge(gn, thresh, off, shift, reach, out):
     """Per line, the edge feature nearest to ``shift (N, M)`` (offsets ``off (L,)``, first in
     index order on a tie): ``out (N, M)`` its offset minus ``shift`` when within ``reach``, else 0."""
@@ -225,7 +244,7 @@ def nearest_edge(gn, thresh, off, shift, reach, out):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def place(z, pts0, n0, q, nrm):
     """``Contour._place`` and ``Contour._turn`` in one pass: template points ``pts0 (M, 2)`` under the
     poses ``z (N, >=4)`` into ``q (N, M, 2)`` and the unit vectors ``n0 (M, 2)`` rotated by their

@@ -212,9 +212,16 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
         nx, ny = n0[:, 0], n0[:, 1]
         return np.stack([c * nx - s * ny, s * nx + c * ny], axis=-1)
 
+    def _placed(self, z, pts0, n0):
+        """:meth:`_place` and :meth:`_turn` of ``pts0, n0`` (compiled where the kernels are on; equal)."""
+        if kernels.use():
+            from ..kernels.contour import place
+            return place(z, pts0, n0, *(np.empty((len(z),) + pts0.shape) for _ in "qn"))
+        return self._place(z, pts0), self._turn(z, n0)
+
     def support_points(self, z):
         """Support points ``q = W z + q0`` as ``(N, n, 2)`` for poses ``z (N, 4)``."""
-        return self._place(z, self.q0)
+        return self._placed(z, self.q0, self.normals0)[0] if kernels.use() else self._place(z, self.q0)
 
     def normals(self, z):
         """Unit outward normals ``(N, n, 2)`` at the support points."""
@@ -222,10 +229,7 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
 
     def measurement_lines(self, z):
         """Measurement points and unit normals ``(N, M, 2)`` each (likelihood lines)."""
-        if kernels.use():
-            from ..kernels.contour import place
-            return place(z, self.meas0, self.meas_normals0, *(np.empty((len(z),) + self.meas0.shape) for _ in "qn"))
-        return self._place(z, self.meas0), self._turn(z, self.meas_normals0)
+        return self._placed(z, self.meas0, self.meas_normals0)
 
     def outline(self, states, per_segment=8):
         """Dense curve points ``(N, n·per_segment, 2)`` of the contours of ``states``."""
@@ -277,12 +281,9 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
         """The gradient map and the float32 points and unit normals ``(N, M, 2)`` of the
         measurement lines (at the support points with ``support=True``; ``lines``: the lines
         of ``z`` already placed)."""
-        if lines is not None:
-            q, nrm = lines
-        elif support:
-            q, nrm = self.support_points(z), self.normals(z)
-        else:
-            q, nrm = self.measurement_lines(z)
+        if lines is None:
+            lines = (self.support_points(z), self.normals(z)) if support else self.measurement_lines(z)
+        q, nrm = lines
         return obs.gradient(self.gradient_sigma)[0], q.astype(np.float32), nrm.astype(np.float32)
 
     def _profiles(self, obs, z, offsets, support=False, lines=None):
@@ -385,16 +386,15 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
         return float(pose_params(np.asarray(state, float).reshape(-1)[:4])[0]), state[0], state[1]
 
     def describe(self, state):
-        """Track-file fields of one state: centre, box, angle, scale, support points."""
-        state = np.asarray(state, float).reshape(1, -1)
-        z = state[0, :4]
-        q = self.support_points(state[:, :4])
-        pts = self.dense_matrix @ q[0]  # the outline, as box() draws it
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        """Track-file fields of one state: centre, box, angle, scale, support points (Python floats)."""
+        z = np.asarray(state, float).reshape(-1)[:4]
+        q = self.support_points(z[None])[0]
+        pts = self.dense_matrix @ q  # the outline, as box() draws it
+        x, y = pts[:, 0], pts[:, 1]
         scale, angle = pose_params(z)
-        row = {"cx": z[0], "cy": z[1], "w": hi[0] - lo[0], "h": hi[1] - lo[1], "angle_deg": float(angle),
-               "scale": float(scale)}
+        row = dict(zip(("cx", "cy"), z[:2].tolist()), w=float(x.max() - x.min()), h=float(y.max() - y.min()),
+                   angle_deg=float(angle), scale=float(scale))
         if getattr(self, "_point_keys", None) is None:
             self._point_keys = [f"qx{i}" for i in range(self.n)] + [f"qy{i}" for i in range(self.n)]
-        row.update(zip(self._point_keys, q[0].T.ravel()))
+        row.update(zip(self._point_keys, q.T.ravel().tolist()))
         return row

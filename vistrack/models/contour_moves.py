@@ -18,6 +18,10 @@ __all__ = ["ContourMoves"]
 class ContourMoves:
     """Mixin of :class:`~vistrack.models.contour.Contour`: local search and local moves."""
 
+    #: the LMS search in two fused compiled passes (:meth:`_search_compiled`) where the kernels are
+    #: on and there is no colour term; ``False``: the step-by-step path (the reference in the tests)
+    fused_search = True
+
     # -- local search LS_λ (LS-N-IPS, §4.3.1) ------------------------------------
     def _lms_fit(self, obs, z, samples, reach_factor=1.0):
         """One LMS step: on each normal within the search length, the edge feature
@@ -64,6 +68,8 @@ class ContourMoves:
             return self._accept(obs, states, nn_candidates(self, obs, z), z, lambda: self.loglik(obs, states))
         grid, step = self._search_grid()
         reach_lms = step
+        if kernels.use() and self.colour is None and self.fused_search:
+            return self._search_compiled(obs, states, grid, step)
         pts, nrm = self.measurement_lines(z)
         off, gn = self._profiles_wide(obs, z, np.hypot(*self.search_lambda[:2]) + reach_lms, lines=(pts, nrm))
         thresh, fast = self._threshold(obs), kernels.use()
@@ -94,6 +100,48 @@ class ContourMoves:
             return ll_x + self.colour_loglik(obs, z) if self.colour is not None else ll_x
 
         return self._accept(obs, states, z_hat, z_t, ll_prediction)
+
+    def _search_compiled(self, obs, states, grid, reach_lms):
+        """:meth:`local_search` (LMS, no colour term) in two compiled passes around the matrix product
+        (:mod:`vistrack.kernels.contour_search`; equal bit for bit to the steps below)."""
+        from ..kernels.contour_search import accept, search_lines
+
+        gxy, thresh = obs.gradient(self.gradient_sigma)[0], np.float32(self._threshold(obs))
+        k = self._search_consts(grid, reach_lms)
+        gn, d, z_t, ll_x = self._search_scratch(len(states), len(k["off"]))
+        pol, cos2 = self.polarity or 0, np.float32(self.cos_min**2)
+        search_lines(gxy, states, self.meas0, self.meas_normals0, k["off"], k["line"], pol, cos2, thresh, grid,
+                     k["grid32"], k["pair"], k["c32"], k["pairs"], reach_lms, gn, d, z_t, ll_x)
+        return accept(gxy, states, d @ self.W_meas_plus.T, z_t, self.search_lambda, self.meas0, self.meas_normals0,
+                      k["off_line"], pol, cos2, thresh, *k["line"][1:], self.search_check, ll_x, states.copy(),
+                      np.empty(len(states)))
+
+    def _search_consts(self, grid, reach_lms):
+        """What :meth:`_search_compiled` passes every frame: the long lines' offsets, the likelihood's
+        middle samples, kernel and constant, the grid's float32 cast, pair kernel and table of
+        two-feature terms (filled as frames need it; all cached while the model's parameters stay)."""
+        key = (tuple(self.search_lambda), reach_lms, self.half_line, self.sigma_edge, self.log_c)
+        cached = getattr(self, "_search_cache", None)
+        if cached is None or cached[0] != key:
+            h = int(np.ceil(np.hypot(*self.search_lambda[:2]) + reach_lms)) + self.half_line
+            off = np.arange(-h, h + 1, dtype=float)
+            line = ((len(off) - len(self.line_offsets)) // 2, self._line_kernel(), np.exp(self.log_c))
+            cached = self._search_cache = (key, {
+                "off": off, "line": line, "grid32": np.asarray(grid, np.float32), "pair": self._pair_kernel(off),
+                "c32": np.float32(np.exp(self.log_c)), "off_line": self.line_offsets.astype(np.float32),
+                "pairs": np.full((len(off), len(off)), np.nan, np.float32)})
+        return cached[1]
+
+    def _search_scratch(self, n, n_samples):
+        """Work arrays of :meth:`_search_compiled` for ``n`` poses, reused from frame to frame:
+        edge strengths, ``p̂ - p0``, the translated poses and ``log r`` at the prediction."""
+        m = len(self.meas0)
+        key = (n, m, n_samples)
+        cached = getattr(self, "_scratch", None)
+        if cached is None or cached[0] != key:
+            cached = self._scratch = (key, (np.empty((n, m, n_samples), np.float32), np.empty((n, 2 * m)),
+                                            np.empty((n, 4)), np.empty(n)))
+        return cached[1]
 
     def _accept(self, obs, states, z_hat, z_else, ll_prediction):
         """The searched poses ``z_hat`` where within ``λ`` of the prediction (max norm per
