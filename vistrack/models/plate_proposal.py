@@ -178,7 +178,23 @@ class PlateLISProposal:
         xs = np.repeat(x, k, axis=0)
         xs[:, col] = values.ravel()
         at = np.zeros((n * k, 1, 2)) if offsets is None else np.repeat(offsets, k, axis=0)[:, None]
-        return self._conditional(self.model.lik.loglik_sparse(obs, xs, at).reshape(n, k), rng, self.birth_beta)
+        return self._sparse_cells(obs, xs, at, rng, n, k)
+
+    def _sparse_cells(self, obs, x, offsets, rng, n, k):
+        """``_conditional`` (β = ``birth_beta``) of the sparse ``r`` at the poses ``x`` shifted by
+        ``offsets (P, C, 2)``, read as ``n`` rows of ``k`` cells; compiled where the kernels are
+        (:func:`vistrack.kernels.plate_scan.sparse_draw`, equal)."""
+        lik = self.model.lik
+        if not kernels.use():
+            return self._conditional(lik.loglik_sparse(obs, x, offsets).reshape(n, k), rng, self.birth_beta)
+        from ..kernels.plate_scan import sparse_draw
+
+        pose = np.ascontiguousarray(x[:, :4])
+        w, b = lik.coef(pose)
+        return sparse_draw(lik.maps(obs), pose, np.tan(pose[:, 2]), float(lik.layout.aspect),
+                           lik.kernel_table(lik.scan_points), np.ascontiguousarray(offsets, float),
+                           np.ascontiguousarray(w), np.ascontiguousarray(b, float), lik.learnt, int(k),
+                           self.birth_beta, rng.gumbel(size=(n, k)), BORDER, np.empty(n, np.int64), np.empty(n))
 
     def _search(self, x, obs, rng):
         """Entering particles: a coarse cell of the window drawn ∝ the sparse full ``r`` at its
@@ -217,7 +233,7 @@ class PlateLISProposal:
         gw = ((np.arange(cw) + 0.5) / cw * 2 - 1)
         du, dw = np.meshgrid(gu, gw, indexing="ij")
         offs = np.stack([du.ravel(), dw.ravel()], axis=1)[None] * half[:, None, :]  # (n, C, 2) px
-        j, log_q = self._conditional(m.lik.loglik_sparse(obs, x, offs), rng, self.birth_beta)
+        j, log_q = self._sparse_cells(obs, x, offs, rng, n, cu * cw)
         centre = x[:, :2] + offs[rows, j]
         xz = x.copy()
         k, span = self.scale_cells, self.scale_span
