@@ -23,7 +23,7 @@ import numpy as np
 from numba import njit
 
 from .plate import means_at, place, set_index
-from .sampling import _block_sum, pairwise_sum
+from .sampling import pairwise_sum
 
 __all__ = ["draw_cells", "line_scans", "sparse_draw"]
 
@@ -46,7 +46,7 @@ def _draw_row(vals, lo, k, beta, gum, tmp):
     shift = m if np.isfinite(m) else 0.0
     for i in range(k):
         tmp[i] = np.exp(vals[lo + i] - shift)
-    s = _block_sum(tmp, 0, k) if k <= 128 else pairwise_sum(tmp, 0, k)
+    s = pairwise_sum(tmp, 0, k)
     lz = np.inf if m == np.inf else shift + np.log(s)
     j, best = 0, -np.inf
     for i in range(k):
