@@ -2,7 +2,8 @@
 
 Tolerance: none — the cells, the drawn points, ``log q`` and the generator's state after the
 draws are equal bit for bit (the kernels take the Gumbel and uniform variates drawn by numpy in
-the numpy path's order, and sum in its order).
+the numpy path's order, and sum in its order — for the births' weighted sums, the order of
+numpy's ``einsum`` on x86-64, which another architecture may not share).
 """
 
 from __future__ import annotations
