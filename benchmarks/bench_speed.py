@@ -14,10 +14,7 @@ so that machine noise hits them alike).
    (LIS-100) vs OpenCV's KCF on the real clips with ground truth (target: less than KCF). KCF is in
    opencv-contrib-python-headless; without it the column says so.
 
-    python benchmarks/bench_speed.py [--rounds 3] [--contour-frames 200] [--plate-frames 150] [--contour-only]
-
-``--contour-only``: part 1 for the contour and box car4 clips and part 2 for the contour (no plate,
-no KCF).
+    python benchmarks/bench_speed.py [--rounds 3] [--contour-frames 200] [--plate-frames 150] [--only plate]
 
 ``--cpu`` times parts 2 and 3 in process CPU time (``time.process_time``) instead of wall time: on a
 machine loaded by other work, wall time mostly measures the scheduler (part 1 stays wall time: its
@@ -25,6 +22,9 @@ end-to-end runs overlap decoding in a thread).
 
 Both vistrack and OpenCV run single-threaded here (``cv2.setNumThreads(1)``); the decode thread of
 the end-to-end runs is the one extra thread, as in ``vistrack run``.
+
+``--only contour|plate|box`` runs one path's entries alone (plate: the two plate clips of part 1
+and part 2's plate LIS-100 vs bootstrap-750).
 """
 
 import argparse
@@ -135,8 +135,7 @@ def clips(tmp, args):
     contour = tmp / "contour320"
     make_contour_clip(contour, frames=args.contour_frames, size=(320, 240), seed=1)
     plate = tmp / "plate640"
-    if not args.contour_only:
-        make_plate_clip(plate, frames=args.plate_frames, seed=1)
+    make_plate_clip(plate, frames=args.plate_frames, seed=1)
     box = write_resized("car4_otb_first100", tmp / "car4_640", (640, 480))
     return [("contour 320x240 LS-N-IPS-30", contour, "contour", "ls-n-ips", 30, {"init_gt": ""}),
             ("plate 640x480 LIS-100", plate, "plate", "lis", 100, {}),
@@ -145,17 +144,19 @@ def clips(tmp, args):
 
 
 def one_round(r, paths, mem, real, res):
-    """Every entry once, in turn, with seed ``r``; appends to ``res`` (``mem`` without ``"plate"``:
-    no plate tracking)."""
+    """Every entry once, in turn, with seed ``r``; appends to ``res``."""
     for label, folder, model, algo, n, build in paths:
         res.setdefault(("decode", label), []).append(decode_rate(load_clip(folder).source.path))
         res.setdefault(("e2e", label), []).append(e2e_rate(folder, model, algo, n, r, **build))
-    contour, cframes = mem["contour"]
-    for algo, n in (("ls-n-ips", 30), ("bootstrap", 2000)):
-        res.setdefault(("contour", algo), []).append(tracking_rate(contour, cframes, "contour", algo, n, r, init_gt=""))
-    for algo, n in (("lis", 100), ("bootstrap", 750)) if "plate" in mem else ():
+    if "contour" in mem:
+        contour, cframes = mem["contour"]
+        for algo, n in (("ls-n-ips", 30), ("bootstrap", 2000)):
+            res.setdefault(("contour", algo), []).append(tracking_rate(contour, cframes, "contour", algo, n, r,
+                                                                       init_gt=""))
+    if "plate" in mem:
         plate, pframes = mem["plate"]
-        res.setdefault(("plate", algo), []).append(tracking_rate(plate, pframes, "plate", algo, n, r))
+        for algo, n in (("lis", 100), ("bootstrap", 750)):
+            res.setdefault(("plate", algo), []).append(tracking_rate(plate, pframes, "plate", algo, n, r))
     for name, (frames, gt) in real.items():
         res.setdefault(("box", name), []).append(box_ms(frames, gt[0], r))
         res.setdefault(("kcf", name), []).append(kcf_ms(frames, gt[0]))
@@ -178,6 +179,8 @@ def report(res, paths, real, rounds):
         print(f"{'round':<6} {na:>16} {nb:>16} {'ratio':>7}")
         for k in range(rounds):
             print(f"{k:<6} {x[k]:>16.1f} {y[k]:>16.1f} {x[k] / y[k]:>7.2f}")
+    if not real:
+        return
     print("\n3. box LIS-100 (the default tracker) vs KCF, tracking ms per frame (init + update), median of rounds")
     print(f"{'clip':<24} {'size':>9} {'box':>7} {'KCF':>7} {'box/KCF':>8}")
     for name, (frames, _) in real.items():
@@ -193,7 +196,7 @@ def main():
     ap.add_argument("--plate-frames", type=int, default=150)
     ap.add_argument("--data", type=Path, default=None, help="the real clips' folder [default: ../shared/data/real]")
     ap.add_argument("--cpu", action="store_true", help="process CPU time instead of wall time (parts 2 and 3)")
-    ap.add_argument("--contour-only", action="store_true", help="the contour (parts 1 and 2) and box car4 (part 1) only")
+    ap.add_argument("--only", choices=("contour", "plate", "box"), default=None, help="one path's entries alone")
     args = ap.parse_args()
     global DATA, CLOCK
     DATA = args.data or DATA
@@ -201,12 +204,12 @@ def main():
     cv2.setNumThreads(1)
     if opencv_tracker("KCF") is None:
         print(f"KCF is not in this OpenCV ({cv2.__version__}): its column is nan (opencv-contrib-python-headless has it)")
-    real = {name: real_clip(name) for name in REAL if (DATA / name).is_dir() and not args.contour_only}
+    real = {name: real_clip(name) for name in REAL if (DATA / name).is_dir() and args.only in (None, "box")}
     with tempfile.TemporaryDirectory() as d:
         paths = [p for p in clips(Path(d), args) if Path(p[1]).is_dir()]
         mem = {k: (paths[i][1], [f for _, f in open_video(load_clip(paths[i][1]).source.path)])
-               for i, k in ((0, "contour"), (1, "plate"))[:1 + (not args.contour_only)]}
-        paths = [p for p in paths if not (args.contour_only and p[2] == "plate")]
+               for i, k in ((0, "contour"), (1, "plate")) if args.only in (None, k)}
+        paths = [p for p in paths if args.only in (None, p[2])]
         for frames, gt in real.values():  # start-up: the kernels and OpenCV's trackers loaded
             box_ms(frames[:3], gt[0], 0)
             kcf_ms(frames[:3], gt[0])

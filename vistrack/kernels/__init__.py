@@ -12,6 +12,8 @@ as the reference and as the fallback where numba is missing:
 - :mod:`~vistrack.kernels.contour_search`: the contour's LMS local search fused into two passes;
 - :mod:`~vistrack.kernels.plate`: the plate likelihood's 4-channel map and pixel-set means (the
   likelihood, the sparse search and the line scans);
+- :mod:`~vistrack.kernels.plate_scan`: the plate LIS proposal's line scans of all particles in one
+  call, and its cell draws;
 - :mod:`~vistrack.kernels.appearance`: the box model's colour bins, per-bin integral images,
   colour term and template correlation;
 - :mod:`~vistrack.kernels.bearings`: the bearings ξ proposal's move and first stage.

@@ -30,6 +30,8 @@ __all__ = ["PlateLikelihood", "PlateObservation", "plate_map", "thesis_weights",
 
 #: the maps' values outside the frame (Sobel channels 0, DoG channels 5: a plate half outside scores low)
 _BORDER = (0.0, 0.0, 5.0, 5.0)
+#: the same as the compiled paths take it
+BORDER = np.array(_BORDER, np.float32)
 
 
 def plate_map(maps):
@@ -253,6 +255,16 @@ class PlateLikelihood:
         ``offsets (N, C, 2)``: ``(N, C, F)``."""
         from ..kernels.plate import set_means
 
+        pts, sets, feats = self.kernel_table(points, cols)
+        out = np.empty(offsets.shape[:2] + (len(feats),), np.float32)
+        return set_means(self.maps(obs), np.ascontiguousarray(pose, float), np.tan(pose[:, 2]), float(self.layout.aspect),
+                         pts, sets, feats, np.ascontiguousarray(offsets, float), BORDER, out)
+
+    def kernel_table(self, points, cols=None):
+        """The compiled path's ``(points (P, 2), sets (S, 2), features (F, 2))`` of the features
+        ``cols`` (default all) on the point sets ``points`` (:attr:`points` or :attr:`scan_points`):
+        the sets' unit-square points stacked, each set's ``(start, count)``, each feature's set and
+        map channel (:func:`vistrack.kernels.plate.set_means`)."""
         key = (id(points), cols)
         if key not in self._kernel_tables:
             names = tuple(dict.fromkeys(self.spec[i][1] for i in (cols or range(len(self.spec)))))
@@ -261,10 +273,13 @@ class PlateLikelihood:
             feats = np.array([[names.index(self.spec[i][1]), self.spec[i][2]] for i in (cols or range(len(self.spec)))],
                              np.int64)
             self._kernel_tables[key] = (pts, sets, feats)
-        pts, sets, feats = self._kernel_tables[key]
-        out = np.empty(offsets.shape[:2] + (len(feats),), np.float32)
-        return set_means(self.maps(obs), np.ascontiguousarray(pose, float), np.tan(pose[:, 2]), float(self.layout.aspect),
-                         pts, sets, feats, np.ascontiguousarray(offsets, float), np.array(_BORDER, np.float32), out)
+        return self._kernel_tables[key]
+
+    def scan_table(self, which):
+        """The line scan ``which`` ("h" or "v") for the compiled path: its :meth:`kernel_table` on
+        :attr:`scan_points` and the indices of its features (columns of :meth:`coef`)."""
+        idx = tuple(int(i) for i in self._terms[which])
+        return self.kernel_table(self.scan_points, idx), np.array(idx)
 
     def _shifted_samples(self, obs, states, points, offsets):
         """The 4 maps at the plate points ``points`` of every pose shifted by ``offsets (N, C, 2)``

@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import kernels
 from ..gaussian import diag_logpdf
 from .kernel import Transition
+from .plate_likelihood import BORDER
 
 __all__ = ["PlateLISProposal"]
 
@@ -70,6 +72,12 @@ class PlateLISProposal:
         """Draw a cell per row ∝ exp(log_vals) and return (index, log prob of the cell)."""
         from ..particles import logsumexp
 
+        if kernels.use():
+            from ..kernels.plate_scan import draw_cells
+
+            n, k = log_vals.shape
+            return draw_cells(np.ascontiguousarray(log_vals, float), float(beta), rng.gumbel(size=(n, k)),
+                              np.empty(n, np.int64), np.empty(n))
         log_vals = beta * log_vals
 
         lz = logsumexp(log_vals, axis=1)
@@ -116,6 +124,8 @@ class PlateLISProposal:
         then ``U'`` from ``r^v`` along the horizontal line at ``W'`` (``± half[:, 0]``); ``k`` cells
         per line, each ∝ the scan likelihood at its centre (times the Gaussian ``prior = (mean, std)``
         of (u, w) there, if given). Returns the new ``(u, w)`` and their log density."""
+        if kernels.use() and (prior is None or prior[0] is centre):
+            return self._compiled_scans(x, obs, rng, centre, half, k, prior, beta)
         n = len(x)
         frac = (np.arange(k) + 0.5) / k * 2 - 1  # cell centres in [-1, 1]
         off = np.zeros((n, k, 2))
@@ -128,6 +138,25 @@ class PlateLISProposal:
         off[:, :, 1] = (w_new - x[:, 1])[:, None]
         u_new, lqv, cell_v = self._scan_draw(obs, x, rng, beta, "v", off, uc, 0, prior, half, k)
         return np.stack([u_new, w_new], axis=1), lqh - np.log(cell_h) + lqv - np.log(cell_v)
+
+    def _compiled_scans(self, x, obs, rng, centre, half, k, prior, beta):
+        """:meth:`_line_scans` in one compiled call (:func:`vistrack.kernels.plate_scan.line_scans`),
+        the Gumbel and uniform variates drawn first in the numpy path's order (equal to it)."""
+        from ..kernels.plate_scan import line_scans
+
+        lik, n = self.model.lik, len(x)
+        gum, unif = np.empty((2, n, k)), np.empty((2, n))
+        for i in range(2):
+            gum[i], unif[i] = rng.gumbel(size=(n, k)), rng.random(n)
+        pose = np.ascontiguousarray(x[:, :4])
+        w = lik.coef(pose)[0]
+        (tab_h, idx_h), (tab_v, idx_v) = lik.scan_table("h"), lik.scan_table("v")
+        sig = np.ones(2) if prior is None else np.asarray(prior[1], float)
+        uv, log_q = np.empty((n, 2)), np.empty(n)
+        return line_scans(lik.maps(obs), pose, np.tan(pose[:, 2]), float(lik.layout.aspect), tab_h,
+                          np.ascontiguousarray(w[:, idx_h]), tab_v, np.ascontiguousarray(w[:, idx_v]),
+                          np.ascontiguousarray(centre, float), np.ascontiguousarray(half, float), int(k),
+                          prior is not None, sig, float(beta), gum, unif, lik.learnt, BORDER, uv, log_q)
 
     def _scan_draw(self, obs, x, rng, beta, which, off, centres, axis, prior, half, k):
         """One line scan of ``_line_scans``: ``log r^which`` at the cell centres ``(n, k)`` (times the
@@ -149,7 +178,23 @@ class PlateLISProposal:
         xs = np.repeat(x, k, axis=0)
         xs[:, col] = values.ravel()
         at = np.zeros((n * k, 1, 2)) if offsets is None else np.repeat(offsets, k, axis=0)[:, None]
-        return self._conditional(self.model.lik.loglik_sparse(obs, xs, at).reshape(n, k), rng, self.birth_beta)
+        return self._sparse_cells(obs, xs, at, rng, n, k)
+
+    def _sparse_cells(self, obs, x, offsets, rng, n, k):
+        """``_conditional`` (β = ``birth_beta``) of the sparse ``r`` at the poses ``x`` shifted by
+        ``offsets (P, C, 2)``, read as ``n`` rows of ``k`` cells; compiled where the kernels are
+        (:func:`vistrack.kernels.plate_scan.sparse_draw`, equal)."""
+        lik = self.model.lik
+        if not kernels.use():
+            return self._conditional(lik.loglik_sparse(obs, x, offsets).reshape(n, k), rng, self.birth_beta)
+        from ..kernels.plate_scan import sparse_draw
+
+        pose = np.ascontiguousarray(x[:, :4])
+        w, b = lik.coef(pose)
+        return sparse_draw(lik.maps(obs), pose, np.tan(pose[:, 2]), float(lik.layout.aspect),
+                           lik.kernel_table(lik.scan_points), np.ascontiguousarray(offsets, float),
+                           np.ascontiguousarray(w), np.ascontiguousarray(b, float), lik.learnt, int(k),
+                           self.birth_beta, rng.gumbel(size=(n, k)), BORDER, np.empty(n, np.int64), np.empty(n))
 
     def _search(self, x, obs, rng):
         """Entering particles: a coarse cell of the window drawn ∝ the sparse full ``r`` at its
@@ -188,7 +233,7 @@ class PlateLISProposal:
         gw = ((np.arange(cw) + 0.5) / cw * 2 - 1)
         du, dw = np.meshgrid(gu, gw, indexing="ij")
         offs = np.stack([du.ravel(), dw.ravel()], axis=1)[None] * half[:, None, :]  # (n, C, 2) px
-        j, log_q = self._conditional(m.lik.loglik_sparse(obs, x, offs), rng, self.birth_beta)
+        j, log_q = self._sparse_cells(obs, x, offs, rng, n, cu * cw)
         centre = x[:, :2] + offs[rows, j]
         xz = x.copy()
         k, span = self.scale_cells, self.scale_span
