@@ -8,10 +8,12 @@ the same order (``tests/test_kernels_box.py`` states each tolerance):
 - :func:`box_loglik`: ``Box.loglik`` (the boxes, the colour term and the template correlation);
 - :func:`grid_points` and :func:`map_sample`: :meth:`MapProposal.sample
   <vistrack.proposals.grid.MapProposal.sample>` with the box's ``proposal_log_q``: the grid's
-  points and their span in working pixels, then the map read as ``cv2.remap`` reads it, the
-  tempered and floored ``log q``, the cell drawn by Gumbel-max from uniforms
-  (``-log(-log(1 - U))``: what ``Generator.gumbel`` computes from the same draws), the point
-  in its cell, ``log alpha`` and ``log q``.
+  points and their span in working pixels, then the map (``exp`` of the tempered scores) read as
+  ``cv2.remap`` reads it, over each row's maximum and floored, the cell drawn by inversion of the
+  cumulative ``q g`` in the linear domain (no ``log``/``exp`` per cell), the point in its cell,
+  ``log alpha`` and ``log q``;
+- :func:`lis_predict` and :func:`lis_weigh`: ``LIS.propose`` with that proposal, the calls above
+  and the likelihood and transition densities in two calls about the proposal map.
 
 ``exp`` and ``log`` are the C library's here and in numpy's scalar loops (equal where numpy has
 no SIMD loop for them: the tests compare with a 1e-12 tolerance).

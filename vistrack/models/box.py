@@ -17,7 +17,9 @@ Local moves (thesis 001, §4.3–4.5)
     (:meth:`Appearance.mean_shift`), the move rejected when it goes further than ``λ``
     (half the box's mean side) or lowers ``r`` (eq. 4.1). ``lis``: a grid of translations
     about the prediction with ``q`` from one per-frame map
-    (:meth:`Appearance.proposal_map`; :class:`~vistrack.proposals.MapProposal`).
+    (:meth:`Appearance.proposal_map`; :class:`~vistrack.proposals.MapProposal`; the cell
+    drawn by inversion of the cumulative ``q g``, the LIS step compiled in two calls:
+    :meth:`lis_step`).
     ``lls``: the exact ``r`` on a grid of the window (:class:`~vistrack.proposals.Window`).
 Lost
     ``visible=0`` where ``log r`` at the estimate falls far below its running level, the
@@ -61,6 +63,11 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         Std of ``p_0`` on the centre (share of ``sqrt(w_0 h_0)``) and on the log-scale.
     window : float
         LIS/LLS window std as a multiple of the innovation's std.
+    map_stride : int
+        The LIS proposal map's step in working pixels (:meth:`Appearance.proposal_map`): 2 makes
+        ``cv2.matchTemplate`` about 4x cheaper (0.46 -> 0.12 ms on girl_otb) but lowered the success
+        AUC on the real clips (girl 0.650 -> 0.632, 12 seeds; hand 0.44 -> 0.39, 24 and 36 seeds; car4
+        0.819 -> 0.813): 1 by default (``docs/experiments.md``, speed, third pass).
     **appearance
         Passed to :class:`~vistrack.models.appearance.Appearance`.
     """

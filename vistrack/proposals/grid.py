@@ -11,10 +11,15 @@ inside it, so the sampling density is ``h(Z) = q(c_j) g(σ o_j) / alpha_hat`` wi
 ``log_alpha = log alpha_hat + log g(X - Z)`` and ``log_q = log q(c_j) + log g(σ o_j)``,
 however coarse the grid or rough the map.
 
-With the compiled kernels (:mod:`vistrack.kernels`), a model whose ``log q`` is a map read
+The cell is drawn by inversion of each row's cumulative ``q g`` with one uniform per particle
+(``rng.random((N, 3))``: the cell, then the point in it; before the third pass of issue 22,
+Gumbel-max with one draw per cell: the same distribution, 81 times the ``log`` pairs).
+
+With the compiled kernels (:mod:`vistrack.kernels`), a model whose ``q`` is a map read
 bilinearly (``proposal_work``, ``proposal_qmap`` and ``proposal_tempering``, as the box model's)
 is sampled in two compiled calls (:func:`~vistrack.kernels.box.grid_points`,
-:func:`~vistrack.kernels.box.map_sample`) from the same draws.
+:func:`~vistrack.kernels.box.map_sample`) from the same draws, and a model with ``lis_step``
+runs LIS's whole proposal step itself (:meth:`MapProposal.propose`).
 """
 
 from __future__ import annotations
