@@ -14,7 +14,7 @@ so that machine noise hits them alike).
    (LIS-100) vs OpenCV's KCF on the real clips with ground truth (target: less than KCF). KCF is in
    opencv-contrib-python-headless; without it the column says so.
 
-    python benchmarks/bench_speed.py [--rounds 3] [--contour-frames 200] [--plate-frames 150] [--only plate]
+    python benchmarks/bench_speed.py [--rounds 3] [--contour-frames 200] [--plate-frames 150] [--parts 1,2,3] [--only plate]
 
 ``--cpu`` times parts 2 and 3 in process CPU time (``time.process_time``) instead of wall time: on a
 machine loaded by other work, wall time mostly measures the scheduler (part 1 stays wall time: its
@@ -22,9 +22,6 @@ end-to-end runs overlap decoding in a thread).
 
 Both vistrack and OpenCV run single-threaded here (``cv2.setNumThreads(1)``); the decode thread of
 the end-to-end runs is the one extra thread, as in ``vistrack run``.
-
-``--only contour|plate|box`` runs one path's entries alone (plate: the two plate clips of part 1
-and part 2's plate LIS-100 vs bootstrap-750).
 """
 
 import argparse
@@ -143,32 +140,57 @@ def clips(tmp, args):
             ("box car4 640x480 LIS-100", box, "box", "lis", 100, {"init_gt": ""})]
 
 
-def one_round(r, paths, mem, real, res):
-    """Every entry once, in turn, with seed ``r``; appends to ``res``."""
+def one_round(r, paths, mem, real, res, parts=(1, 2, 3)):
+    """Every entry of ``parts`` once, in turn, with seed ``r``; appends to ``res``."""
+    if 3 in parts:
+        for name, (frames, gt) in real.items():
+            res.setdefault(("box", name), []).append(box_ms(frames, gt[0], r))
+            res.setdefault(("kcf", name), []).append(kcf_ms(frames, gt[0]))
+    if 1 in parts:
+        e2e_round(r, paths, res)
+    if 2 not in parts:
+        return
+    for key, pair, build in (("contour", (("ls-n-ips", 30), ("bootstrap", 2000)), {"init_gt": ""}),
+                             ("plate", (("lis", 100), ("bootstrap", 750)), {})):
+        if key in mem:
+            folder, frames = mem[key]
+            for algo, n in pair:
+                res.setdefault((key, algo), []).append(tracking_rate(folder, frames, key, algo, n, r, **build))
+
+
+def e2e_round(r, paths, res):
+    """Part 1 once: decode-only and end-to-end rates of every path."""
     for label, folder, model, algo, n, build in paths:
         res.setdefault(("decode", label), []).append(decode_rate(load_clip(folder).source.path))
         res.setdefault(("e2e", label), []).append(e2e_rate(folder, model, algo, n, r, **build))
-    if "contour" in mem:
-        contour, cframes = mem["contour"]
-        for algo, n in (("ls-n-ips", 30), ("bootstrap", 2000)):
-            res.setdefault(("contour", algo), []).append(tracking_rate(contour, cframes, "contour", algo, n, r,
-                                                                       init_gt=""))
-    if "plate" in mem:
-        plate, pframes = mem["plate"]
-        for algo, n in (("lis", 100), ("bootstrap", 750)):
-            res.setdefault(("plate", algo), []).append(tracking_rate(plate, pframes, "plate", algo, n, r))
-    for name, (frames, gt) in real.items():
-        res.setdefault(("box", name), []).append(box_ms(frames, gt[0], r))
-        res.setdefault(("kcf", name), []).append(kcf_ms(frames, gt[0]))
 
 
-def report(res, paths, real, rounds):
+def report(res, paths, real, rounds, parts=(1, 2, 3)):
+    if 1 in parts:
+        report_e2e(res, paths)
+    if 2 in parts:
+        report_ratios(res, rounds)
+    if 3 not in parts:
+        return
+    print("\n3. box LIS-100 (the default tracker) vs KCF, tracking ms per frame (init + update), median of rounds")
+    print(f"{'clip':<24} {'size':>9} {'box':>7} {'KCF':>7} {'box/KCF':>8}  box/KCF per round")
+    for name, (frames, _) in real.items():
+        b, k = np.array(res[("box", name)]), np.array(res[("kcf", name)])
+        size = f"{frames[0].shape[1]}x{frames[0].shape[0]}"
+        print(f"{name:<24} {size:>9} {np.median(b):>7.2f} {np.median(k):>7.2f} {np.median(b) / np.median(k):>8.2f}  "
+              + " ".join(f"{v:.2f}" for v in b / k))
+
+
+def report_e2e(res, paths):
     print("\n1. end to end (vistrack run, decode included) vs decode only, frames/s, median of rounds")
     print(f"{'path':<32} {'decode':>8} {'e2e':>8} {'e2e/decode':>11}  per round")
     for label, *_ in paths:
         d, e = np.array(res[("decode", label)]), np.array(res[("e2e", label)])
         print(f"{label:<32} {np.median(d):>8.0f} {np.median(e):>8.0f} {np.median(e / d):>11.3f}  "
               + " ".join(f"{v:.3f}" for v in e / d))
+
+
+def report_ratios(res, rounds):
     for what, (a, b), target in (("contour 320x240", (("ls-n-ips", 30), ("bootstrap", 2000)), 10.0),
                                  ("plate 640x480", (("lis", 100), ("bootstrap", 750)), 1.5)):
         if (what.split()[0], a[0]) not in res:
@@ -179,14 +201,6 @@ def report(res, paths, real, rounds):
         print(f"{'round':<6} {na:>16} {nb:>16} {'ratio':>7}")
         for k in range(rounds):
             print(f"{k:<6} {x[k]:>16.1f} {y[k]:>16.1f} {x[k] / y[k]:>7.2f}")
-    if not real:
-        return
-    print("\n3. box LIS-100 (the default tracker) vs KCF, tracking ms per frame (init + update), median of rounds")
-    print(f"{'clip':<24} {'size':>9} {'box':>7} {'KCF':>7} {'box/KCF':>8}")
-    for name, (frames, _) in real.items():
-        b, k = np.median(res[("box", name)]), np.median(res[("kcf", name)])
-        size = f"{frames[0].shape[1]}x{frames[0].shape[0]}"
-        print(f"{name:<24} {size:>9} {b:>7.2f} {k:>7.2f} {b / k:>8.2f}")
 
 
 def main():
@@ -196,8 +210,10 @@ def main():
     ap.add_argument("--plate-frames", type=int, default=150)
     ap.add_argument("--data", type=Path, default=None, help="the real clips' folder [default: ../shared/data/real]")
     ap.add_argument("--cpu", action="store_true", help="process CPU time instead of wall time (parts 2 and 3)")
+    ap.add_argument("--parts", default="1,2,3", help="which parts to run, comma-separated [default: 1,2,3]")
     ap.add_argument("--only", choices=("contour", "plate", "box"), default=None, help="one path's entries alone")
     args = ap.parse_args()
+    parts = tuple(int(p) for p in args.parts.split(",") if p)
     global DATA, CLOCK
     DATA = args.data or DATA
     CLOCK = time.process_time if args.cpu else time.perf_counter
@@ -206,9 +222,9 @@ def main():
         print(f"KCF is not in this OpenCV ({cv2.__version__}): its column is nan (opencv-contrib-python-headless has it)")
     real = {name: real_clip(name) for name in REAL if (DATA / name).is_dir() and args.only in (None, "box")}
     with tempfile.TemporaryDirectory() as d:
-        paths = [p for p in clips(Path(d), args) if Path(p[1]).is_dir()]
+        paths = [p for p in clips(Path(d), args) if Path(p[1]).is_dir()] if {1, 2} & set(parts) else []
         mem = {k: (paths[i][1], [f for _, f in open_video(load_clip(paths[i][1]).source.path)])
-               for i, k in ((0, "contour"), (1, "plate")) if args.only in (None, k)}
+               for i, k in ((0, "contour"), (1, "plate")) if 2 in parts and args.only in (None, k)}
         paths = [p for p in paths if args.only in (None, p[2])]
         for frames, gt in real.values():  # start-up: the kernels and OpenCV's trackers loaded
             box_ms(frames[:3], gt[0], 0)
@@ -216,9 +232,9 @@ def main():
         res = {}
         for r in range(args.rounds):
             t0 = time.perf_counter()
-            one_round(r, paths, mem, real, res)
+            one_round(r, paths, mem, real, res, parts)
             print(f"round {r}: {time.perf_counter() - t0:.0f} s", flush=True)
-        report(res, paths, real, args.rounds)
+        report(res, paths, real, args.rounds, parts)
 
 
 if __name__ == "__main__":

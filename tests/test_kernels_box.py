@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import vistrack
+import vistrack.models.appearance
 from vistrack import kernels
 from vistrack.features import FeatureMaps
 from vistrack.models.collapse import CollapseWatch
@@ -82,6 +83,64 @@ def test_map_proposal_draws_equal_the_numpy_path(tracked):
     for u, v in zip(a, b):
         np.testing.assert_allclose(v, u, rtol=1e-12, atol=1e-12)
     assert a[3] == b[3]  # the same draws consumed
+
+
+def test_region_of_interest_equals_the_numpy_path(tracked):
+    t, _ = tracked
+    frames, _ = moving_box_frames(10)
+    a, b = both(lambda: t.model.observe(FeatureMaps(frames[8]), t.particles).roi)
+    assert a == b and a != (0, 0, 160, 120)  # a part of the frame
+
+
+def test_frame_features_equal_the_numpy_path():
+    frames, box = moving_box_frames(1)
+    app = vistrack.models.appearance.Appearance(frames[0], box)
+    for roi in ((0, 0, 160, 120), (37, 21, 90, 70), (5, 5, 6, 9), (3, 3, 10, 4)):
+        a, b = both(lambda: app.frame(frames[0], roi))
+        for name in ("texture", "labels", "ii"):
+            np.testing.assert_array_equal(getattr(b, name), getattr(a, name), err_msg=f"{name} of {roi}")
+
+
+def test_adaptation_equals_the_numpy_path(tracked):
+    t, obs = tracked
+    app, box = t.model.app, t.model.boxes(t.particles.mean())[0]
+    saved = app.template.copy(), app.colour.q.copy()
+
+    def adapt():
+        app.template, app.colour.q = saved[0].copy(), saved[1].copy()
+        return app.adapt(obs, box), app.template.copy(), app.colour.q.copy()
+
+    a, b = both(adapt)
+    assert a[0] and b[0]  # a confident frame: both adapt
+    np.testing.assert_allclose(b[1], a[1], rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(b[2], a[2], rtol=1e-12, atol=1e-15)
+    app.adapt_min_ncc = 2.0  # above any correlation: neither adapts
+    a, b = both(adapt)
+    app.adapt_min_ncc = 0.6
+    assert not a[0] and not b[0]
+    np.testing.assert_array_equal(b[1], saved[0])
+
+
+def test_fused_lis_step_equals_the_calls_one_by_one(tracked):
+    t, obs = tracked
+    filt, model = t._stepper.filt, t.model
+    kernel, prev = filt.kernel, t.particles.states
+    prop = filt.part("proposal", kernel)
+    obs.proposal = None
+    rng = np.random.default_rng(7)
+    z, log_incr, x, ll = prop.propose(prev, obs, rng, kernel)
+    left = rng.random()
+    obs.proposal, rng = None, np.random.default_rng(7)
+    x2 = kernel.predict(prev, rng)
+    z2, log_alpha, log_q = prop.sample(x2, obs, rng)
+    ll2 = model.loglik(obs, z2)
+    incr2 = log_alpha + ll2 - log_q + kernel.logpdf(z2, prev) - kernel.logpdf(x2, prev)
+    assert rng.random() == left  # the same draws consumed
+    np.testing.assert_array_equal(x, x2)
+    np.testing.assert_allclose(z, z2, rtol=1e-14, atol=1e-12)
+    np.testing.assert_allclose(ll, ll2, rtol=1e-12)
+    np.testing.assert_allclose(log_incr, incr2, rtol=1e-12, atol=1e-9)
+    assert prop.propose(prev, obs, rng, filt.prior_kernel) is None  # the first step: the calls one by one
 
 
 def test_proposal_map_scores_equal_the_numpy_path(tracked):

@@ -71,7 +71,8 @@ class Timer:
 
 #: what each stage times: (owner kind, method names)
 _MODEL_PARTS = {"features": ("observe",), "likelihood": ("loglik", "loglik_local_grid"),
-                "proposal": ("local_search", "local_mixture", "proposal_log_q"), "adapt": ("adapt",)}
+                "proposal": ("local_search", "local_mixture", "proposal_log_q", "lis_step"), "adapt": ("adapt",)}
+#: (``lis_step``: the box model's compiled LIS step, its likelihood inside: counted as proposal)
 _MAP_PARTS = ("gradient", "colour_labels", "integral")
 
 

@@ -59,8 +59,13 @@ class LIS(ParticleFilter):
         Parameters and returns as :meth:`ParticleFilter.propose`: ``prev (N, d)`` ->
         ``(new (N, d), log_incr (N,), predicted (N, d), loglik (N,))``.
         """
+        proposal = self.part("proposal", kernel)
+        fused = getattr(proposal, "propose", None)  # the whole step in one pass (the box model's map proposal)
+        out = None if fused is None else fused(prev, obs, rng, kernel)
+        if out is not None:
+            return out
         x = kernel.predict(prev, rng)
-        z, log_alpha, log_q = self.part("proposal", kernel).sample(x, obs, rng, prev)
+        z, log_alpha, log_q = proposal.sample(x, obs, rng, prev)
         ll = self.model.loglik(obs, z)
         log_incr = log_alpha + ll - log_q + kernel.logpdf(z, prev) - kernel.logpdf(x, prev)
         log_incr = np.where(np.isfinite(log_alpha), log_incr, -np.inf)

@@ -8,10 +8,12 @@ the same order (``tests/test_kernels_box.py`` states each tolerance):
 - :func:`box_loglik`: ``Box.loglik`` (the boxes, the colour term and the template correlation);
 - :func:`grid_points` and :func:`map_sample`: :meth:`MapProposal.sample
   <vistrack.proposals.grid.MapProposal.sample>` with the box's ``proposal_log_q``: the grid's
-  points and their span in working pixels, then the map read as ``cv2.remap`` reads it, the
-  tempered and floored ``log q``, the cell drawn by Gumbel-max from uniforms
-  (``-log(-log(1 - U))``: what ``Generator.gumbel`` computes from the same draws), the point
-  in its cell, ``log alpha`` and ``log q``.
+  points and their span in working pixels, then the map (``exp`` of the tempered scores) read as
+  ``cv2.remap`` reads it, over each row's maximum and floored, the cell drawn by inversion of the
+  cumulative ``q g`` in the linear domain (no ``log``/``exp`` per cell), the point in its cell,
+  ``log alpha`` and ``log q``;
+- :func:`lis_predict` and :func:`lis_weigh`: ``LIS.propose`` with that proposal, the calls above
+  and the likelihood and transition densities in two calls about the proposal map.
 
 ``exp`` and ``log`` are the C library's here and in numpy's scalar loops (equal where numpy has
 no SIMD loop for them: the tests compare with a 1e-12 tolerance).
@@ -25,12 +27,12 @@ import numpy as np
 from numba import njit
 
 from .appearance import colour_loglik, ncc
-from .sampling import corner_float, fma_lerp, lerp_fma, pairwise_sum
+from .sampling import corner_float, fma_lerp, lerp_fma
 
-__all__ = ["ar2_predict", "ar2_logpdf", "box_loglik", "grid_points", "map_sample"]
+__all__ = ["ar2_predict", "ar2_logpdf", "box_loglik", "grid_points", "map_sample", "map_scores", "lis_predict",
+           "lis_weigh"]
 
 _LOG2PI = float(np.log(2.0 * np.pi))  # as vistrack.gaussian and vistrack.proposals.grid
-_LN2 = 0.693147180559945309417232121458176568
 
 
 @njit(cache=True)
@@ -106,33 +108,22 @@ def _nanmax(top, x):
     return top
 
 
-@njit(cache=True, forceinline=True)
-def _logaddexp(x, y):
-    """numpy's ``logaddexp`` of two float64 scalars."""
-    if x == y:
-        return x + _LN2
-    d = x - y
-    if d > 0:
-        return x + math.log1p(math.exp(-d))
-    if d <= 0:
-        return y + math.log1p(math.exp(d))
-    return d
-
-
 @njit(cache=True)
-def _log_q_rows(qmap, u0, v0, border, uw, vw, temper, log_keep, log_floor, out):
-    """The box's ``proposal_log_q`` into ``out (N, G)``: the map ``qmap (H, W, 1)`` float32 read at
-    ``(uw - u0, vw - v0)`` as ``cv2.remap`` reads it (``border`` outside), less each row's maximum,
-    times ``temper``, mixed with a flat floor: ``logaddexp(val + log_keep, log_floor)``."""
+def _q_rows(qmap, u0, v0, step, border, uw, vw, keep, floor, out):
+    """The box's ``proposal_log_q`` before its ``log``, into ``out (N, G)``: the map ``qmap (H, W, 1)``
+    float32 (``exp`` of the tempered scores) read at ``((uw - u0) / step, (vw - v0) / step)`` as
+    ``cv2.remap`` reads it (``border`` outside), over each row's maximum (1 where that is not
+    positive), mixed with a flat floor: ``keep val / max + floor``."""
     h, w = qmap.shape[0], qmap.shape[1]
     nan, border = np.float32(np.nan), np.float32(border)
     for n in range(uw.shape[0]):
         for j in range(uw.shape[1]):
-            ix, iy, a, b = corner_float(np.float32(uw[n, j] - u0), np.float32(vw[n, j] - v0))
+            ix, iy, a, b = corner_float(np.float32((uw[n, j] - u0) / step), np.float32((vw[n, j] - v0) / step))
             if 0 <= ix < w - 1 and 0 <= iy < h - 1:
                 y0_, x0_ = np.uint64(iy), np.uint64(ix)
                 y1_, x1_ = y0_ + np.uint64(1), x0_ + np.uint64(1)
-                s = fma_lerp(qmap[y0_, x0_, 0], qmap[y0_, x1_, 0], qmap[y1_, x0_, 0], qmap[y1_, x1_, 0], a, b)
+                s = fma_lerp(qmap[y0_, x0_, 0], qmap[y0_, x1_, 0], qmap[y1_, x0_, 0],
+                             qmap[y1_, x1_, 0], a, b)
             else:
                 s = lerp_fma(qmap, ix, iy, a, b, 0, border, nan)
             out[n, j] = np.float64(s)
@@ -140,49 +131,43 @@ def _log_q_rows(qmap, u0, v0, border, uw, vw, temper, log_keep, log_floor, out):
         for j in range(1, uw.shape[1]):
             top = _nanmax(top, out[n, j])
         for j in range(uw.shape[1]):
-            out[n, j] = _logaddexp(temper * (out[n, j] - top) + log_keep, log_floor)
+            out[n, j] = keep * (out[n, j] / top) + floor if top > 0 else keep + floor
     return out
 
 
 @njit(cache=True)
-def map_sample(states, sig, offsets, log_g_unit, cell, uw, vw, qmap, u0, v0, border, temper, log_keep, log_floor,
-               gumbel, uniforms, shift_u, z_u, log_alpha, log_q):
+def map_sample(states, sig, offsets, g_unit, log_g_unit, cell, uw, vw, qmap, u0, v0, step, border, keep, floor,
+               draws, z_u, log_alpha, log_q):
     """:meth:`MapProposal.sample <vistrack.proposals.grid.MapProposal.sample>` with the box's map
-    ``log q`` (``qmap`` with ``qmap.shape[0] == 0``: a flat ``log q = 0``): the cell of each row
-    drawn by Gumbel-max from ``gumbel (N, G)`` (``uniforms``: the uniforms ``U`` the Gumbel draws
-    ``-log(-log(1 - U))`` are made of, else the draws), the point uniform in it from
-    ``shift_u (N, 2)``; writes ``z_u (N, 2)`` (frame px), ``log_alpha (N,)`` and ``log_q (N,)``."""
+    ``q`` (``qmap`` with ``qmap.shape[0] == 0``: a flat ``q = 1``): the cell of each row drawn by
+    inversion of the cumulative sums of ``q_k g_k`` (``g_unit = exp(log_g_unit)``) at ``draws[n, 0]``,
+    the point uniform in it from ``draws[n, 1:3]``; writes ``z_u (N, 2)`` (frame px), ``log_alpha (N,)``
+    and ``log_q (N,)``."""
     n_rows, g = uw.shape
-    lq = np.zeros((n_rows, g))
+    q = np.ones((n_rows, g))
     if qmap.shape[0] > 0:
-        _log_q_rows(qmap, u0, v0, border, uw, vw, temper, log_keep, log_floor, lq)
-    ex = np.empty(g)
+        _q_rows(qmap, u0, v0, step, border, uw, vw, keep, floor, q)
+    cum = np.empty(g)
     for n in range(n_rows):
         two_log_sig = 2 * math.log(sig[n])
-        best, j = -np.inf, -1
-        top = -np.inf
+        total = 0.0
         for k in range(g):
-            lq[n, k] = (lq[n, k] + log_g_unit[k]) - two_log_sig
-            gk = (0.0 - 1.0 * math.log(-math.log(1.0 - gumbel[n, k]))) if uniforms else gumbel[n, k]
-            v = lq[n, k] + gk
-            if j < 0 or v > best or (np.isnan(v) and not np.isnan(best)):
-                best, j = v, k
-            top = _nanmax(top, lq[n, k])
-        shift = top if np.isfinite(top) else 0.0
+            total += q[n, k] * g_unit[k]
+            cum[k] = total
+        target, j = draws[n, 0] * total, g - 1
         for k in range(g):
-            ex[k] = math.exp(lq[n, k] - shift)
-        lse = shift + math.log(pairwise_sum(ex, 0, g))
-        if top == np.inf:
-            lse = np.inf
+            if cum[k] > target:
+                j = k
+                break
         dd = 0.0
         for c in range(2):
-            zc = (states[n, c] + sig[n] * offsets[j, c]) + sig[n] * cell * (shift_u[n, c] - 0.5)
+            zc = (states[n, c] + sig[n] * offsets[j, c]) + sig[n] * cell * (draws[n, 1 + c] - 0.5)
             z_u[n, c] = zc
             r = (states[n, c] - zc) / sig[n]
             dd = r * r if c == 0 else dd + r * r
         log_g = -0.5 * dd - _LOG2PI - two_log_sig
-        log_alpha[n] = lse + 2 * math.log(cell * sig[n]) + log_g
-        log_q[n] = lq[n, j]
+        log_alpha[n] = (math.log(total) - two_log_sig) + 2 * math.log(cell * sig[n]) + log_g
+        log_q[n] = (math.log(q[n, j]) + log_g_unit[j]) - two_log_sig
     return z_u
 
 
@@ -204,3 +189,39 @@ def map_scores(ncc, s_in, s_out, g, area_in, area_ring, lam_t, lam_c, out):
             o = s_out[i - g, j - g] if i >= g and j >= g else np.float32(0.0)
             out[i, j] = lt * (v - one) + lc * (s_in[i, j] / ai - (o - s_in[i, j]) / ar)
     return out
+
+
+@njit(cache=True)
+def lis_predict(prev, damping, sigma, noise, window_sd, offsets, x0, y0, f, x, sig, uw, vw, span):
+    """The first half of the box's LIS proposal step (``LIS.propose`` with :class:`MapProposal
+    <vistrack.proposals.grid.MapProposal>`): the prediction ``x (N, 6)`` (:func:`ar2_predict`),
+    the window stds ``sig (N,)`` (``Box.window_std``: ``window_sd e^{l}``) and the grid points
+    and their span (:func:`grid_points`). Returns ``span``."""
+    ar2_predict(prev, damping, sigma, noise, x)
+    for n in range(x.shape[0]):
+        sig[n] = window_sd * math.exp(x[n, 2])
+    return grid_points(x, sig, offsets, x0, y0, f, uw, vw, span)
+
+
+@njit(cache=True)
+def lis_weigh(prev, x, sig, offsets, g_unit, log_g_unit, cell, uw, vw, qmap, u0, v0, step, border, keep, floor,
+              draws, damping, sigma, size0, ii, texture, x0, y0, f, ring, bg_weight, q, bp, lam_c, kappa, gx, gy,
+              template, lam_t, z, log_incr, ll):
+    """The second half: ``z (N, 6)`` drawn from the map (:func:`map_sample`), ``log r`` of ``z`` into
+    ``ll`` (:func:`box_loglik`) and LIS's log increment ``log α + log r - log q + log K(z|prev) -
+    log K(x|prev)`` (``-inf`` where ``log α`` is not finite) into ``log_incr``."""
+    n = x.shape[0]
+    z_u, log_alpha, log_q = np.empty((n, 2)), np.empty(n), np.empty(n)
+    map_sample(x, sig, offsets, g_unit, log_g_unit, cell, uw, vw, qmap, u0, v0, step, border, keep, floor, draws,
+               z_u, log_alpha, log_q)
+    for i in range(n):
+        for k in range(x.shape[1]):
+            z[i, k] = x[i, k]
+        z[i, 0], z[i, 1] = z_u[i, 0], z_u[i, 1]
+    box_loglik(z, size0, ii, texture, x0, y0, f, ring, bg_weight, q, bp, lam_c, kappa, gx, gy, template, lam_t, ll)
+    lz = ar2_logpdf(z, prev, damping, sigma, np.empty(n))
+    lx = ar2_logpdf(x, prev, damping, sigma, np.empty(n))
+    for i in range(n):
+        v = (((log_alpha[i] + ll[i]) - log_q[i]) + lz[i]) - lx[i]
+        log_incr[i] = v if np.isfinite(log_alpha[i]) else -np.inf
+    return z

@@ -94,17 +94,24 @@ class AppearanceFrame:
         #: the region ``(x0, y0, x1, y1)`` in frame pixels
         self.roi = (x0, y0, x1, y1)
         self.image = crop
-        self.grey = crop if crop.ndim == 2 else cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY)
-        self.grey_f = self.grey.astype(np.float32)
-        gx = cv2.Sobel(self.grey_f, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT)
-        gy = cv2.Sobel(self.grey_f, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REFLECT)
-        self.texture = cv2.merge([self.grey_f, gx, gy])  # grey level and its gradient, for the template
-        self.labels = colour_bins(crop, grey)
-        self.n_bins = n_colour_bins(grey)
-        self.ii = bin_integrals(self.labels, self.n_bins)
         #: the LIS proposal map of this frame (:meth:`Appearance.proposal_map`, ``()`` where there is
         #: none), set by the box model on first use
         self.proposal = None
+        self.grey = crop if crop.ndim == 2 else cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY)
+        self.n_bins = n_colour_bins(grey)
+        if kernels.use() and not grey and crop.ndim == 3:
+            from ..kernels.box_frame import frame_features
+
+            self.texture, self.labels = np.empty(crop.shape, np.float32), np.empty(crop.shape[:2], np.uint8)
+            self.ii = frame_features(self.grey, cv2.cvtColor(crop, cv2.COLOR_BGR2HSV), self.n_bins, self.texture,
+                                     self.labels)
+            return
+        grey_f = self.grey.astype(np.float32)
+        gx = cv2.Sobel(grey_f, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT)
+        gy = cv2.Sobel(grey_f, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REFLECT)
+        self.texture = cv2.merge([grey_f, gx, gy])  # grey level and its gradient, for the template
+        self.labels = colour_bins(crop, grey)
+        self.ii = bin_integrals(self.labels, self.n_bins)
 
     def to_work(self, x, y):
         """Frame pixel coordinates to working coordinates (same continuous convention)."""
@@ -286,6 +293,8 @@ class Appearance:
         confident frame; returns whether it adapted."""
         if self.adapt_rate <= 0:
             return False
+        if kernels.use():
+            return self._adapt_compiled(obs, np.ascontiguousarray(box, float))
         b = np.asarray(box, float)[None]
         v = self.patches(obs, b)[0]
         if not float(v @ self.template) >= self.adapt_min_ncc:
@@ -298,53 +307,27 @@ class Appearance:
         self.colour.adapt(inner[0], a / 2)
         return True
 
-    # -- maps for local moves ------------------------------------------------------------
-    def proposal_map(self, obs, w, h, span=None):
-        """``log q̃`` over the working region for a box of size ``(w, h)`` (frame px) centred at
-        each working pixel: ``λ_t (ncc - 1)`` from ``cv2.matchTemplate`` of the template plus
-        ``λ_c`` times the back-projection's contrast between the box and its ring. Returns
-        ``(map (H', W'), u0, v0)`` with map pixel ``(i, j)`` at working centre ``(u0 + j, v0 + i)``.
-        ``span = (u_min, u_max, v_min, v_max)``: when centres in that working range read (bilinearly)
-        inside the whole map, only the part they need, with the template's and its ring's reach;
-        the values there are those of the whole region's map (up to the filters' float sums)."""
-        f = obs.f
-        tw, th = max(2, int(round(w * f))), max(2, int(round(h * f)))
-        g = max(1, int(round(self.ring * 0.5 * (tw + th))))
-        gh, gw = obs.grey.shape
-        r0, r1, c0, c1 = 0, gh, 0, gw
-        u_lo, u_hi, v_lo, v_hi = (np.floor(a - b / 2) for a, b in zip(span, (tw, tw, th, th))) if span else (-1,) * 4
-        if u_lo >= 0 and u_hi + 1 <= gw - tw and v_lo >= 0 and v_hi + 1 <= gh - th:
-            # every read inside the whole map (none takes its minimum as the border value): the part read
-            c0 = int(min(max(u_lo - g - 1, 0), gw))
-            c1 = int(min(max(u_hi + tw + g + 3, c0), gw))
-            r0 = int(min(max(v_lo - g - 1, 0), gh))
-            r1 = int(min(max(v_hi + th + g + 3, r0), gh))
-        if tw >= c1 - c0 or th >= r1 - r0:
-            return None
-        my, mx = self.grid_shape
-        m = my * mx
-        img = np.dstack([self.template[:m].reshape(my, mx), self.template[m:].reshape(my, mx, 2)])
-        t = cv2.resize(img.astype(np.float32), (tw, th), interpolation=cv2.INTER_LINEAR)
-        ncc = cv2.matchTemplate(obs.texture[r0:r1, c0:c1], t, cv2.TM_CCOEFF_NORMED)
-        bp = self.backprojection[obs.labels[r0:r1, c0:c1]]
-        s_in = cv2.boxFilter(bp, -1, (tw, th), normalize=False, anchor=(0, 0), borderType=cv2.BORDER_CONSTANT)
-        s_out = cv2.boxFilter(bp, -1, (tw + 2 * g, th + 2 * g), normalize=False, anchor=(0, 0),
-                              borderType=cv2.BORDER_CONSTANT)
-        hh, ww = ncc.shape
-        area_ring = (tw + 2 * g) * (th + 2 * g) - tw * th
-        if kernels.use() and all(type(v) in (int, float) for v in (self.lambda_template, self.lambda_colour)):
-            from ..kernels.box import map_scores
+    def _adapt_compiled(self, obs, box):
+        """:meth:`adapt` in one compiled call (:func:`~vistrack.kernels.box_frame.adapt_template`)."""
+        from ..kernels.box_frame import adapt_template
 
-            out = map_scores(ncc, s_in, s_out, g, tw * th, area_ring, self.lambda_template, self.lambda_colour,
-                             np.empty((hh, ww), np.float32))
-            return out, c0 + tw / 2.0, r0 + th / 2.0
-        inside = s_in[:hh, :ww] / (tw * th)
-        # the ring box of the template at (i, j) starts at (i - g, j - g): shifted by g, zeros before
-        out_pad = np.zeros((hh, ww), s_out.dtype)
-        out_pad[g:, g:] = s_out[:max(hh - g, 0), :max(ww - g, 0)]
-        ring = (out_pad - s_in[:hh, :ww]) / area_ring
-        log_q = self.lambda_template * (np.nan_to_num(ncc) - 1.0) + self.lambda_colour * (inside - ring)
-        return log_q.astype(np.float32), c0 + tw / 2.0, r0 + th / 2.0
+        new, counts = np.empty_like(self.template), np.empty(obs.n_bins)
+        ncc = adapt_template(obs.texture, obs.ii, box, *self.grid_axes, float(obs.x0), float(obs.y0), float(obs.f),
+                             self.template, float(self.adapt_rate), float(self.adapt_min_ncc), new, counts)
+        if not ncc >= self.adapt_min_ncc:
+            return False
+        self.template = new
+        self.colour.adapt(counts, self.adapt_rate / 2)
+        return True
+
+    # -- maps for local moves ------------------------------------------------------------
+    def proposal_map(self, obs, w, h, span=None, stride=1):
+        """``log q̃`` over the working region for a box of size ``(w, h)`` (frame px) centred at each
+        working pixel, from the template and the back-projection's contrast
+        (:func:`~vistrack.models.appearance_map.proposal_map`, which documents the arguments)."""
+        from .appearance_map import proposal_map
+
+        return proposal_map(self, obs, w, h, span, stride)
 
     def mean_shift(self, obs, boxes, iterations=3):
         """Mean shift of box centres on the back-projection (Comaniciu, Ramesh and Meer 2000):
@@ -364,3 +347,4 @@ class Appearance:
             u = np.where(ok, s[:, 1] / np.where(ok, s[:, 0], 1.0), u)
             v = np.where(ok, s[:, 2] / np.where(ok, s[:, 0], 1.0), v)
         return np.stack([u / obs.f + obs.x0, v / obs.f + obs.y0], axis=1)
+

@@ -17,7 +17,9 @@ Local moves (thesis 001, §4.3–4.5)
     (:meth:`Appearance.mean_shift`), the move rejected when it goes further than ``λ``
     (half the box's mean side) or lowers ``r`` (eq. 4.1). ``lis``: a grid of translations
     about the prediction with ``q`` from one per-frame map
-    (:meth:`Appearance.proposal_map`; :class:`~vistrack.proposals.MapProposal`).
+    (:meth:`Appearance.proposal_map`; :class:`~vistrack.proposals.MapProposal`; the cell
+    drawn by inversion of the cumulative ``q g``, the LIS step compiled in two calls:
+    :meth:`lis_step`).
     ``lls``: the exact ``r`` on a grid of the window (:class:`~vistrack.proposals.Window`).
 Lost
     ``visible=0`` where ``log r`` at the estimate falls far below its running level, the
@@ -61,6 +63,11 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         Std of ``p_0`` on the centre (share of ``sqrt(w_0 h_0)``) and on the log-scale.
     window : float
         LIS/LLS window std as a multiple of the innovation's std.
+    map_stride : int
+        The LIS proposal map's step in working pixels (:meth:`Appearance.proposal_map`): 2 makes
+        ``cv2.matchTemplate`` about 4x cheaper (0.46 -> 0.12 ms on girl_otb) but lowered the success
+        AUC on the real clips (girl 0.650 -> 0.632, 12 seeds; hand 0.44 -> 0.39, 24 and 36 seeds; car4
+        0.819 -> 0.813): 1 by default (``docs/experiments.md``, speed, third pass).
     **appearance
         Passed to :class:`~vistrack.models.appearance.Appearance`.
     """
@@ -72,7 +79,7 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
     collapse_options = {"drop": 55.0}
 
     def __init__(self, frame, box, *, sigma_xy=0.06, sigma_scale=0.002, damping=0.5, prior_std=(0.04, 0.02),
-                 window=2.5, **appearance):
+                 window=2.5, map_stride=1, **appearance):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
             raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
@@ -86,6 +93,7 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         self.init_pose = np.array([x + w / 2, y + h / 2, 0.0])
         self.prior_mean = np.concatenate([self.init_pose, self.init_pose])
         self.window = float(window)
+        self.map_stride = int(map_stride)
         self.blob_cell = 0.25 * side  # the colour-blob proposal's cell (frame px)
         self.learn_blob(frame, _inner_ellipse(frame.shape[:2], (x, y, w, h)))
 
@@ -173,6 +181,12 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         if particles is None:
             states = self.prior_mean[None]
             reach = 4 * self.prior_std[0] * (1 + self.window)
+        elif kernels.use():
+            from ..kernels.box_frame import predicted_roi
+
+            roi = predicted_roi(np.ascontiguousarray(particles.states, float), self.damping, self.size0,
+                                4 * self.sigma[0], 1 + self.window, float(self.app.ring), np.empty(4, np.int64))
+            return self.app.frame(maps.frame, tuple(int(v) for v in roi))
         else:
             states = self.predict_mean(particles.states)
             reach = 4 * self.sigma[0] * np.exp(states[:, 2].max()) * (1 + self.window)
@@ -200,7 +214,8 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         base = self.window * (self.prior_std[0] if is_prior(kernel) else self.sigma[0])
         return base if states is None else base * np.exp(states[:, 2])
 
-    #: the LIS map's tempering and flat share: ``log q = logaddexp(t (m - max) + log(1 - s), log s)``
+    #: the LIS map's tempering and flat share: ``q = (1 - s) e / max e + s`` with ``e = exp(t (m - max m))``
+    #: the tempered map read bilinearly and ``max e`` over each particle's grid (``(t, s)``)
     proposal_tempering = (0.5, 0.05)
 
     def proposal_work(self, obs):
@@ -208,30 +223,58 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         return float(obs.x0), float(obs.y0), float(obs.f)
 
     def proposal_qmap(self, obs, states, span):
-        """The LIS proposal map of the frame ``(map (H', W') float32, u0, v0)`` (map pixel ``(i, j)`` at
-        working centre ``(u0 + j, v0 + i)``) or ``()``: :meth:`Appearance.proposal_map` at the mean
-        size of ``states``, over the working ``span`` ``(u_min, u_max, v_min, v_max)`` the points read;
-        computed on the first call of the frame and kept on ``obs``."""
+        """The LIS proposal map of the frame ``(e (H', W') float32, u0, v0, step)`` (map pixel ``(i, j)``
+        at working centre ``(u0 + step j, v0 + step i)``) or ``()``: ``exp(t (m - max m))`` of
+        :meth:`Appearance.proposal_map` ``m`` at the mean size of ``states`` and stride
+        :attr:`map_stride`, over the working ``span`` ``(u_min, u_max, v_min, v_max)`` the points read
+        (:attr:`proposal_tempering`); computed on the first call of the frame and kept on ``obs``."""
         if obs.proposal is None:
             w, h = self.size0 * np.exp(np.mean(states[:, 2]))
-            obs.proposal = self.app.proposal_map(obs, w, h, span=span) or ()
+            pm = self.app.proposal_map(obs, w, h, span=span, stride=self.map_stride)
+            if pm:
+                m = pm[0]
+                pm = (np.exp(np.float32(self.proposal_tempering[0]) * (m - m.max())),) + tuple(pm[1:])
+            obs.proposal = pm or ()
         return obs.proposal
 
     def proposal_log_q(self, obs, states, points):
         """The map's ``log q`` at centres ``points (N, G, 2)`` (frame px), for the LIS proposal:
-        :meth:`proposal_qmap`, tempered by one half and mixed with 5 % of a flat floor (a
-        defensive share; :attr:`proposal_tempering`)."""
+        :meth:`proposal_qmap` read bilinearly, over its maximum on each row, mixed with 5 % of a
+        flat floor (a defensive share; :attr:`proposal_tempering`)."""
         u, v = obs.to_work(points[..., 0], points[..., 1])
         qmap = self.proposal_qmap(obs, states, (u.min(), u.max(), v.min(), v.max()))
         n, g, _ = points.shape
         if not qmap:
             return np.zeros((n, g))
-        m, u0, v0 = qmap
-        lo = float(m.min())
-        t, floor = self.proposal_tempering
-        val = remap_points(m, u - u0, v - v0, border=lo).astype(float)
-        val = t * (val - val.max(axis=1, keepdims=True))
-        return np.logaddexp(val + np.log(1 - floor), np.log(floor))
+        e, u0, v0, step = qmap
+        floor = self.proposal_tempering[1]
+        val = remap_points(e, (u - u0) / step, (v - v0) / step, border=float(e.min())).astype(float)
+        top = val.max(axis=1, keepdims=True)
+        return np.log((1 - floor) * np.divide(val, top, out=np.ones_like(val), where=top > 0) + floor)
+
+    def lis_step(self, prev, obs, rng, proposal):
+        """``LIS.propose`` with ``proposal`` (this model's :class:`MapProposal` of ``K``) in two compiled
+        calls (:func:`~vistrack.kernels.box.lis_predict`, :func:`~vistrack.kernels.box.lis_weigh`) about
+        the proposal map: the same draws in the same order and the same arithmetic as the calls one
+        by one. Returns ``(z, log_incr, x, log r(z))``."""
+        from ..kernels.box import lis_predict, lis_weigh
+
+        prev = np.ascontiguousarray(prev, float)
+        n, g = len(prev), len(proposal.offsets)
+        x, sig, uw, vw = np.empty((n, 6)), np.empty(n), np.empty((n, g)), np.empty((n, g))
+        x0, y0, f = self.proposal_work(obs)
+        span = lis_predict(prev, self.damping, self.sigma, rng.standard_normal((n, 3)), self.window * self.sigma[0],
+                           proposal.offsets, x0, y0, f, x, sig, uw, vw, np.empty(4))
+        qmap = self.proposal_qmap(obs, x, tuple(span))
+        m, u0, v0, step = qmap if qmap else (np.zeros((0, 1), np.float32), 0.0, 0.0, 1.0)
+        floor, app, c = self.proposal_tempering[1], self.app, self.app.colour
+        z, log_incr, ll = np.empty((n, 6)), np.empty(n), np.empty(n)
+        lis_weigh(prev, x, sig, proposal.offsets, proposal.g_unit, proposal.log_g_unit, float(proposal.cell), uw, vw,
+                  m[..., None], float(u0), float(v0), float(step), float(m.min()) if qmap else 0.0, 1.0 - floor,
+                  float(floor), rng.random((n, 3)), self.damping, self.sigma, self.size0, obs.ii, obs.texture, x0, y0,
+                  f, float(app.ring), c.bg_weight, c.q, c._bp, float(c.lambda_colour), float(c.kappa), *app.grid_axes,
+                  app.template, float(app.lambda_template), z, log_incr, ll)
+        return z, log_incr, x, ll
 
     def lis_proposal(self, kernel=None):
         """LIS's proposal for a step with ``kernel``: the colour/template map on a grid."""

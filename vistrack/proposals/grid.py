@@ -11,10 +11,15 @@ inside it, so the sampling density is ``h(Z) = q(c_j) g(σ o_j) / alpha_hat`` wi
 ``log_alpha = log alpha_hat + log g(X - Z)`` and ``log_q = log q(c_j) + log g(σ o_j)``,
 however coarse the grid or rough the map.
 
-With the compiled kernels (:mod:`vistrack.kernels`), a model whose ``log q`` is a map read
+The cell is drawn by inversion of each row's cumulative ``q g`` with one uniform per particle
+(``rng.random((N, 3))``: the cell, then the point in it; before the third pass of issue 22,
+Gumbel-max with one draw per cell: the same distribution, 81 times the ``log`` pairs).
+
+With the compiled kernels (:mod:`vistrack.kernels`), a model whose ``q`` is a map read
 bilinearly (``proposal_work``, ``proposal_qmap`` and ``proposal_tempering``, as the box model's)
 is sampled in two compiled calls (:func:`~vistrack.kernels.box.grid_points`,
-:func:`~vistrack.kernels.box.map_sample`) from the same draws.
+:func:`~vistrack.kernels.box.map_sample`) from the same draws, and a model with ``lis_step``
+runs LIS's whole proposal step itself (:meth:`MapProposal.propose`).
 """
 
 from __future__ import annotations
@@ -22,9 +27,10 @@ from __future__ import annotations
 import numpy as np
 
 from .. import kernels
+from ..models.kernel import Transition
 from ..particles import logsumexp
 
-__all__ = ["MapProposal", "categorical_rows"]
+__all__ = ["MapProposal", "categorical_rows", "inverse_cdf_rows"]
 
 _LOG2PI = np.log(2 * np.pi)
 
@@ -32,6 +38,14 @@ _LOG2PI = np.log(2 * np.pi)
 def categorical_rows(log_p, rng):
     """One index per row of ``log_p (N, K)`` drawn ∝ ``exp(log_p)`` (Gumbel-max)."""
     return np.argmax(log_p + rng.gumbel(size=log_p.shape), axis=1)
+
+
+def inverse_cdf_rows(log_p, u):
+    """One index per row of ``log_p (N, K)`` drawn ∝ ``exp(log_p)`` by inversion: the first ``k``
+    whose cumulative sum exceeds ``u (N,)`` (uniforms) times the row's total."""
+    p = np.exp(log_p - log_p.max(axis=1, keepdims=True))
+    c = np.cumsum(p, axis=1)
+    return np.minimum(np.sum(c <= u[:, None] * c[:, -1:], axis=1), log_p.shape[1] - 1)
 
 
 class MapProposal:
@@ -61,11 +75,13 @@ class MapProposal:
         self.offsets = np.stack(np.meshgrid(axis, axis), axis=-1).reshape(-1, 2)  # (G, 2), unit std
         self.cell = cell
         self.log_g_unit = -0.5 * np.sum(self.offsets**2, axis=1) - _LOG2PI
+        self.g_unit = np.exp(self.log_g_unit)
 
     def sample(self, x, obs, rng, prev=None):
         """Draw ``z (N, d)`` about the predictions ``x (N, d)`` from the map on the grid (module
         docstring); returns ``(z, log_alpha (N,), log_q (N,))`` for LIS's weight. ``prev`` is unused.
-        """
+        The draws: ``rng.random((N, 3))``, the cell by inversion of each row's cumulative ``q g``
+        (:func:`inverse_cdf_rows`), then the point in the cell."""
         model = self.model
         if kernels.use() and hasattr(model, "proposal_qmap"):
             return self._sample_map(x, obs, rng)
@@ -73,18 +89,27 @@ class MapProposal:
         sig = model.window_std(x, self.kernel)[:, None]  # (N, 1)
         pts = u[:, None, :] + sig[..., None] * self.offsets[None]
         log_qg = model.proposal_log_q(obs, x, pts) + self.log_g_unit - 2 * np.log(sig)
-        j = categorical_rows(log_qg, rng)
-        z_u = pts[np.arange(len(u)), j] + sig * self.cell * (rng.random(u.shape) - 0.5)
+        draws = rng.random((len(u), 3))
+        j = inverse_cdf_rows(log_qg, draws[:, 0])
+        z_u = pts[np.arange(len(u)), j] + sig * self.cell * (draws[:, 1:] - 0.5)
         d = (u - z_u) / sig
         log_g = -0.5 * np.sum(d * d, axis=1) - _LOG2PI - 2 * np.log(sig[:, 0])
         log_alpha = logsumexp(log_qg, axis=1) + 2 * np.log(self.cell * sig[:, 0]) + log_g
         log_q = log_qg[np.arange(len(u)), j]
         return self.with_local(x, z_u), log_alpha, log_q
 
+    def propose(self, prev, obs, rng, kernel):
+        """LIS's whole proposal step (:meth:`LIS.propose <vistrack.filters.lis.LIS.propose>`) where the
+        model fuses it with the compiled kernels (``model.lis_step(prev, obs, rng, proposal)``, the box
+        model's) for its own ``K``; ``None`` otherwise (the filter then calls the parts one by one)."""
+        fused = getattr(self.model, "lis_step", None)
+        if fused is None or not kernels.use() or type(kernel) is not Transition or kernel.model is not self.model:
+            return None
+        return fused(prev, obs, rng, self)
+
     def _sample_map(self, x, obs, rng):
-        """:meth:`sample` for a model whose ``log q`` is its map (module docstring), compiled: the
-        same draws (Gumbel-max from ``rng.random``, as ``rng.gumbel`` makes them from the same
-        uniforms, then the shift in the cell), the same arithmetic."""
+        """:meth:`sample` for a model whose ``q`` is its map read bilinearly (module docstring),
+        compiled: the same draws, ``q g`` summed in the linear domain."""
         from ..kernels.box import grid_points, map_sample
 
         model = self.model
@@ -95,16 +120,10 @@ class MapProposal:
         uw, vw = np.empty((n, g)), np.empty((n, g))
         span = grid_points(x, sig, self.offsets, x0, y0, f, uw, vw, np.empty(4))
         qmap = model.proposal_qmap(obs, x, tuple(span))
-        m, u0, v0 = qmap if qmap else (np.zeros((0, 1), np.float32), 0.0, 0.0)
-        t, floor = model.proposal_tempering
-        state = rng.bit_generator.state
-        gumbel = rng.random((n, g))
-        uniforms = bool(gumbel.all())
-        if not uniforms:  # rng.gumbel redraws a uniform of 0 (p = 2^-53): take its draws instead
-            rng.bit_generator.state = state
-            gumbel = rng.gumbel(size=(n, g))
+        m, u0, v0, step = qmap if qmap else (np.zeros((0, 1), np.float32), 0.0, 0.0, 1.0)
+        floor = model.proposal_tempering[1]
         z_u, log_alpha, log_q = np.empty((n, 2)), np.empty(n), np.empty(n)
-        map_sample(x, sig, self.offsets, self.log_g_unit, float(self.cell), uw, vw, m[..., None], float(u0), float(v0),
-                   float(m.min()) if qmap else 0.0, float(t), float(np.log(1 - floor)), float(np.log(floor)),
-                   gumbel, uniforms, rng.random((n, 2)), z_u, log_alpha, log_q)
+        map_sample(x, sig, self.offsets, self.g_unit, self.log_g_unit, float(self.cell), uw, vw, m[..., None],
+                   float(u0), float(v0), float(step), float(m.min()) if qmap else 0.0, 1.0 - floor, float(floor),
+                   rng.random((n, 3)), z_u, log_alpha, log_q)
         return self.with_local(x, z_u), log_alpha, log_q
