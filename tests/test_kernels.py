@@ -166,3 +166,20 @@ def test_warm_up_leaves_the_track_as_it_was(contour_clip):
         stepper = FrameStepper(filt, 30, np.random.default_rng(0))
         b = [stepper.step(i, f).particles.states.copy() for (i, f), _ in zip(contour_clip.source, range(5))]
     np.testing.assert_array_equal(np.array(b), np.array(a))
+
+
+def test_every_kernel_releases_the_gil():
+    """``vistrack run`` decodes in a thread beside the tracking: every compiled entry point must let
+    it run (the private and inlined helpers run inside an entry point, which has released the GIL
+    already)."""
+    import importlib
+
+    from numba.core.registry import CPUDispatcher
+
+    names = ["appearance", "bearings", "box", "box_frame", "contour", "contour_search", "plate", "plate_scan", "sampling"]
+    kernels = [(m, k, f) for m in names for k, f in vars(importlib.import_module(f"vistrack.kernels.{m}")).items()
+               if isinstance(f, CPUDispatcher) and f.__module__ == f"vistrack.kernels.{m}"]
+    assert len([k for _, k, _ in kernels if not k.startswith("_")]) > 25
+    held = [f"{m}.{k}" for m, k, f in kernels
+            if not (k.startswith("_") or f.targetoptions.get("forceinline") or f.targetoptions.get("nogil"))]
+    assert held == []

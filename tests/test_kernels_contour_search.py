@@ -105,12 +105,3 @@ def test_grid_tables_equal_the_direct_sum():
     args = (np.float32(2.0), np.float32(off[0] - 0.5), nrm, offsets, kern, np.float32(31.0))
     ref = direct(gn, *args, np.empty((12, len(offsets)), np.float32))
     np.testing.assert_array_equal(grid(gn, *args, np.empty_like(ref)), ref)
-
-
-def test_contour_kernels_release_the_gil():
-    """``vistrack run`` decodes in a thread beside the tracking: the contour's kernels must let it run."""
-    from vistrack.kernels import contour, contour_search
-
-    for fn in (contour.profiles, contour.loglik, contour.loglik_profiles, contour.grid, contour.nearest_edge,
-               contour.place, contour_search.search_lines, contour_search.accept):
-        assert fn.targetoptions.get("nogil") is True, fn.__name__

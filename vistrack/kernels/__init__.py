@@ -18,7 +18,8 @@ as the reference and as the fallback where numba is missing:
   colour term and template correlation;
 - :mod:`~vistrack.kernels.bearings`: the bearings ξ proposal's move and first stage.
 
-Kernels are compiled on first use and cached on disk (``cache=True``; loading them takes 0.1–1 s,
+Every entry point releases the GIL (``nogil``): the decoding thread of ``vistrack run`` runs beside
+them. Kernels are compiled on first use and cached on disk (``cache=True``; loading them takes 0.1–1 s,
 which :func:`vistrack.tracking.warm_up` does before a run's clock starts). Hot loops pass only
 scalars to helper functions: numba counts references on every call that passes an array, which
 cost more than the sampling itself. :func:`use` says whether

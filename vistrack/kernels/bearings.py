@@ -21,7 +21,7 @@ __all__ = ["xi_move", "xi_look_ahead"]
 _LOG_SQRT_2PI = 0.5 * math.log(2 * math.pi)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _logaddexp(x, y):
     hi = max(x, y)
     return hi + math.log1p(math.exp(min(x, y) - hi))
@@ -31,7 +31,7 @@ def _logaddexp(x, y):
 _parts = njit(cache=True)(laplace_parts)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _conditional(x, prev, i, k, ck, sk, idx, prior, s_k, first):
     """``a, u, m, s`` of ``XiProposal.frame`` for particle ``i``, ship ``k``; ``idx`` the
     ``(4, M)`` indices of x1, x3, v1, v3, ``prior`` the ``(4, M)`` prior means and variances of
@@ -48,7 +48,7 @@ def _conditional(x, prev, i, k, ck, sk, idx, prior, s_k, first):
     return a, u, qy * ck - qx * sk, s_k
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def xi_move(x, prev, c, sn, w0, w1, gz, gam, s_k, first, idx, prior):
     """``(z, log_alpha, log_q)`` of ``XiProposal.sample``: ``x, prev (N, 4M)``, ``c, sn (M,)`` the
     rays, ``w0, w1 (N, M)`` uniforms, ``gz (N, M)`` their normal quantiles ``ndtri(w1)``."""
@@ -85,7 +85,7 @@ def xi_move(x, prev, c, sn, w0, w1, gz, gam, s_k, first, idx, prior):
     return z, log_alpha, log_q
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def xi_look_ahead(prev, c, sn, gam, s_k, idx):
     """``XiProposal.look_ahead`` under ``K``: ``log p̂(y | Z_{t-1}) (N,)`` for ``prev (N, 4M)``."""
     n, nm = prev.shape[0], c.shape[0]

@@ -35,7 +35,7 @@ __all__ = ["ar2_predict", "ar2_logpdf", "box_loglik", "grid_points", "map_sample
 _LOG2PI = float(np.log(2.0 * np.pi))  # as vistrack.gaussian and vistrack.proposals.grid
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def ar2_predict(states, damping, sigma, noise, out):
     """``Box.predict``: ``out (N, 6)`` = ``(z + d (z - z') + σ e^{l} ε, z)`` with the centre's std
     scaled by ``e^{l}`` of the old state and ``noise (N, 3)`` the normal draws."""
@@ -49,7 +49,7 @@ def ar2_predict(states, damping, sigma, noise, out):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def ar2_logpdf(new, old, damping, sigma, out):
     """``Box.transition_logpdf``: ``log K(new|old) (N,)``, Gaussian in the current values about
     ``z + d (z - z')`` with std ``σ e^{l}`` (centre) and ``σ_l``."""
@@ -69,7 +69,7 @@ def ar2_logpdf(new, old, damping, sigma, out):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def box_loglik(states, size0, ii, texture, x0, y0, f, ring, bg_weight, q, bp, lam_c, kappa, gx, gy, template,
                lam_t, out):
     """``Box.loglik``: ``log r (N,)`` of ``states (N, >=3)`` whose boxes are ``(cx, cy, w_0 e^l, h_0 e^l)``:
@@ -88,7 +88,7 @@ def box_loglik(states, size0, ii, texture, x0, y0, f, ring, bg_weight, q, bp, la
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def grid_points(states, sig, offsets, x0, y0, f, uw, vw, span):
     """The grid points ``c + σ o_j`` of each state's centre in working pixels ``uw, vw (N, G)``
     (``(x - x0) f``) and their span ``(u_min, u_max, v_min, v_max)`` into ``span (4,)``."""
@@ -108,7 +108,7 @@ def _nanmax(top, x):
     return top
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _q_rows(qmap, u0, v0, step, border, uw, vw, keep, floor, out):
     """The box's ``proposal_log_q`` before its ``log``, into ``out (N, G)``: the map ``qmap (H, W, 1)``
     float32 (``exp`` of the tempered scores) read at ``((uw - u0) / step, (vw - v0) / step)`` as
@@ -135,7 +135,7 @@ def _q_rows(qmap, u0, v0, step, border, uw, vw, keep, floor, out):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def map_sample(states, sig, offsets, g_unit, log_g_unit, cell, uw, vw, qmap, u0, v0, step, border, keep, floor,
                draws, z_u, log_alpha, log_q):
     """:meth:`MapProposal.sample <vistrack.proposals.grid.MapProposal.sample>` with the box's map
@@ -171,7 +171,7 @@ def map_sample(states, sig, offsets, g_unit, log_g_unit, cell, uw, vw, qmap, u0,
     return z_u
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def map_scores(ncc, s_in, s_out, g, area_in, area_ring, lam_t, lam_c, out):
     """The end of ``Appearance.proposal_map`` in float32, as numpy computes it with Python-float
     scalars: ``λ_t (nan_to_num(ncc) - 1) + λ_c (s_in / area_in - (s_out shifted by g - s_in) / area_ring)``
@@ -191,7 +191,7 @@ def map_scores(ncc, s_in, s_out, g, area_in, area_ring, lam_t, lam_c, out):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def lis_predict(prev, damping, sigma, noise, window_sd, offsets, x0, y0, f, x, sig, uw, vw, span):
     """The first half of the box's LIS proposal step (``LIS.propose`` with :class:`MapProposal
     <vistrack.proposals.grid.MapProposal>`): the prediction ``x (N, 6)`` (:func:`ar2_predict`),
@@ -203,7 +203,7 @@ def lis_predict(prev, damping, sigma, noise, window_sd, offsets, x0, y0, f, x, s
     return grid_points(x, sig, offsets, x0, y0, f, uw, vw, span)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def lis_weigh(prev, x, sig, offsets, g_unit, log_g_unit, cell, uw, vw, qmap, u0, v0, step, border, keep, floor,
               draws, damping, sigma, size0, ii, texture, x0, y0, f, ring, bg_weight, q, bp, lam_c, kappa, gx, gy,
               template, lam_t, z, log_incr, ll):

@@ -28,7 +28,7 @@ from .sampling import NONFINITE, corner_float, fma_lerp, inside, lerp_fma, pairw
 __all__ = ["predicted_roi", "adapt_template", "frame_features"]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def predicted_roi(states, damping, size0, reach_sd, reach_factor, ring, out):
     """``out (4,)`` int64: ``(x0, y0, x1, y1)``, the bounding box of the boxes ``(cx, cy, w_0 e^l,
     h_0 e^l)`` of the predicted means ``z + d (z - z')`` of ``states (N, 6)``, grown by
@@ -50,7 +50,7 @@ def predicted_roi(states, damping, size0, reach_sd, reach_factor, ring, out):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _patch(texture, box, gx, gy, x0, y0, f, out):
     """The raw samples of ``Appearance.patches`` for one ``box (4,)``: grey levels ``out[:M]`` and the
     gradient ``(gx, gy)`` interleaved in ``out[M:]``, row-major over the grid."""
@@ -76,7 +76,7 @@ def _patch(texture, box, gx, gy, x0, y0, f, out):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _unit(v, lo, hi, centre):
     """``v[lo:hi]`` made zero-mean (``centre``) and unit-norm in place (``_unit_rows``; norm floor 1e-6)."""
     if centre:
@@ -91,7 +91,7 @@ def _unit(v, lo, hi, centre):
         v[i] = v[i] / norm
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def adapt_template(texture, ii, box, gx, gy, x0, y0, f, template, rate, min_ncc, new_template, counts):
     """``Appearance.adapt`` of ``box (4,)`` (cx, cy, w, h; frame px): returns the estimate's ``ncc``
     with ``template``; where it is at least ``min_ncc`` writes ``unit((1 - rate) T + rate v)`` into
@@ -126,7 +126,7 @@ def _reflect(i, n):
     return 0 if i < 0 else (n - 1 if i >= n else i)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def frame_features(grey, hsv, n_bins, texture, labels):
     """``texture (H, W, 3)`` float32 = (grey, Sobel x, Sobel y) of ``grey (H, W)`` uint8 (3x3,
     ``BORDER_REFLECT``), ``labels (H, W)`` the colour bins of ``hsv`` (:func:`colour_labels`);

@@ -20,7 +20,7 @@ from .sampling import corner_float, fma_lerp, inside, lerp_fma, pairwise_sum
 __all__ = ["plate_map", "set_means", "set_index", "place", "means_at"]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def plate_map(gx, gy, sums, sizes, out):
     """The 4-channel map ``out (H, W, 4)`` float32, each channel over its frame mean: ``|gx|``, ``|gy|``
     (Sobel, float32) and the two DoGs ``|box_i - box_o|`` from the box sums ``sums (4, H, W)`` int32
@@ -48,7 +48,7 @@ def plate_map(gx, gy, sums, sizes, out):
     return means
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _normalise(flat, means):
     """Each channel of the interleaved ``flat (4 P,)`` over ``float32(max(mean, 1e-6))``, as the numpy
     path divides: ``c / d`` as ``float32(c · (1 / d))`` in double (a multiplication instead of a
@@ -66,7 +66,7 @@ def _normalise(flat, means):
         flat[i + 3] = np.float32(flat[i + 3] * r3)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def set_index(sets, feats):
     """The features of each pixel set: ``per_set (S,)`` how many, ``which (S, F)`` which, and the widest
     set's point count (one sample row of that width per feature)."""
@@ -126,7 +126,7 @@ def means_at(img, base, ox, oy, sets, feats, index, border, buf, out, o):
         out[o + f] = pairwise_sum(buf, f * width, count) / np.float32(count)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def set_means(img, pose, tan, aspect, pts, sets, feats, offsets, border, out):
     """Pixel-set means ``out (N, C, F)`` float32 of the 4-channel map ``img`` at the poses
     ``pose (N, 4)`` (u, w, θ, s; ``tan (N,)`` their ``tan θ``) shifted by ``offsets (N, C, 2)`` px.

@@ -59,7 +59,7 @@ def _draw_row(vals, lo, k, beta, gum, tmp):
     return j, vals[lo + j] - lz
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def draw_cells(vals, beta, gum, idx, lq):
     """For each row of ``vals (n, k)`` the cell ``idx[i]`` and its log probability ``lq[i]`` of
     ``PlateLISProposal._conditional`` with the Gumbel draws ``gum (n, k)``."""
@@ -105,7 +105,7 @@ def _one_scan(img, x, n, tab, index, base, coef, axis, centre, half, other, k, p
     return centre[n, axis] + ((j + 0.5) / k * 2 - 1) * half[n, axis] + cell * (u - 0.5), lq, cell
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def line_scans(img, x, tan, aspect, tab_h, coef_h, tab_v, coef_v, centre, half, k, prior, sig, beta, gum, unif,
                log1p, border, uv, log_q):
     """``PlateLISProposal._line_scans`` of the poses ``x (n, 4)`` (``tan (n,)`` their ``tan θ``):
@@ -157,7 +157,7 @@ def _dot(m, coef, n, log1p):
     return 0.0 + (a0 + a1)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def sparse_draw(img, pose, tan, aspect, tab, offsets, coef, bias, log1p, k, beta, gum, border, idx, lq):
     """``loglik_sparse`` of the poses ``pose (P, 4)`` (``tan (P,)``) shifted by ``offsets (P, C, 2)``
     on the point sets ``tab = (points, sets, features)`` with coefficients ``coef (P, F)`` and

@@ -128,7 +128,7 @@ def inside(ix, iy, w, h):
     return 0 <= ix < w - 1 and 0 <= iy < h - 1
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def sample(img, x, y, border):
     """All channels of ``img (H, W, C)`` float32 at float32 points ``x, y (P,)``: ``(P, C)`` float32,
     equal to ``cv2.remap`` (``BORDER_CONSTANT`` with ``border (C,)`` float32, one value per channel)."""
@@ -173,7 +173,7 @@ def _block_sum(a, lo, n):
     return res
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def pairwise_sum(a, lo, n):
     """``np.sum(a[lo:lo + n])`` of a 1-D array, ``n >= 1``, summed in numpy's order (module
     docstring): blocks of at most 128 summed by :func:`_block_sum`, halves (at multiples of 8)
