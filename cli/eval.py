@@ -173,8 +173,11 @@ def _eval_targets(cfg, targets, equal_time, results_dirs, out, engine):
     from vistrack.mot_report import write_mot_outputs
     from vistrack.reproduce.plates import plates_equal_time, run_plates_task, score_plates_tasks
 
+    from .reproduce_plates import _require_scorer
+
     if cfg.model != "plate":
         raise click.UsageError("--targets is for --model plate")
+    _require_scorer()
     if results_dirs:
         raise click.UsageError("--results-dir scores one box per frame: not with --targets")
     bad = [a for a in cfg.algos if a not in PLATES_ALGOS]

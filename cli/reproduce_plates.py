@@ -12,6 +12,16 @@ from .reproduce import _check_entries, _clip_suite, _report, _run
 __all__ = ["overlap"]
 
 
+def _require_scorer():
+    """One error line, before any tracking, when the MOT scorer is missing."""
+    from vistrack.mot import require_motmetrics
+
+    try:
+        require_motmetrics()
+    except ImportError as e:
+        raise click.ClickException(str(e)) from None
+
+
 def overlap(clips_dir, make, frames, size, entries, runs, seed, targets, equal_time, quiet, json_path, engine,
             out_dir):
     """``reproduce plate --overlap``: several plates at once (:mod:`vistrack.reproduce.plates`)."""
@@ -20,6 +30,7 @@ def overlap(clips_dir, make, frames, size, entries, runs, seed, targets, equal_t
 
     _check_entries(entries)
     check_writable(json_path, "--json file")
+    _require_scorer()
     clips = _clip_suite(clips_dir, "plate-overlap-clips", make, frames, size, make_plate_clip, "plate-overlap", quiet,
                         overlap=True, cars=6)
     if equal_time:

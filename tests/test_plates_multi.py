@@ -219,3 +219,20 @@ def test_eval_targets_scores_mota_and_idf1(road, tmp_path, capsys, monkeypatch):
     assert "| algo | N | runs | MOTA | IDF1 |" in (tmp_path / "ev" / "report.md").read_text()
     code, out, err = run(["eval", str(road), "--targets", "2", "--out", "e2", "-q"], capsys)
     assert code != 0 and err.strip() == "Error: --targets is for --model plate"
+
+
+def test_a_missing_scorer_is_one_error_line_before_any_tracking(road, tmp_path, capsys, monkeypatch):
+    """eval --targets and reproduce plate --overlap score with motmetrics: without it (a stale
+    environment), one line saying what to install, and no task run."""
+    import sys
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setitem(sys.modules, "motmetrics", None)  # import motmetrics raises ImportError
+    for argv in (["eval", str(road), "--model", "plate", "--targets", "2", "--particles", "10", "--runs", "1",
+                  "--in-process", "--out", "ev", "-q"],
+                 ["reproduce", "plate", "--overlap", "--clips", str(road.parent), "--runs", "1", "--in-process",
+                  "--out", "rp", "-q"]):
+        code, out, err = run(argv, capsys)
+        assert code != 0 and err.strip().startswith("Error: the motmetrics library"), err
+        assert "pip install motmetrics" in err and len(err.strip().splitlines()) == 1
+    assert not list(tmp_path.glob("*/tasks/*")), "no task ran"

@@ -26,6 +26,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 __all__ = ["MultiTarget", "Identities", "FrameObjects", "objects_by_frame", "plate_distances", "clear_mot",
+           "require_motmetrics",
            "MOT_KEYS"]
 
 
@@ -136,6 +137,17 @@ def plate_distances(truth, hyp, aspect):
     height = truth.scale[:, None] / aspect
     with np.errstate(invalid="ignore"):
         return np.where(d <= height / 3, d, np.nan)
+
+
+def require_motmetrics():
+    """Raise ``ImportError`` saying what to install when ``motmetrics`` (a dependency of vistrack,
+    which :func:`clear_mot` scores with) cannot be imported: batch commands check it before they
+    track, so that a stale environment does not lose its score after hours of runs."""
+    try:
+        import motmetrics  # noqa: F401
+    except ImportError:
+        raise ImportError("the motmetrics library (vistrack's scorer of MOTA and IDF1) is not installed: "
+                          "pip install motmetrics, or reinstall vistrack") from None
 
 
 def clear_mot(truth, hyp, aspect):
