@@ -236,3 +236,47 @@ def test_a_missing_scorer_is_one_error_line_before_any_tracking(road, tmp_path, 
         assert code != 0 and err.strip().startswith("Error: the motmetrics library"), err
         assert "pip install motmetrics" in err and len(err.strip().splitlines()) == 1
     assert not list(tmp_path.glob("*/tasks/*")), "no task ran"
+
+
+@pytest.fixture(scope="module")
+def one_car(tmp_path_factory):
+    """One car at the evaluation's frame size and about its speed; frame 36 has its plate mid-frame."""
+    from vistrack.data_synth.plate import make_plate_clip
+
+    out = tmp_path_factory.mktemp("one_car")
+    make_plate_clip(out, frames=100, size=(640, 480), seed=5, cars=1)
+    return load_clip(out)
+
+
+def test_a_plate_covered_from_one_side_is_not_reported(one_car):
+    """The report test sees partial occlusion: at a plate wholly in view each half scored alone is
+    about the whole plate's log-odds, above ``report_half``, and the plate is reported; with a flat
+    patch (a car in front) over the left 10 % of the plate, the whole plate still passes the
+    whole-plate level, but the left half drops below ``report_half`` while the right stays above it,
+    so the plate is reported only without the half test. The compiled and numpy paths agree."""
+    from vistrack import kernels
+    from vistrack.features import FeatureMaps
+    from vistrack.models.plates import Plates
+
+    t, k = one_car.truth, 36
+    assert t["visible"][k] > 0
+    pose = np.array([t["cx"][k], t["cy"][k], np.deg2rad(t["angle_deg"][k]), t["scale"][k]])
+    state = np.concatenate([pose, pose, [5.0]])[None]
+    est = np.concatenate([state[0], [1.0], np.zeros(20)])  # slot 0 holds the plate, slots 1-2 absent
+    m, plain = Plates((640, 480), 3), Plates((640, 480), 3, report_half=None)
+    lik = m.plate.lik
+    frame = dict(one_car.source)[k]
+    obs = m.observe(FeatureMaps(frame), None)
+    full, halves = lik.loglik(obs, state)[0], lik.half_loglik(obs, state)[0]
+    assert np.all(np.abs(halves - full) < 1.0) and halves.min() > m.plate.visible_half
+    assert len(m.targets(obs, est)) == 1
+    v = m.plate.vertices(state)[0]
+    covered = frame.copy()
+    covered[int(v[:, 1].min()) - 20:int(v[:, 1].max()) + 20, :int(v[:, 0].min() + 0.1 * pose[3])] = 90
+    obs = m.observe(FeatureMaps(covered), None)
+    left, right = lik.half_loglik(obs, state)[0]
+    assert lik.loglik(obs, state)[0] > m.plate.visible_loglik
+    assert left < m.plate.visible_half < right
+    assert len(m.targets(obs, est)) == 0 and len(plain.targets(obs, est)) == 1
+    with kernels.numpy_paths(True):
+        np.testing.assert_allclose(lik.half_loglik(obs, state)[0], [left, right], atol=1e-3)

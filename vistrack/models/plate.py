@@ -86,6 +86,10 @@ class Plate(VideoModelBase):
         #: 10 for the thesis's coefficients (not calibrated)
         self.visible_loglik = 2.5 if self.lik.learnt else 10.0
         self.visible_margin = 4.0
+        #: with a level here, the estimate is reported only when each half of the plate, scored
+        #: alone (:meth:`PlateLikelihood.half_loglik`), also exceeds it: a plate a car in front
+        #: covers from one side fails in that half (None: no half test; :class:`Plates` sets 2)
+        self.visible_half = None
         self.layout = self.lik.layout
         self.enter_weight = float(enter_weight)
         self.damping = np.asarray(damping, float)
@@ -279,8 +283,9 @@ class Plate(VideoModelBase):
         return np.concatenate([lo, hi - lo], axis=1)
 
     def visible(self, obs, state):
-        """Whether a plate is reported at ``state``: ``log r`` above :attr:`visible_loglik` and the
-        whole parallelogram at least :attr:`visible_margin` px inside the frame (the ground truth
+        """Whether a plate is reported at ``state``: ``log r`` above :attr:`visible_loglik` (and, with
+        :attr:`visible_half` set, each half's ``log r`` above that level) and the whole
+        parallelogram at least :attr:`visible_margin` px inside the frame (the ground truth
         counts a plate as in view when it is wholly inside; an estimate at the border is as
         likely a plate half gone). With a learned appearance (:meth:`learn_appearance`), also
         when the estimate matches the first frame's plate: the template's ``ncc`` at least the
@@ -292,7 +297,9 @@ class Plate(VideoModelBase):
         inside = bool(np.all((v[:, 0] >= d) & (v[:, 0] <= w - 1 - d) & (v[:, 1] >= d) & (v[:, 1] <= h - 1 - d)))
         if not inside:
             return False
-        if bool(self.lik.loglik(obs, s)[0] / self.lik.sharpness > self.visible_loglik):
+        if bool(self.lik.loglik(obs, s)[0] / self.lik.sharpness > self.visible_loglik) and (
+                self.visible_half is None or bool(np.all(self.lik.half_loglik(obs, s)[0] / self.lik.sharpness
+                                                         > self.visible_half))):
             return True
         if self.app is None:
             return False

@@ -341,3 +341,32 @@ class PlateLikelihood:
         """``log r = log r^h + log r^v + log r^c`` ``(N,)``."""
         h, v, c = self.terms(obs, states)
         return h + v + c
+
+    #: the pixel sets of each half of the plate (:meth:`half_loglik`), built on first use
+    _halves = None
+
+    def half_loglik(self, obs, states):
+        """``log r`` of the plate's left and right halves alone ``(N, 2)``: each pixel set keeps its
+        points with ``a < 1/2`` (left) or ``a ≥ 1/2`` (right; a set with no point in a half keeps all
+        of them), and the coefficients of :meth:`loglik` take the means over those. A plate wholly in
+        view scores about its whole ``log r`` in both halves; one a car in front covers from one side
+        scores low in that side's half, whatever the whole plate's ``log r`` (the report test of
+        :class:`~vistrack.models.plates.Plates`)."""
+        if self._halves is None:
+            self._halves = tuple({k: (p[m] if m.any() else p) for k, p in self.points.items()
+                                  for m in [(p[:, 0] < 0.5) if left else (p[:, 0] >= 0.5)]}
+                                 for left in (True, False))
+        pose = np.atleast_2d(states)[:, :4]
+        w, b = self.coef(pose)
+        out = np.empty((len(pose), 2))
+        for h, points in enumerate(self._halves):
+            if kernels.use():
+                means = self._kernel_means(obs, pose, points, np.zeros((len(pose), 1, 2)))[:, 0]
+            else:
+                pts, sl = self._stack(points)
+                xy = plate_points(pose, pts, self.layout.aspect)
+                v = remap_points(self.maps(obs), xy[..., 0].astype(np.float32), xy[..., 1].astype(np.float32),
+                                 border=_BORDER)
+                means = self._set_means(v, sl)
+            out[:, h] = np.einsum("nf,nf->n", self.transform(means), w) + b
+        return out
