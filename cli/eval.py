@@ -112,7 +112,7 @@ def _run_tasks(tasks, out, *, scheduler, workers, timeout, in_process, resume, q
         stale = stale_tasks(tasks, out)
         if stale:  # a warning: even with --quiet
             click.echo(f"--resume: {len(stale)} of {len(tasks)} task files come from other options, seed, clip content "
-                       "or version (or are damaged): running them again", err=True)
+                       "or vistrack version or code (or are damaged): running them again", err=True)
         if all(task_done(t, out) for t in tasks):
             return
     with _dask_quiet() as deaths:

@@ -656,6 +656,18 @@ def test_a_damaged_task_file_is_run_again(tmp_path, text):
     assert not task_done(task, tmp_path) and stale_tasks([task], tmp_path) == [task]
 
 
+def test_a_task_file_written_by_other_code_is_run_again(tmp_path, monkeypatch):
+    """The fingerprint covers vistrack's source: a result written before a change of the code (a
+    report rule, a default; the version string unchanged) is not reused by ``--resume``."""
+    from vistrack import tasks
+
+    task = {"name": "t", "algo": "lis", "particles": 10, "run": 0}
+    tasks.write_task_result(tmp_path / "tasks" / "t.json", {"error": 1.0}, task)
+    assert tasks.task_done(task, tmp_path) and len(tasks.code_signature()) == 16
+    monkeypatch.setattr(tasks, "_CODE", "0" * 16)  # another checkout's source
+    assert not tasks.task_done(task, tmp_path) and tasks.stale_tasks([task], tmp_path) == [task]
+
+
 def test_synth_sigterm_stops_cleanly(tmp_path):
     """SIGTERM (as Ctrl-C) stops any command: exit 143 with one line, the partial clip removed, the
     old clip as it was."""

@@ -45,15 +45,36 @@ def _jsonable(v):
     return v if isinstance(v, (int, float, str, bool, type(None))) else str(v)
 
 
+def code_signature():
+    """A hash of vistrack's own source (every ``.py`` file of the installed package, by path and
+    content): an edited model or filter changes it where the version string does not (an editable
+    install, a checkout between releases). Computed once per process."""
+    global _CODE
+    if _CODE is None:
+        import hashlib
+
+        root = Path(__file__).resolve().parent
+        h = hashlib.sha256()
+        for p in sorted(root.rglob("*.py")):
+            h.update(p.relative_to(root).as_posix().encode() + b"\0" + p.read_bytes() + b"\0")
+        _CODE = h.hexdigest()[:16]
+    return _CODE
+
+
+_CODE = None
+
+
 def task_fingerprint(task):
     """A hash of everything that determines a task's result: the task itself (algorithm, N, model,
-    run, seed stream, config), the content signature of its clip, and the vistrack version. A
-    result file whose fingerprint differs is not reused by ``--resume``."""
+    run, seed stream, config), the content signature of its clip, the vistrack version and its
+    source (:func:`code_signature`: a result computed before a change of the code — a report rule,
+    a default — is not silently reused). A result file whose fingerprint differs is not reused by
+    ``--resume``."""
     import hashlib
 
     from . import __version__
 
-    body = {"task": _jsonable(task), "version": __version__}
+    body = {"task": _jsonable(task), "version": __version__, "code": code_signature()}
     if "clip" in task:
         body["clip_files"] = _clip_signature(task["clip"])
     return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()[:20]
@@ -87,7 +108,7 @@ def write_atomic(path, text):
 
 def task_done(task, out_dir):
     """Whether ``task``'s result file exists, parses, and was computed by this very task (its
-    :func:`task_fingerprint`: same clip content, options, seed stream and version) — what
+    :func:`task_fingerprint`: same clip content, options, seed stream, version and code) — what
     ``--resume`` may reuse."""
     p = Path(out_dir) / "tasks" / f"{task['name']}.json"
     if not p.is_file():
