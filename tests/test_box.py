@@ -253,3 +253,20 @@ def test_run_box_on_a_one_frame_video(tmp_path, capsys):
         main(["run", str(video), "--init", f"{x},{y},{w},{h}", "--track", str(tmp_path / "t.csv")])
     assert e.value.code == 0
     assert len((tmp_path / "t.csv").read_text().splitlines()) == 2
+
+
+def test_working_image_places_content_where_to_work_reads_it():
+    """A region whose size times ``f`` is not whole (301 px at f = 0.4: 120.4 -> 120 working px):
+    a bright square's centroid in the working image is at ``to_work`` of its frame centre on both
+    axes. Resizing to the rounded size put it 0.38 / 0.34 working px short (the dashcam plate's
+    upward offset, ``docs/experiments.md``)."""
+    from vistrack.models.appearance import AppearanceFrame
+
+    frame = np.full((310, 320, 3), 20, np.uint8)
+    frame[250:260, 280:290] = 220
+    obs = AppearanceFrame(frame, (0, 0, 301, 301), 0.4, False)
+    assert obs.grey.shape == (120, 120)
+    bright = obs.grey.astype(float) - 20
+    rows, cols = np.mgrid[0:120, 0:120] + 0.5
+    centroid = ((bright * cols).sum() / bright.sum(), (bright * rows).sum() / bright.sum())
+    np.testing.assert_allclose(centroid, obs.to_work(285.0, 255.0), atol=0.02)

@@ -56,6 +56,18 @@ def _unit_rows(v):
     return v / np.maximum(norm, 1e-6)
 
 
+def shrink(image, f):
+    """``image`` shrunk by ``f < 1`` (``INTER_AREA``) to ``round(f W) x round(f H)`` pixels, its content
+    placed by ``f`` itself: frame coordinate ``x`` at working ``x f`` on both axes, as
+    :meth:`AppearanceFrame.to_work` reads it. Given the size, OpenCV scales by the rounded size's
+    ratio instead, which put content up to half a working pixel off at the far side of the region
+    (the dashcam plate, 15 working px high, sat about a frame pixel high: ``docs/experiments.md``)."""
+    h, w = image.shape[:2]
+    if round(w * f) >= 1 and round(h * f) >= 1:
+        return cv2.resize(image, None, fx=f, fy=f, interpolation=cv2.INTER_AREA)
+    return cv2.resize(image, (max(1, int(round(w * f))), max(1, int(round(h * f)))), interpolation=cv2.INTER_AREA)
+
+
 class AppearanceFrame:
     """One frame's maps over a region of interest at the working resolution.
 
@@ -88,8 +100,7 @@ class AppearanceFrame:
         else:
             crop = frame[y0:y1, x0:x1]
             if f < 1.0:
-                size = (max(1, int(round((x1 - x0) * f))), max(1, int(round((y1 - y0) * f))))
-                crop = cv2.resize(crop, size, interpolation=cv2.INTER_AREA)
+                crop = shrink(crop, f)
         self.x0, self.y0 = x0, y0
         #: the region ``(x0, y0, x1, y1)`` in frame pixels
         self.roi = (x0, y0, x1, y1)
@@ -213,11 +224,7 @@ class Appearance:
 
     def work_image(self, frame):
         """The whole ``frame`` at the working resolution (as :meth:`frame` over the whole frame resizes it)."""
-        if self.f >= 1.0:
-            return frame
-        h, w = frame.shape[:2]
-        return cv2.resize(frame, (max(1, int(round(w * self.f))), max(1, int(round(h * self.f)))),
-                          interpolation=cv2.INTER_AREA)
+        return frame if self.f >= 1.0 else shrink(frame, self.f)
 
     # -- the likelihood ------------------------------------------------------------------
     def patches(self, obs, boxes):
