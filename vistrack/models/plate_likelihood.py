@@ -238,13 +238,17 @@ class PlateLikelihood:
         """The pixel-set means ``(N, len(FEATURES))``: Table 1.1's edge bands on their Sobel channel,
         free stripes and character areas on each DoG separately, then the layout's extra sets
         (columns :attr:`FEATURES`)."""
-        pose = np.atleast_2d(states)[:, :4]
+        return self._means(obs, np.atleast_2d(states)[:, :4], self.points, (self._all, self._slices))
+
+    def _means(self, obs, pose, points, stacked):
+        """The pixel-set means ``(N, F)`` at ``pose`` on the point sets ``points`` (stacked as
+        ``stacked = (points, slices)`` for the numpy path): compiled where numba is."""
         if kernels.use():
-            return self._kernel_means(obs, pose, self.points, np.zeros((len(pose), 1, 2)))[:, 0]
-        pts = plate_points(pose, self._all, self.layout.aspect)
+            return self._kernel_means(obs, pose, points, np.zeros((len(pose), 1, 2)))[:, 0]
+        pts = plate_points(pose, stacked[0], self.layout.aspect)
         v = remap_points(self.maps(obs), pts[..., 0].astype(np.float32), pts[..., 1].astype(np.float32),
                          border=_BORDER)
-        return self._set_means(v, self._slices)
+        return self._set_means(v, stacked[1])
 
     def _set_means(self, v, sl):
         return np.stack([v[:, sl[ps], ch].mean(axis=1) for _, ps, ch, _ in self.spec], axis=1)
@@ -353,20 +357,10 @@ class PlateLikelihood:
         scores low in that side's half, whatever the whole plate's ``log r`` (the report test of
         :class:`~vistrack.models.plates.Plates`)."""
         if self._halves is None:
-            self._halves = tuple({k: (p[m] if m.any() else p) for k, p in self.points.items()
-                                  for m in [(p[:, 0] < 0.5) if left else (p[:, 0] >= 0.5)]}
-                                 for left in (True, False))
+            halves = tuple({k: (p[m] if m.any() else p) for k, p in self.points.items()
+                            for m in [(p[:, 0] < 0.5) if left else (p[:, 0] >= 0.5)]} for left in (True, False))
+            self._halves = tuple((h, self._stack(h)) for h in halves)
         pose = np.atleast_2d(states)[:, :4]
         w, b = self.coef(pose)
-        out = np.empty((len(pose), 2))
-        for h, points in enumerate(self._halves):
-            if kernels.use():
-                means = self._kernel_means(obs, pose, points, np.zeros((len(pose), 1, 2)))[:, 0]
-            else:
-                pts, sl = self._stack(points)
-                xy = plate_points(pose, pts, self.layout.aspect)
-                v = remap_points(self.maps(obs), xy[..., 0].astype(np.float32), xy[..., 1].astype(np.float32),
-                                 border=_BORDER)
-                means = self._set_means(v, sl)
-            out[:, h] = np.einsum("nf,nf->n", self.transform(means), w) + b
-        return out
+        return np.stack([np.einsum("nf,nf->n", self.transform(self._means(obs, pose, points, stacked)), w) + b
+                         for points, stacked in self._halves], axis=1)
