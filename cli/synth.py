@@ -9,6 +9,7 @@ from tqdm import tqdm
 
 from vistrack.data_synth.contour import CLUTTER, make_contour_clip
 from vistrack.data_synth.landmarks import make_landmark_clip
+from vistrack.data_synth.perturb import LIGHTS, Perturbation, perturb_clip, read_clip
 from vistrack.data_synth.plate import make_plate_clip
 
 from .options import SEED, Fraction, Size
@@ -124,6 +125,63 @@ def landmarks(out, k, frames, size, seed, clutter_blobs, occlusion, quiet):
                            occlusion=occlusion, progress=bar.update)
     if not quiet:
         click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({frames} frames, {size[0]}x{size[1]}, K={k})")
+
+
+class _Ratio(click.ParamType):
+    """``A:B``, two positive numbers (``--zoom 1:0.6``, ``--gain 0.3:1.6``)."""
+
+    name = "A:B"
+
+    def convert(self, value, param, ctx):
+        """Parse ``value`` into a pair of positive floats; a bad value fails with one usage line."""
+        if isinstance(value, tuple):
+            return value
+        try:
+            a, b = (float(v) for v in str(value).split(":"))
+        except ValueError:
+            self.fail(f"expected two numbers A:B, got {value!r}", param, ctx)
+        if not (0 < a < float("inf") and 0 < b < float("inf")):
+            self.fail(f"expected two positive numbers A:B, got {value!r}", param, ctx)
+        return a, b
+
+
+@synth.command()
+@click.argument("clip", type=click.Path(exists=True))
+@click.option("--out", required=True, type=click.Path(file_okay=False), help="Folder of the stressed copy.")
+@click.option("--light", type=click.Choice(LIGHTS), default=None,
+              help="ramp: the gain goes linearly from the first --gain factor to the second (dark into light); "
+                   "flicker: a random gain per frame between them.")
+@click.option("--gain", default="0.3:1.6", show_default=True, type=_Ratio(), help="Gain range of --light.")
+@click.option("--blur", default=0, show_default=True, type=click.IntRange(0, 200),
+              help="Motion blur: a line kernel K px long along a random direction per frame.")
+@click.option("--shake", default=0.0, show_default=True, type=click.FloatRange(0, 1000),
+              help="Camera shake: each frame moved by up to PX px in x and y (uniform).")
+@click.option("--zoom", default=None, type=_Ratio(),
+              help="Zoom about the object over the clip: its size goes from A to B times its own (1:0.6 shrinks it).")
+@click.option("--drop", default=0, show_default=True, type=click.IntRange(min=0),
+              help="Drop every K-th frame (and its ground-truth row); 0: none.")
+@click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the shake, blur directions, flicker.")
+@click.option("--quiet", "-q", is_flag=True)
+def perturb(clip, out, light, gain, blur, shake, zoom, drop, seed, quiet):
+    """A harder copy of a real CLIP (a folder or video with box ground truth beside it) with its
+    ground truth transformed exactly: OUT/<name>.mp4, groundtruth_rect.txt (0-based x,y,w,h) and
+    perturb.json. Stresses combine; geometry (zoom, shake) is applied first, then blur, then light.
+
+    \b
+    Examples:
+      vistrack synth perturb ../shared/data/real/girl_otb --out girl-ramp --light ramp
+      vistrack synth perturb CLIP --out C2 --blur 9 --shake 6 --zoom 1:0.6 --drop 2 --seed 1
+    """
+    try:
+        p = Perturbation(light=light, gain=gain, blur=blur, shake=shake, zoom=zoom, drop=drop, seed=seed)
+        video, gt = read_clip(clip)
+    except ValueError as e:
+        raise click.ClickException(str(e)) from None
+    out = _out_dir(out)
+    with tqdm(total=len(gt), unit="frame", disable=quiet, desc=f"synth perturb {p.name}") as bar:
+        n = _make(perturb_clip, out, clip=clip, p=p, progress=bar.update)
+    if not quiet:
+        click.echo(f"wrote {out} ({p.name}: {n} of {len(gt)} frames, ground truth transformed)")
 
 
 #: per kind: clip maker, default frames, default size

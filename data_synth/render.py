@@ -54,8 +54,9 @@ def clutter_background(size, rng, shapes=120):
     return img
 
 
-def motion_blur(img, velocity):
-    """Blur along ``velocity (vx, vy)`` (px/frame) with a line kernel of that length."""
+def motion_blur(img, velocity, border=cv2.BORDER_CONSTANT):
+    """Blur along ``velocity (vx, vy)`` (px/frame) with a line kernel of that length (``border``: how
+    :func:`cv2.filter2D` extends the image; black by default, as the synthetic clips were made)."""
     length = float(np.hypot(*velocity))
     if length < 1.5:
         return img
@@ -66,7 +67,7 @@ def motion_blur(img, velocity):
     cv2.line(kern, (int(round(c - d[0])), int(round(c - d[1]))), (int(round(c + d[0])), int(round(c + d[1]))),
              1.0, 1, cv2.LINE_AA)
     kern /= kern.sum()
-    return cv2.filter2D(img, -1, kern, borderType=cv2.BORDER_CONSTANT)
+    return cv2.filter2D(img, -1, kern, borderType=border)
 
 
 def lighting(size, t, phase, amplitude=0.25, period=150.0):

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["center_error", "contour_lost_threshold", "plate_frame_measures", "lost_frames", "summarize_runs", "landmark_error", "iou", "success_auc",
-           "IOU_THRESHOLDS"]
+           "IOU_THRESHOLDS", "box_scores"]
 
 #: IoU thresholds of the success plot (OTB protocol)
 IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
@@ -87,6 +87,36 @@ def success_auc(ious):
     frames whose IoU ``(frames,)`` exceeds the threshold."""
     ious = np.nan_to_num(np.asarray(ious, float))
     return float(np.mean([(ious > t).mean() for t in IOU_THRESHOLDS])) if ious.size else float("nan")
+
+
+def box_scores(boxes, truth, precision_px=20.0):
+    """OTB's one-pass scores of a box track.
+
+    Parameters
+    ----------
+    boxes, truth : ndarray, shape (T, 4)
+        Estimated and true ``x, y, w, h`` per frame; frames whose true box has no area (the
+        object not in view, ``0,0,0,0``) are not scored, as the toolkits do.
+    precision_px : float
+        Centre-error threshold of the precision score.
+
+    Returns
+    -------
+    auc : float
+        :func:`success_auc` of the IoUs.
+    precision : float
+        Share of frames whose centre error is at most ``precision_px``.
+    error : float
+        Mean centre error (px).
+    """
+    boxes, truth = np.asarray(boxes, float).reshape(-1, 4), np.asarray(truth, float).reshape(-1, 4)
+    seen = (truth[:, 2] > 0) & (truth[:, 3] > 0)
+    b, g = boxes[seen], truth[seen]
+    if not len(g):
+        return float("nan"), float("nan"), float("nan")
+    err = center_error(b[:, 0] + b[:, 2] / 2, b[:, 1] + b[:, 3] / 2, g[:, 0] + g[:, 2] / 2, g[:, 1] + g[:, 3] / 2)
+    err = np.nan_to_num(err, nan=np.inf)
+    return success_auc(iou(b, g)), float(np.mean(err <= precision_px)), float(np.mean(err))
 
 
 def plate_frame_measures(result, truth, aspect):
