@@ -9,7 +9,7 @@ Clips: every folder under ``--data`` (``../shared/data/real``) holding ``groundt
 found by globbing, so a clip added later is included — or those named by ``--clips``. With
 ``--all`` (or ``--stress KINDS``) each clip is also run as stressed copies made by
 ``vistrack synth perturb`` (``data_synth.perturb.STRESS_PRESETS``: light ramp ×0.3 → ×1.6,
-motion blur 9 px, camera shake ±6 px, zoom out to 0.6 of the object's size; seed 1), cached under
+motion blur 9 px, camera shake ±6 px, a zoom out from 1.6 to 1 times the object's size; seed 1), cached under
 ``--cache``. Every tracker starts from the first ground-truth box of the copy it runs on.
 
 vistrack runs with its defaults (``vistrack.Tracker(seed=s)``, what ``vistrack run VIDEO --init``

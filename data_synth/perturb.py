@@ -88,7 +88,7 @@ STRESS_PRESETS = {
     "ramp": Perturbation(light="ramp"),
     "blur": Perturbation(blur=9),
     "shake": Perturbation(shake=6.0),
-    "zoom": Perturbation(zoom=(1.0, 0.6)),
+    "zoom": Perturbation(zoom=(1.6, 1.0)),  # the object shrinks to 0.6 of its first size; no border shows
     "flicker": Perturbation(light="flicker"),
     "drop": Perturbation(drop=2),
 }
