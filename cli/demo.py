@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import click
@@ -25,7 +26,21 @@ DEMO_ALGOS = (("ls-n-ips", 30), ("lis", 30), ("bootstrap", 150))
 CLIP = {"size": (320, 240), "clutter": "high", "distractor": False, "jump_prob": 0.04, "jump_size": (0.12, 0.16)}
 #: the real clip: vistrack's default box tracker beside OpenCV's MIL
 REAL_ALGOS = (("lis", 100), ("opencv-mil", 1))
-REAL_CLIP = Path("..") / "shared" / "data" / "real" / "girl_otb"
+REAL_CLIP = Path("shared") / "data" / "real" / "girl_otb"
+
+
+def find_real_clip():
+    """The real clip of step 4 whichever the working folder: ``$VISTRACK_REAL_DATA/girl_otb``, else
+    ``shared/data/real/girl_otb`` under the working folder, the installed package's folder or any folder
+    above them (a clone's ``../shared``); ``None`` when there is none."""
+    env = os.environ.get("VISTRACK_REAL_DATA")
+    if env and (Path(env) / REAL_CLIP.name).exists():
+        return Path(env) / REAL_CLIP.name
+    cwd, pkg = Path.cwd().resolve(), Path(__file__).resolve().parent
+    for base in [cwd, *cwd.parents, pkg, *pkg.parents]:
+        if (base / REAL_CLIP).exists():
+            return base / REAL_CLIP
+    return None
 
 
 def compare(clip, entries, model, runs, seed, out):
@@ -48,8 +63,10 @@ def compare(clip, entries, model, runs, seed, out):
 @click.option("--runs", default=4, show_default=True, type=click.IntRange(min=1),
               help="Monte-Carlo runs per algorithm in the comparisons.")
 @click.option("--seed", default=0, show_default=True, type=SEED)
-@click.option("--real-clip", "real_clip", default=str(REAL_CLIP), show_default=True, metavar="DIR",
-              help="A real clip with box ground truth (any layout run reads); skipped when absent; '' skips it.")
+@click.option("--real-clip", "real_clip", default=None, metavar="DIR",
+              help="A real clip with box ground truth (any layout run reads); '' skips it. Default: "
+                   "$VISTRACK_REAL_DATA/girl_otb, else shared/data/real/girl_otb in the working folder, the "
+                   "package's folder or a folder above either (a clone's ../shared); skipped when none is found.")
 @click.option("--real-frames", default=60, show_default=True, type=click.IntRange(min=10),
               help="Frames of the real clip to track.")
 @click.pass_context
@@ -82,10 +99,11 @@ def demo(ctx, out_dir, frames, runs, seed, real_clip, real_frames):
                + ", ".join(f"{a} N={n}" for a, n in DEMO_ALGOS))
     click.echo(compare(clip, DEMO_ALGOS, "box", runs, seed, out / "eval"))
     made.append(out / "eval" / "report.md")
-    real = Path(real_clip) if real_clip else None
+    real = Path(real_clip) if real_clip else (find_real_clip() if real_clip is None else None)
     if real is None or not real.exists():
-        click.echo(f"4/4 skipped: no real clip at {real_clip or '(none given)'} (--real-clip DIR: a clip with box "
-                   "ground truth, e.g. OTB's Girl)")
+        where = real_clip or ("(none given)" if real_clip == "" else f"{REAL_CLIP} above {Path.cwd()} or the package")
+        click.echo(f"4/4 skipped: no real clip at {where} (--real-clip DIR: a clip with box ground truth, e.g. "
+                   "OTB's Girl; or set VISTRACK_REAL_DATA to the folder holding girl_otb)")
     else:
         name = real.name if real.is_dir() else real.parent.name
         excerpt = out / "clips" / name
