@@ -9,6 +9,7 @@ import click
 
 from vistrack.clips import excerpt_clip
 from vistrack.data_synth.contour import make_contour_clip
+from vistrack.models.registry import DEFAULT_MODEL, get_model_spec
 from vistrack.evaluation import EvalConfig, load_task_results, summarize, task_list
 from vistrack.report import write_eval_outputs
 from vistrack.video import VideoError
@@ -25,7 +26,7 @@ DEMO_ALGOS = (("ls-n-ips", 30), ("lis", 30), ("bootstrap", 150))
 #: with probability 0.04 per frame, in heavy clutter
 CLIP = {"size": (320, 240), "clutter": "high", "distractor": False, "jump_prob": 0.04, "jump_size": (0.12, 0.16)}
 #: the real clip: vistrack's default box tracker beside OpenCV's MIL
-REAL_ALGOS = (("lis", 100), ("opencv-mil", 1))
+REAL_ALGOS = ((get_model_spec(DEFAULT_MODEL).default_algo, 100), ("opencv-mil", 1))
 REAL_CLIP = Path("shared") / "data" / "real" / "girl_otb"
 
 
@@ -112,8 +113,8 @@ def demo(ctx, out_dir, frames, runs, seed, real_clip, real_frames):
         except VideoError as e:
             raise click.ClickException(str(e)) from None
         click.echo(f"4/4 the first {real_frames} frames of {real} ({excerpt}): vistrack's default box tracker "
-                   f"(LIS N=100, {runs} runs) beside OpenCV MIL")
-        click.echo(compare(excerpt, REAL_ALGOS, "box", runs, seed, out / "eval-real"))
+                   f"({REAL_ALGOS[0][0].upper()} N={REAL_ALGOS[0][1]}, {runs} runs) beside OpenCV MIL")
+        click.echo(compare(excerpt, REAL_ALGOS, DEFAULT_MODEL, runs, seed, out / "eval-real"))
         made.append(out / "eval-real" / "report.md")
     click.echo("")
     click.echo(f"done. In {out}/:")

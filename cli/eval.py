@@ -15,7 +15,9 @@ from vistrack.evaluation import (OPENCV_TRACKERS, EvalConfig, OutLocked, TaskFai
                                  execute, find_clips, load_task_results, lock_out, result_files, score_result_file,
                                  stale_tasks, summarize, task_done, task_list)
 from vistrack.report import write_eval_outputs
-from vistrack.models.registry import get_model_spec
+from vistrack.builders import MODELS as MODEL_NAMES
+from vistrack.clips import load_clip
+from vistrack.models.registry import DEFAULT_MODEL, all_algos, clip_model, get_model_spec
 from vistrack.runtime import check_particle_memory
 from vistrack.video import VideoError
 
@@ -208,16 +210,27 @@ def _eval_targets(cfg, targets, equal_time, results_dirs, out, engine):
         click.echo(f"wrote {out / 'results.json'}, results.csv and report.md")
 
 
+def _clips_model(clips):
+    """The model of ``eval`` without ``--model``, as ``run`` chooses it: the one the clips' ``meta.json``
+    names, else the default; clips naming different models need ``--model``."""
+    named = {clip_model(load_clip(c).model_name) for c in clips}
+    if len(named) > 1:
+        raise ValueError(f"the clips name different models in meta.json ({', '.join(sorted(named))}): give --model")
+    return named.pop()
+
+
 @click.command("eval")
 @click.argument("clips", nargs=-1, required=True, type=click.Path())
 @click.option("--algos", default="lis,bootstrap", show_default=True, type=StrList(),
-              help="Algorithms (bootstrap, ls-n-ips, lls, lis, avpf) and OpenCV trackers (opencv-mil, ...).")
+              help="Algorithms, any that run takes on the model (" + ", ".join(all_algos()) + ") and OpenCV "
+                   "trackers (" + ", ".join(OPENCV_TRACKERS) + "; KCF and CSRT need opencv-contrib-python-headless).")
 @click.option("--particles", default="100,750", show_default=True, type=IntList(), help="Particle counts N.")
 @click.option("--runs", default=20, show_default=True, type=click.IntRange(min=1), help="Runs per clip × algo × N.")
 @click.option("--seed", default=0, show_default=True, type=SEED)
-@click.option("--model", default="contour", show_default=True, metavar="[contour|plate|box]",
-              help="Tracking model, any registered one, started from the first ground-truth box (box: any "
-                   "object, appearance learned from the first frame; plate: layout from the box's aspect).")
+@click.option("--model", default=None, metavar="[" + "|".join(MODEL_NAMES) + "]",
+              help="Tracking model, any registered one, started from the first ground-truth box [default: as run: "
+                   "the model the clips' meta.json names (synthetic clips), else " + DEFAULT_MODEL + ", any object, "
+                   "appearance learned from the first frame]. plate: layout from the box's aspect.")
 @click.option("--equal-time", is_flag=True, help="Pick N per algorithm for equal CPU time per frame.")
 @click.option("--targets", type=click.IntRange(min=1), default=None,
               help="Plate model: track up to K plates at once (no start box; partitioned-lis, partitioned, "
@@ -250,12 +263,14 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, sc
     if not algos and not results_dirs:
         raise click.UsageError("nothing to evaluate: give --algos or --results-dir")
     try:
-        spec = get_model_spec(model)
         check_algos(algos)
+        clip_paths = find_clips(clips)
+        if model is None and targets is None:
+            model = _clips_model(clip_paths)
+        spec = get_model_spec(model or "plate")
         for a in algos:  # one task's working memory (tasks run side by side: one per worker)
             for n in ([] if a in OPENCV_TRACKERS else particles):
                 check_particle_memory(n, spec.bytes_per_particle, a)
-        clip_paths = find_clips(clips)
     except (ValueError, VideoError) as e:
         raise click.ClickException(str(e)) from None
     out = Path(out_dir)

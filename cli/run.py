@@ -14,7 +14,7 @@ from vistrack.clips import load_clip
 from vistrack.filters import make_filter
 from vistrack.models.registry import MODELS as MODEL_REGISTRY
 from vistrack.models.contour_nn import network_for
-from vistrack.models.registry import get_model_spec
+from vistrack.models.registry import DEFAULT_MODEL, all_algos, get_model_spec
 from vistrack.runtime import check_particle_memory
 from vistrack.session import stop_on_signals, summary_lines, track_video
 from vistrack.video import VideoDecodeWarning, VideoError, prefetch
@@ -23,9 +23,8 @@ from .options import SEED, Box, Fraction, check_outputs, check_writable
 
 __all__ = ["run"]
 
-RUN_ALGOS = ("bootstrap", "ls-n-ips", "lls", "lis", "avpf", "condensation",
-             "pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt", "sir", "basic-sir", "hs-sir", "rb-hs-sir", "rb-ss-hs-sir",
-             "partitioned", "partitioned-lis", "branched-partitioned", "branched-partitioned-lis")
+#: every algorithm a registered model runs (the registry is the one list: ``eval --algos`` takes the same)
+RUN_ALGOS = all_algos()
 
 
 def model_options(name, *, layout, no_colour, template, targets=None):
@@ -170,7 +169,7 @@ def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, 
             fw, fh = clip.source.size
             if x >= fw or y >= fh or x + w <= 0 or y + h <= 0:
                 raise click.UsageError(f"--init box {x:g},{y:g},{w:g},{h:g} lies outside the {fw}x{fh} frame")
-        name = model_name or clip.model_name or ("box" if init is not None or init_gt is not None else "plate")
+        name = model_name or clip.model_name or (DEFAULT_MODEL if init is not None or init_gt is not None else "plate")
         if model_name is None and name not in MODEL_REGISTRY:
             raise click.ClickException(f"{video}: meta.json names model {name!r}, which this version cannot track")
         spec = get_model_spec(name)

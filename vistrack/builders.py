@@ -321,7 +321,7 @@ PLATES_ALGOS = ("partitioned-lis", "partitioned", "branched-partitioned-lis", "b
 register(ModelSpec("plate", ("lis", "bootstrap", "condensation", "lls", "avpf"),
                    "license-plate template (thesis 001 §1.3.2); acquires plates without a box",
                    from_box=_plate_from_frame_box, from_clip=_plate_from_clip, lost_rule="plate",
-                   bytes_per_particle=48_000))
+                   bytes_per_particle=48_000, multi_algos=PLATES_ALGOS))
 register(ModelSpec("landmarks", ("pf-eis-mt", "pf-eis", "pf-doucet", "pf-gordon", "bootstrap"),
                    "landmark shape (seed 000 §3)", box_init=False, from_clip=_landmarks_from_clip))
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-__all__ = ["ModelSpec", "MODELS", "register", "get_model_spec"]
+__all__ = ["ModelSpec", "MODELS", "DEFAULT_MODEL", "register", "get_model_spec", "all_algos", "clip_model"]
 
 
 @dataclass(frozen=True)
@@ -48,6 +48,8 @@ class ModelSpec:
     from_clip: Callable | None = None
     lost_rule: str = "centre"
     bytes_per_particle: int = 64_000
+    #: algorithms that track several targets at once (``run``/``eval --targets K``), the default first
+    multi_algos: tuple = ()
 
     @property
     def default_algo(self):
@@ -56,6 +58,10 @@ class ModelSpec:
 
 
 MODELS: dict[str, ModelSpec] = {}
+
+#: the model ``run``, ``eval``, ``demo`` and ``vistrack.Tracker`` use when neither the user nor the
+#: clip (its ``meta.json``) names one: any object, from a box
+DEFAULT_MODEL = "box"
 
 
 def register(spec):
@@ -70,3 +76,15 @@ def get_model_spec(name):
         return MODELS[name]
     except KeyError:
         raise ValueError(f"unknown model {name!r}; choose from {', '.join(MODELS)}") from None
+
+
+def all_algos():
+    """Every algorithm some registered model runs (single- and several-target), in registration order:
+    the choices of ``run --algo`` and ``eval --algos``."""
+    return tuple(dict.fromkeys(a for spec in MODELS.values() for a in (*spec.algos, *spec.multi_algos)))
+
+
+def clip_model(named=None):
+    """The model a clip is tracked with when no ``--model`` is given: the one its ``meta.json`` names
+    (``named``), else :data:`DEFAULT_MODEL`."""
+    return named or DEFAULT_MODEL
