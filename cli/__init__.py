@@ -37,6 +37,9 @@ def cli():
 
     \b
     Examples:
+      vistrack run my_video.mp4 --init x,y,w,h --out annotated.mp4   # track any object from a box
+      vistrack run dashcam.mp4 --model plate --track plates.csv       # find and follow a license plate
+      vistrack eval clips/ --algos lis,opencv-mil --runs 3 --out ev   # compare trackers on clips with ground truth
       vistrack demo                                  # generate, track, compare: ./vistrack-demo
       vistrack synth contour --out clip              # synthetic clip with ground truth
       vistrack run clip --algo ls-n-ips -n 30 --init-gt --out annotated.mp4 --track track.csv

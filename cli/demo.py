@@ -60,10 +60,12 @@ def compare(clip, entries, model, runs, seed, out):
 @click.command()
 @click.option("--out", "out_dir", default="vistrack-demo", show_default=True, type=click.Path(file_okay=False),
               help="Folder for clips, annotated videos, tracks, tables and plots.")
-@click.option("--frames", default=100, show_default=True, type=click.IntRange(min=10))
+@click.option("--frames", default=100, show_default=True, type=click.IntRange(min=10),
+              help="Number of frames to generate.")
 @click.option("--runs", default=4, show_default=True, type=click.IntRange(min=1),
               help="Monte-Carlo runs per algorithm in the comparisons.")
-@click.option("--seed", default=0, show_default=True, type=SEED)
+@click.option("--seed", default=0, show_default=True, type=SEED,
+              help="Random seed: the same seed gives the same output, bit for bit.")
 @click.option("--real-clip", "real_clip", default=None, metavar="DIR",
               help="A real clip with box ground truth (any layout run reads); '' skips it. Default: "
                    "$VISTRACK_REAL_DATA/girl_otb, else shared/data/real/girl_otb in the working folder, the "

@@ -226,7 +226,8 @@ def _clips_model(clips):
                    "trackers (" + ", ".join(OPENCV_TRACKERS) + "; KCF and CSRT need opencv-contrib-python-headless).")
 @click.option("--particles", default="100,750", show_default=True, type=IntList(), help="Particle counts N.")
 @click.option("--runs", default=20, show_default=True, type=click.IntRange(min=1), help="Runs per clip × algo × N.")
-@click.option("--seed", default=0, show_default=True, type=SEED)
+@click.option("--seed", default=0, show_default=True, type=SEED,
+              help="Random seed: the same seed gives the same output, bit for bit.")
 @click.option("--model", default=None, metavar="[" + "|".join(MODEL_NAMES) + "]",
               help="Tracking model, any registered one, started from the first ground-truth box [default: as run: "
                    "the model the clips' meta.json names (synthetic clips), else " + DEFAULT_MODEL + ", any object, "
@@ -248,7 +249,7 @@ def _clips_model(clips):
                    "per frame (0-based; 0,0,0,0 for none; the format of run --results); named after DIR. "
                    "Repeat for several trackers; --algos '' scores only these.")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Results folder.")
-@click.option("--quiet", "-q", is_flag=True)
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, scheduler, workers, timeout, in_process,
              resume, results_dirs, out_dir, quiet):
     """Evaluate algorithms over CLIPS (clip folders, videos with ground truth, or folders of clip folders).

@@ -11,7 +11,8 @@ from .options import FloatList
 
 @click.command("fit-plate")
 @click.argument("clips", type=click.Path(exists=True, file_okay=False))
-@click.option("--layout", default="jp", show_default=True, type=click.Choice(["jp", "single-row"]))
+@click.option("--layout", default="jp", show_default=True, type=click.Choice(["jp", "single-row"]),
+              help="Plate layout the template is fitted to: Japanese two-row (jp) or single-row.")
 @click.option("--rounds", default=2, show_default=True, type=click.IntRange(min=0),
               help="Refits with hard negatives mined by the current coefficients.")
 @click.option("--scales", type=FloatList(), metavar="S0,S1",

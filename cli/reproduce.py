@@ -58,7 +58,8 @@ def suite_options(clips_help, size, algos, algos_help, runs, frames=300):
         click.option("--size", default=size, show_default=True, help="Frame size of made clips."),
         click.option("--algos", "entries", default=algos, show_default=True, type=Entries(), help=algos_help),
         click.option("--runs", default=runs, show_default=True, type=click.IntRange(min=1), help="Runs per clip."),
-        click.option("--seed", default=0, show_default=True, type=SEED),
+        click.option("--seed", default=0, show_default=True, type=SEED,
+                      help="Random seed: the same seed gives the same output, bit for bit."),
     ]
     return _stacked(opts)
 
@@ -91,7 +92,8 @@ def reproduce():
               "takes as long per run (timed here on the first sequence).")
 @click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of sequences and runs.")
 @click.option("--resample", default="systematic", show_default=True,
-              type=click.Choice(["multinomial", "residual", "stratified", "systematic"]))
+              type=click.Choice(["multinomial", "residual", "stratified", "systematic"]),
+              help="Resampling scheme of the particle filter.")
 @click.option("--ess-threshold", default=None, type=Fraction(),
               help="Resample when ESS < threshold·N (default: every step).")
 @click.option("--lis-proposal", default="xi", show_default=True, type=click.Choice(["xi", "position"]),
@@ -252,7 +254,8 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
                    "8: N=20, PF-EIS-MT vs PF-EIS vs PF-Gordon (Fig. 2b).")
 @click.option("--runs", default=80, show_default=True, type=click.IntRange(min=1), help="Monte-Carlo runs.")
 @click.option("--steps", default=50, show_default=True, type=click.IntRange(min=1), help="Time steps T per run.")
-@click.option("--seed", default=0, show_default=True, type=SEED)
+@click.option("--seed", default=0, show_default=True, type=SEED,
+              help="Random seed: the same seed gives the same output, bit for bit.")
 @click.option("--algos", default=None, type=StrList(),
               help=f"Algorithms, comma-separated ({', '.join(LANDMARK_ALGOS)}) [default: the paper's for K].")
 @click.option("-n", "--particles", default=None, type=click.IntRange(min=1),

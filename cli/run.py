@@ -100,7 +100,8 @@ def lost_notice(most=5):
 @click.option("--show-particles", default=10, show_default=True, type=click.IntRange(min=0),
               help="Draw the K highest-weight particles in the annotated video.")
 @click.option("--resample", default="systematic", show_default=True,
-              type=click.Choice(["multinomial", "residual", "stratified", "systematic"]))
+              type=click.Choice(["multinomial", "residual", "stratified", "systematic"]),
+              help="Resampling scheme of the particle filter.")
 @click.option("--ess-threshold", default=None, type=Fraction(),
               help="Resample when ESS < threshold·N [default: every frame].")
 @click.option("--targets", type=click.IntRange(min=1), default=None,
@@ -117,6 +118,9 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
 
     \b
     Examples:
+      vistrack run video.mp4 --init 120,80,60,60 --out annotated.mp4 --track track.csv   # box model, LIS
+      vistrack run video.mp4 --init 120,80,60,60 --algo bootstrap -n 500 --results r.txt
+      vistrack run ../shared/data/real/girl_otb --init-gt --out girl.mp4   # started from the ground truth
       vistrack synth contour --out clip && vistrack run clip --algo ls-n-ips -n 30 --init-gt --out a.mp4
       vistrack run video.mp4 --model contour --init 120,80,60,60 --track track.csv
       vistrack run video.mp4 --model contour --template hand.txt --out a.mp4

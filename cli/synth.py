@@ -51,18 +51,21 @@ def synth():
 
 @synth.command()
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write.")
-@click.option("--frames", default=300, show_default=True, type=click.IntRange(min=1))
-@click.option("--size", default="320x240", show_default=True, type=Size())
-@click.option("--seed", default=0, show_default=True, type=SEED)
+@click.option("--frames", default=300, show_default=True, type=click.IntRange(min=1),
+              help="Number of frames to generate.")
+@click.option("--size", default="320x240", show_default=True, type=Size(), help="Frame size WIDTHxHEIGHT in pixels.")
+@click.option("--seed", default=0, show_default=True, type=SEED,
+              help="Random seed: the same seed gives the same output, bit for bit.")
 @click.option("--clutter", default="high", show_default=True, type=click.Choice(list(CLUTTER)),
               help="Background edge density and sensor noise.")
 @click.option("--distractor/--no-distractor", default=True, show_default=True,
               help="An identical object lying still in the scene (thesis §3.2.5).")
-@click.option("--shape", default="hand", show_default=True, type=click.Choice(["hand", "head"]))
+@click.option("--shape", default="hand", show_default=True, type=click.Choice(["hand", "head"]),
+              help="Outline of the object: an open hand or a head-and-shoulders.")
 @click.option("--color", "color", is_flag=True,
               help="Give the object (and the distractor) a distinctive saturated colour: the clips of the "
                    "colour-blob proposal (thesis §3.2.5, `vistrack reproduce hs-sir`).")
-@click.option("--quiet", "-q", is_flag=True)
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def contour(out, frames, size, seed, clutter, distractor, shape, color, quiet):
     """A textured object with a B-spline outline moving (AR(2) with sudden jumps, scale,
     rotation) over edge clutter, with lighting change, blur and noise."""
@@ -76,16 +79,18 @@ def contour(out, frames, size, seed, clutter, distractor, shape, color, quiet):
 
 @synth.command()
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write.")
-@click.option("--frames", default=300, show_default=True, type=click.IntRange(min=1))
-@click.option("--size", default="640x480", show_default=True, type=Size())
-@click.option("--seed", default=0, show_default=True, type=SEED)
+@click.option("--frames", default=300, show_default=True, type=click.IntRange(min=1),
+              help="Number of frames to generate.")
+@click.option("--size", default="640x480", show_default=True, type=Size(), help="Frame size WIDTHxHEIGHT in pixels.")
+@click.option("--seed", default=0, show_default=True, type=SEED,
+              help="Random seed: the same seed gives the same output, bit for bit.")
 @click.option("--cars", default=3, show_default=True, type=click.IntRange(min=1), help="Cars driving through.")
 @click.option("--layout", default="jp", show_default=True, type=click.Choice(["jp", "single-row"]),
               help="Plate layout: Japanese (Fig. 1.5) or single-row (European/Indian style).")
 @click.option("--overlap", is_flag=True,
               help="Cars close together in three lanes: up to three plates in view at once (track them with "
                    "run --targets K).")
-@click.option("--quiet", "-q", is_flag=True)
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def plate(out, frames, size, seed, cars, layout, overlap, quiet):
     """A road scene in which cars carrying plates drive through (thesis §1.3.2, §4.5.3).
 
@@ -105,14 +110,16 @@ def plate(out, frames, size, seed, cars, layout, overlap, quiet):
 @synth.command()
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write.")
 @click.option("--k", "k", default=5, show_default=True, type=click.IntRange(min=3), help="Number of landmarks K.")
-@click.option("--frames", default=200, show_default=True, type=click.IntRange(min=1))
-@click.option("--size", default="640x480", show_default=True, type=Size())
-@click.option("--seed", default=0, show_default=True, type=SEED)
+@click.option("--frames", default=200, show_default=True, type=click.IntRange(min=1),
+              help="Number of frames to generate.")
+@click.option("--size", default="640x480", show_default=True, type=Size(), help="Frame size WIDTHxHEIGHT in pixels.")
+@click.option("--seed", default=0, show_default=True, type=SEED,
+              help="Random seed: the same seed gives the same output, bit for bit.")
 @click.option("--clutter-blobs", default=6, show_default=True, type=click.IntRange(min=0),
               help="Drifting blobs identical to the landmarks.")
 @click.option("--occlusion", default=0.01, show_default=True, type=Fraction(),
               help="Per-frame probability that a landmark disappears for 3-10 frames.")
-@click.option("--quiet", "-q", is_flag=True)
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def landmarks(out, k, frames, size, seed, clutter_blobs, occlusion, quiet):
     """K landmark blobs moving and deforming by the shape model of seed 000 (§3.1): scale and
     rotation about the image centre, shape change in the tangent space; clutter blobs, occlusions,
@@ -161,7 +168,7 @@ class _Ratio(click.ParamType):
 @click.option("--drop", default=0, show_default=True, type=click.IntRange(min=0),
               help="Drop every K-th frame (and its ground-truth row); 0: none.")
 @click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the shake, blur directions, flicker.")
-@click.option("--quiet", "-q", is_flag=True)
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def perturb(clip, out, light, gain, blur, shake, zoom, drop, seed, quiet):
     """A harder copy of a real CLIP (a folder or video with box ground truth beside it) with its
     ground truth transformed exactly: OUT/<name>.mp4, groundtruth_rect.txt (0-based x,y,w,h) and
@@ -190,15 +197,17 @@ SUITES = {"contour": (make_contour_clip, 300, (320, 240)), "plate": (make_plate_
 
 
 @click.command("synth-suite")
-@click.option("--kind", required=True, type=click.Choice(["contour", "plate", "landmarks"]))
-@click.option("--clips", "n_clips", default=10, show_default=True, type=click.IntRange(min=1))
+@click.option("--kind", required=True, type=click.Choice(["contour", "plate", "landmarks"]),
+              help="Which synthetic clips to make: contour, plate or landmarks (as vistrack synth KIND).")
+@click.option("--clips", "n_clips", default=10, show_default=True, type=click.IntRange(min=1),
+              help="Number of clips in the suite.")
 @click.option("--seed", default=1, show_default=True, type=SEED, help="Seed of the first clip (then +1, +2, ...).")
 @click.option("--frames", default=None, type=click.IntRange(min=1),
               help="Frames per clip [default: 300; 200 for landmarks].")
 @click.option("--size", default=None, type=Size(),
               help="Frame size [default: 320x240 contour, 640x480 plate/landmarks].")
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="Folder to hold the clip folders.")
-@click.option("--quiet", "-q", is_flag=True)
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def synth_suite(kind, n_clips, seed, frames, size, out, quiet):
     """A suite of clips for `vistrack eval` (OUT/<kind>-<seed>/ each), with each kind's defaults
     (contour: high clutter and a distractor; plate: 3 cars, JP layout; landmarks: K = 5)."""
