@@ -93,7 +93,8 @@ def lost_notice(most=5):
                    "frame, or fitted to --init / --init-gt boxes. Default: an ellipse, or the clip's template. "
                    "Landmarks: the first frame's landmark positions.")
 @click.option("--track", "track_path", type=click.Path(dir_okay=False), help="Write the track CSV here.")
-@click.option("--out", "out_path", type=click.Path(dir_okay=False), help="Write the annotated mp4 here.")
+@click.option("--out", "out_path", type=click.Path(dir_okay=False),
+              help="Write the annotated video here: .mp4 (H.264, index first: plays in browsers while loading), .mkv, .mov, or .avi (Motion JPEG).")
 @click.option("--results", "results_path", type=click.Path(dir_okay=False),
               help="Write the track in the OTB / GOT-10k result format here: x,y,w,h per frame (0-based pixels; "
                    "0,0,0,0 where the object is not reported).")

@@ -225,3 +225,43 @@ def test_annotated_video_falls_back_to_mp4v_with_a_note(tmp_path, monkeypatch):
         w.write(np.zeros((64, 96, 3), np.uint8))
     w.close()
     assert int(cv2.VideoCapture(str(tmp_path / "a.mp4")).get(cv2.CAP_PROP_FRAME_COUNT)) == 5
+
+
+def _atoms(path):
+    """Top-level MP4 box types in file order."""
+    data, out, i = path.read_bytes(), [], 0
+    while i + 8 <= len(data):
+        size = int.from_bytes(data[i:i + 4], "big")
+        out.append(data[i + 4:i + 8].decode("latin-1"))
+        if size == 1:
+            size = int.from_bytes(data[i + 8:i + 16], "big")
+        if size < 8:
+            break
+        i += size
+    return out
+
+
+def test_the_annotated_video_s_codec_fits_its_container(tmp_path):
+    """--out picks a codec its container holds: H.264 in .mp4 with the index first (faststart),
+    H.264 in .mkv, Motion JPEG in .avi (with a note); another name is one clear error."""
+    pytest.importorskip("av")
+    frame = np.zeros((64, 96, 3), np.uint8)
+    for name in ("a.mp4", "a.mkv", "a.avi"):
+        with VideoWriter(tmp_path / name, 25, (96, 64), codec="auto") as w:
+            for k in range(5):
+                w.write(frame + k)
+        cap = cv2.VideoCapture(str(tmp_path / name))
+        fourcc = int(cap.get(cv2.CAP_PROP_FOURCC)).to_bytes(4, "little").decode("latin-1").lower()
+        n = 0
+        while cap.read()[0]:
+            n += 1
+        cap.release()
+        assert n == 5
+        if name == "a.avi":
+            assert w.codec == "mjpg" and fourcc == "mjpg" and "Motion JPEG" in w.note
+        else:
+            assert w.codec == "h264" and fourcc in ("avc1", "h264") and w.note is None
+    atoms = _atoms(tmp_path / "a.mp4")
+    assert atoms.index("moov") < atoms.index("mdat"), atoms
+    with pytest.raises(VideoError, match=r"give a file name ending in \.mp4"):
+        VideoWriter(tmp_path / "a.webm", 25, (96, 64), codec="auto")

@@ -43,6 +43,8 @@ __all__ = [
 IMAGE_EXT = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".ppm", ".pgm"}
 VIDEO_EXT = {".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"}
 #: files FFmpeg's text/data demuxers would "decode", which are never videos here
+#: containers VideoWriter writes and what it puts in them under codec "auto"/"h264"
+CONTAINERS = {".mp4": "h264", ".m4v": "h264", ".mov": "h264", ".mkv": "h264", ".avi": "mjpg"}
 TEXT_EXT = {".txt", ".csv", ".json", ".md", ".rst", ".xml", ".yaml", ".yml", ".log", ".py", ".html", ".srt"}
 
 
@@ -256,7 +258,10 @@ class VideoWriter:
         ``mp4v`` (MPEG-4 Part 2, OpenCV; the synthetic clips, whose decoded pixels the
         experiments depend on); ``h264`` through PyAV (libx264, ``yuv420p``: plays in browsers
         and Jupyter; an odd width or height is padded by one pixel); ``auto``: H.264 where PyAV
-        can write it, else mp4v with :attr:`note` saying so.
+        can write it, else mp4v with :attr:`note` saying so. The container is the file name's
+        (:data:`CONTAINERS`): ``.mp4``/``.m4v``/``.mov`` get their index first (``faststart``: a
+        browser plays them while they load), ``.mkv`` H.264 too, and ``.avi`` Motion JPEG under
+        ``h264``/``auto`` (with :attr:`note`); any other name is a :class:`VideoError`.
 
     Attributes
     ----------
@@ -276,6 +281,19 @@ class VideoWriter:
         self.frames = 0
         self.note = None
         self._av = None
+        # the container by the name's last known suffix (``a.mp4``, or a temporary ``a.mp4.part-7``)
+        suffix = next((x for x in reversed([x.lower() for x in self.path.suffixes]) if x in CONTAINERS), "")
+        self.container = suffix
+        if suffix not in CONTAINERS:
+            raise VideoError(f"cannot write a video to {self.path}: give a file name ending in "
+                             f"{', '.join(CONTAINERS)}")
+        if codec in ("h264", "auto") and CONTAINERS[suffix] == "mjpg":
+            self.codec = "mjpg"  # H.264 in AVI plays in few players: AVI's own Motion JPEG
+            self.note = f"{suffix} holds Motion JPEG here (.mp4 or .mkv for H.264)"
+            self._w = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"MJPG"), float(fps), self.size)
+            if not self._w.isOpened():
+                raise VideoError(f"cannot open {self.path} for writing")
+            return
         if codec in ("h264", "auto"):
             try:
                 self._open_h264(fps)
@@ -296,7 +314,10 @@ class VideoWriter:
         import av  # noqa: PLC0415  (optional: PyAV)
         from fractions import Fraction
 
-        container = av.open(str(self.path), "w")
+        # the index (moov) first, so that a browser plays the file while it loads
+        fmt = {".mp4": "mp4", ".m4v": "mp4", ".mov": "mov", ".mkv": "matroska"}[self.container]
+        options = {"movflags": "+faststart"} if fmt in ("mp4", "mov") else {}
+        container = av.open(str(self.path), "w", format=fmt, options=options)
         try:
             stream = container.add_stream("libx264", rate=Fraction(fps).limit_denominator(1001))
             stream.width, stream.height = (v + v % 2 for v in self.size)
