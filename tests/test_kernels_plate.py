@@ -71,8 +71,9 @@ def test_line_scans_equal_the_numpy_path(scene, prior):
     pri = (centre, model.sigma[:2]) if prior else None
     beta = 1.0 if prior else 2.0
     (a, sa), (b, sb) = _draws(lambda rng: prop._line_scans(x, obs, rng, centre, half, 24, prior=pri, beta=beta))
-    np.testing.assert_array_equal(a[0], b[0])
-    np.testing.assert_array_equal(a[1], b[1])
+    np.testing.assert_array_equal(a[0], b[0])  # the same draws
+    # the same densities to the last bits: numpy's exp/log are SIMD routines on AVX-512 CPUs, libm's in numba
+    np.testing.assert_allclose(a[1], b[1], rtol=1e-13, atol=0)
     assert sa == sb
 
 
@@ -83,6 +84,7 @@ def test_plate_proposal_sample_equal_the_numpy_path(scene):
     x[30:, 4:8] = x[30:, :4]  # ten fresh entering draws: the births' search
     prop = model.lis_proposal()
     (a, sa), (b, sb) = _draws(lambda rng: prop.sample(x, obs, rng, prev))
-    for u, v in zip(a, b):
-        np.testing.assert_array_equal(u, v)
+    np.testing.assert_array_equal(a[0], b[0])  # the same draws
+    for u, v in zip(a[1:], b[1:]):  # the densities to the last bits (AVX-512's exp/log: see above)
+        np.testing.assert_allclose(u, v, rtol=1e-13, atol=0)
     assert sa == sb

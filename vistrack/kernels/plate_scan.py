@@ -73,6 +73,12 @@ def draw_cells(vals, beta, gum, idx, lq):
 
 
 @njit(cache=True, forceinline=True)
+def _log1p32(m):
+    """``log1p`` of a float32 mean as :func:`~vistrack.models.plate_likelihood.log1p32` computes it."""
+    return np.float32(np.log1p(np.float64(m)))
+
+
+@njit(cache=True, forceinline=True)
 def _scan_value(img, base, ox, oy, tab, index, coef, n, log1p, border, buf, means):
     """``Σ_f coef[n, f] t(mean_f)`` at the placed points shifted by ``(ox, oy)``, summed from 0 in
     feature order as the numpy path's ``sum``; ``t`` is ``log1p`` (float32) or the identity."""
@@ -80,7 +86,7 @@ def _scan_value(img, base, ox, oy, tab, index, coef, n, log1p, border, buf, mean
     means_at(img, base, ox, oy, sets, feats, index, border, buf, means, 0)
     acc = 0.0
     for f in range(feats.shape[0]):
-        m = np.log1p(means[f]) if log1p else means[f]
+        m = _log1p32(means[f]) if log1p else means[f]
         acc = acc + coef[n, f] * np.float64(m)
     return acc
 
@@ -142,16 +148,16 @@ def _dot(m, coef, n, log1p):
     while nf - k >= 8:
         for blk in range(3, -1, -1):
             i = k + 2 * blk
-            v0 = np.log1p(m[i]) if log1p else m[i]
-            v1 = np.log1p(m[i + 1]) if log1p else m[i + 1]
+            v0 = _log1p32(m[i]) if log1p else m[i]
+            v1 = _log1p32(m[i + 1]) if log1p else m[i + 1]
             a0 = np.float64(v0) * coef[n, i] + a0
             a1 = np.float64(v1) * coef[n, i + 1] + a1
         k += 8
     while k < nf:
-        v0 = np.log1p(m[k]) if log1p else m[k]
+        v0 = _log1p32(m[k]) if log1p else m[k]
         a0 = np.float64(v0) * coef[n, k] + a0
         if k + 1 < nf:
-            v1 = np.log1p(m[k + 1]) if log1p else m[k + 1]
+            v1 = _log1p32(m[k + 1]) if log1p else m[k + 1]
             a1 = np.float64(v1) * coef[n, k + 1] + a1
         k += 2
     return 0.0 + (a0 + a1)

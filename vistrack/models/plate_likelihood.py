@@ -120,6 +120,14 @@ def _grid_points(rects, per_unit=24):
     return np.concatenate(pts)
 
 
+
+def log1p32(v):
+    """``log(1 + v)`` of float32 means, computed in float64 and rounded to float32: the same
+    bits as the compiled kernels' on any CPU (numpy's float32 ``log1p`` is a SIMD routine on
+    AVX-512 machines that differs from libm's by an ulp; rounding the float64 value hides the
+    float64 routines' differences)."""
+    return np.log1p(np.asarray(v, dtype=np.float64)).astype(np.float32)
+
 class PlateLikelihood:
     """The plate likelihood ``r(y | u, w, θ, s)`` for poses ``(N, 4)`` (or states whose first
     four columns are the pose).
@@ -190,7 +198,7 @@ class PlateLikelihood:
         self.bias = np.broadcast_to(np.asarray(bias, float), 2).copy()
         self.learnt = weights is not None and weights is LEARNT_WEIGHTS.get(self.layout.name)
         #: learnt weights apply to ``log(1 + mean)``, the thesis's to the means themselves
-        self.transform = np.log1p if self.learnt else (lambda v: v)
+        self.transform = log1p32 if self.learnt else (lambda v: v)
         #: ``log r = sharpness · (w · features + bias)`` (the learnt coefficients give log-odds at 1)
         self.sharpness = float(sharpness)
         self.w *= self.sharpness
