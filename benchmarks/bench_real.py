@@ -27,9 +27,9 @@ import cv2
 import numpy as np
 
 import vistrack
+from vistrack.metrics import iou
 from vistrack.models.appearance import Appearance
 from vistrack.models.box import Box
-from vistrack.metrics import iou
 from vistrack.proposals import MapProposal
 from vistrack.runtime import keep_freed_memory
 from vistrack.video import groundtruth_origin, open_video, read_rects

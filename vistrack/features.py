@@ -304,7 +304,8 @@ class FeatureMaps:
         """:func:`colour_bins` of the frame, ``(H, W) uint8`` (cached per ``grey``)."""
         grey = bool(grey) or self.frame.ndim == 2
         if grey not in self._labels:
-            self._labels[grey] = colour_bins(self.frame, grey, dst=self._buf(f"labels{int(grey)}", self.shape, np.uint8))
+            self._labels[grey] = colour_bins(self.frame, grey,
+                                             dst=self._buf(f"labels{int(grey)}", self.shape, np.uint8))
         return self._labels[grey]
 
     @cached_property

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["center_error", "contour_lost_threshold", "plate_frame_measures", "lost_frames", "summarize_runs", "landmark_error", "iou", "success_auc",
-           "IOU_THRESHOLDS"]
+__all__ = ["center_error", "contour_lost_threshold", "plate_frame_measures", "lost_frames", "summarize_runs",
+           "landmark_error", "iou", "success_auc", "IOU_THRESHOLDS"]
 
 #: IoU thresholds of the success plot (OTB protocol)
 IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)

@@ -28,8 +28,8 @@ import numpy as np
 from ..builders import build_model
 from ..clips import load_clip
 from ..evaluation import entry_tasks, prepare_worker, write_task_result
-from ..metrics import plate_frame_measures
 from ..filters import make_filter
+from ..metrics import plate_frame_measures
 from ..particles import DegenerateWeightsWarning
 from ..tracking import track
 from .contour import ContourConfig
