@@ -183,7 +183,7 @@ def test_engine_workers_keep_freed_memory():
 
 
 def test_lost_rules_known_answers():
-    """The plate rule (DESIGN.md): lost where a plate is in view and none is reported, or the summed
+    """The plate rule (docs/architecture.md): lost where a plate is in view and none is reported, or the summed
     vertex error exceeds a third of the plate height; never in a frame without a plate. Without
     vertex truth, and for other models, the centre rule (50 px at 240-px width)."""
     from vistrack.metrics import lost_frames
