@@ -6,7 +6,6 @@ import warnings
 
 from vistrack.profiling import Timer  # noqa: F401  (the benchmarks import it from here)
 
-
 PARTS = ["decode", "features", "likelihood", "proposal", "resampling"]
 
 

@@ -46,7 +46,8 @@ def main():
     print(f"{'algo':<10} {'N':>6} {'ms/run':>8} {'x LIS':>6} {'final err':>10} {'mean err':>9}")
     for c in configs:
         e = np.array(err[c])
-        print(f"{c[0]:<10} {c[1]:>6} {1e3 * t[c] / n_runs:>8.2f} {t[c] / ref:>6.2f} {e[:, -1].mean():>10.5f} {e.mean():>9.5f}")
+        print(f"{c[0]:<10} {c[1]:>6} {1e3 * t[c] / n_runs:>8.2f} {t[c] / ref:>6.2f} "
+              f"{e[:, -1].mean():>10.5f} {e.mean():>9.5f}")
 
     # time split of one LIS step
     lis = filters[configs[0]]
@@ -54,7 +55,8 @@ def main():
     rng = np.random.default_rng(0)
     xs, ys = seqs[0]
     p = lis.first_step(ys[0], n, rng)
-    parts = dict.fromkeys(["1st stage+resample", "predict", "local proposal", "likelihood", "transition", "weights"], 0.0)
+    parts = dict.fromkeys(["1st stage+resample", "predict", "local proposal", "likelihood", "transition", "weights"],
+                          0.0)
     reps = 300
     for _ in range(reps):
         t0 = time.perf_counter()

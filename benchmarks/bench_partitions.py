@@ -19,7 +19,8 @@ once (bearings' stacked partitions) and group by group (the path of models witho
 after each step (their total weights are their own estimates of ``p(Y_t|Y_{1:t-1})``).
 
 An entry ``ALGO:N`` of ``--algos`` runs ``ALGO`` with ``N`` particles instead of ``-n`` (e.g. the
-equal-time counts of ``reproduce bearings --equal-time``). ``partitioned-reversed`` in ``--algos`` is partitioned sampling drawing the ships in the
+equal-time counts of ``reproduce bearings --equal-time``). ``partitioned-reversed`` in ``--algos`` is
+partitioned sampling drawing the ships in the
 reversed order (ship M first, ship 1 last), from the same seeds: does a ship's error depend
 on its place in the order? ``--paired`` prints, for every algorithm after the first, the
 paired differences (this algorithm − the first) of ship 1's, ship M's and the joint

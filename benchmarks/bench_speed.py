@@ -3,7 +3,8 @@ so that machine noise hits them alike).
 
 1. Decode-only rate of each clip (``open_video``, frames read and dropped) beside the ``vistrack
    run``-equivalent end-to-end rate (:func:`vistrack.session.track_video` on the prefetched frames,
-   the stage timers on, decode included; model building and the kernels' loading excluded, as start-up) of the three paths: contour
+   the stage timers on, decode included; model building and the kernels' loading excluded, as start-up)
+   of the three paths: contour
    LS-N-IPS-30 at 320x240, plate LIS-100 at 640x480 (synthetic; and the real dashcam clip with its
    appearance learned from the first box) and box LIS-100 at 640x480 (car4 resized). Target: end to
    end >= 25 % of decode-only.
@@ -14,7 +15,8 @@ so that machine noise hits them alike).
    (LIS-100) vs OpenCV's KCF on the real clips with ground truth (target: less than KCF). KCF is in
    opencv-contrib-python-headless; without it the column says so.
 
-    python benchmarks/bench_speed.py [--rounds 3] [--contour-frames 200] [--plate-frames 150] [--parts 1,2,3] [--only plate]
+    python benchmarks/bench_speed.py [--rounds 3] [--contour-frames 200] [--plate-frames 150] [--parts 1,2,3] \
+        [--only plate]
 
 ``--cpu`` times parts 2 and 3 in process CPU time (``time.process_time``) instead of wall time: on a
 machine loaded by other work, wall time mostly measures the scheduler (part 1 stays wall time: its
@@ -219,7 +221,8 @@ def main():
     CLOCK = time.process_time if args.cpu else time.perf_counter
     cv2.setNumThreads(1)
     if opencv_tracker("KCF") is None:
-        print(f"KCF is not in this OpenCV ({cv2.__version__}): its column is nan (opencv-contrib-python-headless has it)")
+        print(f"KCF is not in this OpenCV ({cv2.__version__}): its column is nan "
+              "(opencv-contrib-python-headless has it)")
     real = {name: real_clip(name) for name in REAL if (DATA / name).is_dir() and args.only in (None, "box")}
     with tempfile.TemporaryDirectory() as d:
         paths = [p for p in clips(Path(d), args) if Path(p[1]).is_dir()] if {1, 2} & set(parts) else []

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 import vistrack
+from cli_helpers import run
 from vistrack.builders import model_from_box
 from vistrack.clips import read_groundtruth_csv
 from vistrack.features import FeatureMaps
 from vistrack.models.collapse import REASONS, CollapseWatch
-from cli_helpers import run
 
 GONE = 20  # the object vanishes from this frame on
 BOX = (36, 42, 28, 36)  # its first box (x, y, w, h)

@@ -8,8 +8,8 @@ import matplotlib.image as mpimg
 import numpy as np
 import pytest
 
-from vistrack.data_synth.contour import make_contour_clip
 from cli_helpers import run
+from vistrack.data_synth.contour import make_contour_clip
 
 SUMMARY_KEYS = {"clip", "algo", "particles", "runs", "mean_error", "p_lost", "p_lost_final", "p_lost_per_frame",
                 "error_per_frame", "success_auc", "success_curve", "precision_20px", "frames_per_s", "mean_ess",
@@ -183,7 +183,7 @@ def test_engine_workers_keep_freed_memory():
 
 
 def test_lost_rules_known_answers():
-    """The plate rule (DESIGN.md): lost where a plate is in view and none is reported, or the summed
+    """The plate rule (docs/architecture.md): lost where a plate is in view and none is reported, or the summed
     vertex error exceeds a third of the plate height; never in a frame without a plate. Without
     vertex truth, and for other models, the centre rule (50 px at 240-px width)."""
     from vistrack.metrics import lost_frames
@@ -199,7 +199,7 @@ def test_lost_rules_known_answers():
     np.testing.assert_array_equal(lost, [False, True, True, False, False])
     centre = lost_frames("centre", np.array([10.0, 70.0]), 320)  # threshold 66.7 px at 320 px
     np.testing.assert_array_equal(centre, [False, True])
-    no_vertices = {k: v for k, v in truth.items() if not k[0] in "xy"}
+    no_vertices = {k: v for k, v in truth.items() if k[0] not in "xy"}
     np.testing.assert_array_equal(lost_frames("plate", np.array([10.0, 70.0]), 320, truth=no_vertices,
                                               reported=[1, 1], vertices=est[:2], aspect=2.0), [False, True])
     with pytest.raises(ValueError, match="unknown lost rule"):

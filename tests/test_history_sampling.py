@@ -70,7 +70,8 @@ def test_unnormalised_weights_are_unbiased(algo, rest, opts):
     for key, truth in exact.items():
         e = est[key]
         se = e.std(ddof=1) / np.sqrt(len(e))
-        assert abs(e.mean() - truth) < 4.5 * se + 1e-12, f"{algo} {key}: {e.mean():.5g} vs exact {truth:.5g} (se {se:.2g})"
+        assert abs(e.mean() - truth) < 4.5 * se + 1e-12, \
+            f"{algo} {key}: {e.mean():.5g} vs exact {truth:.5g} (se {se:.2g})"
     # the self-normalised posterior mean: O(1/N) bias on top of Monte-Carlo error
     post = exact["u"] / exact["1"]
     assert abs(est["mean_u"].mean() - post) < 4.5 * est["mean_u"].std(ddof=1) / np.sqrt(REPS) + 0.02
@@ -150,7 +151,8 @@ def test_same_seed_same_particles():
 
 @pytest.mark.parametrize("algo", FAMILY)
 def test_model_without_split_is_one_clear_line(algo):
-    with pytest.raises(ValueError, match=rf"^{algo} needs a model with .*\(InnovationSplit\); GaussMixtureToy does not"):
+    with pytest.raises(ValueError,
+                       match=rf"^{algo} needs a model with .*\(InnovationSplit\); GaussMixtureToy does not"):
         make_filter(algo, GaussMixtureToy())
     assert algo in ALGORITHMS
 

@@ -15,13 +15,13 @@ import cv2
 import numpy as np
 import pytest
 
+from kernel_helpers import both
 from vistrack import kernels
 from vistrack.builders import build_model
 from vistrack.clips import load_clip
 from vistrack.features import FeatureMaps, bin_integrals, colour_bins, remap_points
 from vistrack.filters import make_filter
 from vistrack.tracking import FrameStepper, warm_up
-from kernel_helpers import both
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 
@@ -32,7 +32,8 @@ def track(clip, model_name, algo, n, frames, fast, seed=0, **build):
         warnings.simplefilter("ignore")
         model = build_model(model_name, clip, **build)
         stepper = FrameStepper(make_filter(algo, model), n, np.random.default_rng(seed))
-        return model, stepper, [stepper.step(i, f).particles.states.copy() for (i, f), _ in zip(clip.source, range(frames))]
+        return model, stepper, [stepper.step(i, f).particles.states.copy()
+                                for (i, f), _ in zip(clip.source, range(frames))]
 
 
 @pytest.fixture(scope="module")
@@ -176,7 +177,8 @@ def test_every_kernel_releases_the_gil():
 
     from numba.core.registry import CPUDispatcher
 
-    names = ["appearance", "bearings", "box", "box_frame", "contour", "contour_search", "plate", "plate_scan", "sampling"]
+    names = ["appearance", "bearings", "box", "box_frame", "contour", "contour_search", "plate", "plate_scan",
+             "sampling"]
     kernels = [(m, k, f) for m in names for k, f in vars(importlib.import_module(f"vistrack.kernels.{m}")).items()
                if isinstance(f, CPUDispatcher) and f.__module__ == f"vistrack.kernels.{m}"]
     assert len([k for _, k, _ in kernels if not k.startswith("_")]) > 25

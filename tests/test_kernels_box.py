@@ -16,11 +16,11 @@ import pytest
 
 import vistrack
 import vistrack.models.appearance
+from kernel_helpers import both
 from vistrack import kernels
 from vistrack.features import FeatureMaps
 from vistrack.models.collapse import CollapseWatch
 from vistrack.particles import ParticleSet
-from kernel_helpers import both
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 

@@ -11,11 +11,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from kernel_helpers import both
 from vistrack import kernels
 from vistrack.builders import build_model
 from vistrack.clips import load_clip
 from vistrack.features import FeatureMaps
-from kernel_helpers import both
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 

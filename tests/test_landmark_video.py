@@ -3,14 +3,12 @@
 import numpy as np
 import pytest
 
+from cli_helpers import run
 from vistrack.clips import load_clip, read_groundtruth_csv
 from vistrack.data_synth.landmarks import draw_blob, make_landmark_clip
 from vistrack.features import FeatureMaps, blob_peaks
 from vistrack.metrics import landmark_error
 from vistrack.video import open_video
-from cli_helpers import run
-
-
 
 
 @pytest.fixture(scope="module")

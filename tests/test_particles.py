@@ -73,7 +73,8 @@ def test_make_filter_errors_are_clear():
 
     with pytest.raises(ValueError, match="unknown algorithm 'nope'"):
         make_filter("nope", GaussMixtureToy())
-    with pytest.raises(ValueError, match="sir needs a model with sir_proposal .its proposal.; GaussMixtureToy does not"):
+    with pytest.raises(ValueError,
+                       match="sir needs a model with sir_proposal .its proposal.; GaussMixtureToy does not"):
         make_filter("sir", GaussMixtureToy())
 
 

@@ -11,13 +11,12 @@ import pytest
 from scipy import stats
 
 import vistrack
+from cli_helpers import run
 from vistrack.filters import ALGORITHMS, BranchedPartitioned, make_filter
 from vistrack.filters.branched_partitioned import cyclic_orderings
 from vistrack.models import Bearings, GaussMixtureToy
 from vistrack.models.partitions import IndependentTargets
 from vistrack.particles import ParticleSet
-
-from cli_helpers import run
 
 X_PREV = np.array([0.2, -0.1])
 Q = 1.0

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from vistrack.clips import load_clip
 from vistrack.cli import main
+from vistrack.clips import load_clip
 from vistrack.models.plate_layout import LAYOUTS, plate_vertices
 
 

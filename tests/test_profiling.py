@@ -2,16 +2,14 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 
+from test_box import clip_frames, obj_box, path
 from vistrack.builders import model_from_box
 from vistrack.filters import make_filter
 from vistrack.profiling import Timer
 from vistrack.session import track_video
-
-from test_box import clip_frames, obj_box, path
 
 
 def test_timer_counts_nested_calls_once():

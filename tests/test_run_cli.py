@@ -7,8 +7,8 @@ import cv2
 import numpy as np
 import pytest
 
-from vistrack.cli import main
 from cli_helpers import run
+from vistrack.cli import main
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 

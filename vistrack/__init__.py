@@ -13,4 +13,5 @@ try:
 except PackageNotFoundError:  # running from a source tree
     __version__ = "0.0.0+src"
 
-__all__ = ["Tracker", "ParticleSet", "DegenerateWeightsWarning", "ess", "logsumexp", "normalized_weights", "__version__"]
+__all__ = ["Tracker", "ParticleSet", "DegenerateWeightsWarning", "ess", "logsumexp", "normalized_weights",
+           "__version__"]

@@ -311,9 +311,11 @@ def _contour(clip, size, init, init_gt, template, params):
 _THESIS = ("lis", "bootstrap", "condensation", "ls-n-ips", "lls", "avpf")
 #: SIR and the history-sampling family (§3.2) with the colour-blob proposal: models with an innovation split
 _HISTORY = ("sir", "basic-sir", "hs-sir", "rb-hs-sir", "rb-ss-hs-sir")
-register(ModelSpec("box", _THESIS + _HISTORY, "any object from a box: colour + template appearance learned from the first frame",
+register(ModelSpec("box", _THESIS + _HISTORY,
+                   "any object from a box: colour + template appearance learned from the first frame",
                    from_box=_box_from_box, bytes_per_particle=32_000))
-register(ModelSpec("contour", _THESIS + _HISTORY + ("ls-n-ips-nn",), "B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
+register(ModelSpec("contour", _THESIS + _HISTORY + ("ls-n-ips-nn",),
+                   "B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
                    from_box=_contour_from_box, from_clip=_contour_from_clip, bytes_per_particle=48_000))
 #: with ``targets`` (several plates at once, :class:`~vistrack.models.plates.Plates`): partitioned sampling too
 PLATES_ALGOS = ("partitioned-lis", "partitioned", "branched-partitioned-lis", "branched-partitioned", "lis",

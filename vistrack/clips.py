@@ -1,4 +1,4 @@
-"""Clip folders: a video plus ground truth and metadata (DESIGN.md, Files).
+"""Clip folders: a video plus ground truth and metadata (docs/architecture.md, Conventions).
 
 A synthetic clip folder holds ``video.mp4``, ``groundtruth.csv`` (header row,
 one row per frame: ``frame, visible, cx, cy, w, h, angle_deg`` + model columns)

@@ -1,4 +1,4 @@
-"""Batch evaluation: clip × algorithm × N × run -> tasks -> results (DESIGN.md, evaluation protocol).
+"""Batch evaluation: clip × algorithm × N × run -> tasks -> results (docs/architecture.md, evaluation protocol).
 
 Every task tracks one clip once and writes its own result file
 ``tasks/<clip>__<algo>__N<n>__r<run>.json`` (written to a temporary name and

@@ -1,11 +1,11 @@
-"""Per-frame feature maps, computed once and lazily, shared by every particle (DESIGN.md).
+"""Per-frame feature maps, computed once and lazily, shared by every particle (docs/architecture.md).
 
 Grayscale ``float32``; Sobel ``gx``, ``gy`` (3x3, unnormalised: a unit step
 gives 4) and magnitude, also of the image smoothed by a Gaussian
 (:meth:`FeatureMaps.gradient`); difference-of-boxes DoG at two scales (thesis §1.3.2:
 "2D DoG filters approximated by the difference of two 2D box-filters"), and
 integral images of any map. All computed with OpenCV (5-15x faster than the
-scipy/scikit-image equivalents, DESIGN.md performance notes).
+scipy/scikit-image equivalents, docs/architecture.md, performance notes).
 
 Coordinates: maps are indexed ``[row, col] = [y, x]``; the API speaks ``(x, y)``.
 """
@@ -218,7 +218,7 @@ class FeatureMaps:
         return np.empty(shape, dtype) if b is None else b
 
     def _buf(self, name, shape, dtype=np.float32):
-        """A reusable output array (fresh arrays cost a page fault per 4 KiB, DESIGN.md);
+        """A reusable output array (fresh arrays cost a page fault per 4 KiB, docs/architecture.md);
         without a buffer pool, ``None`` (cv2 allocates)."""
         if self._buffers is None:
             return None
@@ -304,7 +304,8 @@ class FeatureMaps:
         """:func:`colour_bins` of the frame, ``(H, W) uint8`` (cached per ``grey``)."""
         grey = bool(grey) or self.frame.ndim == 2
         if grey not in self._labels:
-            self._labels[grey] = colour_bins(self.frame, grey, dst=self._buf(f"labels{int(grey)}", self.shape, np.uint8))
+            self._labels[grey] = colour_bins(self.frame, grey,
+                                             dst=self._buf(f"labels{int(grey)}", self.shape, np.uint8))
         return self._labels[grey]
 
     @cached_property

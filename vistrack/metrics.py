@@ -1,4 +1,4 @@
-"""Tracking errors and losses (DESIGN.md evaluation protocol; thesis §3.2.5, §4.5.3).
+"""Tracking errors and losses (docs/architecture.md, evaluation protocol; thesis §3.2.5, §4.5.3).
 
 - the reproductions of the thesis (``reproduce contour``; ``lost_rule="centre"``): centre
   distance (px); lost when it exceeds 50 px at the thesis's 240-px frame width, scaled with
@@ -6,7 +6,7 @@
 - ``eval`` and ``run`` on box-level ground truth (``lost_rule="size"``, as OTB users read
   it): lost when the centre error exceeds half the larger side of the true box — the
   object's own size, not the frame's;
-- plate (``lost_rule="plate"``, DESIGN.md): lost in a frame with a plate when no plate is
+- plate (``lost_rule="plate"``, docs/architecture.md): lost in a frame with a plate when no plate is
   reported or the summed vertex error exceeds a third of the plate height; a report in a
   frame without a plate is a false report (:func:`plate_frame_measures`);
 - P(lost) per frame is the fraction of runs lost; the mean error is over
@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["center_error", "contour_lost_threshold", "plate_frame_measures", "lost_frames", "summarize_runs", "landmark_error", "iou", "success_auc",
-           "IOU_THRESHOLDS", "box_scores"]
+__all__ = ["center_error", "contour_lost_threshold", "plate_frame_measures", "lost_frames", "summarize_runs",
+           "landmark_error", "iou", "success_auc", "IOU_THRESHOLDS", "box_scores"]
 
 #: IoU thresholds of the success plot (OTB protocol)
 IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)

@@ -9,7 +9,6 @@ import io
 import json
 from pathlib import Path
 
-
 from .tasks import write_atomic
 
 __all__ = ["MOT_CSV_COLUMNS", "write_mot_outputs"]
@@ -35,7 +34,8 @@ def _table(groups):
         lines.append(f"| {algo} | {n} | {s['runs']} | {fmt(s['mota'], '.3f')} | {fmt(s['idf1'], '.3f')} | "
                      f"{fmt(s['motp'], '.2f')} | {fmt(s['switches_per_run'], '.2f')} | "
                      f"{fmt(s['false_positives_per_run'], '.1f')} | {fmt(s['misses_per_run'], '.1f')} | "
-                     f"{s['empty_frame_reports']} (in {s['frames_without']} frames) | {fmt(s['ms_per_frame'], '.1f')} |")
+                     f"{s['empty_frame_reports']} (in {s['frames_without']} frames) | "
+                     f"{fmt(s['ms_per_frame'], '.1f')} |")
     return "\n".join(lines)
 
 

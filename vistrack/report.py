@@ -109,9 +109,11 @@ def _table(labels, first):
     out = [f"| {first} | mean error, all frames (px) | mean error, not lost (px) | P(lost) | P(lost) last frame | "
            "success AUC | precision@20px | frames/s |", "|---|---|---|---|---|---|---|---|---|"]
     for ss in labels.values():
-        out.append(f"| {ss[0]['algo']} | {ss[0]['particles']} | {_mean(ss, 'mean_error_all')} | {_mean(ss, 'mean_error')} | "
+        out.append(f"| {ss[0]['algo']} | {ss[0]['particles']} | {_mean(ss, 'mean_error_all')} | "
+                   f"{_mean(ss, 'mean_error')} | "
                    f"{np.mean([s['p_lost'] for s in ss]):.3f} | {np.mean([s['p_lost_final'] for s in ss]):.3f} | "
-                   f"{np.mean([s['success_auc'] for s in ss]):.3f} | {np.mean([s['precision_20px'] for s in ss]):.3f} | "
+                   f"{np.mean([s['success_auc'] for s in ss]):.3f} | "
+                   f"{np.mean([s['precision_20px'] for s in ss]):.3f} | "
                    f"{_mean(ss, 'frames_per_s', '.0f')} |")
     return "\n".join(out)
 

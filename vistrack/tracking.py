@@ -1,7 +1,7 @@
 """The tracking loop: frames -> feature maps -> one filter step per frame.
 
 Feature maps are computed once per frame and shared by every particle
-(DESIGN.md). The loop owns nothing but timing; what to do with each frame's
+(docs/architecture.md). The loop owns nothing but timing; what to do with each frame's
 result (CSV row, annotated frame, progress) is the caller's business.
 """
 

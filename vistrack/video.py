@@ -1,4 +1,4 @@
-"""Video sources and writers (DESIGN.md: open a file or an image-sequence folder).
+"""Video sources and writers (docs/architecture.md: open a file or an image-sequence folder).
 
 ``open_video(path)`` accepts
 

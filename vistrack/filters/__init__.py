@@ -1,6 +1,6 @@
 """Particle filters, one module per algorithm, all with ``step(particles, obs, rng)``.
 
-See DESIGN.md's algorithm table; aliases follow the literature's names.
+See the algorithm table of README.md and docs/architecture.md; aliases follow the literature's names.
 """
 
 from .avpf import AVPF

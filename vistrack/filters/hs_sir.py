@@ -30,7 +30,8 @@ class HSSIR(HistorySampling):
     resamples_first = False
 
     def sample(self, hist, obs, rng, kernel):
-        """Draw the new states ``(N, d)`` with sampled history indices and their log-weight increments ``(N,)`` (Fig. 3.4)."""
+        """Draw the new states ``(N, d)`` with sampled history indices and their log-weight increments ``(N,)``
+        (Fig. 3.4)."""
         n = len(hist.member)
         x1, log_pi = self.innovations(hist, obs, rng, kernel)
         ll = self._loglik(obs, x1, hist, kernel)

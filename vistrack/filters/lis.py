@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..proposals import GaussMixtureProposal
 from ..models.protocol import StateSpaceModel
+from ..proposals import GaussMixtureProposal
 from .base import ParticleFilter
 
 __all__ = ["LIS", "GaussMixtureProposal"]

@@ -19,9 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..models.protocol import GridLikelihood, LocalMoves, StateSpaceModel, offers
 from ..particles import logsumexp
 from ..proposals import Window, categorical_rows
-from ..models.protocol import GridLikelihood, LocalMoves, StateSpaceModel, offers
 from .base import ParticleFilter
 
 __all__ = ["LLS", "Window"]

@@ -24,7 +24,8 @@ class RBHSSIR(HistorySampling):
     name = "rb-hs-sir"
 
     def sample(self, hist, obs, rng, kernel):
-        """Draw the new states ``(N, d)`` with the history Rao-Blackwellised out of the weight, and their log-weight increments ``(N,)`` (Fig. 3.5)."""
+        """Draw the new states ``(N, d)`` with the history Rao-Blackwellised out of the weight, and their
+        log-weight increments ``(N,)`` (Fig. 3.5)."""
         n = len(hist.member)
         x1, log_pi = self.innovations(hist, obs, rng, kernel)
         idx, log_mix = associate(lambda rows: hist.log_w[None] + self.pair_logpdf(x1[rows], hist, kernel), n,

@@ -23,7 +23,8 @@ class RBSSHSSIR(HistorySampling):
     name = "rb-ss-hs-sir"
 
     def sample(self, hist, obs, rng, kernel):
-        """Draw the new states ``(N, d)`` (the proposal on ``X_{t,1a}``, ``K_1b`` for the rest) and their log-weight increments ``(N,)`` (Fig. 3.7)."""
+        """Draw the new states ``(N, d)`` (the proposal on ``X_{t,1a}``, ``K_1b`` for the rest) and their
+        log-weight increments ``(N,)`` (Fig. 3.7)."""
         n = len(hist.member)
         x1a, log_pi = self._proposed(n, obs, rng)
         idx, log_mix = associate(lambda rows: hist.log_w[None] + self.pair_logpdf(x1a[rows], hist, kernel), n,

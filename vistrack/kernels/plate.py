@@ -1,9 +1,10 @@
 """The plate likelihood's maps and pixel-set means (:mod:`~vistrack.models.plate_likelihood`), compiled.
 
-- :func:`plate_map` is ``PlateLikelihood.maps``: ``(|∇_x I|, |∇_y I|, |G_s I|, |G_l I|)`` in one pass from the Sobel maps and the box filters' integer
-  sums (scaled in double as OpenCV's normalised box filter does), and the four means (summed in
-  double: the sums of these values are exact, so their order does not matter), then each channel
-  divided by its mean (by its reciprocal in double: the same float32): equal to the numpy path.
+- :func:`plate_map` is ``PlateLikelihood.maps``: ``(|∇_x I|, |∇_y I|, |G_s I|, |G_l I|)`` in one pass from
+  the Sobel maps and the box filters' integer sums (scaled in double as OpenCV's normalised box filter does),
+  and the four means (summed in double: the sums of these values are exact, so their order does not
+  matter), then each channel divided by its mean (by its reciprocal in double: the same float32):
+  equal to the numpy path.
 - :func:`set_means` is ``PlateLikelihood._set_means`` of the sampled points: the points placed
   as ``plate_points`` places them (the same float64 arithmetic, ``tan θ`` given), each sampled in
   the channels its pixel set's features read only, as ``cv2.remap`` samples (bit for bit), and each

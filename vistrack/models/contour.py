@@ -20,7 +20,8 @@ Likelihood (Blake and Isard; §1.3.1)
     smoothed by a Gaussian of std ``gradient_sigma`` = 1 px, which damps sensor
     noise and the loss of motion-blurred edges). Edge features are the local
     maxima of ``|g · n_i|`` above ``τ = edge_threshold · mean|∇I|`` of the
-    frame whose direction is within ~32° of the contour's (``|g · n| >= 0.85 |g|``). With non-detection probability ``q`` and clutter density ``λ``
+    frame whose direction is within ~32° of the contour's (``|g · n| >= 0.85 |g|``). With non-detection
+    probability ``q`` and clutter density ``λ``
     (features per pixel of line), each line contributes
 
         log(1 + (1 / (sqrt(2π) σ q λ)) Σ_j exp(-ν_j² / (2 σ²)))
@@ -64,7 +65,7 @@ from .contour_colour import ContourColour
 from .contour_moves import ContourMoves
 from .innovation import ARInnovation
 from .protocol import VideoModelBase
-from .spline import BSpline, shape_matrices, edge_peaks, ellipse_template, pose_from, pose_params
+from .spline import BSpline, edge_peaks, ellipse_template, pose_from, pose_params, shape_matrices
 
 __all__ = ["BSpline", "Contour", "ellipse_template", "pose_from", "pose_params"]
 

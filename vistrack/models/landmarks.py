@@ -16,7 +16,7 @@ Observation (6): each landmark independently,
 with the circular complex Gaussian ``CN(y; μ, σ²) = exp(-|y - μ|²/σ²)/(πσ²)``.
 A NaN observation (a landmark with no candidate, from video) contributes nothing.
 
-The particle state is packed into one float row (DESIGN.md contract):
+The particle state is packed into one float row (the core contract, docs/architecture.md):
 ``[s, θ, c (2K-4), Re z (K), Im z (K), Re U (K(K-2)), Im U (K(K-2))]``;
 ``U`` and ``z`` are carried because ``g`` and ``f`` depend on them.
 

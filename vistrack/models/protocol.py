@@ -31,7 +31,8 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 __all__ = ["StateSpaceModel", "PredictMean", "LocalSearch", "LearnedSearch", "LocalMoves", "LLSModel", "GridLikelihood",
-           "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "InnovationSplit", "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
+           "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "InnovationSplit",
+           "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
 __all__ += ["Partitions", "PartitionLIS"]
 
 
@@ -216,7 +217,8 @@ class SIRModel(Protocol):
 
 @runtime_checkable
 class InnovationSplit(Protocol):
-    """A state split into innovation and history for the history-sampling family (thesis 001 §3.2, Assumption 3.2.1); see the module docstring."""
+    """A state split into innovation and history for the history-sampling family (thesis 001 §3.2,
+    Assumption 3.2.1); see the module docstring."""
     innovation_dim: int
     subspace_dim: int
 
@@ -224,7 +226,8 @@ class InnovationSplit(Protocol):
         """The history part ``X_{t,2} = f(X_{t-1})`` of new states, from ``prev (..., d)``."""
 
     def subspace_logpdf(self, x1a, prev):
-        """``log K_1a(x1a | prev)`` broadcast over leading axes: ``x1a (N, 1, a)`` against ``prev (1, C, d)`` gives ``(N, C)``."""
+        """``log K_1a(x1a | prev)`` broadcast over leading axes: ``x1a (N, 1, a)`` against ``prev (1, C, d)``
+        gives ``(N, C)``."""
 
     def rest_logpdf(self, x1b, x1a, prev):
         """``log K_1b(x1b | x1a, prev)``, broadcast as :meth:`subspace_logpdf`."""
@@ -245,7 +248,8 @@ class InnovationSplit(Protocol):
         """The state ``(N, d)`` of innovation ``x1 (N, k)`` with the history ``p_0`` gives it."""
 
     def innovation_proposal(self, kernel=None):
-        """``π(X_{t,1a} | Y_t)``: an object with ``sample(n, obs, rng) -> (n, a)`` and ``logpdf(x1a, obs) -> (n,)`` (§3.2.5's colour blobs)."""
+        """``π(X_{t,1a} | Y_t)``: an object with ``sample(n, obs, rng) -> (n, a)`` and ``logpdf(x1a, obs) -> (n,)``
+        (§3.2.5's colour blobs)."""
 
 
 @runtime_checkable

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["BSpline", "ellipse_template", "pose_from", "pose_params", "edge_peaks", "shape_matrices", "template_normals"]
+__all__ = ["BSpline", "ellipse_template", "pose_from", "pose_params", "edge_peaks", "shape_matrices",
+           "template_normals"]
 
 _M = np.array([[-1.0, 3, -3, 1], [3, -6, 3, 0], [-3, 0, 3, 0], [1, 4, 1, 0]]) / 6.0
 

@@ -5,4 +5,5 @@ from .grid import MapProposal, categorical_rows
 from .mixture import GaussMixtureProposal
 from .window import Window
 
-__all__ = ["BlobProposal", "GaussianColour", "SubspaceProposal", "MapProposal", "GaussMixtureProposal", "Window", "categorical_rows"]
+__all__ = ["BlobProposal", "GaussianColour", "SubspaceProposal", "MapProposal", "GaussMixtureProposal", "Window",
+           "categorical_rows"]

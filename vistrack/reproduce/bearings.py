@@ -20,9 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..models.bearings import simulate
 from ..filters import ALGORITHMS, filter_steps, make_filter
-from ..models.bearings import LIS_PROPOSALS, Bearings
+from ..models.bearings import LIS_PROPOSALS, Bearings, simulate
 from ..particles import DegenerateWeightsWarning
 
 __all__ = ["BearingsConfig", "run_bearings", "bearing_tasks", "run_bearing_task", "bearing_results", "DEFAULT_ALGOS",

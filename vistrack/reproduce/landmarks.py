@@ -23,9 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..models.landmarks import simulate
 from ..filters import make_filter
-from ..models.landmarks import Landmarks
+from ..models.landmarks import Landmarks, simulate
 from ..particles import DegenerateWeightsWarning, ParticleSet
 
 __all__ = ["LandmarksConfig", "PAPER", "run_landmarks", "landmarks_run", "landmark_tasks", "run_landmark_task",

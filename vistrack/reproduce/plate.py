@@ -7,7 +7,7 @@ frame whether a plate is reported (``Plate.visible``), the reported
 vertices and the time spent. Run ``r`` on clip ``c`` uses
 ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]`` for every algorithm.
 
-Measures (DESIGN.md): on frames with a plate, the vertex error is the sum of
+Measures (docs/architecture.md): on frames with a plate, the vertex error is the sum of
 the distances of the four vertices; the tracker is lost when it reports no
 plate or the vertex error exceeds one third of the true plate height.
 P(lost) per frame is the fraction of runs lost; the mean vertex error is over
@@ -28,8 +28,8 @@ import numpy as np
 from ..builders import build_model
 from ..clips import load_clip
 from ..evaluation import entry_tasks, prepare_worker, write_task_result
-from ..metrics import plate_frame_measures
 from ..filters import make_filter
+from ..metrics import plate_frame_measures
 from ..particles import DegenerateWeightsWarning
 from ..tracking import track
 from .contour import ContourConfig
