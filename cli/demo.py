@@ -9,8 +9,8 @@ import click
 
 from vistrack.clips import excerpt_clip
 from vistrack.data_synth.contour import make_contour_clip
-from vistrack.models.registry import DEFAULT_MODEL, get_model_spec
 from vistrack.evaluation import EvalConfig, load_task_results, summarize, task_list
+from vistrack.models.registry import DEFAULT_MODEL, get_model_spec
 from vistrack.report import write_eval_outputs
 from vistrack.video import VideoError
 

@@ -4,14 +4,13 @@ import json
 
 import numpy as np
 
+from cli_helpers import run
 from vistrack.cli.eval import eval_cmd
 from vistrack.cli.run import RUN_ALGOS
 from vistrack.data_synth.contour import make_contour_clip
 from vistrack.evaluation import check_algos
 from vistrack.models.registry import DEFAULT_MODEL, MODELS, all_algos
 from vistrack.video import VideoWriter
-
-from cli_helpers import run
 
 
 def square_clip(folder, frames=8):
