@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import sys
 import warnings
 
@@ -14,6 +15,7 @@ from vistrack.clips import load_clip
 from vistrack.filters import make_filter
 from vistrack.models.registry import MODELS as MODEL_REGISTRY
 from vistrack.models.contour_nn import network_for
+from vistrack.models.plate_detect import PlateSearch
 from vistrack.models.registry import DEFAULT_MODEL, all_algos, get_model_spec
 from vistrack.runtime import check_particle_memory
 from vistrack.session import stop_on_signals, summary_lines, track_video
@@ -39,7 +41,7 @@ def model_options(name, *, layout, no_colour, template, targets=None):
         if name in ("plate", "box"):
             raise click.UsageError("--template is for the contour and landmarks models")
         opts["template"] = template
-    if layout is not None:
+    if layout not in (None, "auto"):
         if name != "plate":
             raise click.UsageError("--layout is for the plate model")
         opts["layout"] = layout
@@ -70,8 +72,9 @@ def lost_notice(most=5):
               help="Tracking model, any registered one [default: the clip's meta.json model; else box when --init or --init-gt "
                    "is given (any object: colour and template learned from the first frame); else plate, "
                    "which finds plates by itself].")
-@click.option("--layout", type=click.Choice(["jp", "single-row"]), default=None,
-              help="Plate layout [default: the clip's, else jp].")
+@click.option("--layout", type=click.Choice(["auto", "jp", "single-row"]), default="auto", show_default=True,
+              help="Plate layout: auto decides between the two-row Japanese (jp) and the single-row layout from "
+                   "the clip, the --init box's aspect ratio or the plate found.")
 @click.option("--algo", default=None, type=click.Choice(RUN_ALGOS),
               help="Particle filter [default: lis; pf-eis-mt for landmarks]. Contour and box also run sir and "
                    "the history-sampling family of thesis §3.2 (basic-sir, hs-sir, rb-hs-sir, rb-ss-hs-sir), "
@@ -154,13 +157,30 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
         raise click.UsageError("--results writes one box per frame: not with --targets (use --track)")
     clip, name, algo, model = _setup(video, model_name, algo, search, particles, init, init_gt, quiet,
                                      layout=layout, no_colour=no_colour, template_path=template_path, targets=targets)
+    frames, lead = _frames(clip.source, max_frames), ()
+    if isinstance(model, PlateSearch):  # real footage without a box: find the plate first
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", VideoDecodeWarning)
+                model, found, lead = model.start(frames)
+        except VideoError as e:
+            raise click.ClickException(str(e)) from None
+        if model is None:
+            raise click.ClickException(
+                f"no license plate found in the first {len(lead)} frames of {video}; give its box: "
+                f"vistrack run {video} --init x,y,w,h")
+        frames = itertools.chain([found[:2]], frames)
+        if not quiet:
+            b = found[2].box
+            click.echo(f"plate found in frame {found[0]} at {b[0]:.0f},{b[1]:.0f},{b[2]:.0f},{b[3]:.0f} "
+                       f"({found[2].layout} layout)", err=True)
     try:
         filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)
     except ValueError as e:
         raise click.ClickException(str(e)) from None
     outputs = {"track_path": track_path, "out_path": out_path, "results_path": results_path}
-    done = _track(clip, model, filt, particles, seed, max_frames, show_particles, quiet, f"{algo} N={particles}",
-                  outputs)
+    done = _track(clip, frames, model, filt, particles, seed, max_frames, show_particles, quiet,
+                  f"{algo} N={particles}", outputs, lead)
     _report(video, clip, done, name, model, particles, quiet, outputs)
 
 
@@ -201,19 +221,20 @@ def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, 
     return clip, name, algo, model
 
 
-def _track(clip, model, filt, particles, seed, max_frames, show_particles, quiet, label, outputs):
-    """:func:`~vistrack.session.track_video` over the clip with a progress bar; stops cleanly on
-    SIGINT/SIGTERM (the outputs so far kept)."""
+def _frames(src, max_frames):
+    """The ``(index, frame)`` pairs of ``src`` (decoded ahead), up to ``max_frames``."""
+    for i, f in prefetch(src):
+        if max_frames is not None and i >= max_frames:
+            return
+        yield i, f
+
+
+def _track(clip, frames, model, filt, particles, seed, max_frames, show_particles, quiet, label, outputs, lead=()):
+    """:func:`~vistrack.session.track_video` over ``frames`` with a progress bar (``lead``: the frames
+    searched before them); stops cleanly on SIGINT/SIGTERM (the outputs so far kept)."""
     src = clip.source
     total = src.frame_count if max_frames is None else min(max_frames, src.frame_count or max_frames)
-
-    def frames():
-        for i, f in prefetch(src):
-            if max_frames is not None and i >= max_frames:
-                return
-            yield i, f
-
-    bar = tqdm(total=total, unit="frame", disable=quiet, dynamic_ncols=True, desc=label)
+    bar = tqdm(total=total, unit="frame", disable=quiet, dynamic_ncols=True, desc=label, initial=len(lead))
 
     def progress(ess):
         bar.update(1)
@@ -222,9 +243,9 @@ def _track(clip, model, filt, particles, seed, max_frames, show_particles, quiet
     try:  # skipped frames: one line below, not the decoder's warning too
         with stop_on_signals(), warnings.catch_warnings():
             warnings.simplefilter("ignore", VideoDecodeWarning)
-            return track_video(frames(), model, filt, particles, np.random.default_rng(seed),
+            return track_video(frames, model, filt, particles, np.random.default_rng(seed),
                                video_info=(src.fps, src.size), show_particles=show_particles, label=label,
-                               progress=progress, notify=None if quiet else lost_notice(), **outputs)
+                               progress=progress, notify=None if quiet else lost_notice(), lead=lead, **outputs)
     except (VideoError, OSError) as e:
         raise click.ClickException(str(e)) from None
     finally:

@@ -44,7 +44,7 @@ from vistrack.video import VideoWriter
 
 from .render import add_noise, atomic_clip, lighting, motion_blur, smooth_noise, write_clip_files
 
-__all__ = ["render_plate", "make_plate_clip"]
+__all__ = ["render_plate", "make_plate_clip", "detection_frames"]
 
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
 _FONT_BOLD = cv2.FONT_HERSHEY_DUPLEX
@@ -315,3 +315,40 @@ def make_plate_clip(out, *, frames=300, size=(640, 480), seed=0, cars=3, layout=
     write_clip_files(out, rows, COLUMNS, meta)
     write_track_csv(out / "objects.csv", objects, OBJECT_COLUMNS)
     return meta
+
+
+def detection_frames(n, *, layout="jp", seed=0, size=(640, 480), widths=(90.0, 180.0), with_plate=True):
+    """``n`` still road scenes for the plate detector: the scene of :func:`make_plate_clip` (buildings,
+    text signs, grilles, lane marks) and, with ``with_plate``, one car whose plate (``layout``) is
+    ``widths`` px wide (uniform), sheared by ±6°, parked in the lower half; lighting and sensor noise
+    as in the clips (no motion blur: a car the detector has to find first is a car in view).
+
+    Returns ``(frames, boxes)``: BGR uint8 frames and each plate's bounding box ``(x, y, w, h)``
+    (``None`` without a plate)."""
+    w, h = int(size[0]), int(size[1])
+    lay = LAYOUTS[layout]
+    rng = np.random.default_rng(seed)
+    frames, boxes = [], []
+    for _ in range(n):
+        img = _background((w, h), rng)
+        box = None
+        if with_plate:
+            plate = render_plate(lay, rng, 240)
+            sprite, alpha, (px0, py0) = _car_sprite(plate, rng)
+            s = rng.uniform(*widths)
+            scale = s / plate.shape[1]
+            th = np.deg2rad(rng.uniform(-6, 6))
+            pcx, pcy = px0 + plate.shape[1] / 2, py0 + plate.shape[0] / 2
+            xc, yc = rng.uniform(0.25, 0.75) * w, rng.uniform(0.62, 0.8) * h
+            m = np.array([[scale, 0, xc - scale * pcx],
+                          [scale * np.tan(th), scale, yc - scale * (pcy + np.tan(th) * pcx)]], np.float32)
+            car = cv2.warpAffine(sprite, m, (w, h), flags=cv2.INTER_AREA)
+            a = cv2.warpAffine(alpha, m, (w, h), flags=cv2.INTER_LINEAR)[..., None]
+            img = img * (1 - a) + car * a
+            v = plate_vertices(np.array([[xc, yc, th, s]]), lay.aspect)[0]
+            lo, hi = v.min(axis=0), v.max(axis=0)
+            box = np.array([lo[0], lo[1], hi[0] - lo[0], hi[1] - lo[1]])
+        img = img * lighting((w, h), int(rng.integers(0, 300)), rng.uniform(0, 2 * np.pi), amplitude=0.2)
+        frames.append(np.clip(add_noise(img, rng, 4.0), 0, 255).astype(np.uint8))
+        boxes.append(box)
+    return frames, boxes

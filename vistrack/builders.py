@@ -128,6 +128,7 @@ def _contour_from_box(frame, box, *, polarity="auto", colour="auto", template=No
 
 def _plate_from_frame_box(frame, box, *, appearance=True, layout=None, **params):
     size = (frame.shape[1], frame.shape[0])
+    layout = None if layout == "auto" else layout
     return _plate_from_box(size, box, layout, params, frame if appearance else None)
 
 
@@ -195,7 +196,7 @@ def _plate_from_clip(clip, *, init, init_gt, template, targets=None, **params):
         from .models.plates import Plates
 
         params.pop("appearance", None)
-        layout = params.pop("layout", None) or (clip.meta or {}).get("layout") or "jp"
+        layout = _layout(params) or (clip.meta or {}).get("layout") or "jp"
         return Plates(clip.source.size, targets, layout, **params)
     return _plate(clip, clip.source.size, init, init_gt, params)
 
@@ -239,18 +240,41 @@ def _landmarks(clip, size, init_gt, template, params):
 
 
 def _plate(clip, size, init, init_gt, params):
-    """Plate model; without a start it acquires plates through the entering-car component.
-    The layout is the given one, the clip's, the one nearest the start box's aspect ratio, or jp."""
+    """Plate model; without a start, on a rendered clip it acquires plates through the entering-car
+    component, on real footage (the appearance on) it is a
+    :class:`~vistrack.models.plate_detect.PlateSearch` that finds the plate in the first frames and
+    starts there. The layout is the given one, the clip's, the one nearest the start box's aspect
+    ratio, the detection's, or jp."""
     box = init
     if box is None and init_gt is not None:
         row = initial_truth(clip, init_gt)
         box = (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"])
-    layout = params.pop("layout", None) or (clip.meta or {}).get("layout")
+    layout = _layout(params) or (clip.meta or {}).get("layout")
     appearance = params.pop("appearance", "auto")
     if appearance == "auto":  # a rendered clip: the plate likelihood alone, as the thesis experiments
         appearance = not (clip.meta or {}).get("model")
+    if box is None and appearance:  # real footage without a box: find the plate first (PlateSearch)
+        from .models.plate_detect import PlateSearch
+
+        def build(frame, det):
+            # one plate found on real footage, its appearance learned: no entering-car births (they
+            # take the track to other plate-like structure: dashcam from the first box, LIS-100
+            # seeds 1-3, AUC 0.35 / 0.85 / 0.48 with the births, 0.87 / 0.90 / 0.88 without;
+            # docs/experiments.md). --init keeps them: a plate moving 4 px/frame is lost without
+            # the entering search (tests/test_plate_appearance.py)
+            return _plate_from_box(size, det.box, layout or det.layout,
+                                   {"enter_weight": 0.0, "birth_reserve": 0.0, **params}, frame)
+
+        return PlateSearch(build)
     frame = _first_frame(clip) if appearance and box is not None else None
     return _plate_from_box(size, box, layout, params, frame)
+
+
+def _layout(params):
+    """The ``layout`` parameter taken out of ``params``; ``None`` for none or ``"auto"`` (decided
+    from the clip, the start box or the detection)."""
+    layout = params.pop("layout", None)
+    return None if layout == "auto" else layout
 
 
 def _plate_from_box(size, box, layout, params, frame=None):

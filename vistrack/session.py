@@ -177,7 +177,7 @@ def target_rows(model, res):
 
 
 def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, results_path=None,
-                video_info=None, show_particles=10, label="", progress=None, notify=None, profile=True):
+                video_info=None, show_particles=10, label="", progress=None, notify=None, profile=True, lead=()):
     """Track ``frames`` (iterable of ``(index, frame)``), writing the track CSV and annotated video as
     it goes; stops cleanly on Ctrl-C / SIGTERM (:func:`stop_on_signals`). Returns a :class:`VideoRun`.
 
@@ -203,6 +203,10 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     profile : bool
         Time the stages (:mod:`vistrack.profiling`) into ``VideoRun.timer``; the tracks are
         the same either way.
+    lead : sequence of (int, ndarray)
+        Frames before ``frames`` that were searched for the object without finding it
+        (:class:`~vistrack.models.plate_detect.PlateSearch`): each gets a row with ``visible=0``
+        and ``lost_reason`` "not found" (NaN geometry), and its frame unmarked in the video.
     """
     run = VideoRun()
     run.timer = Timer() if profile else None
@@ -214,6 +218,14 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     outs = [TrackCSV(track_path)] if track_path else []
     if results_path:
         outs.append(TrackCSV(results_path, boxes=True))
+    for index, frame in lead:
+        row = {"frame": index, "visible": 0, **model.describe(np.full(model.dim, np.nan)),
+               "ess": 0.0, "ms": 0.0, "lost_reason": "not found"}
+        run.rows.append(row)
+        for o in outs:
+            o.write(row)
+        if writer:
+            writer.write(annotate(frame, [], [], f"#{index}  {label}  searching"))
     t0 = time.perf_counter()
     try:
         with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
@@ -294,7 +306,7 @@ def summary_lines(run, particles, *, model_name, model, truth, frame_width, obje
     AUC, precision at 20 px and centre error for box-level truth; for several targets, MOTA and
     IDF1 against ``objects``, the columns of the clip's ``objects.csv``)."""
     rows, n = run.rows, len(run.rows)
-    ms = np.array([r["ms"] for r in rows])
+    ms = np.array([r["ms"] for r in rows if r["ess"] > 0] or [np.nan])  # not the frames searched (lead)
     lines = [f"{n} frames, {n / max(run.wall, 1e-9):.0f} frames/s end to end ({1e3 / ms.mean():.0f} frames/s in "
              f"the filter), mean ESS {run.ess_sum / n:.1f} of {particles}"
              + (f", {run.degenerate} degenerate frames" if run.degenerate else "")]
@@ -363,10 +375,14 @@ def _box_summary(rows, t, frame_width):
     ious = iou(np.column_stack([est[:, :2] - est[:, 2:] / 2, est[:, 2:]]),
                np.column_stack([t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k]]))
     vis = (t["w"][k] > 0) & (t["h"][k] > 0)
-    lost = lost_frames("size", err, frame_width, truth={"w": t["w"][k], "h": t["h"][k]}) & vis
+    searched = np.isnan(err)  # frames searched before the object was found: no estimate, lost
+    lost = (lost_frames("size", np.nan_to_num(err), frame_width, truth={"w": t["w"][k], "h": t["h"][k]})
+            | searched) & vis
     tracked = f"{err[vis & ~lost].mean():.2f} px" if (vis & ~lost).any() else "none"
     n = int(vis.sum())
+    mean = f"{err[vis & ~searched].mean():.2f} px" if (vis & ~searched).any() else "n/a"
     return (f"vs ground truth ({n} frames with the object): success AUC {success_auc(ious[vis]):.3f}, precision@20px "
-            f"{np.mean(err[vis] <= 20):.3f}, mean centre error {err[vis].mean():.2f} px over all of them "
-            f"({tracked} over tracked frames); lost (centre error > half the object's larger side) in "
+            f"{np.mean(err[vis] <= 20):.3f}, mean centre error {mean} over all of them"
+            + (f" but the {int((vis & searched).sum())} searched before it was found" if (vis & searched).any() else "")
+            + f" ({tracked} over tracked frames); lost (centre error > half the object's larger side) in "
             f"{int(lost.sum())} frames")

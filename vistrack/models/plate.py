@@ -179,7 +179,8 @@ class Plate(VideoModelBase):
     def transition_logpdf(self, new, old):
         """``log K(new|old)`` for the branch ``new`` came from (AR(2) or entering car)."""
         ar = np.log1p(-self.enter_weight) + diag_logpdf(new[:, :4], self.predict_mean(old)[:, :4], self.sigma)
-        ent = np.log(self.enter_weight) + self.enter_logpdf(new[:, :4])
+        with np.errstate(divide="ignore"):  # enter_weight 0 (a plate found on real footage): no births
+            ent = np.log(self.enter_weight) + self.enter_logpdf(new[:, :4])
         return np.where(self.entering(new), ent, ar)
 
     def estimate(self, particles):
