@@ -114,9 +114,10 @@ def run_vistrack(frames, gt, seed, model=None, algo=None, n=None):
     out = np.zeros_like(gt)
     t0 = time.perf_counter()
     t.init(frames[k], box)
-    out[k] = t.box
+    out[k] = t.box_estimate  # the float estimate (update's box is rounded, as OpenCV's)
     for i in range(k + 1, len(frames)):
-        out[i] = t.update(frames[i])[1]
+        t.update(frames[i])
+        out[i] = t.box_estimate
     return out, time.perf_counter() - t0
 
 

@@ -23,6 +23,7 @@ from .reproduce import reproduce
 from .run import run
 from .synth import synth, synth_suite
 from .train_search import train_search
+from .trax import trax
 
 __all__ = ["cli", "main"]
 
@@ -57,6 +58,7 @@ cli.add_command(run)
 cli.add_command(synth)
 cli.add_command(synth_suite)
 cli.add_command(train_search)
+cli.add_command(trax)
 
 
 @contextmanager

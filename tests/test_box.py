@@ -224,7 +224,7 @@ def test_run_defaults_to_box_with_init_and_equals_the_python_api(tmp_path, capsy
     frames = [f for _, f in open_video(video)]  # decoded as run decodes them
     t = vistrack.Tracker(seed=4)
     t.init(frames[0], (x, y, w, h))
-    api = [t.box] + [t.update(f)[1] for f in frames[1:]]
+    api = [t.box_estimate] + [t.update(f) and t.box_estimate for f in frames[1:]]
     np.testing.assert_allclose(track["cx"], [b[0] + b[2] / 2 for b in api], atol=1e-3)
     np.testing.assert_allclose(track["w"], [b[2] for b in api], atol=1e-3)
     assert list(track)[:8] == ["frame", "visible", "cx", "cy", "w", "h", "angle_deg", "scale"]

@@ -157,7 +157,7 @@ def test_box_tracks_with_kernels_are_the_numpy_paths_and_repeat():
     def run():
         t = vistrack.Tracker(model="box", particles=50, seed=3)
         t.init(frames[0], box)
-        return np.array([t.update(f)[1] for f in frames[1:]])
+        return np.array([t.update(f) and t.box_estimate for f in frames[1:]])
 
     a, b = both(run)
     np.testing.assert_allclose(b, a, atol=1e-9)

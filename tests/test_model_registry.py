@@ -112,7 +112,8 @@ def test_every_allowed_filter_tracks_the_registered_point(point_model, algo):
     t.init(fr[0], start_box())
     err = []
     for k in range(1, len(fr)):
-        _, (x, y, w, h) = t.update(fr[k])
+        t.update(fr[k])
+        x, y, w, h = t.box_estimate
         err.append(np.hypot(x + w / 2 - centre(k)[0] - 0.5, y + h / 2 - centre(k)[1] - 0.5))
     assert np.max(err) < 3.0, err
 

@@ -90,8 +90,8 @@ class Tracker:
         return True
 
     def update(self, frame):
-        """Track ``frame``; returns ``(ok, (x, y, w, h))`` with ``ok`` whether the model reports
-        the object (``False`` where its estimate collapsed: :attr:`lost_reason`)."""
+        """Track ``frame``; returns ``(ok, (x, y, w, h))`` (integers, as :attr:`box`) with ``ok``
+        whether the model reports the object (``False`` where its estimate collapsed: :attr:`lost_reason`)."""
         if self._stepper is None:
             raise RuntimeError("call init(frame, box) before update(frame)")
         self._index += 1
@@ -100,8 +100,20 @@ class Tracker:
 
     @property
     def box(self):
-        """The last estimate as ``(x, y, w, h)`` floats."""
+        """The last estimate's box as ``(x, y, w, h)`` integers, as OpenCV's trackers give it (it
+        draws with ``cv2.rectangle(frame, tracker.box, colour)``); :attr:`box_estimate` has the floats."""
+        return tuple(int(round(v)) for v in self.box_estimate)
+
+    @property
+    def box_estimate(self):
+        """The last estimate as ``(x, y, w, h)`` floats (sub-pixel; what ``vistrack run`` writes)."""
         return tuple(float(v) for v in self.model.box(self.result.estimate)[0])
+
+    def __repr__(self):
+        where = "not started" if self.result is None else f"frame {self._index}, box={self.box}, " \
+            f"visible={self.visible}"
+        return (f"Tracker(model={self.model_name!r}, algo={self.algo!r}, particles={self.n}, seed={self.seed!r}; "
+                f"{where})")
 
     @property
     def visible(self):

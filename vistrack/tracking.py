@@ -50,6 +50,12 @@ class FrameResult:
         """Whether the object is reported at the estimate (the track CSV's ``visible``)."""
         return not self.lost_reason
 
+    def __repr__(self):
+        est = np.array2string(np.asarray(self.estimate, float), precision=2, separator=", ")
+        lost = f", lost_reason={self.lost_reason!r}" if self.lost_reason else ""
+        return (f"FrameResult(index={self.index}, estimate={est}, ess={self.ess:.1f}, ms={self.ms:.2f}, "
+                f"particles={self.particles.n}{lost})")
+
 
 def top_particles(particles, k):
     """States of the ``k`` highest-weight particles, best first."""

@@ -1,0 +1,38 @@
+"""``vistrack trax``: vistrack as a tracker of the VOT toolkit, over the TraX protocol."""
+
+from __future__ import annotations
+
+import click
+
+from vistrack.models.registry import DEFAULT_MODEL
+
+from .options import SEED
+
+__all__ = ["trax"]
+
+
+@click.command()
+@click.option("--model", default=DEFAULT_MODEL, show_default=True, help="Tracking model (any that starts from a box).")
+@click.option("--algo", default=None, help="Particle filter [default: the model's].")
+@click.option("-n", "--particles", default=100, show_default=True, type=click.IntRange(min=1),
+              help="Number of particles N.")
+@click.option("--seed", default=0, show_default=True, type=SEED, help="Random seed (same seed, same boxes).")
+def trax(model, algo, particles, seed):
+    """Serve one TraX session on standard input and output (the VOT toolkit starts this command;
+    the boxes equal `vistrack run FRAMES --init x,y,w,h` with the same options and seed).
+    Needs the optional vot-trax package: pip install "vistrack[trax]".
+
+    \b
+    trackers.ini:
+      [vistrack]
+      label = vistrack
+      protocol = trax
+      command = vistrack trax --seed 0
+    """
+    from vistrack.trax import serve
+
+    try:
+        serve(model, algo, particles, seed)
+    except ImportError as e:
+        raise click.ClickException(f"vistrack trax needs the vot-trax package ({e}): pip install 'vistrack[trax]'") \
+            from None
