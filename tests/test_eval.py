@@ -154,7 +154,8 @@ def test_demo_writes_videos_tracks_and_reports(tmp_path, capsys):
     real_res = json.loads((out / "eval-real" / "results.json").read_text())["results"]
     assert [(r["algo"], r["particles"], r["runs"]) for r in real_res] == [("lis", 100, 2), ("opencv-mil", 1, 1)]
     assert len(real_res[0]["p_lost_per_frame"]) == 10  # the excerpt: the first 10 frames
-    assert "| opencv-mil | 1 |" in stdout and "| lis | 100 |" in stdout
+    # no N for a tracker without particles; its true run count (issue 37)
+    assert "| opencv-mil | – | 1 |" in stdout and "| lis | 100 | 2 |" in stdout
 
 
 def test_demo_skips_a_missing_real_clip(tmp_path, capsys, monkeypatch):

@@ -297,6 +297,8 @@ def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=No
         "lost": lost_frames(rule, err, clip.source.size[0], truth=t, reported=list(reported)[:m],
                             vertices=list(vertices)[:m], aspect=aspect).astype(int).tolist(),
         "iou": [float(v) for v in np.nan_to_num(iou(boxes, truth), nan=0.0)],
+        # the boxes themselves (x, y, w, h; None without an estimate): the report's annotated videos
+        "boxes": [None if not np.all(np.isfinite(b)) else [round(float(v), 3) for v in b] for b in boxes],
     }
 
 
@@ -327,7 +329,7 @@ def score_result_file(clip_path, path, name):
     boxes[~((boxes[:, 2] > 0) & (boxes[:, 3] > 0))] = np.nan
     result = score_boxes(clip, boxes)
     result.update({"clip": str(clip_path), "algo": name, "particles": 1, "run": 0, "ms": [],
-                   "ess": [None] * result["frames"]})
+                   "ess": [None] * result["frames"], "external": True})
     return result
 
 
@@ -353,8 +355,16 @@ def summarize(results):
         every = err[:, vis][np.isfinite(err[:, vis])]
         ms = np.array([np.mean(r["ms"]) if r["ms"] else np.nan for r in rs])
         ess = [e for r in rs for e in r["ess"] if e is not None]
+        # per run: the spread over runs of the scores below
+        auc_run = [float(np.mean([np.mean(v > th) for th in IOU_THRESHOLDS])) if v.size else 0.0 for v in ious]
+        prec_run = [float(np.mean(e <= 20.0)) if e.size else 0.0 for e in err[:, vis]]
+        lost_run = [float(v[vis].mean()) if vis.any() else 0.0 for v in lost]
         out.append({
             "clip": clip, "algo": algo, "particles": n, "runs": len(rs),
+            # OpenCV's trackers and other trackers' result files have no particles (their N means nothing)
+            "particle_filter": algo not in OPENCV_TRACKERS and not rs[0].get("external", False),
+            "success_auc_sd": float(np.std(auc_run)), "precision_20px_sd": float(np.std(prec_run)),
+            "p_lost_sd": float(np.std(lost_run)),
             "mean_error": float(err[ok].mean()) if ok.any() else None,
             "mean_error_all": float(every.mean()) if every.size else None,
             "p_lost": float(p_lost[vis].mean()) if vis.any() else 0.0,

@@ -57,29 +57,38 @@ def plot_error_vs_n(results, path, *, key="mean_error_final", err_key="std_error
     return path
 
 
-def plot_per_frame(curves, path, *, ylabel, title):
-    """One line per label: a per-frame curve (thesis Figs. 3.9–3.10, 4.15–4.16)."""
+def plot_per_frame(curves, path, *, ylabel, title, xlabel="frame"):
+    """One line per label: a per-frame curve (thesis Figs. 3.9–3.10, 4.15–4.16); ``curves`` maps a
+    label to ``y`` or to ``(x, y)`` (a normalised time axis)."""
     fig, ax = _subplots()
     for label, y in curves.items():
-        ax.plot(range(len(y)), y, lw=1.2, label=label)
-    ax.set_xlabel("frame")
+        x, y = y if isinstance(y, tuple) else (range(len(y)), y)
+        ax.plot(x, y, lw=1.2, label=label)
+    ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.set_title(title)
     return _finish(fig, ax, path)
 
 
 def plot_vs_n(summaries, path, *, key, ylabel, title=None):
-    """``key`` (averaged over clips) vs number of particles, one line per algorithm."""
+    """``key`` (averaged over clips) vs number of particles, one line per algorithm; trackers without
+    particles (``particle_filter`` false: OpenCV's, result files) are a dashed level, not a point at N = 1."""
     import numpy as np
 
     fig, ax = _subplots()
-    for algo in dict.fromkeys(s["algo"] for s in summaries):
-        ns = sorted({s["particles"] for s in summaries if s["algo"] == algo})
+    for i, algo in enumerate(dict.fromkeys(s["algo"] for s in summaries)):
+        rows = [s for s in summaries if s["algo"] == algo]
+        if not rows[0].get("particle_filter", True):
+            v = [s[key] for s in rows if s[key] is not None]
+            if v:
+                ax.axhline(np.mean(v), ls="--", lw=1.2, color=f"C{i % 10}", label=f"{algo} (no particles)")
+            continue
+        ns = sorted({s["particles"] for s in rows})
         ys = []
         for n in ns:
-            v = [s[key] for s in summaries if s["algo"] == algo and s["particles"] == n and s[key] is not None]
+            v = [s[key] for s in rows if s["particles"] == n and s[key] is not None]
             ys.append(np.mean(v) if v else np.nan)
-        ax.plot(ns, ys, marker="o", label=algo)
+        ax.plot(ns, ys, marker="o", color=f"C{i % 10}", label=algo)
     ax.set_xscale("log")
     ax.set_xlabel("number of particles N")
     ax.set_ylabel(ylabel)
