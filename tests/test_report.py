@@ -32,7 +32,8 @@ def report(tmp_path_factory):
     square_clip(d / "clips" / "a", 14)
     square_clip(d / "clips" / "b", 9)  # another length: the per-frame plots go to a normalised axis
     out = d / "ev"
-    code = subprocess.run([sys.executable, "-c", "from vistrack.cli import main; main()", "eval", str(d / "clips"), "--algos", "lis,opencv-mil", "--particles", "30",
+    code = subprocess.run([sys.executable, "-c", "from vistrack.cli import main; main()", "eval", str(d / "clips"),
+                           "--algos", "lis,opencv-mil", "--particles", "30",
                            "--runs", "2", "--in-process", "--workers", "1", "--out", str(out), "-q"],
                           capture_output=True, text=True)
     assert code.returncode == 0, code.stderr

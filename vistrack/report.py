@@ -273,7 +273,7 @@ def _cells(ss):
 def _table(labels, first):
     """A markdown table: one row per ``label -> [summaries]``, their averages (``±``: over runs)."""
     out = [f"| {first} | runs | mean error, all frames (px) | mean error, not lost (px) | P(lost) | "
-           "P(lost) last frame | success AUC | precision@20px | frames/s |", "|---|---|---|---|---|---|---|---|---|---|"]
+           "P(lost) last frame | success AUC | precision@20px | frames/s |", "|---" * 10 + "|"]
     for ss in labels.values():
         out.append("| " + " | ".join(_cells(ss)) + " |")
     return "\n".join(out)
