@@ -69,7 +69,8 @@ def _no_repeats(values, ptype, param, ctx):
     seen = set()
     for v in values:
         if v in seen:
-            ptype.fail(f"{v} is listed twice (each is run once: list it once)", param, ctx)
+            ptype.fail(f"{v if isinstance(v, int) or v.isprintable() else _short(v)} is listed twice (each is run "
+                       "once: list it once)", param, ctx)
         seen.add(v)
     return values
 

@@ -14,7 +14,7 @@ from .features import FeatureMaps, is_grey
 from .models.contour import Contour
 from .models.registry import MODELS as _REGISTRY
 from .models.registry import ModelSpec, get_model_spec, register
-from .video import VideoError, groundtruth_origin, read_rects
+from .video import VideoError, _short, groundtruth_origin, read_rects
 
 __all__ = ["MODELS", "PLATES_ALGOS", "initial_truth", "start_frame", "check_start_box", "build_model", "model_from_box",
            "read_support_points"]
@@ -127,7 +127,7 @@ def read_support_points(path):
             try:
                 rows.append([float(v) for v in parts])
             except ValueError:
-                raise VideoError(f"{p}, line {k}: expected two numbers x y, got {line!r}") from None
+                raise VideoError(f"{p}, line {k}: expected two numbers x y, got {_short(line)}") from None
             if len(parts) != 2:
                 raise VideoError(f"{p}, line {k}: expected two numbers x y, got {len(parts)}")
         pts = np.asarray(rows, dtype=float).reshape(-1, 2)
