@@ -234,42 +234,42 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     frames = _warmed(frames, filt, particles)
     if profile:
         frames = run.timer.timed_iter(frames, "decode")
-    outs, writer = [], None
-    try:  # an output another run holds (OutputBusy) or cannot write: none of them left behind
-        if track_path:
-            outs.append(TrackCSV(track_path))
-        if results_path:
-            outs.append(TrackCSV(results_path, boxes=True))
-        writer = VideoWriter(out_path, *video_info, codec="auto", atomic=True) if out_path else None
-    except BaseException:
-        _close_all(outs, writer)
-        raise
-    run.video_note = writer.note if writer else None
-    t0 = time.perf_counter()
-    try:
-        with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()), \
-                deferred_signals() as stop:
-            warnings.simplefilter("ignore", DegenerateWeightsWarning)
-            expected, last = 0, None
-            for res in track(frames, filt, particles, rng):
-                for i in range(expected, res.index):  # frames before the start, or that failed to decode
-                    _record_decode(run, i, res, model, outs, writer, label, notify, progress, i < start)
-                _record(run, res, model, outs, writer, show_particles, label, notify)
-                if progress:
-                    progress(run.rows[-1]["ess"])
-                expected, last = res.index + 1, res
-                if stop.reason:
-                    break
-            if stop.reason:
-                run.stopped = stop.reason
-            elif last is not None and frame_count:
-                for i in range(expected, int(frame_count)):
-                    _record_decode(run, i, last, model, outs, writer, label, notify, progress)
-    except (KeyboardInterrupt, SystemError) as e:  # Terminated is a KeyboardInterrupt
-        run.stopped = _stop_reason(e)
-    finally:
-        run.wall = time.perf_counter() - t0
-        _close_all(outs, writer)
+    with deferred_signals() as stop:  # from opening the outputs to closing them: a signal waits for the frame
+        outs, writer = [], None
+        try:  # an output another run holds (OutputBusy) or cannot write: none of them left behind
+            if track_path:
+                outs.append(TrackCSV(track_path))
+            if results_path:
+                outs.append(TrackCSV(results_path, boxes=True))
+            writer = VideoWriter(out_path, *video_info, codec="auto", atomic=True) if out_path else None
+        except BaseException:
+            _close_all(outs, writer)
+            raise
+        run.video_note = writer.note if writer else None
+        t0 = time.perf_counter()
+        try:
+            with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
+                warnings.simplefilter("ignore", DegenerateWeightsWarning)
+                expected, last = 0, None
+                for res in track(frames, filt, particles, rng):
+                    for i in range(expected, res.index):  # frames before the start, or that failed to decode
+                        _record_decode(run, i, res, model, outs, writer, label, notify, progress, i < start)
+                    _record(run, res, model, outs, writer, show_particles, label, notify)
+                    if progress:
+                        progress(run.rows[-1]["ess"])
+                    expected, last = res.index + 1, res
+                    if stop.reason:
+                        break
+                if not stop.reason and last is not None and frame_count:
+                    for i in range(expected, int(frame_count)):
+                        _record_decode(run, i, last, model, outs, writer, label, notify, progress)
+        except (KeyboardInterrupt, SystemError) as e:  # Terminated is a KeyboardInterrupt
+            run.stopped = _stop_reason(e)
+        finally:
+            run.wall = time.perf_counter() - t0
+            _close_all(outs, writer)
+        if stop.reason:  # a signal while the outputs were closed counts too
+            run.stopped = stop.reason
     return run
 
 
