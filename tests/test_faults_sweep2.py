@@ -485,6 +485,8 @@ def test_8_a_second_signal_while_the_outputs_close_is_waited_for(tmp_path):
     try:
         done = track_video(iter(clip.source), model, make_filter("lis", model), 30, np.random.default_rng(0),
                            track_path=track, out_path=out, video_info=(25.0, clip.source.size))
+    except KeyboardInterrupt:
+        pytest.fail("the signal escaped while the outputs were being closed")
     finally:
         TrackCSV.close = close
     assert done.stopped == "interrupt"
