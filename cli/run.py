@@ -127,8 +127,11 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     angle_deg, scale, the model's points (contour: support points qx0..,
     qy0..; plate: vertices x0..y3; landmarks: lx0.., ly0..), then ess, ms
     (time spent on the frame) and lost_reason (empty where visible=1; else
-    scale, outside, likelihood or "not found"). run says on which frames it
-    loses the object and why. With ground truth beside the video, the
+    scale, outside, likelihood or "not found"; "decode" for a frame that
+    failed to decode and "not started" before the first ground-truth box of
+    --init-gt: every frame of the input has a row). run says on which frames
+    it loses the object and why. Ctrl-C or SIGTERM stops it after the frame
+    in hand: the track, --results and --out then hold the same frames. With ground truth beside the video, the
     summary reports the centre error (landmarks: the mean landmark error).
 
     \b
