@@ -9,8 +9,10 @@
 
 Frames come as ``(index, frame)`` with ``frame`` a ``uint8`` BGR array of shape
 ``(H, W, 3)``; ``frame_count``, ``fps`` and ``size`` are known up front where the
-container says. A frame that fails to decode is skipped (its index is not yielded) and
-counted in a :class:`VideoDecodeWarning`; a path that is
+container says. An image folder's frames are read in natural order (``frame2`` before
+``frame10``; :class:`FrameOrderWarning` where the names leave it ambiguous) and must share one
+size. A frame that fails to decode is skipped (its index is not yielded; ``vistrack run``
+gives it a row of its own) and counted in a :class:`VideoDecodeWarning`; a path that is
 missing, not a video, or holds no frame raises :class:`VideoError` with one
 clear sentence.
 """
@@ -31,6 +33,9 @@ os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 __all__ = [
     "VideoError",
     "VideoDecodeWarning",
+    "FrameOrderWarning",
+    "natural_key",
+    "read_text_lines",
     "VideoSource",
     "open_video",
     "VideoWriter",
@@ -316,16 +321,16 @@ class VideoWriter:
     fps : float
     size : tuple of int
         ``(width, height)``; every frame must have it.
-    atomic : bool
-        Write under a temporary name beside ``path`` (:func:`vistrack.outputs.temporary_name`),
-        renamed over it by :meth:`close`, holding ``path``'s lock meanwhile
-        (:class:`vistrack.outputs.OutputLock`: a second writer is refused); ``path`` never
-        holds half a video and is never the same file as another writer's.
     codec : {"mp4v", "h264", "auto"}
         ``mp4v`` (MPEG-4 Part 2, OpenCV; the synthetic clips, whose decoded pixels the
         experiments depend on); ``h264`` through PyAV (libx264, ``yuv420p``: plays in browsers
         and Jupyter; an odd width or height is padded by one pixel); ``auto``: H.264 where PyAV
         can write it, else mp4v with :attr:`note` saying so.
+    atomic : bool
+        Write under a temporary name beside ``path`` (:func:`vistrack.outputs.temporary_name`),
+        renamed over it by :meth:`close`, holding ``path``'s lock meanwhile
+        (:class:`vistrack.outputs.OutputLock`: a second writer is refused); ``path`` never
+        holds half a video and is never the same file as another writer's.
 
     Attributes
     ----------
