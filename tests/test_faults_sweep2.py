@@ -207,11 +207,9 @@ def test_7_short_result_files_are_said_and_scored_as_not_reported(tmp_path, caps
         code, _, err = run(["eval", str(tmp_path / "c"), "--algos", "", "--results-dir", str(tmp_path / "mt"),
                             "--out", str(tmp_path / "e"), "-q"], capsys)
     assert code == 0, err
-    s = json.loads((tmp_path / "e" / "results.json").read_text())
-    summary = next(x for x in s["summaries"] if x["algo"] == "mt") if "summaries" in s else None
-    if summary is not None:
-        assert len(summary["p_lost_per_frame"]) == 10
-        assert summary["precision_20px"] == pytest.approx(0.6)
+    (summary,) = json.loads((tmp_path / "e" / "results.json").read_text())["results"]
+    assert summary["algo"] == "mt" and len(summary["p_lost_per_frame"]) == 10
+    assert summary["precision_20px"] == pytest.approx(0.6) and summary["p_lost"] == pytest.approx(0.4)
 
 
 def test_9_init_gt_starts_at_the_first_frame_with_a_box(tmp_path, capsys):
@@ -492,3 +490,12 @@ def test_8_a_second_signal_while_the_outputs_close_is_waited_for(tmp_path):
     assert done.stopped == "interrupt"
     assert len(rows_of(track)) == 6 and _decoded_frames(out) == 6
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4", "c", "t.csv"]
+
+
+def test_4_the_python_api_checks_the_start_box_too():
+    import vistrack
+
+    for box, words in (((0, 0, 1e12, 1e12), "far larger than the 160x120 frame"),
+                       ((-100, -100, 50, 50), "lies outside the 160x120 frame")):
+        with pytest.raises(ValueError, match=words):
+            vistrack.Tracker().init(box_frame(0), box)

@@ -84,7 +84,7 @@ def check_start_box(box, size, what="--init box"):
     x, y, w, h = (float(v) for v in box)
     text = f"{x:.6g},{y:.6g},{w:.6g},{h:.6g}"
     if not all(np.isfinite([x, y, w, h])) or w <= 0 or h <= 0:
-        raise VideoError(f"{what} {text} needs finite numbers and a positive width and height")
+        raise VideoError(f"{what} {text} needs finite numbers and a positive size (width and height)")
     if w > MAX_BOX_FACTOR * fw or h > MAX_BOX_FACTOR * fh:
         raise VideoError(f"{what} {text} is far larger than the {fw}x{fh} frame (at most {MAX_BOX_FACTOR} times "
                          "its width and height): give the object's box")
@@ -164,7 +164,9 @@ def model_from_box(name, frame, box, **params):
     if spec.from_box is None:
         starts = ", ".join(k for k, v in _REGISTRY.items() if v.from_box is not None)
         raise VideoError(f"model {name!r} does not start from a box; choose from {starts}")
-    return spec.from_box(np.asarray(frame), box, **params)
+    frame = np.asarray(frame)
+    check_start_box(box, (frame.shape[1], frame.shape[0]), "start box")
+    return spec.from_box(frame, box, **params)
 
 
 def _spec(name):
