@@ -1,4 +1,4 @@
-"""Fault-injection soak: ~140 scenarios of bad input, broken files and interruptions, each run as a
+"""Fault-injection soak: ~200 scenarios of bad input, broken files and interruptions, each run as a
 user would (``python -m vistrack.cli ...`` in a fresh folder), its outcome classified automatically.
 
 Not part of CI (about 10 minutes on 2 cores). The fast cases that guard each fix live in
@@ -186,6 +186,7 @@ def build_fixtures(fx):
     _otb(badimg_gt, _otb_rows(8), n=8)
     (badimg_gt / "img" / "0004.png").write_bytes(b"not a png")
     (fx / "template_nan.txt").write_text("10 10\nnan 12\n14 14\n")
+    build_sweep2_fixtures(fx, rows)
     (fx / "garbage.txt").write_text("x y z\n")
     (fx / "file").write_text("a file\n")
     res = fx / "results"
@@ -194,6 +195,41 @@ def build_fixtures(fx):
     bad = fx / "badresults"
     bad.mkdir()
     (bad / "c1.txt").write_text("hello\n")
+
+
+def build_sweep2_fixtures(fx, rows):
+    """The inputs of issue 38's cases (the second sweep)."""
+    # an image folder whose 4th frame has another size
+    _images(fx / "sizes", 8)
+    cv2.imwrite(str(fx / "sizes" / "img" / "0004.png"), np.zeros((2 * H, 2 * W, 3), np.uint8))
+    # meta.json that is JSON but not an object
+    for name, text in (("meta_list", "[1, 2, 3]"), ("meta_str", '"hello"')):
+        _otb(fx / name, rows)
+        (fx / name / "meta.json").write_text(text)
+    # result folders: two of one name, files of different lengths; one named like an algorithm; a short one
+    for d, n in (("rd_a/mt", 10), ("rd_b/mt", 6), ("rd_lis/lis", 10), ("rd_short/mt", 6)):
+        (fx / d).mkdir(parents=True)
+        (fx / d / "c1.txt").write_text("40,40,20,20\n" * n)
+    # 40 frames, 12 of them undecodable
+    _otb(fx / "bad12", _otb_rows(40), n=40)
+    for k in range(3, 40, 3)[:12]:
+        (fx / "bad12" / "img" / f"{k + 1:04d}.png").write_bytes(b"not a png")
+    # ground truth absent (NaN) in the first 4 frames
+    _otb(fx / "otb_late", ["NaN,NaN,NaN,NaN"] * 4 + rows[4:])
+    # frames named frame1 .. frame12 (lexicographic order: 1, 10, 11, 12, 2, ...), each brighter than the last
+    (fx / "natural" / "img").mkdir(parents=True)
+    for i in range(12):
+        f = np.full((H, W, 3), 10 + 20 * i, np.uint8)
+        cv2.rectangle(f, (60, 50), (80, 66), (30, 60, 220), -1)
+        cv2.imwrite(str(fx / "natural" / "img" / f"frame{i + 1}.png"), f)
+    (fx / "template_nan4.txt").write_text("10 10\nnan 12\n14 14\n20 20\n")
+    _avi(fx / "long.avi", 400)
+    _otb(fx / "one_frame", rows[:1], n=1)
+    _otb(fx / "otb_huge", rows[:1] + ["1e300,5,6,7"] + rows[2:])
+    _otb(fx / "otb_binary", rows)
+    (fx / "otb_binary" / "groundtruth_rect.txt").write_bytes(b"\x89PNG\r\n\x1a\n\xff\xfe" + bytes(range(256)))
+    _otb(fx / "otb_bom", rows)
+    (fx / "otb_bom" / "groundtruth_rect.txt").write_bytes(b"\xef\xbb\xbf" + "\n".join(rows).encode() + b"\n")
 
 
 # ---------------------------------------------------------------- running and judging
@@ -221,7 +257,7 @@ def bad_output(w, since):
 
     for p in outputs(w, since):
         text = p.read_text(errors="replace")
-        if p.name == "groundtruth.csv":  # documented: a plate clip's geometry is nan where no plate is in view
+        if p.name in ("groundtruth.csv", "objects.csv"):  # documented: a plate clip's nan where no plate is in view
             text = "\n".join(ln for ln in text.splitlines() if not re.match(r"\d+,0,", ln))
         m = NAN.search(text)
         if m:
@@ -250,6 +286,10 @@ def classify(sc, w, res, since):
     parts = [p.name for p in w.rglob("*.part")]
     if parts and (res.code is None or res.code >= 0):
         return "data loss", f"{', '.join(parts)} left behind (not renamed into place)"
+    litter = [p.name for p in w.rglob(".*") if p.name.endswith(".lock") and p.name != ".vistrack.lock"
+              or ".part." in p.name]
+    if litter and (res.code is None or res.code >= 0) and "fixtures" not in str(w):
+        return "silent wrong", f"{', '.join(litter[:3])} left behind (a lock or temporary file)"
     if sc.check:
         verdict = sc.check(w, res)
         if verdict:
@@ -392,6 +432,152 @@ def kill_worker(w, argv, timeout):
     return _finish(p, t0, timeout)
 
 
+def signals(sigs, ready, group=False):
+    """A driver: start the command, send the signals ``sigs`` one after the other once ``ready(w)``."""
+
+    def driver(w, argv, timeout):
+        t0 = time.time()
+        p = _popen(argv, w, group)
+        if not _wait_for(p, lambda: ready(w), timeout):
+            res = _finish(p, t0, timeout)
+            res.note = "finished before the signal" if not res.timeout else ""
+            return res
+        for sig in sigs:
+            os.killpg(p.pid, sig) if group else p.send_signal(sig)
+        return _finish(p, t0, timeout)
+
+    return driver
+
+
+def two_runs(argv_a):
+    """A driver: run A writes ``w/t.csv``; run B (the scenario's) starts with the same ``--track``
+    while A writes it. B's result is the scenario's; A's track must be A's own, whole (else: data
+    loss)."""
+
+    def driver(w, argv, timeout):
+        t0 = time.time()
+        a = _popen([x.format(w=w, fx=FX) for x in argv_a], w)
+        _wait_for(a, lambda: _lines(w / "t.csv.part") > 2, timeout)
+        res = vistrack(argv, w, timeout)
+        ra = _finish(a, t0, timeout)
+        rows = _rows(w / "t.csv") if (w / "t.csv").is_file() else []
+        frames = [r.get("frame") for r in rows]
+        if ra.code != 0 or frames != [str(k) for k in range(400)] or any(None in r.values() for r in rows):
+            res.note = f"first run: exit {ra.code}, its track holds {len(rows)} rows, frames {frames[:3]}..."
+            res.lost = True
+        return res
+
+    return driver
+
+
+def _decoded(path):
+    cap = cv2.VideoCapture(str(path))
+    n = 0
+    while cap.read()[0]:
+        n += 1
+    cap.release()
+    return n
+
+
+def same_frames(w, res):
+    """After an interrupt: the track, the results and the video hold the same frames 0..k-1."""
+    if res.note:
+        return None
+    t = _rows(w / "t.csv") if (w / "t.csv").is_file() else []
+    r = _lines(w / "r.txt")
+    v = _decoded(w / "a.mp4") if (w / "a.mp4").is_file() else 0
+    if len(t) < 2 or [int(x["frame"]) for x in t] != list(range(len(t))):
+        return "data loss", f"track CSV has {len(t)} rows"
+    if not len(t) == r == v:
+        return "data loss", f"track {len(t)} rows, results {r} lines, video {v} frames"
+    res.note = f"{len(t)} frames in each"
+    return None
+
+
+def results_lines(n, zero=None, first_zero=0):
+    """``w/r.txt`` has ``n`` lines (one per input frame), ``zero`` of them (or the first
+    ``first_zero``) ``0,0,0,0``."""
+
+    def check(w, res):
+        if res.code != 0:
+            return None
+        lines = (w / "r.txt").read_text().splitlines() if (w / "r.txt").is_file() else []
+        zeros = [k for k, ln in enumerate(lines) if set(ln.replace(",", "").replace(".", "")) <= {"0"}]
+        if len(lines) != n:
+            return "silent wrong", f"results have {len(lines)} lines for {n} frames"
+        if zero is not None and len(zeros) != zero:
+            return "silent wrong", f"{len(zeros)} lines 0,0,0,0 (expected {zero})"
+        if first_zero and zeros[:first_zero] != list(range(first_zero)):
+            return "silent wrong", f"the first {first_zero} lines are not 0,0,0,0"
+        res.note = f"{n} lines, {len(zeros)} 0,0,0,0"
+        return None
+
+    return check
+
+
+def all_of(*checks):
+    def check(w, res):
+        for c in checks:
+            v = c(w, res)
+            if v:
+                return v
+        return None
+
+    return check
+
+
+def natural_order(w, res):
+    """Frames frame1..frame12 (each brighter than the one before) read in natural order: the
+    annotated video's frames grow brighter."""
+    if res.code != 0:
+        return None
+    cap = cv2.VideoCapture(str(w / "a.mp4"))
+    means = []
+    while True:
+        ok, f = cap.read()
+        if not ok:
+            break
+        means.append(float(f.mean()))
+    if len(means) != 12 or np.any(np.diff(means) <= 0):
+        return "silent wrong", f"frame brightness {np.round(means).astype(int).tolist()}: not frame1, frame2, .."
+    return None
+
+
+def suite_holds(names):
+    def check(w, res):
+        if res.code != 0:
+            return None
+        got = sorted(p.name for p in (w / "s").iterdir() if not p.name.startswith("."))
+        if got != sorted(names):
+            return "silent wrong", f"the suite folder holds {got}"
+        return None
+
+    return check
+
+
+def short_error(most=300):
+    def check(w, res):
+        long = [ln for ln in res.err.splitlines() if ln.startswith("Error:") and len(ln) > most]
+        return ("misleading error", f"a {len(long[0])}-character error line") if long else None
+
+    return check
+
+
+def fast(seconds):
+    def check(w, res):
+        return ("misleading error", f"failed after {res.seconds:.0f} s (ran the grid first)") \
+            if res.code and res.seconds > seconds else None
+
+    return check
+
+
+def says(word):
+    def check(w, res):
+        return None if word.lower() in (res.out + res.err).lower() else ("silent wrong", f"does not say {word!r}")
+
+    return check
+
+
 def lost_if_flagged(w, res):
     return ("data loss", res.note) if getattr(res, "lost", False) else None
 
@@ -432,9 +618,40 @@ def decodable(video):
 
 
 def track_decodable(name):
-    """The track has one row per frame that OpenCV can decode (a run that stops at a damaged frame
-    although later ones decode is a silent wrong result)."""
-    return lambda w, res: track_has(decodable(FX / name), decodable(FX / name))(w, res)
+    """The track has a row per frame, 0, 1, .. (issue 38: a frame that fails to decode has one
+    with lost_reason "decode"), and as many tracked rows as OpenCV decodes frames (a run that stops
+    at a damaged frame although later ones decode is a silent wrong result)."""
+
+    def check(w, res):
+        if res.code != 0:
+            return None
+        rows = _rows(w / "t.csv") if (w / "t.csv").is_file() else []
+        frames = [int(r["frame"]) for r in rows]
+        tracked = sum(r["lost_reason"] != "decode" for r in rows)
+        if frames != list(range(len(frames))):
+            return "silent wrong", f"track frames are not 0..{len(frames) - 1}"
+        if tracked != decodable(FX / name):
+            return "silent wrong", f"{tracked} tracked rows, {decodable(FX / name)} decodable frames"
+        res.note = res.note or f"{len(rows)} rows, {len(rows) - tracked} 'decode'"
+        return None
+
+    return check
+
+
+def track_accounts(n, bad):
+    """Every one of ``n`` frames has a row (0..n-1), ``bad`` of them with lost_reason "decode"."""
+
+    def check(w, res):
+        if res.code != 0:
+            return None
+        rows = _rows(w / "t.csv") if (w / "t.csv").is_file() else []
+        got = sum(r["lost_reason"] == "decode" for r in rows)
+        if [int(r["frame"]) for r in rows] != list(range(n)) or got != bad:
+            return "silent wrong", f"{len(rows)} rows ({got} 'decode'); expected {n} ({bad})"
+        res.note = f"{n} rows, {bad} 'decode'"
+        return None
+
+    return check
 
 
 def partial_track(w, res):
@@ -650,7 +867,7 @@ def video_scenarios():
         Scenario("run grey image folder", R("{fx}/grey"), "ok", check=track_has(8, 8)),
         Scenario("run 4-channel image folder", R("{fx}/bgra"), "ok", check=track_has(8, 8)),
         Scenario("run 16-bit image folder", R("{fx}/u16"), "ok", check=track_has(8, 8)),
-        Scenario("run image folder with one bad image", R("{fx}/badimg"), "ok", check=track_has(7, 7)),
+        Scenario("run image folder with one bad image", R("{fx}/badimg"), "ok", check=track_accounts(8, 1)),
         Scenario("run image folder of bad images only", R("{fx}/allbad"), mention="allbad"),
         Scenario("run empty folder", R("{fx}/emptydir"), mention="emptydir"),
         Scenario("run a text file", R("{fx}/notes.txt"), mention="notes.txt"),
@@ -898,9 +1115,125 @@ def reproduce_scenarios():
     return out
 
 
+def sweep2_scenarios():
+    """Issue 38: the second sweep's cases, numbered as in the issue."""
+    v, E = "{fx}/v.avi", "either"
+    slow = ["run", "{fx}/v.avi", "--init", INIT, "-n", "3000", "--algo", "bootstrap", "--track", "{w}/t.csv",
+            "--results", "{w}/r.txt", "--out", "{w}/a.mp4", "-q"]
+    ready = _track_part_rows(4)
+
+    def hard(name, target):
+        return lambda w: (shutil.copy(FX / "v.avi", w / "in.avi"), os.link(w / "in.avi", w / name))
+
+    def fifo(w):
+        os.mkfifo(w / "fifo")
+
+    def old_suite(w):
+        r = vistrack(["synth-suite", "--kind", "contour", "--clips", "3", "--frames", "2", "--size", "96x72",
+                      "--out", str(w / "s"), "-q"], w, 300)
+        assert r.code == 0, r.err
+
+    def intact(name):
+        def check(w, res):
+            return None if (w / name).read_bytes() == (FX / "v.avi").read_bytes() else \
+                ("data loss", f"the input {name} was overwritten")
+
+        return check
+
+    out = [
+        # 1, 2: data loss
+        *[Scenario(f"#1 run {o} a hard link of the input", ["run", "{w}/in.avi", "--init", INIT, "-n", "50", o,
+                                                            "{w}/h" + ext, "-q"], prepare=hard("h" + ext, "in.avi"),
+                   mention="overwrite", check=intact("in.avi")) for o, ext in
+          (("--out", ".avi"), ("--track", ".avi"), ("--results", ".avi"))],
+        Scenario("#1 run --out a symbolic link of the input", ["run", "{w}/in.avi", "--init", INIT, "--out",
+                                                               "{w}/s.avi", "-q"], mention="overwrite",
+                 prepare=lambda w: (shutil.copy(FX / "v.avi", w / "in.avi"), (w / "s.avi").symlink_to(w / "in.avi")),
+                 check=intact("in.avi")),
+        Scenario("#2 two runs, one --track at once", R("{fx}/otb", "--init-gt", init=False), mention="another vistrack",
+                 check=lost_if_flagged, driver=two_runs(["run", "{fx}/long.avi", "--init", INIT, "-n", "20000",
+                                                         "--algo", "bootstrap", "--track", "{w}/t.csv", "-q"])),
+        # 3-5: tracebacks
+        Scenario("#3 run image folder whose frames change size, --out", R("{fx}/sizes", "--out", "{w}/a.mp4"),
+                 mention="0004.png"),
+        Scenario("#3 run image folder whose frames change size", R("{fx}/sizes"), mention="0004.png"),
+        Scenario("#4 run --init 0,0,1e12,1e12 (box)", R(v, init=False) + ["--init", "0,0,1e12,1e12"], mention="larger"),
+        Scenario("#4 run --init 0,0,1e12,1e12 (contour)", R(v, "--model", "contour", init=False)
+                 + ["--init", "0,0,1e12,1e12"], mention="larger"),
+        Scenario("#5 run meta.json [1,2,3]", R("{fx}/meta_list"), mention="meta.json"),
+        Scenario("#5 run meta.json \"hello\"", R("{fx}/meta_str"), mention="meta.json"),
+        Scenario("#5 eval meta.json [1,2,3]", EV("{fx}/meta_list", model="box"), mention="meta.json"),
+        Scenario("#5 eval --results-dir a/mt --results-dir b/mt", EV("{fx}/suite/c1", "--results-dir", "{fx}/rd_a/mt",
+                                                                     "--results-dir", "{fx}/rd_b/mt"),
+                 mention="same name"),
+        # 6-13: silent wrong output
+        Scenario("#6 run 12 undecodable frames of 40, --results", R("{fx}/bad12", "--results", "{w}/r.txt"), "ok",
+                 check=all_of(track_accounts(40, 12), results_lines(40, 12))),
+        Scenario("#7 eval --results-dir shorter than the ground truth", EV("{fx}/suite/c1", "--results-dir",
+                                                                           "{fx}/rd_short/mt"), "ok",
+                 check=warns("6 lines for the 10")),
+        Scenario("#8 run SIGINT once: track, video, results", slow, "ok", codes=(130,), check=same_frames,
+                 driver=signals([signal.SIGINT], ready)),
+        Scenario("#8 run SIGINT twice: track, video, results", slow, "ok", codes=(130,), check=same_frames,
+                 driver=signals([signal.SIGINT, signal.SIGINT], ready)),
+        Scenario("#8 run Ctrl-C twice on the process group", slow, "ok", codes=(130,), check=same_frames,
+                 driver=signals([signal.SIGINT, signal.SIGINT], ready, group=True)),
+        Scenario("#8 run SIGTERM: track, video, results", slow, "ok", codes=(143,), check=same_frames,
+                 driver=signals([signal.SIGTERM], ready)),
+        Scenario("#8 run SIGTERM early: track, video, results", slow, "ok", codes=(143,), check=same_frames,
+                 driver=signals([signal.SIGTERM], _track_part_rows(2))),
+        Scenario("#8 run SIGTERM then SIGINT", slow, "ok", codes=(143,), check=same_frames,
+                 driver=signals([signal.SIGTERM, signal.SIGINT], ready)),
+        Scenario("#9 run --init-gt, ground truth absent in frames 0-3", R("{fx}/otb_late", "--init-gt", "--results",
+                                                                          "{w}/r.txt", init=False), "ok",
+                 check=all_of(says("tracking starts there"), results_lines(12, first_zero=4))),
+        Scenario("#10 run frames frame1..frame12", R("{fx}/natural", "--out", "{w}/a.mp4", "--show-particles", "0",
+                                                     init=False) + ["--init", "60,50,21,17"], "ok",
+                 check=natural_order),
+        Scenario("#11 synth-suite over an earlier, larger suite", ["synth-suite", "--kind", "contour", "--clips", "2",
+                                                                   "--frames", "2", "--size", "96x72", "--seed", "5",
+                                                                   "--out", "{w}/s", "-q"], "ok", prepare=old_suite,
+                 check=suite_holds(["contour-05", "contour-06"])),
+        Scenario("#11 synth --out a folder holding an OTB clip", sub(SY, "--out", "{w}/otb"), mention="not a clip",
+                 prepare=copy("otb")),
+        Scenario("#12 run avi cut at 60 % says it ended early", R("{fx}/trunc.avi"), "ok", check=warns("ended early")),
+        Scenario("#13 eval --results-dir named lis", EV("{fx}/suite/c1", "--results-dir", "{fx}/rd_lis/lis"),
+                 mention="named like"),
+        Scenario("#13 eval --equal-time on a 1-frame clip", EV("{fx}/one_frame", "--equal-time", model="box")
+                 + ["--algos", "lis,bootstrap"], mention="at least 3"),
+        Scenario("#13 eval --particles 100,100", sub(EV("{fx}/suite"), "--particles", "100,100"), mention="twice"),
+        Scenario("#13 eval --algos lis,lis", sub(EV("{fx}/suite"), "--algos", "lis,lis"), mention="twice"),
+        Scenario("#13 synth --size 321x241", sub(SY, "--size", "321x241"), mention="even"),
+        Scenario("#13 run ground-truth box 1e300", R("{fx}/otb_huge", "--init-gt", init=False), mention="line 2",
+                 check=short_error()),
+        Scenario("#13 synth plate --frames 3 --size 160x120", ["synth", "plate", "--out", "{w}/p", "--frames", "3",
+                                                               "--size", "160x120", "-q"], "ok",
+                 check=warns("no plate")),
+        Scenario("#13 demo --real-frames 60 on a 12-frame clip", ["demo", "--out", "{w}/d", "--frames", "10", "--runs",
+                                                                  "1", "--real-clip", "{fx}/otb", "--real-frames",
+                                                                  "60"], "ok", check=says("all 12 frames")),
+        # 14: wording
+        Scenario("#14 run /dev/zero", R("/dev/zero"), mention="not a regular file"),
+        Scenario("#14 run a FIFO", R("{w}/fifo"), mention="not a regular file", prepare=fifo),
+        Scenario("#14 run --init with 1 px inside the frame", R(v, init=False) + ["--init", "159,119,30,30"],
+                 mention="outside"),
+        Scenario("#14 run binary ground truth", R("{fx}/otb_binary", "--init-gt", init=False),
+                 mention="groundtruth_rect.txt"),
+        Scenario("#14 run --template of 4 points, one NaN", R(v, "--model", "contour", "--template",
+                                                              "{fx}/template_nan4.txt"),
+                 mention="finite"),
+        Scenario("#14 run ground truth with a UTF-8 BOM", R("{fx}/otb_bom", "--init-gt", init=False), "ok",
+                 check=track_has(12, 12)),
+        Scenario("#14 synth --size 8192x2048", sub(SY, "--size", "8192x2048"), mention="8190"),
+        Scenario("#14 eval --out E where E/tasks is a file", sub(EV("{fx}/suite"), "--out", "{w}/E"), mention="tasks",
+                 check=fast(20), prepare=lambda w: ((w / "E").mkdir(), (w / "E" / "tasks").write_text("x"))),
+    ]
+    return out
+
+
 def scenarios():
     return (video_scenarios() + number_scenarios() + output_scenarios() + interrupt_scenarios() + eval_scenarios()
-            + synth_scenarios() + reproduce_scenarios())
+            + synth_scenarios() + reproduce_scenarios() + sweep2_scenarios())
 
 
 # ---------------------------------------------------------------- main
@@ -941,6 +1274,9 @@ def main():
             shutil.rmtree(base, ignore_errors=True)
     print(f"\n{len(chosen)} scenarios in {time.time() - t0:.0f} s: "
           + ", ".join(f"{n} {o}" for o, n in totals.items() if n or o in OUTCOMES))
+    bad = ("traceback", "hang", "silent wrong", "data loss")
+    print("failures: " + ", ".join(f"{totals.get(o, 0)} {o}" for o in bad)
+          + f" ({sum(totals.get(o, 0) for o in bad)} of {len(chosen)} scenarios)")
 
 
 if __name__ == "__main__":

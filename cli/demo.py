@@ -114,7 +114,10 @@ def demo(ctx, out_dir, frames, runs, seed, real_clip, real_frames):
             excerpt_clip(real, excerpt, real_frames)
         except VideoError as e:
             raise click.ClickException(str(e)) from None
-        click.echo(f"4/4 the first {real_frames} frames of {real} ({excerpt}): vistrack's default box tracker "
+        got = sum(1 for _ in (excerpt / "img").iterdir())
+        took = f"the first {real_frames} frames" if got >= real_frames else \
+            f"all {got} frames (fewer than --real-frames {real_frames})"
+        click.echo(f"4/4 {took} of {real} ({excerpt}): vistrack's default box tracker "
                    f"({REAL_ALGOS[0][0].upper()} N={REAL_ALGOS[0][1]}, {runs} runs) beside OpenCV MIL")
         click.echo(compare(excerpt, REAL_ALGOS, DEFAULT_MODEL, runs, seed, out / "eval-real"))
         made.append(out / "eval-real" / "report.md")

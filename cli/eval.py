@@ -142,13 +142,22 @@ def _equal_time(cfg, clips, frames=30):
     from vistrack.filters import make_filter
     from vistrack.tracking import track
 
+    from vistrack.builders import start_frame
+    from vistrack.runtime import check_particle_memory
+
     clip = load_clip(clips[0])
+    start = start_frame(clip, None, "")
     fr = []
     for i, f in clip.source:
-        if i >= frames:
+        if i >= start + frames:
             break
-        fr.append((i, f))
+        if i >= start:
+            fr.append((i, f))
+    if len(fr) < 3:
+        raise click.ClickException(f"--equal-time times the algorithms on the first clip, {clips[0]}, which has "
+                                   f"{len(fr)} frame(s) to track: it needs at least 3")
     model = build_model(cfg.model, clip, init_gt="")
+    bpp = get_model_spec(cfg.model).bytes_per_particle
 
     def ms(algo, n):
         best = np.inf
@@ -164,8 +173,21 @@ def _equal_time(cfg, clips, frames=30):
     chosen = {cfg.algos[0]: n_ref}
     for algo in cfg.algos[1:]:
         t1, t2 = ms(algo, n_ref), ms(algo, 2 * n_ref)
-        per = max((t2 - t1) / n_ref, 1e-6)  # ms per particle; t(N) = t1 + per (N - n_ref)
-        chosen[algo] = int(max(1, round(n_ref + (budget - t1) / per)))
+        # ms per particle (t(N) = t1 + per (N - n_ref)); a slope lost in timing noise is taken as at
+        # least a tenth of the mean time per particle, so one noisy pair cannot pick a huge N
+        per = max((t2 - t1) / n_ref, 0.1 * t1 / n_ref, 1e-6)
+        n = int(max(1, round(n_ref + (budget - t1) / per)))
+        for _ in range(3):  # check the pick: a run at N must not take well over the budget
+            t = ms(algo, n)
+            if t <= 1.25 * budget:
+                break
+            n = max(1, int(n * budget / t))
+        try:
+            check_particle_memory(n, bpp, algo)
+        except ValueError:
+            raise click.ClickException(f"--equal-time: {algo} would need N={n} for the time of {cfg.algos[0]} "
+                                       f"N={n_ref}, more than memory allows; give a smaller --particles") from None
+        chosen[algo] = n
     return chosen
 
 
@@ -279,6 +301,14 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, sc
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise click.ClickException(f"cannot create --out {out}: {e.strerror}") from None
+    blocked = next((out / n for n in ("tasks", "results.json", "results.csv", "report.md")
+                    if (out / n).exists() and (out / n).is_dir() != (n == "tasks")), None)
+    if blocked is not None:  # found before the grid runs, not after
+        raise click.ClickException(f"cannot write the results into {out}: {blocked} is a "
+                                   f"{'folder' if blocked.is_dir() else 'file'}, where eval writes a "
+                                   f"{'folder' if blocked.name == 'tasks' else 'file'}")
+    if not os.access(out, os.W_OK):
+        raise click.ClickException(f"cannot write the results into {out}: permission denied")
     cfg = EvalConfig(clips=clip_paths, algos=list(algos), particles=list(particles), runs=runs, seed=seed, model=model)
     engine = dict(scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process, resume=resume,
                   quiet=quiet)

@@ -22,9 +22,10 @@ class IntList(click.ParamType):
         if isinstance(value, list):
             return value
         try:
-            return [int(v) for v in str(value).split(",") if v.strip()]
+            out = [int(v) for v in str(value).split(",") if v.strip()]
         except ValueError:
-            self.fail(f"expected comma-separated integers, got {value!r}", param, ctx)
+            self.fail(f"expected comma-separated integers, got {_short(value)}", param, ctx)
+        return _no_repeats(out, self, param, ctx)
 
 
 class FloatList(click.ParamType):
@@ -41,7 +42,7 @@ class FloatList(click.ParamType):
         except ValueError:
             out = None
         if out is None or not all(v == v and abs(v) != float("inf") for v in out):
-            self.fail(f"expected comma-separated finite numbers, got {value!r}", param, ctx)
+            self.fail(f"expected comma-separated finite numbers, got {_short(value)}", param, ctx)
         return out
 
 
@@ -54,7 +55,24 @@ class StrList(click.ParamType):
         """Parse ``value`` into a list of names; a bad value fails with click's one-line usage error."""
         if isinstance(value, list):
             return value
-        return [v.strip() for v in str(value).split(",") if v.strip()]
+        return _no_repeats([v.strip() for v in str(value).split(",") if v.strip()], self, param, ctx)
+
+
+def _short(value, most=60):
+    """``value`` quoted, cut to ``most`` characters (an error stays one short line)."""
+    text = str(value)
+    return repr(text if len(text) <= most else text[:most] + "...")
+
+
+def _no_repeats(values, ptype, param, ctx):
+    """``values``, failing with one line when one is listed twice (its runs would be counted twice)."""
+    seen = set()
+    for v in values:
+        if v in seen:
+            ptype.fail(f"{v if isinstance(v, int) or v.isprintable() else _short(v)} is listed twice (each is run "
+                       "once: list it once)", param, ctx)
+        seen.add(v)
+    return values
 
 
 class Box(click.ParamType):
@@ -70,11 +88,11 @@ class Box(click.ParamType):
         try:
             v = tuple(float(s) for s in str(value).split(","))
         except ValueError:
-            self.fail(f"expected four numbers x,y,w,h, got {value!r}", param, ctx)
+            self.fail(f"expected four numbers x,y,w,h, got {_short(value)}", param, ctx)
         if len(v) != 4:
             self.fail(f"expected four numbers x,y,w,h, got {len(v)}", param, ctx)
         if not all(abs(x) < float("inf") for x in v):  # also false for NaN
-            self.fail(f"expected four finite numbers x,y,w,h, got {value!r}", param, ctx)
+            self.fail(f"expected four finite numbers x,y,w,h, got {_short(value)}", param, ctx)
         if v[2] <= 0 or v[3] <= 0:
             self.fail(f"width and height must be positive, got {v[2]:g}x{v[3]:g}", param, ctx)
         return v
@@ -106,7 +124,7 @@ class Size(click.ParamType):
         try:
             w, h = (int(v) for v in str(value).lower().split("x"))
         except ValueError:
-            self.fail(f"expected WIDTHxHEIGHT such as 320x240, got {value!r}", param, ctx)
+            self.fail(f"expected WIDTHxHEIGHT such as 320x240, got {_short(value)}", param, ctx)
         if w < 64 or h < 48:
             self.fail(f"frame size {w}x{h} is too small (at least 64x48)", param, ctx)
         if max(w, h) > 8192 or w * h > 4096 * 4096:
@@ -133,10 +151,16 @@ CLIP_INPUTS = {"video.mp4", "groundtruth.csv", "groundtruth_rect.txt", "groundtr
 IMAGE_SUFFIXES = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp"}
 
 
-def check_outputs(outputs, video):
+def check_outputs(outputs, video, inputs=()):
     """Raise ``click.ClickException`` when two of ``outputs`` (``{option: path or None}``) are one
     file, or one would overwrite what ``video`` reads: the video file itself, or a clip folder's
-    video, ground truth, meta.json or frames. Devices such as ``/dev/null`` may be shared."""
+    video, ground truth, meta.json or frames, or one of ``inputs`` (a template, an ``--init-gt``
+    file). Files are compared by identity (:func:`vistrack.outputs.file_id`: a hard or symbolic
+    link of an input is that input), names that do not exist yet by their real path. Devices such
+    as ``/dev/null`` may be shared."""
+    from vistrack.outputs import file_id, input_files
+
+    read = {file_id(p): p for p in input_files(video, inputs)}
     video = os.path.realpath(video)
     seen = {}
     for opt, path in outputs.items():
@@ -145,12 +169,16 @@ def check_outputs(outputs, video):
         real = os.path.realpath(path)
         if os.path.exists(real) and not os.path.isfile(real):
             continue
-        if real in seen:
-            raise click.ClickException(f"{seen[real]} and {opt} name the same file {path}")
-        seen[real] = opt
+        key = file_id(real) or real
+        if key in seen:
+            raise click.ClickException(f"{seen[key]} and {opt} name the same file {path}")
+        seen[key] = opt
         parent, name = os.path.split(real)
         reads = real == video or (os.path.isdir(video) and (
             (parent == video and (name in CLIP_INPUTS or os.path.splitext(name)[1].lower() in IMAGE_SUFFIXES))
             or (os.path.dirname(parent) == video and os.path.basename(parent) in ("img", "color"))))
         if reads:
             raise click.ClickException(f"{opt} {path} would overwrite the input it reads ({name}); write elsewhere")
+        if key in read:  # a hard or symbolic link, another spelling
+            raise click.ClickException(f"{opt} {path} would overwrite the input it reads ({read[key]}, the same file "
+                                       "under another name); write elsewhere")

@@ -10,7 +10,7 @@ import click
 import numpy as np
 from tqdm import tqdm
 
-from vistrack.builders import MODELS, PLATES_ALGOS, build_model, read_support_points
+from vistrack.builders import MODELS, PLATES_ALGOS, build_model, read_support_points, start_frame
 from vistrack.clips import load_clip
 from vistrack.filters import make_filter
 from vistrack.models.registry import MODELS as MODEL_REGISTRY
@@ -19,6 +19,7 @@ from vistrack.models.plate_detect import PlateSearch
 from vistrack.models.registry import DEFAULT_MODEL, all_algos, get_model_spec
 from vistrack.runtime import check_particle_memory
 from vistrack.session import stop_on_signals, summary_lines, track_video
+from vistrack.outputs import OutputBusy
 from vistrack.video import VideoDecodeWarning, VideoError, prefetch
 
 from .options import SEED, Box, Fraction, check_outputs, check_writable
@@ -133,8 +134,11 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     angle_deg, scale, the model's points (contour: support points qx0..,
     qy0..; plate: vertices x0..y3; landmarks: lx0.., ly0..), then ess, ms
     (time spent on the frame) and lost_reason (empty where visible=1; else
-    scale, outside, likelihood or "not found"). run says on which frames it
-    loses the object and why. With ground truth beside the video, the
+    scale, outside, likelihood or "not found"; "decode" for a frame that
+    failed to decode and "not started" before the first ground-truth box of
+    --init-gt: every frame of the input has a row). run says on which frames
+    it loses the object and why. Ctrl-C or SIGTERM stops it after the frame
+    in hand: the track, --results and --out then hold the same frames. With ground truth beside the video, the
     summary reports the centre error (landmarks: the mean landmark error).
 
     \b
@@ -150,7 +154,8 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     check_writable(track_path, "track file")
     check_writable(out_path, "annotated video")
     check_writable(results_path, "results file")
-    check_outputs({"--track": track_path, "--out": out_path, "--results": results_path}, video)
+    check_outputs({"--track": track_path, "--out": out_path, "--results": results_path}, video,
+                  inputs=(template_path, init_gt or None))
     if init is not None and init_gt is not None:
         raise click.UsageError("give either --init or --init-gt, not both")
     if targets is not None and results_path:
@@ -179,8 +184,9 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     except ValueError as e:
         raise click.ClickException(str(e)) from None
     outputs = {"track_path": track_path, "out_path": out_path, "results_path": results_path}
+    start = _start(clip, init, init_gt, max_frames)
     done = _track(clip, frames, model, filt, particles, seed, max_frames, show_particles, quiet,
-                  f"{algo} N={particles}", outputs, lead)
+                  f"{algo} N={particles}", outputs, lead, start=start)
     _report(video, clip, done, name, model, particles, quiet, outputs)
 
 
@@ -229,11 +235,32 @@ def _frames(src, max_frames):
         yield i, f
 
 
-def _track(clip, frames, model, filt, particles, seed, max_frames, show_particles, quiet, label, outputs, lead=()):
-    """:func:`~vistrack.session.track_video` over ``frames`` with a progress bar (``lead``: the frames
-    searched before them); stops cleanly on SIGINT/SIGTERM (the outputs so far kept)."""
+def _start(clip, init, init_gt, max_frames):
+    """The start frame (:func:`~vistrack.builders.start_frame`), said on stderr when it is not 0."""
+    try:
+        start = start_frame(clip, init, init_gt)
+    except (VideoError, ValueError) as e:
+        raise click.ClickException(str(e)) from None
+    if start and max_frames is not None and start >= max_frames:
+        raise click.ClickException(f"--init-gt: the ground truth's first box is at frame {start}, past --max-frames "
+                                   f"{max_frames}")
+    if start:
+        click.echo(f"note: the ground truth has no box before frame {start}: tracking starts there (frames 0-"
+                   f"{start - 1} get rows with visible=0, lost_reason \"not started\"; scores count from frame "
+                   f"{start})", err=True)
+    return start
+
+
+def _track(clip, frames, model, filt, particles, seed, max_frames, show_particles, quiet, label, outputs, lead=(),
+           start=0):
+    """:func:`~vistrack.session.track_video` over ``frames`` from ``start`` with a progress bar (``lead``:
+    the frames searched before them); stops cleanly on SIGINT/SIGTERM after the frame in hand (the
+    outputs so far kept, holding the same frames)."""
     src = clip.source
     total = src.frame_count if max_frames is None else min(max_frames, src.frame_count or max_frames)
+    # an image folder's frame count is exact: frames after the last decodable one get rows too
+    exact = total if getattr(src, "_images", None) is not None else None
+    frames = ((i, f) for i, f in frames if i >= start)
     bar = tqdm(total=total, unit="frame", disable=quiet, dynamic_ncols=True, desc=label, initial=len(lead))
 
     def progress(ess):
@@ -245,8 +272,9 @@ def _track(clip, frames, model, filt, particles, seed, max_frames, show_particle
             warnings.simplefilter("ignore", VideoDecodeWarning)
             return track_video(frames, model, filt, particles, np.random.default_rng(seed),
                                video_info=(src.fps, src.size), show_particles=show_particles, label=label,
-                               progress=progress, notify=None if quiet else lost_notice(), lead=lead, **outputs)
-    except (VideoError, OSError) as e:
+                               progress=progress, notify=None if quiet else lost_notice(), frame_count=exact,
+                               start=start, lead=lead, **outputs)
+    except (VideoError, OSError, OutputBusy) as e:
         raise click.ClickException(str(e)) from None
     finally:
         bar.close()
@@ -266,8 +294,13 @@ def _report(video, clip, done, name, model, particles, quiet, outputs):
                    + (f"; track so far: {track_path}" if track_path else "")
                    + (f"; annotated video so far: {out_path}" if out_path else ""), err=True)
     if src.skipped:
-        click.echo(f"{len(src.skipped)} frame(s) failed to decode and were skipped (no track row): "
-                   + ", ".join(map(str, src.skipped[:10])) + (", ..." if len(src.skipped) > 10 else ""), err=True)
+        click.echo(f"{len(src.skipped)} frame(s) failed to decode: "
+                   + ", ".join(map(str, src.skipped[:10])) + (", ..." if len(src.skipped) > 10 else "")
+                   + " (their rows have visible=0, lost_reason \"decode\"; results 0,0,0,0)", err=True)
+    if src.ended_at is not None and not done.stopped:
+        click.echo(f"warning: {video} ended early: decoding stopped at frame {src.ended_at} of the "
+                   f"{src.frame_count} its header announces (frames {src.ended_at}-{src.frame_count - 1} have no row)",
+                   err=True)
     if not quiet:
         for line in summary_lines(done, particles, model_name=name, model=model, truth=clip.truth,
                                   frame_width=src.size[0], objects=clip.objects):

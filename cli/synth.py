@@ -11,6 +11,7 @@ from vistrack.data_synth.contour import CLUTTER, make_contour_clip
 from vistrack.data_synth.landmarks import make_landmark_clip
 from vistrack.data_synth.perturb import LIGHTS, Perturbation, perturb_clip, read_clip
 from vistrack.data_synth.plate import make_plate_clip
+from vistrack.data_synth.render import prepare_suite
 
 from .options import SEED, Fraction, Size
 
@@ -215,6 +216,10 @@ def synth_suite(kind, n_clips, seed, frames, size, out, quiet):
     frames = frames or frames_default
     size = size or size_default
     out = _out_dir(out, clip=False)
+    try:  # the folder holds this suite alone: an earlier suite's other clips go (issue 38)
+        prepare_suite(out, [f"{kind}-{s:02d}" for s in range(seed, seed + n_clips)])
+    except ValueError as e:
+        raise click.ClickException(str(e)) from None
     with tqdm(total=n_clips * frames, unit="frame", disable=quiet, desc=f"synth-suite {kind}") as bar:
         for s in range(seed, seed + n_clips):
             _make(make, out / f"{kind}-{s:02d}", frames=frames, size=size, seed=s, progress=bar.update)

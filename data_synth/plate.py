@@ -314,6 +314,12 @@ def make_plate_clip(out, *, frames=300, size=(640, 480), seed=0, cars=3, layout=
         meta["max_in_view"] = 3
     write_clip_files(out, rows, COLUMNS, meta)
     write_track_csv(out / "objects.csv", objects, OBJECT_COLUMNS)
+    if not any(r["visible"] for r in rows):
+        import warnings
+
+        warnings.warn(f"no plate comes wholly into view in the {frames} frame(s): every row of groundtruth.csv and "
+                      "objects.csv has visible=0 (NaN geometry); give more frames",
+                      NoPlateWarning, stacklevel=3)
     return meta
 
 
@@ -352,3 +358,7 @@ def detection_frames(n, *, layout="jp", seed=0, size=(640, 480), widths=(90.0, 1
         frames.append(np.clip(add_noise(img, rng, 4.0), 0, 255).astype(np.uint8))
         boxes.append(box)
     return frames, boxes
+
+
+class NoPlateWarning(UserWarning):
+    """A plate clip in which no plate is ever in view."""

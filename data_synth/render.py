@@ -14,7 +14,13 @@ import numpy as np
 from vistrack.clips import write_track_csv
 
 __all__ = ["smooth_noise", "clutter_background", "motion_blur", "lighting", "add_noise", "write_clip_files",
-           "atomic_clip"]
+           "atomic_clip", "is_synth_clip", "prepare_suite", "check_video_size"]
+
+#: names in a clip folder that a run reads as part of the clip: never carried from an old folder into a new clip
+CLIP_NAMES = {"video.mp4", "groundtruth.csv", "groundtruth_rect.txt", "groundtruth.txt", "meta.json", "objects.csv",
+              "img", "color"}
+#: the largest side MPEG-4 Part 2 (mp4v) encodes
+MAX_SIDE = 8190
 
 
 def smooth_noise(shape, rng, scale=8.0):
@@ -113,10 +119,65 @@ def _swap_in(new, out):
     old = out.with_name(f".{out.name}.old-{os.getpid()}")
     out.rename(old)
     new.rename(out)
-    for e in old.iterdir():
-        if not (out / e.name).exists():
+    for e in old.iterdir():  # the user's own files; not the old clip's (a plate clip's objects.csv, frames)
+        if e.name not in CLIP_NAMES and not (out / e.name).exists():
             e.rename(out / e.name)
     shutil.rmtree(old)
+
+
+def check_video_size(size):
+    """Raise ``ValueError`` unless the clips' MPEG-4 Part 2 video can hold frames of ``size``
+    ``(width, height)`` as they are: even sides (the encoder drops an odd last row or column, so
+    the video would not match the ground truth) of at most :data:`MAX_SIDE`."""
+    w, h = (int(v) for v in size)
+    if w % 2 or h % 2:
+        raise ValueError(f"frame size {w}x{h}: the clip's MPEG-4 video needs even sides (it would be "
+                         f"{w - w % 2}x{h - h % 2} while the ground truth says {w}x{h}); give {w + w % 2}x{h + h % 2}")
+    if max(w, h) > MAX_SIDE:
+        raise ValueError(f"frame size {w}x{h}: the clip's MPEG-4 video has at most {MAX_SIDE} pixels a side")
+
+
+def is_synth_clip(folder):
+    """Whether ``folder`` holds a clip ``vistrack synth`` wrote (``video.mp4`` and a ``meta.json``
+    object naming its ``kind`` or ``model``)."""
+    folder = Path(folder)
+    if not ((folder / "video.mp4").is_file() and (folder / "meta.json").is_file()):
+        return False
+    try:
+        meta = json.loads((folder / "meta.json").read_text())
+    except (OSError, ValueError):
+        return False
+    return isinstance(meta, dict) and bool(meta.get("kind") or meta.get("model"))
+
+
+def _check_clip_out(out):
+    """Refuse (``ValueError``) an existing, non-empty ``out`` that is not a clip synth wrote: its
+    files (another clip's frames, ground truth) would be mixed with the new clip's."""
+    if not out.is_dir() or is_synth_clip(out):
+        return
+    theirs = sorted(e.name for e in out.iterdir() if not e.name.startswith("."))
+    clip = [n for n in theirs if n in CLIP_NAMES or Path(n).suffix.lower() in (".mp4", ".avi", ".jpg", ".png")]
+    if clip:
+        raise ValueError(f"{out} holds {', '.join(clip[:3])}{', ...' if len(clip) > 3 else ''}, not a clip vistrack "
+                         "synth wrote: the new clip would be mixed with them; give an empty or new folder")
+
+
+def prepare_suite(out, names):
+    """Make folder ``out`` ready for a suite of clips ``names``: refuse (``ValueError``) a folder
+    holding anything but clips synth wrote (a suite's folder holds only its clips), and remove
+    the clips of an earlier suite that the new one does not write, so that ``out`` holds the new
+    suite alone. Returns the names removed."""
+    out = Path(out)
+    if not out.is_dir():
+        return []
+    other = [e.name for e in out.iterdir() if not e.name.startswith(".") and not (e.is_dir() and is_synth_clip(e))]
+    if other:
+        raise ValueError(f"{out} holds {', '.join(sorted(other)[:3])}{', ...' if len(other) > 3 else ''}, which are "
+                         "not clips of an earlier synth-suite: give an empty or new folder")
+    stale = sorted(e.name for e in out.iterdir() if e.is_dir() and not e.name.startswith(".") and e.name not in names)
+    for n in stale:
+        shutil.rmtree(out / n)
+    return stale
 
 
 def atomic_clip(make):
@@ -133,6 +194,9 @@ def atomic_clip(make):
             raise ValueError(f"{out} holds the current folder: give the clip a folder of its own (such as clip/)")
         if out.exists() and not out.is_dir():
             raise ValueError(f"{out} exists and is not a folder")
+        if "size" in kw:
+            check_video_size(kw["size"])
+        _check_clip_out(out)
         out.parent.mkdir(parents=True, exist_ok=True)
         for stale in out.parent.glob(f".{out.name}.partial-*"):
             pid = stale.name.rpartition("-")[2]

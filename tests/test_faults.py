@@ -203,8 +203,9 @@ def test_prefetch_gives_the_same_frames_and_stops_cleanly(tmp_path):
 
 
 def test_an_undecodable_image_is_skipped_and_counted(tmp_path, capsys):
-    """One bad image in an image folder: tracking goes on at the next frame, the track has no row for
-    the bad frame (indices stay the stream's), and the warning says how many were skipped."""
+    """One bad image in an image folder: tracking goes on at the next frame, the bad frame has a row
+    with visible=0, lost_reason "decode" (issue 38: every input frame accounted for; indices stay
+    the stream's), and the warning says how many failed."""
     import warnings
 
     from vistrack.video import VideoDecodeWarning, open_video
@@ -223,8 +224,10 @@ def test_an_undecodable_image_is_skipped_and_counted(tmp_path, capsys):
     assert any(issubclass(w.category, VideoDecodeWarning) and "1 frame(s) of 8" in str(w.message) for w in caught)
     code, out, err = run(["run", str(tmp_path), "--init", "40,50,25,19", "--track", str(tmp_path / "t.csv")], capsys)
     assert code == 0, err
-    assert [int(r["frame"]) for r in read_rows(tmp_path / "t.csv")] == [0, 1, 2, 4, 5, 6, 7]
-    assert "failed to decode and were skipped" in err
+    rows = read_rows(tmp_path / "t.csv")
+    assert [int(r["frame"]) for r in rows] == list(range(8))
+    assert (rows[3]["visible"], rows[3]["lost_reason"]) == ("0", "decode")
+    assert "1 frame(s) failed to decode: 3 (their rows have visible=0" in err
 
 
 def _moving_box_frames(folder, n=8):

@@ -14,9 +14,10 @@ from .features import FeatureMaps, is_grey
 from .models.contour import Contour
 from .models.registry import MODELS as _REGISTRY
 from .models.registry import ModelSpec, get_model_spec, register
-from .video import VideoError, groundtruth_origin, read_rects
+from .video import VideoError, _short, groundtruth_origin, read_rects
 
-__all__ = ["MODELS", "PLATES_ALGOS", "initial_truth", "build_model", "model_from_box", "read_support_points"]
+__all__ = ["MODELS", "PLATES_ALGOS", "initial_truth", "start_frame", "check_start_box", "build_model", "model_from_box",
+           "read_support_points"]
 
 
 def initial_truth(clip, init_gt):
@@ -43,7 +44,53 @@ def initial_truth(clip, init_gt):
     vis = np.flatnonzero(np.asarray(truth["visible"]) > 0)
     if not len(vis):
         raise VideoError("--init-gt: the object is not visible in any ground-truth row")
-    return {k: float(v[vis[0]]) for k, v in truth.items()}
+    row = {k: float(v[vis[0]]) for k, v in truth.items() if np.asarray(v).dtype.kind in "fiub"}
+    if "w" in row and "cx" in row:
+        check_start_box((row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"]),
+                        clip.source.size, f"the first ground-truth box (frame {int(vis[0])})")
+    return row
+
+
+def start_frame(clip, init=None, init_gt=None):
+    """The frame a run starts from: the first frame whose ground-truth row has the object
+    (``init_gt`` given, no ``init``), else 0. Frames before it are not tracked (``vistrack run``
+    gives them rows with ``lost_reason`` "not started"; their ground truth has no box to score)."""
+    if init is not None or init_gt is None:
+        return 0
+    if init_gt in ("", True):
+        truth = clip.truth
+        if truth is None:
+            return 0
+    else:
+        p = Path(init_gt)
+        if p.suffix == ".csv":
+            truth = read_groundtruth_csv(p)
+        else:
+            r = read_rects(p, origin=groundtruth_origin(p))
+            truth = {"visible": ((r[:, 2] > 0) & (r[:, 3] > 0)).astype(float)}
+    vis = np.flatnonzero(np.asarray(truth["visible"]) > 0)
+    return int(vis[0]) if len(vis) else 0
+
+
+#: a start box may be at most this many times the frame's width and height
+MAX_BOX_FACTOR = 2
+
+
+def check_start_box(box, size, what="--init box"):
+    """Raise :class:`VideoError` unless ``box`` ``(x, y, w, h)`` is one to start tracking from in
+    a frame of ``size`` ``(width, height)``: finite, a positive size, at least 2 px of it inside
+    the frame each way, and at most :data:`MAX_BOX_FACTOR` times the frame's width and height."""
+    fw, fh = size
+    x, y, w, h = (float(v) for v in box)
+    text = f"{x:.6g},{y:.6g},{w:.6g},{h:.6g}"
+    if not all(np.isfinite([x, y, w, h])) or w <= 0 or h <= 0:
+        raise VideoError(f"{what} {text} needs finite numbers and a positive size (width and height)")
+    if w > MAX_BOX_FACTOR * fw or h > MAX_BOX_FACTOR * fh:
+        raise VideoError(f"{what} {text} is far larger than the {fw}x{fh} frame (at most {MAX_BOX_FACTOR} times "
+                         "its width and height): give the object's box")
+    if min(x + w, fw) - max(x, 0) < 2 or min(y + h, fh) - max(y, 0) < 2:
+        raise VideoError(f"{what} {text} lies outside the {fw}x{fh} frame (less than 2 px of it inside): "
+                         "give a box on the object")
 
 
 def read_support_points(path):
@@ -52,7 +99,10 @@ def read_support_points(path):
     p = Path(path)
     if not p.is_file():
         raise VideoError(f"template file {p} does not exist")
-    text = p.read_text()
+    try:
+        text = p.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise VideoError(f"template file {p} is not a text file (byte {e.start} is not UTF-8)") from None
     if p.suffix == ".json":
         import json
 
@@ -61,8 +111,12 @@ def read_support_points(path):
         except json.JSONDecodeError as e:
             raise VideoError(f"template file {p} is not valid JSON: {e}") from None
         if isinstance(data, dict):
-            data = (data.get("template") or {}).get("support_points", data.get("support_points"))
-        pts = np.asarray(data, dtype=float) if data is not None else np.zeros((0, 2))
+            tpl = data.get("template")
+            data = (tpl if isinstance(tpl, dict) else {}).get("support_points", data.get("support_points"))
+        try:
+            pts = np.asarray(data, dtype=float) if data is not None else np.zeros((0, 2))
+        except (TypeError, ValueError):
+            raise VideoError(f"template file {p}: expected a list of [x, y] pairs of numbers") from None
     else:
         rows = []
         for k, line in enumerate(text.splitlines(), 1):
@@ -73,19 +127,26 @@ def read_support_points(path):
             try:
                 rows.append([float(v) for v in parts])
             except ValueError:
-                raise VideoError(f"{p}, line {k}: expected two numbers x y, got {line!r}") from None
+                raise VideoError(f"{p}, line {k}: expected two numbers x y, got {_short(line)}") from None
             if len(parts) != 2:
                 raise VideoError(f"{p}, line {k}: expected two numbers x y, got {len(parts)}")
         pts = np.asarray(rows, dtype=float).reshape(-1, 2)
     if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 4:
-        raise VideoError(f"template file {p} needs at least 4 support points (x y), got {len(pts)}")
+        raise VideoError(f"template file {p} needs at least 4 support points (x y), got "
+                         f"{len(pts) if pts.ndim == 2 and pts.shape[1] == 2 else 'another shape'}")
+    bad = np.flatnonzero(~np.all(np.isfinite(pts), axis=1) | np.any(np.abs(pts) > 1e6, axis=1))
+    if len(bad):
+        raise VideoError(f"template file {p}: support point {bad[0] + 1} is not a finite pixel position "
+                         f"({pts[bad[0], 0]:.6g}, {pts[bad[0], 1]:.6g})")
     return pts
 
 
-def _first_frame(clip):
-    for _, frame in clip.source:
-        return frame
-    raise VideoError(f"{clip.source.path}: no frame could be decoded")
+def _first_frame(clip, index=0):
+    """The first decodable frame of ``clip`` at or after ``index`` (the start frame)."""
+    for i, frame in clip.source:
+        if i >= index:
+            return frame
+    raise VideoError(f"{clip.source.path}: no frame could be decoded" + (f" from frame {index} on" if index else ""))
 
 
 def model_from_box(name, frame, box, **params):
@@ -103,7 +164,9 @@ def model_from_box(name, frame, box, **params):
     if spec.from_box is None:
         starts = ", ".join(k for k, v in _REGISTRY.items() if v.from_box is not None)
         raise VideoError(f"model {name!r} does not start from a box; choose from {starts}")
-    return spec.from_box(np.asarray(frame), box, **params)
+    frame = np.asarray(frame)
+    check_start_box(box, (frame.shape[1], frame.shape[0]), "start box")
+    return spec.from_box(frame, box, **params)
 
 
 def _spec(name):
@@ -170,13 +233,16 @@ def build_model(name, clip, *, init=None, init_gt=None, template=None, **params)
     or without one its ``from_box`` at the start box in the clip's first frame.
     """
     spec = _spec(name)
+    if init is not None:
+        check_start_box(init, clip.source.size)
     if spec.from_clip is not None:
         return spec.from_clip(clip, init=init, init_gt=init_gt, template=template, **params)
     if init is None and init_gt is None:
         raise VideoError(f"the {name} model needs a start: --init x,y,w,h or --init-gt")
     if template is not None:
         raise VideoError(f"--template is not for the {name} model")
-    return spec.from_box(_first_frame(clip), _start_box(clip, init, init_gt), **params)
+    box = _start_box(clip, init, init_gt)
+    return spec.from_box(_first_frame(clip, start_frame(clip, init, init_gt)), box, **params)
 
 
 def _contour_from_clip(clip, *, init, init_gt, template, polarity="auto", colour="auto", **params):
@@ -186,7 +252,7 @@ def _contour_from_clip(clip, *, init, init_gt, template, polarity="auto", colour
         return _contour_from_box(_first_frame(clip), init, template=template, polarity=polarity, colour=colour,
                                  **params)
     model = _contour(clip, clip.source.size, init, init_gt, template, params)
-    return _learn_contour(model, _first_frame(clip), polarity, colour)
+    return _learn_contour(model, _first_frame(clip, start_frame(clip, init, init_gt)), polarity, colour)
 
 
 def _plate_from_clip(clip, *, init, init_gt, template, targets=None, **params):
@@ -266,7 +332,7 @@ def _plate(clip, size, init, init_gt, params):
                                    {"enter_weight": 0.0, "birth_reserve": 0.0, **params}, frame)
 
         return PlateSearch(build)
-    frame = _first_frame(clip) if appearance and box is not None else None
+    frame = _first_frame(clip, start_frame(clip, init, init_gt)) if appearance and box is not None else None
     return _plate_from_box(size, box, layout, params, frame)
 
 

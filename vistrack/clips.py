@@ -19,7 +19,7 @@ import numpy as np
 
 from .video import VideoError, find_groundtruth, groundtruth_origin, open_video, read_rects
 
-__all__ = ["Clip", "load_clip", "read_groundtruth_csv", "write_track_csv", "format_value", "excerpt_clip",
+__all__ = ["Clip", "load_clip", "read_meta", "read_groundtruth_csv", "write_track_csv", "format_value", "excerpt_clip",
            "GroundTruthWarning"]
 
 
@@ -73,13 +73,18 @@ TEXT_COLUMNS = ("lost_reason",)
 
 def read_groundtruth_csv(path):
     """Columns of a ``groundtruth.csv`` (or track CSV) as float arrays (:data:`TEXT_COLUMNS`: str)."""
-    with open(path, newline="") as f:
-        rd = csv.reader(f)
-        try:
-            header = next(rd)
-        except StopIteration:
-            raise VideoError(f"{path} is empty") from None
-        rows = [r for r in rd if r]
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as f:
+            rd = csv.reader(f)
+            try:
+                header = next(rd)
+            except StopIteration:
+                raise VideoError(f"{path} is empty") from None
+            rows = [r for r in rd if r]
+    except UnicodeDecodeError as e:
+        raise VideoError(f"{path} is not a text file (byte {e.start} is not UTF-8)") from None
+    except csv.Error as e:
+        raise VideoError(f"{path} is not a CSV file ({e})") from None
     text = [k for k, h in enumerate(header) if h in TEXT_COLUMNS]
     try:
         if any(len(r) != len(header) for r in rows):
@@ -107,16 +112,19 @@ def load_clip(path):
     folder = p if p.is_dir() else p.parent
     meta = None
     if (folder / "meta.json").is_file():
-        try:
-            meta = json.loads((folder / "meta.json").read_text())
-        except json.JSONDecodeError as e:
-            raise VideoError(f"{folder / 'meta.json'} is not valid JSON: {e}") from None
+        meta = read_meta(folder / "meta.json")
     truth = None
     if (folder / "groundtruth.csv").is_file():
         truth = read_groundtruth_csv(folder / "groundtruth.csv")
         missing = {"frame", "visible", "cx", "cy", "w", "h"} - set(truth)
         if missing:
             raise VideoError(f"{folder / 'groundtruth.csv'} lacks columns {', '.join(sorted(missing))}")
+        geo = np.abs(np.nan_to_num(np.column_stack([truth[c] for c in ("cx", "cy", "w", "h")]), posinf=np.inf,
+                                   neginf=np.inf))
+        if geo.size and np.any(geo > 1e6):
+            k = int(np.flatnonzero(np.any(geo > 1e6, axis=1))[0])
+            raise VideoError(f"{folder / 'groundtruth.csv'}, line {k + 2}: cx, cy, w, h must be pixel coordinates "
+                             "and sizes (at most 1e+06), or NaN where the object is not in view")
     elif find_groundtruth(p) is not None:
         gt = find_groundtruth(p)
         truth = _rects_truth(read_rects(gt, origin=groundtruth_origin(gt)))
@@ -126,6 +134,22 @@ def load_clip(path):
                       + ("frames past its end are not scored" if k < n else "its extra rows are ignored"),
                       GroundTruthWarning, stacklevel=2)
     return Clip(source, folder, meta, truth)
+
+
+def read_meta(path):
+    """A clip's ``meta.json`` as a dict; a :class:`VideoError` naming the file for one that is not
+    text, not JSON, or not a JSON object (``{...}``), or whose ``model`` is not a name."""
+    try:
+        meta = json.loads(Path(path).read_text(encoding="utf-8-sig"))
+    except UnicodeDecodeError as e:
+        raise VideoError(f"{path} is not a text file (byte {e.start} is not UTF-8)") from None
+    except (json.JSONDecodeError, RecursionError) as e:
+        raise VideoError(f"{path} is not valid JSON: {e}") from None
+    if not isinstance(meta, dict):
+        raise VideoError(f"{path} holds a JSON {type(meta).__name__}, not an object ({{\"model\": ..., ...}})")
+    if "model" in meta and not isinstance(meta["model"], str):
+        raise VideoError(f"{path}: \"model\" must be a model name, got {json.dumps(meta['model'])[:40]}")
+    return meta
 
 
 class GroundTruthWarning(UserWarning):
@@ -177,6 +201,10 @@ def excerpt_clip(src, dst, frames):
         if not cv2.imwrite(str(dst / "img" / f"{i + 1:08d}.png"), frame):
             raise VideoError(f"cannot write {dst / 'img'}")
         n = i + 1
+    written = {f"{k + 1:08d}.png" for k in range(n)}
+    for p in (dst / "img").iterdir():  # an earlier, longer excerpt's frames
+        if p.name not in written and p.suffix.lower() == ".png":
+            p.unlink()
     t = clip.truth
     with open(dst / "groundtruth.txt", "w") as f:
         for k in range(min(n, len(t["cx"]))):

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .builders import build_model
+from .builders import build_model, start_frame
 from .clips import GroundTruthWarning, load_clip
 from .filters import ALGORITHMS, make_filter
 from .metrics import IOU_THRESHOLDS, center_error, iou, lost_frames, summarize_runs
@@ -243,7 +243,9 @@ def run_task(task, out_dir):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", GroundTruthWarning)  # said once, when eval found the clips
         clip = load_clip(task["clip"])
-    frames = list(clip.source)
+    # the run starts at the first frame with a ground-truth box (earlier frames: no estimate, not scored)
+    start = start_frame(clip, None, "")
+    frames = [(i, f) for i, f in clip.source if i >= start]
     algo, n = task["algo"], task["particles"]
     # eval: the object's own size (the plate's vertex rule for plates); reproduce: the thesis's
     rule = "centre" if task.get("lost_rule") == "thesis" else "size"
@@ -304,10 +306,20 @@ def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=No
 
 def result_files(dirs, clips):
     """``(tracker name, clip, result file)`` for every result folder and clip: ``DIR/<clip name>.txt``
-    (case-insensitive), the tracker named after ``DIR``. A missing file is a ``ValueError``."""
+    (case-insensitive), the tracker named after ``DIR``. A missing file is a ``ValueError``; so are
+    two folders of one name (they would be merged into one tracker) and a folder named like one
+    of vistrack's algorithms or OpenCV trackers (it would be listed as that algorithm)."""
     out = []
+    names = {}
     for d in dirs:
         d = Path(d)
+        if d.name in names:
+            raise ValueError(f"--results-dir {names[d.name]} and {d} have the same name {d.name!r}: each tracker is "
+                             "named after its folder; rename one")
+        names[d.name] = d
+        if d.name.lower() in ALGORITHMS or d.name.lower() in OPENCV_TRACKERS:
+            raise ValueError(f"--results-dir {d} is named like vistrack's algorithm {d.name.lower()!r}: its results "
+                             "would be listed as that algorithm's; rename the folder (e.g. after the tracker)")
         files = {p.name.lower(): p for p in d.iterdir() if p.suffix.lower() == ".txt"}
         for c in clips:
             want = f"{_name(c)}.txt"
@@ -327,10 +339,20 @@ def score_result_file(clip_path, path, name):
     clip = load_clip(clip_path)
     boxes = read_rects(path)
     boxes[~((boxes[:, 2] > 0) & (boxes[:, 3] > 0))] = np.nan
+    n = len(clip.truth["cx"])
+    if len(boxes) != n:  # positional: a line per frame of the ground truth
+        warnings.warn(f"{path} has {len(boxes)} lines for the {n} ground-truth frames of {_name(clip_path)}: "
+                      + (f"the {n - len(boxes)} frames past its end are scored as not reported" if len(boxes) < n
+                         else f"its last {len(boxes) - n} lines are ignored"), ResultsLengthWarning, stacklevel=2)
+        boxes = np.concatenate([boxes[:n], np.full((max(0, n - len(boxes)), 4), np.nan)])
     result = score_boxes(clip, boxes)
     result.update({"clip": str(clip_path), "algo": name, "particles": 1, "run": 0, "ms": [],
                    "ess": [None] * result["frames"], "external": True})
     return result
+
+
+class ResultsLengthWarning(UserWarning):
+    """A result file and the ground truth differ in their number of frames."""
 
 
 def summarize(results):

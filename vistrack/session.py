@@ -1,7 +1,9 @@
 """One tracking run over a video, as ``vistrack run`` does it: the track CSV and the annotated
 video written frame by frame, nothing lost on an interrupt, and the summary against ground truth.
 
-Writing whole or not at all: the track CSV goes to ``PATH.part``, one flushed row per frame,
+Writing whole or not at all: the track CSV goes to a temporary name of its own beside ``PATH``
+(``PATH.part``, or ``PATH.<pid>-<k>.part`` when that is taken; :mod:`vistrack.outputs`), one
+flushed row per frame, under a lock that a second run given the same ``PATH`` refuses,
 and is renamed to ``PATH`` when the run ends for any reason (done, Ctrl-C, SIGTERM, an
 error), so ``PATH`` is always a whole CSV of the frames tracked; a killed process leaves only
 the ``.part`` file (whole rows up to the last frame). The annotated video is closed on every
@@ -28,6 +30,7 @@ from .particles import DegenerateWeightsWarning
 from .profiling import STAGES, Timer, profile_stages
 from .render import annotate, annotate_targets
 from .tracking import top_particles, track, warm_up
+from .outputs import OutputLock, is_device, temporary_name
 from .video import VideoWriter
 
 __all__ = ["TrackCSV", "VideoRun", "track_row", "target_rows", "track_video", "summary_lines", "Terminated", "stop_on_signals"]
@@ -65,9 +68,15 @@ class TrackCSV:
     def __init__(self, path, boxes=False):
         self.path = Path(path)
         # a device or pipe (/dev/stdout) is written directly: a part file renamed over it would replace it
-        self.direct = self.path.exists() and not self.path.is_file()
-        self.part = self.path if self.direct else self.path.with_name(self.path.name + ".part")
-        self._f = open(self.part, "w", newline="")
+        self.direct = is_device(self.path)
+        # one live writer per output (a second run refuses it: OutputBusy), and a temporary name of its own
+        self._lock = OutputLock(self.path, "results file" if boxes else "track file")
+        try:
+            self.part = self.path if self.direct else temporary_name(self.path)
+            self._f = open(self.part, "w", newline="")
+        except BaseException:
+            self._lock.release()
+            raise
         self._w = csv.writer(self._f)
         self.boxes = bool(boxes)
         self.columns = None
@@ -99,12 +108,15 @@ class TrackCSV:
             self._f.close()
         except OSError:
             pass
-        if self.direct:
-            return
-        if self.rows:
-            os.replace(self.part, self.path)
-        else:
-            self.part.unlink(missing_ok=True)
+        try:
+            if self.direct:
+                return
+            if self.rows:
+                os.replace(self.part, self.path)
+            else:
+                self.part.unlink(missing_ok=True)
+        finally:
+            self._lock.release()
 
 
 @dataclass
@@ -177,7 +189,8 @@ def target_rows(model, res):
 
 
 def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, results_path=None,
-                video_info=None, show_particles=10, label="", progress=None, notify=None, profile=True, lead=()):
+                video_info=None, show_particles=10, label="", progress=None, notify=None, profile=True,
+                frame_count=None, start=0, lead=()):
     """Track ``frames`` (iterable of ``(index, frame)``), writing the track CSV and annotated video as
     it goes; stops cleanly on Ctrl-C / SIGTERM (:func:`stop_on_signals`). Returns a :class:`VideoRun`.
 
@@ -207,39 +220,115 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         Frames before ``frames`` that were searched for the object without finding it
         (:class:`~vistrack.models.plate_detect.PlateSearch`): each gets a row with ``visible=0``
         and ``lost_reason`` "not found" (NaN geometry), and its frame unmarked in the video.
+    frame_count : int or None
+        The number of frames the input holds, where it is exact (an image folder): frames after
+        the last one decoded get rows too.
+    start : int
+        The frame tracking starts from (:func:`~vistrack.builders.start_frame`): earlier frames
+        get rows with ``visible=0`` and ``lost_reason`` ``"not started"``.
+
+    Every frame of the input is accounted for: a frame that failed to decode (an index missing
+    from ``frames``) gets a row with ``visible=0`` and ``lost_reason`` ``"decode"`` (the
+    filter's state carried over, ``ms`` 0), a ``0,0,0,0`` results line and a blank annotated
+    frame saying so. A signal (Ctrl-C, SIGTERM; :func:`deferred_signals`) stops the run after
+    the frame in hand, so that the track, the results and the video hold the same frames.
     """
     run = VideoRun()
     run.timer = Timer() if profile else None
     frames = _warmed(frames, filt, particles)
     if profile:
         frames = run.timer.timed_iter(frames, "decode")
-    writer = VideoWriter(out_path, *video_info, codec="auto") if out_path else None
-    run.video_note = writer.note if writer else None
-    outs = [TrackCSV(track_path)] if track_path else []
-    if results_path:
-        outs.append(TrackCSV(results_path, boxes=True))
-    for index, frame in lead:
-        row = {"frame": index, "visible": 0, **model.describe(np.full(model.dim, np.nan)),
-               "ess": 0.0, "ms": 0.0, "lost_reason": "not found"}
-        run.rows.append(row)
-        for o in outs:
-            o.write(row)
-        if writer:
-            writer.write(annotate(frame, [], [], f"#{index}  {label}  searching"))
-    t0 = time.perf_counter()
-    try:
-        with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
-            warnings.simplefilter("ignore", DegenerateWeightsWarning)
-            for res in track(frames, filt, particles, rng):
-                _record(run, res, model, outs, writer, show_particles, label, notify)
-                if progress:
-                    progress(run.rows[-1]["ess"])
-    except (KeyboardInterrupt, SystemError) as e:  # Terminated is a KeyboardInterrupt
-        run.stopped = _stop_reason(e)
-    finally:
-        run.wall = time.perf_counter() - t0
-        _close_all(outs, writer)
+    with deferred_signals() as stop:  # from opening the outputs to closing them: a signal waits for the frame
+        outs, writer = [], None
+        try:  # an output another run holds (OutputBusy) or cannot write: none of them left behind
+            if track_path:
+                outs.append(TrackCSV(track_path))
+            if results_path:
+                outs.append(TrackCSV(results_path, boxes=True))
+            writer = VideoWriter(out_path, *video_info, codec="auto", atomic=True) if out_path else None
+        except BaseException:
+            _close_all(outs, writer)
+            raise
+        run.video_note = writer.note if writer else None
+        for index, frame in lead:  # searched without finding the object (PlateSearch)
+            row = {"frame": index, "visible": 0, **model.describe(np.full(model.dim, np.nan)),
+                   "ess": 0.0, "ms": 0.0, "lost_reason": "not found"}
+            run.rows.append(row)
+            for o in outs:
+                o.write(row)
+            if writer:
+                writer.write(annotate(frame, [], [], f"#{index}  {label}  searching"))
+        t0 = time.perf_counter()
+        try:
+            with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
+                warnings.simplefilter("ignore", DegenerateWeightsWarning)
+                expected, last = (lead[-1][0] + 1 if len(lead) else 0), None
+                for res in track(frames, filt, particles, rng):
+                    for i in range(expected, res.index):  # frames before the start, or that failed to decode
+                        _record_decode(run, i, res, model, outs, writer, label, notify, progress, i < start)
+                    _record(run, res, model, outs, writer, show_particles, label, notify)
+                    if progress:
+                        progress(run.rows[-1]["ess"])
+                    expected, last = res.index + 1, res
+                    if stop.reason:
+                        break
+                if not stop.reason and last is not None and frame_count:
+                    for i in range(expected, int(frame_count)):
+                        _record_decode(run, i, last, model, outs, writer, label, notify, progress)
+        except (KeyboardInterrupt, SystemError) as e:  # Terminated is a KeyboardInterrupt
+            run.stopped = _stop_reason(e)
+        finally:
+            run.wall = time.perf_counter() - t0
+            _close_all(outs, writer)
+        if stop.reason:  # a signal while the outputs were closed counts too
+            run.stopped = stop.reason
     return run
+
+
+class _Stop:
+    """What :func:`deferred_signals` caught: ``reason`` (``None``, ``"interrupt"`` or
+    ``"terminate"``) and how many signals."""
+
+    def __init__(self):
+        self.reason, self.count = None, 0
+
+
+#: signals after which a run stops at once (raises) instead of after the frame in hand
+HARD_STOP = 3
+
+
+@contextmanager
+def deferred_signals():
+    """Within the block SIGINT and SIGTERM set a flag (the yielded object's ``reason``:
+    ``"terminate"`` once a SIGTERM came, else ``"interrupt"``) instead of raising, so the frame in
+    hand is finished and every writer flushed before the run stops; the :data:`HARD_STOP`-th
+    signal raises (``KeyboardInterrupt``, or :class:`Terminated` for SIGTERM) for a run that does
+    not come back. A SIGINT the process ignores (a background job) stays ignored. Outside the
+    main thread signals are left alone."""
+    import threading
+
+    stop = _Stop()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def handler(signum, frame):
+        stop.count += 1
+        if stop.reason is None or signum == signal.SIGTERM:  # a SIGTERM (shutdown) outranks Ctrl-C
+            stop.reason = "terminate" if signum == signal.SIGTERM else "interrupt"
+        if stop.count >= HARD_STOP:
+            raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+    old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    for s, h in old.items():
+        if h is not signal.SIG_IGN:
+            signal.signal(s, handler)
+    try:
+        yield stop
+    finally:
+        for s, h in old.items():
+            if h is not signal.SIG_IGN and h is not None:
+                signal.signal(s, h)
 
 
 def _close_all(outs, writer):
@@ -298,6 +387,48 @@ def _record(run, res, model, outs, writer, show_particles, label, notify=None):
             ids, states = res.targets
             img = annotate_targets(res.frame, ids, model.target_outline(states), particles, text)
         writer.write(img)
+
+
+class _Untracked:
+    """The :class:`~vistrack.tracking.FrameResult` fields of a frame that was not tracked."""
+
+    visible = False
+
+    def __init__(self, index, reason, detail):
+        self.index, self.lost_reason, self.lost_detail = index, reason, detail
+
+
+def _record_decode(run, index, near, model, outs, writer, label, notify=None, progress=None, before=False):
+    """The row of frame ``index``, which failed to decode (or comes ``before`` the start frame):
+    ``visible=0``, ``lost_reason`` "decode" ("not started"), the geometry and ESS of the
+    neighbouring frame's result ``near`` (the filter's state, which the frame did not change),
+    ``ms`` 0; a blank annotated frame saying so."""
+    reason, detail = ("not started", "before the first ground-truth box") if before else \
+        ("decode", "the frame failed to decode")
+    if near.targets is None:
+        row = {"frame": index, "visible": 0, **model.describe(near.estimate), "ess": near.ess, "ms": 0.0,
+               "lost_reason": reason}
+        rows = [row]
+    else:
+        row = {"frame": index, "visible": 0, "id": -1,
+               **{k: np.nan for k in model.describe_target(np.zeros(near.targets[1].shape[1]))},
+               "ess": near.ess, "ms": 0.0, "lost_reason": reason}
+        rows = [row]
+        run.target_rows += rows
+        row = {"frame": index, "visible": 0, **model.describe(near.estimate), "ess": near.ess, "ms": 0.0,
+               "lost_reason": reason}
+    if not before:
+        run.note_lost(_Untracked(index, reason, detail), notify)
+    run.rows.append(row)
+    for o in outs:
+        for r in rows:
+            o.write(r)
+    run.ess_sum += row["ess"]
+    if writer:
+        blank = np.zeros((writer.size[1], writer.size[0], 3), np.uint8)
+        writer.write(annotate(blank, [], [], f"#{index}  {label}  {detail}"))
+    if progress:
+        progress(row["ess"])
 
 
 def summary_lines(run, particles, *, model_name, model, truth, frame_width, objects=None):

@@ -9,8 +9,10 @@
 
 Frames come as ``(index, frame)`` with ``frame`` a ``uint8`` BGR array of shape
 ``(H, W, 3)``; ``frame_count``, ``fps`` and ``size`` are known up front where the
-container says. A frame that fails to decode is skipped (its index is not yielded) and
-counted in a :class:`VideoDecodeWarning`; a path that is
+container says. An image folder's frames are read in natural order (``frame2`` before
+``frame10``; :class:`FrameOrderWarning` where the names leave it ambiguous) and must share one
+size. A frame that fails to decode is skipped (its index is not yielded; ``vistrack run``
+gives it a row of its own) and counted in a :class:`VideoDecodeWarning`; a path that is
 missing, not a video, or holds no frame raises :class:`VideoError` with one
 clear sentence.
 """
@@ -31,6 +33,9 @@ os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 __all__ = [
     "VideoError",
     "VideoDecodeWarning",
+    "FrameOrderWarning",
+    "natural_key",
+    "read_text_lines",
     "VideoSource",
     "open_video",
     "VideoWriter",
@@ -56,6 +61,10 @@ class VideoDecodeWarning(RuntimeWarning):
     """A frame failed to decode before the announced end of the stream."""
 
 
+class FrameOrderWarning(UserWarning):
+    """The names of an image folder's frames do not give one clear order."""
+
+
 class VideoSource:
     """An opened video: iterate for ``(index, frame)``.
 
@@ -75,10 +84,14 @@ class VideoSource:
         self._images = _images
         #: indices of the frames the last iteration skipped (failed to decode)
         self.skipped = []
-        if _images is not None:
-            first = cv2.imread(str(_images[0]), cv2.IMREAD_COLOR)
+        #: where the last iteration of a video stopped decoding before the frame count its container
+        #: announces (``None`` when it reached it)
+        self.ended_at = None
+        if _images is not None:  # the frame size is the first readable image's (unreadable ones: "decode" rows)
+            first = next((f for f in (cv2.imread(str(p), cv2.IMREAD_COLOR) for p in _images) if f is not None), None)
             if first is None:
-                raise VideoError(f"{_images[0]} is not a readable image")
+                raise VideoError(f"{_images[0]} is not a readable image" if len(_images) == 1 else
+                                 f"{Path(path)}: none of its {len(_images)} images is readable")
             self.frame_count = len(_images)
             self.fps = 30.0
             self.size = (first.shape[1], first.shape[0])
@@ -111,12 +124,17 @@ class VideoSource:
         :class:`VideoDecodeWarning` at the end says how many. A video gives up after
         :attr:`max_failed_run` failures in a row."""
         self.skipped = []
+        self.ended_at = None
         if self._images is not None:
             for i, p in enumerate(self._images):
                 frame = cv2.imread(str(p), cv2.IMREAD_COLOR)
                 if frame is None:
                     self.skipped.append(i)
                     continue
+                if (frame.shape[1], frame.shape[0]) != self.size:
+                    raise VideoError(f"{p.name} (frame {i}) is {frame.shape[1]}x{frame.shape[0]}, but the folder's "
+                                     f"first frame is {self.size[0]}x{self.size[1]}: the frames of an image "
+                                     "sequence must share one size")
                 yield i, frame
             self._warn_skipped(len(self._images))
             return
@@ -137,6 +155,7 @@ class VideoSource:
                 i += 1
             i -= failed
             if self.frame_count is not None and i < self.frame_count:
+                self.ended_at = i
                 warnings.warn(f"{self.path.name}: decoding stopped at frame {i} of {self.frame_count}",
                               VideoDecodeWarning, stacklevel=2)
             self._warn_skipped(self.frame_count)
@@ -151,8 +170,32 @@ class VideoSource:
                           VideoDecodeWarning, stacklevel=3)
 
 
+def natural_key(name):
+    """Sort key of a file name by the numbers in it: ``frame2`` before ``frame10``; text parts
+    compare as text (case-folded), number parts as numbers."""
+    import re
+
+    return tuple((0, int(t), "") if t.isdigit() else (1, 0, t.casefold())
+                 for t in re.split(r"(\d+)", name) if t)
+
+
 def _image_files(folder):
-    return sorted(p for p in Path(folder).iterdir() if p.suffix.lower() in IMAGE_EXT and p.is_file())
+    """The image files of ``folder`` in natural order (:func:`natural_key`: ``frame1, frame2, ..,
+    frame10``, not ``frame1, frame10, frame2``); a :class:`FrameOrderWarning` when two names give
+    the same numbers (``1.png`` and ``01.png``) or the names differ in more than their numbers
+    (the order is then a guess)."""
+    files = [p for p in Path(folder).iterdir() if p.suffix.lower() in IMAGE_EXT and p.is_file()]
+    files.sort(key=lambda p: (natural_key(p.name), p.name))
+    keys = [natural_key(p.name) for p in files]
+    dup = next((files[k] for k in range(1, len(keys)) if keys[k] == keys[k - 1]), None)
+    stems = {tuple(t[2] for t in k) for k in keys}
+    if dup is not None or len(stems) > 1:
+        why = (f"{dup.name} and another name give the same frame number" if dup is not None
+               else "the names differ in more than their numbers ("
+               + ", ".join(sorted({files[0].name, files[-1].name})) + ")")
+        warnings.warn(f"{folder}: the frames' order is ambiguous ({why}); read in natural order "
+                      f"{files[0].name}, {files[1].name}, ...", FrameOrderWarning, stacklevel=3)
+    return files
 
 
 def open_video(path):
@@ -160,6 +203,9 @@ def open_video(path):
     p = Path(path)
     if not p.exists():
         raise VideoError(f"{p} does not exist")
+    if not p.is_file() and not p.is_dir():
+        raise VideoError(f"{p} is not a regular file or folder (a device or pipe): give a video file or an image "
+                         "folder")
     if p.is_file():
         if os.path.getsize(p) == 0:
             raise VideoError(f"{p} is empty")
@@ -193,28 +239,51 @@ def read_rects(path, origin=0):
     subtracted from ``x`` and ``y``. Any other line is a :class:`VideoError` naming the file and line.
     """
     rows = []
-    with open(path) as f:
-        for k, line in enumerate(f, 1):
-            line = line.strip()
-            if not line:
-                continue
-            parts = line.replace(",", " ").replace("\t", " ").split()
-            try:
-                v = np.array([float(x) for x in parts])
-            except ValueError:
-                raise VideoError(f"{path}, line {k}: expected numbers (x,y,w,h or a 4-corner polygon), "
-                                 f"got {line!r}") from None
-            if len(v) == 8:
-                xs, ys = v[0::2], v[1::2]
-                v = np.array([xs.min(), ys.min(), xs.max() - xs.min(), ys.max() - ys.min()])
-            elif len(v) != 4:
-                raise VideoError(f"{path}, line {k}: expected 4 values x,y,w,h or 8 (a polygon), got {len(v)}")
-            if not (np.all(np.isfinite(v)) and v[2] > 0 and v[3] > 0):
-                v = np.zeros(4)  # the object is not in view
-            else:
-                v[:2] -= origin
-            rows.append(v)
+    for k, line in enumerate(read_text_lines(path), 1):
+        line = line.strip()
+        if not line:
+            continue
+        parts = line.replace(",", " ").replace("\t", " ").split()
+        try:
+            v = np.array([float(x) for x in parts])
+        except ValueError:
+            raise VideoError(f"{path}, line {k}: expected numbers (x,y,w,h or a 4-corner polygon), "
+                             f"got {_short(line)}") from None
+        if np.any(np.abs(v[np.isfinite(v)]) > MAX_COORD):
+            raise VideoError(f"{path}, line {k}: a value beyond {MAX_COORD:.0e} px is not a pixel coordinate, "
+                             f"got {_short(line)}")
+        if len(v) == 8:
+            xs, ys = v[0::2], v[1::2]
+            v = np.array([xs.min(), ys.min(), xs.max() - xs.min(), ys.max() - ys.min()])
+        elif len(v) != 4:
+            raise VideoError(f"{path}, line {k}: expected 4 values x,y,w,h or 8 (a polygon), got {len(v)}")
+        if not (np.all(np.isfinite(v)) and v[2] > 0 and v[3] > 0):
+            v = np.zeros(4)  # the object is not in view
+        else:
+            v[:2] -= origin
+        rows.append(v)
     return np.array(rows, dtype=float).reshape(-1, 4)
+
+
+#: the largest pixel coordinate or size a ground-truth or results file may give
+MAX_COORD = 1e6
+
+
+def _short(text, most=60):
+    """``text`` quoted, cut to ``most`` characters (an error line stays one short line)."""
+    return repr(text if len(text) <= most else text[:most] + "...")
+
+
+def read_text_lines(path):
+    """The lines of a text file (UTF-8, a byte-order mark ignored); a :class:`VideoError` naming the
+    file for one that is not text (binary) or cannot be read."""
+    try:
+        with open(path, encoding="utf-8-sig") as f:
+            return f.read().splitlines()
+    except UnicodeDecodeError as e:
+        raise VideoError(f"{path} is not a text file (byte {e.start} is not UTF-8)") from None
+    except IsADirectoryError:
+        raise VideoError(f"{path} is a folder, not a text file") from None
 
 
 #: ground-truth files by dataset layout: (file name, coordinate origin)
@@ -262,6 +331,11 @@ class VideoWriter:
         (:data:`CONTAINERS`): ``.mp4``/``.m4v``/``.mov`` get their index first (``faststart``: a
         browser plays them while they load), ``.mkv`` H.264 too, and ``.avi`` Motion JPEG under
         ``h264``/``auto`` (with :attr:`note`); any other name is a :class:`VideoError`.
+    atomic : bool
+        Write under a temporary name beside ``path`` (:func:`vistrack.outputs.temporary_name`),
+        renamed over it by :meth:`close`, holding ``path``'s lock meanwhile
+        (:class:`vistrack.outputs.OutputLock`: a second writer is refused); ``path`` never
+        holds half a video and is never the same file as another writer's.
 
     Attributes
     ----------
@@ -271,7 +345,9 @@ class VideoWriter:
         Why H.264 was not written, under ``codec="auto"``.
     """
 
-    def __init__(self, path, fps, size, codec="mp4v"):
+    def __init__(self, path, fps, size, codec="mp4v", atomic=False):
+        from .outputs import OutputLock, is_device, temporary_name
+
         self.path = Path(path)
         if not self.path.parent.is_dir():
             raise VideoError(f"cannot write {self.path}: folder {self.path.parent} does not exist")
@@ -283,16 +359,34 @@ class VideoWriter:
         self._av = None
         # the container by the name's last known suffix (``a.mp4``, or a temporary ``a.mp4.part-7``)
         suffix = next((x for x in reversed([x.lower() for x in self.path.suffixes]) if x in CONTAINERS), "")
-        self.container = suffix
+        self.container = suffix = suffix or (".mp4" if is_device(self.path) else "")  # /dev/null: anything goes
         if suffix not in CONTAINERS:
             raise VideoError(f"cannot write a video to {self.path}: give a file name ending in "
                              f"{', '.join(CONTAINERS)}")
-        if codec in ("h264", "auto") and CONTAINERS[suffix] == "mjpg":
+        self._w = _Closed()
+        # atomic: written under a temporary name of its own, renamed over ``path`` by close(); one live writer
+        self._lock = OutputLock(self.path, "annotated video") if atomic else _NoLock()
+        self._final = self.path
+        try:
+            if atomic and not is_device(self.path):
+                self.path = temporary_name(self.path)
+            self._open(fps, codec)
+        except BaseException:
+            self._discard()
+            raise
+
+    def _discard(self):
+        if self.path != self._final:
+            self.path.unlink(missing_ok=True)
+        self._lock.release()
+
+    def _open(self, fps, codec):
+        if codec in ("h264", "auto") and CONTAINERS[self.container] == "mjpg":
             self.codec = "mjpg"  # H.264 in AVI plays in few players: AVI's own Motion JPEG
-            self.note = f"{suffix} holds Motion JPEG here (.mp4 or .mkv for H.264)"
+            self.note = f"{self.container} holds Motion JPEG here (.mp4 or .mkv for H.264)"
             self._w = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"MJPG"), float(fps), self.size)
             if not self._w.isOpened():
-                raise VideoError(f"cannot open {self.path} for writing")
+                raise VideoError(f"cannot open {self._final} for writing")
             return
         if codec in ("h264", "auto"):
             try:
@@ -301,14 +395,14 @@ class VideoWriter:
                 return
             except Exception as e:  # PyAV missing, or FFmpeg without an H.264 encoder
                 if codec == "h264":
-                    raise VideoError(f"cannot write H.264 to {self.path}: {e}") from None
+                    raise VideoError(f"cannot write H.264 to {self._final}: {e}") from None
                 self.note = (f"H.264 not available ({type(e).__name__}: {e}); wrote MPEG-4 Part 2 (mp4v), which "
                              "browsers do not play (pip install av)")
         self.codec = "mp4v"
         self._w = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"mp4v"), float(fps), self.size)
         if not self._w.isOpened():
-            hint = "" if self.path.suffix.lower() == ".mp4" else " (give a file name ending in .mp4)"
-            raise VideoError(f"cannot open {self.path} for writing{hint}")
+            hint = "" if self._final.suffix.lower() == ".mp4" else " (give a file name ending in .mp4)"
+            raise VideoError(f"cannot open {self._final} for writing{hint}")
 
     def _open_h264(self, fps):
         import av  # noqa: PLC0415  (optional: PyAV)
@@ -346,24 +440,44 @@ class VideoWriter:
         self.frames += 1
 
     def close(self):
-        """Flush the encoder and close the file."""
-        if self._av is None:
-            self._w.release()
+        """Flush the encoder, close the file and rename it over the output path (a video without
+        frames is removed; the path is left as it was)."""
+        if self._lock is None:
             return
-        av, container, stream = self._av
-        self._av = None
         try:
-            for packet in stream.encode():
-                container.mux(packet)
-        finally:
-            container.close()
-        self._w = _Closed()
+            if self._av is None:
+                self._w.release()
+            else:
+                av, container, stream = self._av
+                self._av = None
+                try:
+                    for packet in stream.encode():
+                        container.mux(packet)
+                finally:
+                    container.close()
+                self._w = _Closed()
+        finally:  # the frames written so far are kept even when the encoder fails to flush (a full disk)
+            try:
+                if self.path != self._final:
+                    if self.frames:
+                        os.replace(self.path, self._final)
+                    else:
+                        self.path.unlink(missing_ok=True)
+                    self.path = self._final
+            finally:
+                self._lock.release()
+                self._lock = None
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
         self.close()
+
+
+class _NoLock:
+    def release(self):
+        pass
 
 
 class _Closed:
