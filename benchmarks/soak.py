@@ -1117,7 +1117,7 @@ def reproduce_scenarios():
 
 def sweep2_scenarios():
     """Issue 38: the second sweep's cases, numbered as in the issue."""
-    v, E = "{fx}/v.avi", "either"
+    v = "{fx}/v.avi"
     slow = ["run", "{fx}/v.avi", "--init", INIT, "-n", "3000", "--algo", "bootstrap", "--track", "{w}/t.csv",
             "--results", "{w}/r.txt", "--out", "{w}/a.mp4", "-q"]
     ready = _track_part_rows(4)
