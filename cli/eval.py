@@ -17,6 +17,7 @@ from vistrack.evaluation import (OPENCV_TRACKERS, EvalConfig, OutLocked, TaskFai
 from vistrack.report import write_eval_outputs
 from vistrack.builders import MODELS as MODEL_NAMES
 from vistrack.clips import load_clip
+from vistrack.results_format import FORMATS
 from vistrack.models.registry import DEFAULT_MODEL, all_algos, clip_model, get_model_spec
 from vistrack.runtime import check_particle_memory
 from vistrack.video import VideoError
@@ -267,13 +268,16 @@ def _clips_model(clips):
 @click.option("--in-process", is_flag=True, help="LocalCluster workers as threads of this process (debugging, tests).")
 @click.option("--resume", is_flag=True, help="Keep finished task files in --out and run only the rest.")
 @click.option("--results-dir", "results_dirs", multiple=True, type=click.Path(exists=True, file_okay=False),
-              help="Score another tracker's result files beside vistrack's: DIR/<clip name>.txt per clip, x,y,w,h "
-                   "per frame (0-based; 0,0,0,0 for none; the format of run --results); named after DIR. "
-                   "Repeat for several trackers; --algos '' scores only these.")
+              help="Score another tracker's result files beside vistrack's: DIR/<clip name>.txt per clip (OTB) or "
+                   "DIR/<clip>/<clip>_001.txt (GOT-10k, VOT), x,y,w,h per frame (0,0,0,0 for none; what run "
+                   "--results writes); named after DIR. Repeat for several trackers; --algos '' scores only these.")
+@click.option("--results-format", "results_format", type=click.Choice(FORMATS), default="otb", show_default=True,
+              help="Format of the --results-dir files: otb (1-based pixels, as the OTB toolkit and pytracking write "
+                   "them), got10k or vot (0-based).")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Results folder.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, scheduler, workers, timeout, in_process,
-             resume, results_dirs, out_dir, quiet):
+             resume, results_dirs, results_format, out_dir, quiet):
     """Evaluate algorithms over CLIPS (clip folders, videos with ground truth, or folders of clip folders).
 
     Every clip × algorithm × N × run is one Dask task writing its own file
@@ -327,7 +331,8 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, sc
                       resume=resume, quiet=quiet, desc="eval")
         results = load_task_results(tasks, out)
         try:
-            results += [score_result_file(c, f, name) for name, c, f in result_files(results_dirs, clip_paths)]
+            results += [score_result_file(c, f, name, results_format)
+                        for name, c, f in result_files(results_dirs, clip_paths, results_format)]
         except (ValueError, VideoError) as e:
             raise click.ClickException(str(e)) from None
         summaries = summarize(results)

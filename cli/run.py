@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import os
 import sys
 import warnings
 
@@ -16,6 +17,8 @@ from vistrack.filters import make_filter
 from vistrack.models.registry import MODELS as MODEL_REGISTRY
 from vistrack.models.contour_nn import network_for
 from vistrack.models.plate_detect import PlateSearch
+from vistrack.evaluation import sequence_name
+from vistrack.results_format import FORMATS, result_paths
 from vistrack.models.registry import DEFAULT_MODEL, all_algos, get_model_spec
 from vistrack.runtime import check_particle_memory
 from vistrack.session import stop_on_signals, summary_lines, track_video
@@ -99,9 +102,13 @@ def lost_notice(most=5):
 @click.option("--track", "track_path", type=click.Path(dir_okay=False), help="Write the track CSV here.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False),
               help="Write the annotated video here: .mp4 (H.264, index first: plays in browsers while loading), .mkv, .mov, or .avi (Motion JPEG).")
-@click.option("--results", "results_path", type=click.Path(dir_okay=False),
-              help="Write the track in the OTB / GOT-10k result format here: x,y,w,h per frame (0-based pixels; "
-                   "0,0,0,0 where the object is not reported).")
+@click.option("--results", "results_path", type=click.Path(),
+              help="Write the track as the tracking toolkits' result file: x,y,w,h per frame (0,0,0,0 where the "
+                   "object is not reported). otb: this file, 1-based pixels as the OTB toolkit and pytracking "
+                   "write them; got10k: the submission layout in this folder (SEQ/SEQ_001.txt, 0-based, and "
+                   "SEQ/SEQ_time.txt); vot: this folder's SEQ/SEQ_001.txt (0-based, '1' on the first frame).")
+@click.option("--results-format", "results_format", type=click.Choice(FORMATS), default="otb", show_default=True,
+              help="Format of --results (OTB is 1-based; GOT-10k and VOT 0-based).")
 @click.option("--show-particles", default=10, show_default=True, type=click.IntRange(min=0),
               help="Draw the K highest-weight particles in the annotated video.")
 @click.option("--resample", default="systematic", show_default=True,
@@ -118,7 +125,7 @@ def lost_notice(most=5):
                    "likelihood only (no appearance learned from the --init box).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary.")
 def run(video, model_name, layout, algo, search, particles, seed, init, init_gt, template_path, track_path, out_path,
-        results_path, show_particles, resample, ess_threshold, targets, max_frames, no_colour, quiet):
+        results_path, results_format, show_particles, resample, ess_threshold, targets, max_frames, no_colour, quiet):
     """Track the object in VIDEO (a video file, an image folder or a clip folder).
 
     \b
@@ -153,7 +160,11 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     """
     check_writable(track_path, "track file")
     check_writable(out_path, "annotated video")
-    check_writable(results_path, "results file")
+    if results_format == "otb":
+        check_writable(results_path, "results file")
+    elif results_path is not None and os.path.exists(results_path) and not os.path.isdir(results_path):
+        raise click.ClickException(f"--results {results_path}: the {results_format} layout is a folder (SEQ/SEQ_001.txt "
+                                   "inside it), not a file")
     check_outputs({"--track": track_path, "--out": out_path, "--results": results_path}, video,
                   inputs=(template_path, init_gt or None))
     if init is not None and init_gt is not None:
@@ -183,7 +194,8 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
         filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)
     except ValueError as e:
         raise click.ClickException(str(e)) from None
-    outputs = {"track_path": track_path, "out_path": out_path, "results_path": results_path}
+    outputs = {"track_path": track_path, "out_path": out_path, "results_path": results_path,
+               "results_format": results_format, "sequence": sequence_name(video)}
     start = _start(clip, init, init_gt, max_frames)
     done = _track(clip, frames, model, filt, particles, seed, max_frames, show_particles, quiet,
                   f"{algo} N={particles}", outputs, lead, start=start)
@@ -284,6 +296,8 @@ def _report(video, clip, done, name, model, particles, quiet, outputs):
     """Print what happened (interrupts, skipped frames, the summary, the files written); exit 130/143
     after an interrupt."""
     track_path, out_path, results_path = outputs["track_path"], outputs["out_path"], outputs["results_path"]
+    if results_path and outputs["results_format"] != "otb":
+        results_path = result_paths(results_path, outputs["results_format"], outputs["sequence"])[0]
     src = clip.source
     if not done.rows:
         if done.stopped:

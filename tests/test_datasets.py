@@ -75,8 +75,9 @@ def test_a_text_file_is_not_a_video(tmp_path, capsys):
 
 
 def test_results_file_is_the_otb_format_and_matches_the_track(tmp_path, capsys):
-    """``--results``: one ``x,y,w,h`` line per frame, the track's box (0-based), 0,0,0,0 where the
-    object is not reported; a run with no output file says so."""
+    """``--results``: one ``x,y,w,h`` line per frame, the track's box in OTB's 1-based pixels (issue 37:
+    as the OTB toolkit and pytracking write it), 0,0,0,0 where the object is not reported; a run with no
+    output file says so."""
     images(tmp_path / "seq", n=6)
     code, out, err = run(["run", str(tmp_path / "seq"), "--init", "20,20,21,17", "--track", str(tmp_path / "t.csv"),
                           "--results", str(tmp_path / "r.txt")], capsys)
@@ -86,7 +87,7 @@ def test_results_file_is_the_otb_format_and_matches_the_track(tmp_path, capsys):
     t = read_groundtruth_csv(tmp_path / "t.csv")
     r = np.loadtxt(tmp_path / "r.txt", delimiter=",")
     assert r.shape == (6, 4)
-    np.testing.assert_allclose(r[:, 0] + r[:, 2] / 2, t["cx"], atol=0.01)
+    np.testing.assert_allclose(r[:, 0] - 1 + r[:, 2] / 2, t["cx"], atol=0.01)
     np.testing.assert_allclose(r[:, 2], t["w"], atol=0.01)
     assert "results (x,y,w,h):" in out
     code, out, err = run(["run", str(tmp_path / "seq"), "--init", "20,20,21,17"], capsys)

@@ -19,7 +19,8 @@ import numpy as np
 
 from .video import VideoError, find_groundtruth, groundtruth_origin, open_video, read_rects
 
-__all__ = ["Clip", "load_clip", "read_meta", "read_groundtruth_csv", "write_track_csv", "format_value", "excerpt_clip",
+__all__ = ["Clip", "load_clip", "excluded_frames",
+           "read_meta", "read_groundtruth_csv", "write_track_csv", "format_value", "excerpt_clip",
            "GroundTruthWarning"]
 
 
@@ -128,12 +129,36 @@ def load_clip(path):
     elif find_groundtruth(p) is not None:
         gt = find_groundtruth(p)
         truth = _rects_truth(read_rects(gt, origin=groundtruth_origin(gt)))
+        flagged = excluded_frames(folder, len(truth["cx"]))
+        truth["visible"][flagged] = 0.0  # not scored, as the toolkits do; the box stays for reference
+        truth["excluded"] = flagged
     if truth is not None and source.frame_count and len(truth["cx"]) != source.frame_count:
         k, n = len(truth["cx"]), source.frame_count
         warnings.warn(f"{folder}: the ground truth has {k} rows for {n} frames; "
                       + ("frames past its end are not scored" if k < n else "its extra rows are ignored"),
                       GroundTruthWarning, stacklevel=2)
     return Clip(source, folder, meta, truth)
+
+
+#: per-frame flags of frames the datasets' toolkits leave out of the scores: LaSOT's full occlusion
+#: and out of view (one line of comma-separated 0/1), GOT-10k's absence (a 0/1 per line)
+EXCLUSION_FILES = ("full_occlusion.txt", "out_of_view.txt", "absence.label")
+
+
+def excluded_frames(folder, n):
+    """``(n,)`` bool: frames flagged fully occluded or out of view (LaSOT) or absent (GOT-10k) in
+    ``folder``; a flag file that is not 0/1 values is a :class:`VideoError` naming it."""
+    out = np.zeros(n, bool)
+    for name in EXCLUSION_FILES:
+        f = Path(folder) / name
+        if not f.is_file():
+            continue
+        text = f.read_text(errors="replace").replace(",", " ").split()
+        if any(v not in ("0", "1") for v in text):
+            raise VideoError(f"{f}: expected 0/1 flags, one per frame")
+        flags = np.array([v == "1" for v in text], bool)[:n]
+        out[: len(flags)] |= flags
+    return out
 
 
 def read_meta(path):

@@ -28,6 +28,7 @@ import numpy as np
 
 from .builders import build_model, start_frame
 from .clips import GroundTruthWarning, load_clip
+from .results_format import find_result_file, read_result_file
 from .filters import ALGORITHMS, make_filter
 from .metrics import IOU_THRESHOLDS, center_error, iou, lost_frames, summarize_runs
 from .models.registry import get_model_spec
@@ -99,11 +100,37 @@ def check_algos(algos):
 
 
 def _is_clip(p):
-    return (p / "video.mp4").is_file() or (p / "img").is_dir() or (p / "groundtruth_rect.txt").is_file()
+    """A clip folder: a synthetic clip, or images (``img/``, VOT's ``color/``, or in the folder) or a
+    video with box ground truth of a known layout (OTB, VOT, GOT-10k, LaSOT)."""
+    return ((p / "video.mp4").is_file() or (p / "img").is_dir() or (p / "color").is_dir()
+            or (p / "groundtruth_rect.txt").is_file() or (p / "groundtruth.txt").is_file()
+            or (p / "groundtruth.csv").is_file())
+
+
+def _dataset_clips(p):
+    """The clip folders of a dataset root ``p``: a VOT workspace (``sequences/``), a GOT-10k split or
+    VOT's ``sequences`` (``list.txt`` names them, in its order), a folder of clip folders, or LaSOT's
+    ``root/category/sequence``; ``[]`` when there is none."""
+    if (p / "sequences").is_dir() and not _is_clip(p):
+        p = p / "sequences"
+    if (p / "list.txt").is_file():
+        names = [n.strip() for n in (p / "list.txt").read_text(errors="replace").splitlines() if n.strip()]
+        missing = [n for n in names if not (p / n).is_dir()]
+        if missing:
+            raise VideoError(f"{p / 'list.txt'} names sequences that are not folders in {p}: "
+                             + ", ".join(missing[:5]) + (" ..." if len(missing) > 5 else ""))
+        return [p / n for n in names]
+    # hidden folders are not clips: synth renders into .NAME.partial-PID before renaming it
+    subs = sorted(q for q in p.iterdir() if q.is_dir() and not q.name.startswith("."))
+    clips = [q for q in subs if _is_clip(q)]
+    if clips:
+        return clips
+    return [r for q in subs for r in sorted(q.iterdir()) if r.is_dir() and not r.name.startswith(".") and _is_clip(r)]
 
 
 def find_clips(paths):
-    """Clip folders from clip folders, videos or directories of clip folders.
+    """Clip folders from clip folders, videos or dataset roots (folders of clip folders; a LaSOT root
+    with category folders; a GOT-10k split or a VOT workspace, in its ``list.txt`` order).
 
     Raises ``VideoError`` for a missing path, an empty directory, or a clip
     without ground truth (eval needs it; ``run`` does not).
@@ -116,10 +143,10 @@ def find_clips(paths):
         if p.is_file() or _is_clip(p):
             clips.append(p)
             continue
-        # hidden folders are not clips: synth renders into .NAME.partial-PID before renaming it
-        sub = sorted(q for q in p.iterdir() if q.is_dir() and not q.name.startswith(".") and _is_clip(q))
+        sub = _dataset_clips(p)
         if not sub:
-            raise VideoError(f"{p} holds no clips (folders with video.mp4 or img/ and ground truth)")
+            raise VideoError(f"{p} holds no clips (folders with a video or images and box ground truth: OTB, VOT, "
+                             "GOT-10k, LaSOT or vistrack's own layout)")
         clips.extend(sub)
     for c in clips:
         truth = load_clip(c).truth
@@ -132,9 +159,14 @@ def find_clips(paths):
     return clips
 
 
-def _name(clip):
+def sequence_name(clip):
+    """A clip's sequence name: its folder's (a video's parent folder's); result files are named after it."""
     p = Path(clip)
-    return (p.parent.name if p.is_file() else p.name).replace("__", "_")
+    return p.parent.name if p.is_file() else p.name
+
+
+def _name(clip):
+    return sequence_name(clip).replace("__", "_")
 
 
 def task_list(cfg, clips):
@@ -304,9 +336,10 @@ def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=No
     }
 
 
-def result_files(dirs, clips):
+def result_files(dirs, clips, fmt="otb"):
     """``(tracker name, clip, result file)`` for every result folder and clip: ``DIR/<clip name>.txt``
-    (case-insensitive), the tracker named after ``DIR``. A missing file is a ``ValueError``; so are
+    (OTB) or ``DIR/<clip>/<clip>_001.txt`` (GOT-10k, VOT; :func:`~vistrack.results_format.find_result_file`,
+    case-insensitive), the tracker named after ``DIR``. A missing file is a ``ValueError``; so are
     two folders of one name (they would be merged into one tracker) and a folder named like one
     of vistrack's algorithms or OpenCV trackers (it would be listed as that algorithm)."""
     out = []
@@ -320,25 +353,28 @@ def result_files(dirs, clips):
         if d.name.lower() in ALGORITHMS or d.name.lower() in OPENCV_TRACKERS:
             raise ValueError(f"--results-dir {d} is named like vistrack's algorithm {d.name.lower()!r}: its results "
                              "would be listed as that algorithm's; rename the folder (e.g. after the tracker)")
-        files = {p.name.lower(): p for p in d.iterdir() if p.suffix.lower() == ".txt"}
         for c in clips:
-            want = f"{_name(c)}.txt"
-            if want.lower() not in files:
-                raise ValueError(f"--results-dir {d}: no result file {want} for clip {c}")
-            out.append((d.name, c, files[want.lower()]))
+            found = find_result_file(d, _name(c), fmt)
+            if found is None:
+                want = f"{_name(c)}.txt" if fmt == "otb" else f"{_name(c)}/{_name(c)}_001.txt"
+                raise ValueError(f"--results-dir {d}: no result file {want} for clip {c} ({fmt} layout)")
+            out.append((d.name, c, found))
     return out
 
 
-def score_result_file(clip_path, path, name):
+def score_result_file(clip_path, path, name, fmt="otb"):
     """A task result, as :func:`run_task` writes, from another tracker's result file ``path``
-    (``x,y,w,h`` per frame, 0-based, ``0,0,0,0`` or NaN where it reports nothing — the format of
-    ``vistrack run --results``), scored against the clip's ground truth under algorithm ``name``.
-    Its frame rate is unknown (``ms`` empty)."""
-    from .video import read_rects
-
+    (``x,y,w,h`` per frame in format ``fmt``, :mod:`~vistrack.results_format`: OTB's 1-based, GOT-10k's
+    and VOT's 0-based; ``0,0,0,0`` or NaN where it reports nothing — what ``vistrack run --results``
+    writes), scored against the clip's ground truth under algorithm ``name``. Its frame rate is
+    unknown (``ms`` empty)."""
     clip = load_clip(clip_path)
-    boxes = read_rects(path)
-    boxes[~((boxes[:, 2] > 0) & (boxes[:, 3] > 0))] = np.nan
+    try:
+        boxes = read_result_file(path, fmt)
+    except ValueError as e:
+        raise VideoError(str(e)) from None
+    if fmt == "vot" and len(boxes) and clip.truth is not None:  # its "1": initialised on the true box
+        boxes[0] = _truth_boxes(clip.truth)[0]
     n = len(clip.truth["cx"])
     if len(boxes) != n:  # positional: a line per frame of the ground truth
         warnings.warn(f"{path} has {len(boxes)} lines for the {n} ground-truth frames of {_name(clip_path)}: "

@@ -27,6 +27,7 @@ import numpy as np
 from .clips import format_value
 from .metrics import center_error, iou, landmark_error, lost_frames, plate_frame_measures, success_auc
 from .particles import DegenerateWeightsWarning
+from .results_format import format_line, result_paths
 from .profiling import STAGES, Timer, profile_stages
 from .render import annotate, annotate_targets
 from .tracking import top_particles, track, warm_up
@@ -62,8 +63,9 @@ class TrackCSV:
     """Track rows (dicts) written as they come: header from the first row, one flushed row per
     :meth:`write` to ``path.part``; :meth:`close` renames it to ``path`` (module docstring); a
     device or pipe (``/dev/stdout``) is written directly.
-    ``boxes=True``: the OTB / GOT-10k result format instead — ``x,y,w,h`` per frame, no header,
-    0-based pixels, ``0,0,0,0`` where the object is not reported (``visible=0``)."""
+    ``boxes``: a result file of the tracking toolkits instead (:mod:`vistrack.results_format`):
+    ``"otb"`` (or ``True``), ``"got10k"``, ``"vot"`` — ``x,y,w,h`` per frame, no header — or
+    ``"time"``, GOT-10k's seconds per frame."""
 
     def __init__(self, path, boxes=False):
         self.path = Path(path)
@@ -78,7 +80,7 @@ class TrackCSV:
             self._lock.release()
             raise
         self._w = csv.writer(self._f)
-        self.boxes = bool(boxes)
+        self.boxes = "otb" if boxes is True else (boxes or None)
         self.columns = None
         self.rows = 0
         self._done = False
@@ -86,10 +88,11 @@ class TrackCSV:
     def write(self, row):
         """Write one track ``row`` (a dict: column -> value; ``visible``, ``cx``, ``cy``, ``w``, ``h`` for the box
         format) and flush it."""
-        if self.boxes:
-            box = (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"]) if row["visible"] \
-                else (0, 0, 0, 0)
-            self._w.writerow([f"{float(v):.2f}" for v in box])
+        if self.boxes == "time":
+            self._f.write(f"{float(row.get('ms') or 0.0) / 1e3:.6f}\n")
+        elif self.boxes:
+            box = (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"])
+            self._f.write(format_line(box, bool(row["visible"]), self.boxes, self.rows) + "\n")
         else:
             if self.columns is None:
                 self.columns = list(row)
@@ -190,7 +193,7 @@ def target_rows(model, res):
 
 def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, results_path=None,
                 video_info=None, show_particles=10, label="", progress=None, notify=None, profile=True,
-                frame_count=None, start=0, lead=()):
+                frame_count=None, start=0, lead=(), results_format="otb", sequence="sequence"):
     """Track ``frames`` (iterable of ``(index, frame)``), writing the track CSV and annotated video as
     it goes; stops cleanly on Ctrl-C / SIGTERM (:func:`stop_on_signals`). Returns a :class:`VideoRun`.
 
@@ -201,7 +204,12 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     particles : int
     rng : numpy.random.Generator
     track_path, out_path, results_path : path or None
-        Track CSV (:class:`TrackCSV`), annotated mp4 and OTB/GOT-10k result file (``x,y,w,h``).
+        Track CSV (:class:`TrackCSV`), annotated mp4 and result file (``x,y,w,h``; for GOT-10k and
+        VOT the results folder, :func:`~vistrack.results_format.result_paths`).
+    results_format : {"otb", "got10k", "vot"}
+        The result file's format (:mod:`vistrack.results_format`; OTB's is 1-based).
+    sequence : str
+        The sequence's name in the GOT-10k and VOT result layouts.
     video_info : tuple or None
         ``(fps, (width, height))`` for the annotated video.
     show_particles : int
@@ -244,7 +252,11 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
             if track_path:
                 outs.append(TrackCSV(track_path))
             if results_path:
-                outs.append(TrackCSV(results_path, boxes=True))
+                box_path, time_path = result_paths(results_path, results_format, sequence)
+                box_path.parent.mkdir(parents=True, exist_ok=True)
+                outs.append(TrackCSV(box_path, boxes=results_format))
+                if time_path is not None:
+                    outs.append(TrackCSV(time_path, boxes="time"))
             writer = VideoWriter(out_path, *video_info, codec="auto", atomic=True) if out_path else None
         except BaseException:
             _close_all(outs, writer)
