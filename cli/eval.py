@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import logging
 import os
 from contextlib import contextmanager
 from pathlib import Path
@@ -11,9 +10,9 @@ import click
 import numpy as np
 from tqdm import tqdm
 
-from vistrack.evaluation import (OPENCV_TRACKERS, EvalConfig, OutLocked, TaskFailed, check_algos, check_shared,
-                                 execute, find_clips, load_task_results, lock_out, result_files, score_result_file,
-                                 stale_tasks, summarize, task_done, task_list)
+from vistrack.engine import EngineError, run_grid
+from vistrack.evaluation import (OPENCV_TRACKERS, EvalConfig, OutLocked, TaskFailed, check_algos, find_clips,
+                                 load_task_results, lock_out, result_files, score_result_file, summarize, task_list)
 from vistrack.report import write_eval_outputs
 from vistrack.builders import MODELS as MODEL_NAMES
 from vistrack.clips import load_clip
@@ -26,69 +25,9 @@ from .options import SEED, IntList, StrList
 
 __all__ = ["eval_cmd", "run_tasks"]
 
-def _client(scheduler, workers, timeout, in_process=False):
-    try:
-        from distributed import Client, LocalCluster
-    except ImportError:  # pragma: no cover - a declared dependency
-        raise click.ClickException("vistrack eval needs dask.distributed: pip install distributed") from None
-    if scheduler:
-        try:
-            client = Client(scheduler, timeout=f"{timeout}s")
-        except (OSError, TimeoutError, ValueError) as e:
-            raise click.ClickException(f"cannot reach the Dask scheduler at {scheduler} within {timeout} s ({e}); "
-                                       "give its address as tcp://host:8786") from None
-        try:
-            client.wait_for_workers(1, timeout=timeout)
-        except TimeoutError:
-            client.close()
-            raise click.ClickException(f"the Dask scheduler at {scheduler} has no workers (waited {timeout} s)") \
-                from None
-        return client, None
-    # the HTTP server on any free local port (not 8787, which another cluster may hold: a warning);
-    # workers ignore Ctrl-C, which this process handles (vistrack.evaluation.dask_setup)
-    cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                           processes=not in_process, dashboard_address=None, silence_logs=logging.CRITICAL,
-                           scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-                           **({} if in_process else {"preload": ["vistrack.evaluation"]}))
-    return Client(cluster), cluster
-
-
-class _WorkerDeaths(logging.Handler):
-    """Counts the worker processes the nannies restart."""
-
-    def __init__(self):
-        super().__init__(logging.WARNING)
-        self.count = 0
-
-    def emit(self, record):
-        self.count += "Restarting worker" in record.getMessage()
-
-
-@contextmanager
-def _dask_quiet():
-    """distributed's log lines (a lost worker, keys rescheduled) kept from the user for the block:
-    what matters arrives as an exception (:class:`TaskFailed`) or, for a worker that died and was
-    replaced, as one note after the grid. Yields the :class:`_WorkerDeaths` counter."""
-    loggers = [logging.getLogger(n) for n in ("distributed", "distributed.client", "distributed.nanny")]
-    saved = [(lg.level, lg.propagate) for lg in loggers]
-    deaths = _WorkerDeaths()
-    for lg in loggers[:2]:
-        lg.setLevel(logging.CRITICAL)
-    loggers[2].setLevel(logging.WARNING)
-    loggers[2].propagate = False
-    loggers[2].addHandler(deaths)
-    try:
-        yield deaths
-    finally:
-        loggers[2].removeHandler(deaths)
-        for lg, (level, propagate) in zip(loggers, saved):
-            lg.setLevel(level)
-            lg.propagate = propagate
-
-
 @contextmanager
 def _locked(out):
-    """:func:`vistrack.evaluation.lock_out` with its refusal as one error line."""
+    """:func:`vistrack.tasks.lock_out` with its refusal as one error line."""
     try:
         with lock_out(out):
             yield
@@ -98,40 +37,22 @@ def _locked(out):
 
 def run_tasks(tasks, out, *, scheduler=None, workers=0, timeout=10, in_process=False, resume=False, quiet=False,
               desc="tasks", runner=None):
-    """Execute ``tasks`` on Dask (a LocalCluster unless ``scheduler``) with a progress bar
-    (``runner``: see :func:`vistrack.evaluation.execute`), holding the ``--out`` lock. Task
-    files are only ever replaced whole, as tasks finish: without ``resume`` every task runs again.
-    With ``scheduler``, the workers must see ``out`` and the clips (checked first: one error line)."""
-    with _locked(out):
-        try:
-            _run_tasks(tasks, out, scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process,
-                       resume=resume, quiet=quiet, desc=desc, runner=runner)
-        except TaskFailed as e:
-            raise click.ClickException(str(e)) from None
+    """:func:`vistrack.engine.run_grid` with a progress bar, its refusals and failures as one error line
+    and its notes on stderr (even with ``quiet``)."""
+    bar = []  # the progress bar, shown once the workers are there
 
+    def progress(k):
+        bar[0].update(k)
 
-def _run_tasks(tasks, out, *, scheduler, workers, timeout, in_process, resume, quiet, desc, runner):
-    if resume:
-        stale = stale_tasks(tasks, out)
-        if stale:  # a warning: even with --quiet
-            click.echo(f"--resume: {len(stale)} of {len(tasks)} task files come from other options, seed, clip content "
-                       "or vistrack version or code (or are damaged): running them again", err=True)
-        if all(task_done(t, out) for t in tasks):
-            return
-    with _dask_quiet() as deaths:
-        client, cluster = _client(scheduler, workers, timeout, in_process)
-        try:
-            if scheduler:
-                check_shared(client, tasks, out)
-            with tqdm(total=len(tasks), unit="task", desc=desc, disable=quiet) as bar:
-                execute(tasks, out, client, resume=resume, progress=bar.update, runner=runner)
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
-    if deaths.count:  # a note: even with --quiet
-        click.echo(f"note: {deaths.count} worker process(es) died and were replaced; their tasks ran again from "
-                   "their own seeds (the results are those of an uninterrupted run)", err=True)
+    try:
+        run_grid(tasks, out, scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process,
+                 resume=resume, progress=progress, runner=runner, notify=lambda m: click.echo(m, err=True),
+                 on_ready=lambda: bar.append(tqdm(total=len(tasks), unit="task", desc=desc, disable=quiet)))
+    except (OutLocked, EngineError, TaskFailed) as e:
+        raise click.ClickException(str(e)) from None
+    finally:
+        for b in bar:
+            b.close()
 
 
 def _equal_time(cfg, clips, frames=30):

@@ -107,8 +107,11 @@ def _rects_truth(rects):
 
 
 def load_clip(path):
-    """Open a clip folder, a video file (with its folder's ground truth) or an image folder."""
-    p = Path(path)
+    """Open a clip folder, a video file (with its folder's ground truth) or an image folder; a URL
+    (``http://``, ``s3://``, ...) is fetched once into a local cache (:func:`vistrack.remote.local_clip`)."""
+    from .remote import local_clip
+
+    p = local_clip(path)
     source = open_video(p)
     folder = p if p.is_dir() else p.parent
     meta = None

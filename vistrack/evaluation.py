@@ -28,12 +28,13 @@ import numpy as np
 
 from .builders import build_model, start_frame
 from .clips import GroundTruthWarning, load_clip
+from .remote import is_url
 from .results_format import find_result_file, read_result_file
 from .filters import ALGORITHMS, make_filter
 from .metrics import IOU_THRESHOLDS, center_error, iou, lost_frames, summarize_runs
 from .models.registry import get_model_spec
 from .runtime import keep_freed_memory
-from .tasks import (OutLocked, TaskFailed, check_shared, execute, load_task_results, lock_out, stale_tasks, task_done,
+from .tasks import (OutLocked, TaskFailed, check_shared, load_task_results, lock_out, stale_tasks, task_done,
                     task_fingerprint, write_atomic, write_task_result)
 from .tracking import track
 from .video import VideoError
@@ -42,7 +43,7 @@ __all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_conf
            "pooled_summary", "OPENCV_TRACKERS", "check_algos",
            "score_boxes", "score_result_file", "result_files",
            # the engine's task files (vistrack.tasks), re-exported
-           "execute", "task_fingerprint", "task_done", "stale_tasks", "write_task_result", "write_atomic", "OutLocked",
+           "task_fingerprint", "task_done", "stale_tasks", "write_task_result", "write_atomic", "OutLocked",
            "lock_out", "load_task_results", "TaskFailed", "check_shared", "dask_setup"]
 
 #: centre-error thresholds (px) of the precision plot (OTB)
@@ -137,6 +138,9 @@ def find_clips(paths):
     """
     clips = []
     for raw in paths:
+        if is_url(raw):  # one clip folder, fetched where it is read (vistrack.remote)
+            clips.append(str(raw))
+            continue
         p = Path(raw)
         if not p.exists():
             raise VideoError(f"{p} does not exist")
@@ -160,7 +164,10 @@ def find_clips(paths):
 
 
 def sequence_name(clip):
-    """A clip's sequence name: its folder's (a video's parent folder's); result files are named after it."""
+    """A clip's sequence name: its folder's (a video's parent folder's; a URL's last part); result files
+    are named after it."""
+    if is_url(clip):
+        return str(clip).rstrip("/").rsplit("/", 1)[-1]
     p = Path(clip)
     return p.parent.name if p.is_file() else p.name
 

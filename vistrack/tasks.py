@@ -12,12 +12,15 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["task_fingerprint", "write_task_result", "write_atomic", "task_done", "stale_tasks", "load_task_results",
-           "execute", "TaskFailed", "check_shared", "OutLocked", "lock_out"]
+           "TaskFailed", "check_shared", "OutLocked", "lock_out"]
 
 
 def _clip_signature(clip):
     """Name, size and modification time of the files of a clip (its folder, or a video file's
-    folder): a changed video or ground truth changes the signature."""
+    folder): a changed video or ground truth changes the signature. A clip given by URL is signed
+    by its URL (each worker fetches its own copy)."""
+    if "://" in str(clip):
+        return [("url", str(clip))]
     p = Path(clip)
     folder = p if p.is_dir() else p.parent
     out = []
@@ -137,65 +140,35 @@ class TaskFailed(RuntimeError):
     task files finished so far are kept, so ``--resume`` runs only the rest."""
 
 
-def execute(tasks, out_dir, client, *, resume=False, progress=None, key_prefix="vistrack", runner=None):
-    """Run the tasks not yet done on a ``distributed.Client``; each writes its own file.
-
-    ``runner(task, out_dir)`` does one task (default :func:`run_task`, one tracking run
-    of a clip); it must write ``out_dir/tasks/<name>.json``. A worker that dies (killed, out of
-    memory) is replaced and its task runs again from its own seed stream, so the results are those
-    of an uninterrupted run; a task whose workers keep dying, or that fails on a broken file
-    (``OSError``, ``VideoError``), raises :class:`TaskFailed` naming it.
-
-    ``progress(k)`` is called as tasks finish (and once for those skipped on resume).
-    """
-    from distributed import KilledWorker, as_completed
-
-    from .video import VideoError
-
-    pending = [t for t in tasks if not (resume and task_done(t, out_dir))]
-    if progress and len(tasks) > len(pending):
-        progress(len(tasks) - len(pending))
-    if runner is None:
-        from .evaluation import run_task as runner
-    futs = {client.submit(runner, t, str(out_dir), key=f"{key_prefix}-{t['name']}", retries=2, pure=False): t["name"]
-            for t in pending}
-    for f in as_completed(list(futs)):
-        try:
-            f.result()
-        except KilledWorker as e:
-            raise TaskFailed(f"task {futs[f]} ended the process of every worker that ran it ({e.allowed_failures + 1}; "
-                             "out of memory?); the finished task files are kept: --resume runs the rest") from None
-        except (OSError, VideoError) as e:
-            raise TaskFailed(f"task {futs[f]} failed: {e}; the finished task files are kept: "
-                             "--resume runs the rest") from None
-        if progress:
-            progress(1)
-    return len(pending)
-
-
 def _sees(probe, paths):
-    """On a worker: which of ``probe`` and ``paths`` it cannot see (the paths as the tasks give them)."""
-    return [p for p in [probe, *paths] if not os.path.exists(p)]
+    """On a worker: which of ``probe`` (``None``: none) and ``paths`` it cannot see (the paths as the
+    tasks give them)."""
+    return [p for p in ([probe] if probe else []) + list(paths) if not os.path.exists(p)]
 
 
-def check_shared(client, tasks, out_dir):
-    """Raise ``TaskFailed`` unless every worker of ``client`` sees ``out_dir`` (a file written there
-    now) and the tasks' clips at the paths the tasks give: workers write their task files into
-    ``out_dir``, so with a scheduler on other machines it must be on a filesystem they share."""
+def check_shared(client, tasks, out_dir=None):
+    """Raise ``TaskFailed`` unless every worker of ``client`` sees the tasks' clips at the paths the
+    tasks give (clips given as URLs are fetched by each worker and not checked) and, with
+    ``out_dir``, that folder (a file written there now)."""
     import uuid
 
-    probe = Path(out_dir) / f".vistrack-probe-{uuid.uuid4().hex[:12]}"
-    probe.write_text("")
+    probe = None
+    if out_dir is not None:
+        probe = Path(out_dir) / f".vistrack-probe-{uuid.uuid4().hex[:12]}"
+        probe.write_text("")
     try:
-        clips = sorted({t["clip"] for t in tasks if "clip" in t})
-        missing = {w: m for w, m in client.run(_sees, str(probe), clips).items() if m}
+        clips = sorted({t["clip"] for t in tasks if "clip" in t and "://" not in str(t["clip"])})
+        missing = {w: m for w, m in client.run(_sees, str(probe) if probe else None, clips).items() if m}
     finally:
-        probe.unlink(missing_ok=True)
+        if probe is not None:
+            probe.unlink(missing_ok=True)
     if missing:
         worker, paths = next(iter(missing.items()))
-        what = f"--out {out_dir}" if paths[0] == str(probe) else f"clip {paths[0]}"
+        what = f"--out {out_dir}" if probe is not None and paths[0] == str(probe) else f"clip {paths[0]}"
         raise TaskFailed(f"{len(missing)} worker(s) of the scheduler (e.g. {worker}) cannot see {what}: --out and "
-                         "the clips must be on a filesystem the workers share, at the same paths")
+                         "the clips must be on a filesystem the workers share, at the same paths" if probe else
+                         f"{len(missing)} worker(s) of the scheduler (e.g. {worker}) cannot see {what}: give the "
+                         "clips at paths the workers share, or as URLs they can fetch (http://, s3://, ...)")
 
 
 class OutLocked(RuntimeError):

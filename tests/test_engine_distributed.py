@@ -1,0 +1,110 @@
+"""The batch engine on a real Dask cluster with no filesystem in common (issue 36, item 1): a
+`dask scheduler` and two `dask worker` processes on 127.0.0.1, each in its own empty working folder
+and clip cache, run an eval whose --out only the client writes and whose clip is served over HTTP
+on 127.0.0.1; the results equal the local run's, and killing a worker mid-run changes nothing."""
+
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vistrack.video import VideoWriter
+
+DASK = shutil.which("dask") or str(Path(sys.executable).with_name("dask"))
+pytestmark = pytest.mark.skipif(not Path(DASK).exists(), reason="the dask command is not installed")
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def square_clip(folder, frames=20):
+    folder.mkdir(parents=True)
+    gt = []
+    with VideoWriter(folder / "sq.mp4", 25, (96, 72)) as w:
+        for t in range(frames):
+            img = np.full((72, 96, 3), 40, np.uint8)
+            img[20:40, 20 + t:40 + t] = (40, 60, 220)
+            w.write(img)
+            gt.append((20 + t, 20, 20, 20))
+    np.savetxt(folder / "groundtruth_rect.txt", gt, fmt="%d", delimiter=",")
+
+
+def wait_for(predicate, timeout, what):
+    t0 = time.monotonic()
+    while not predicate():
+        if time.monotonic() - t0 > timeout:
+            raise TimeoutError(what)
+        time.sleep(0.2)
+
+
+def strip(results):
+    return [{k: v for k, v in r.items() if k not in ("frames_per_s", "clip")} for r in results]
+
+
+def eval_args(clip, out, *extra):
+    return [sys.executable, "-c", "from vistrack.cli import main; main()", "eval", str(clip),
+            "--algos", "bootstrap,lis", "--particles", "1500", "--runs", "6", "--seed", "7", "--out", str(out), "-q",
+            *extra]
+
+
+def test_eval_on_a_cluster_without_a_shared_filesystem_equals_the_local_run(tmp_path):
+    served = tmp_path / "served"
+    square_clip(served / "sq")
+    procs = []
+    env = {**os.environ, "PYTHONWARNINGS": "ignore"}
+    try:
+        http_port, sched_port = free_port(), free_port()
+        procs.append(subprocess.Popen([sys.executable, "-m", "http.server", str(http_port), "--bind", "127.0.0.1"],
+                                      cwd=served, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        procs.append(subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", str(sched_port),
+                                       "--dashboard-address", ":0"], cwd=tmp_path, env=env,
+                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        workers = []
+        for k in range(2):
+            wd = tmp_path / f"worker{k}"
+            wd.mkdir()
+            workers.append(subprocess.Popen(
+                [DASK, "worker", f"tcp://127.0.0.1:{sched_port}", "--nthreads", "1", "--no-nanny",
+                 "--no-dashboard", "--host", "127.0.0.1"], cwd=wd,
+                env={**env, "VISTRACK_CACHE": str(wd / "cache")}, stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL))
+        procs += workers
+        url = f"http://127.0.0.1:{http_port}/sq/"
+        client_env = {**env, "VISTRACK_CACHE": str(tmp_path / "client-cache")}
+        out = tmp_path / "client-only" / "out"
+        run = subprocess.Popen(eval_args(url, out, "--scheduler", f"tcp://127.0.0.1:{sched_port}", "--timeout", "60"),
+                               cwd=tmp_path, env=client_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        # a worker killed mid-run: its task runs again elsewhere from its own seed stream
+        wait_for(lambda: (out / "tasks").is_dir() and len(list((out / "tasks").glob("*.json"))) >= 2
+                 or run.poll() is not None, 120, "no task finished")
+        done_at_kill = len(list((out / "tasks").glob("*.json")))
+        assert run.poll() is None and done_at_kill < 12, "the grid ended before the kill: give it more work"
+        workers[0].send_signal(signal.SIGKILL)
+        _, err = run.communicate(timeout=300)
+        assert run.returncode == 0, err
+        for k in range(2):  # the workers wrote nothing where they ran; one fetched the clip into its cache
+            assert sorted(p.name for p in (tmp_path / f"worker{k}").iterdir()) in ([], ["cache"])
+        assert (tmp_path / "worker1" / "cache").is_dir()
+        local = tmp_path / "local"
+        done = subprocess.run(eval_args(served / "sq", local, "--in-process", "--workers", "1"), cwd=tmp_path,
+                              env=client_env, capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stderr
+        got = json.loads((out / "results.json").read_text())["results"]
+        want = json.loads((local / "results.json").read_text())["results"]
+        assert len(got) == 2 and strip(got) == strip(want)
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+            p.wait(timeout=30)
