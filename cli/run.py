@@ -23,11 +23,24 @@ from vistrack.models.registry import DEFAULT_MODEL, all_algos, get_model_spec
 from vistrack.runtime import check_particle_memory
 from vistrack.session import stop_on_signals, summary_lines, track_video
 from vistrack.outputs import OutputBusy
-from vistrack.video import VideoDecodeWarning, VideoError, prefetch
+from vistrack.video import is_stream, VideoDecodeWarning, VideoError, prefetch
 
 from .options import SEED, Box, Fraction, check_outputs, check_writable
 
 __all__ = ["run"]
+
+
+class _Video(click.Path):
+    """A video file, image folder or clip folder that exists, a camera's index (``0``) or a stream URL."""
+
+    def __init__(self):
+        super().__init__(exists=True)
+
+    def convert(self, value, param, ctx):
+        """The path checked as ``click.Path(exists=True)`` does, unless it names a camera or a stream."""
+        if is_stream(value) and not os.path.exists(value):
+            return value
+        return super().convert(value, param, ctx)
 
 #: every algorithm a registered model runs (the registry is the one list: ``eval --algos`` takes the same)
 RUN_ALGOS = all_algos()
@@ -71,7 +84,7 @@ def lost_notice(most=5):
 
 
 @click.command()
-@click.argument("video", type=click.Path(exists=True))
+@click.argument("video", type=_Video())
 @click.option("--model", "model_name", default=None, metavar="[" + "|".join(MODELS) + "]",
               help="Tracking model, any registered one [default: the clip's meta.json model; else box when --init or --init-gt "
                    "is given (any object: colour and template learned from the first frame); else plate, "

@@ -110,7 +110,10 @@ def load_clip(path):
     """Open a clip folder, a video file (with its folder's ground truth) or an image folder; a URL
     (``http://``, ``s3://``, ...) is fetched once into a local cache (:func:`vistrack.remote.local_clip`)."""
     from .remote import local_clip
+    from .video import is_stream
 
+    if is_stream(path) and not Path(str(path)).exists():  # a camera or a live stream: no ground truth
+        return Clip(open_video(path), Path.cwd(), None, None)
     p = local_clip(path)
     source = open_video(p)
     folder = p if p.is_dir() else p.parent

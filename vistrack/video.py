@@ -30,7 +30,7 @@ import numpy as np
 # frame is counted and reported once (VideoDecodeWarning). Read when the first capture opens.
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 
-__all__ = [
+__all__ = ["is_stream",
     "VideoError",
     "VideoDecodeWarning",
     "FrameOrderWarning",
@@ -82,6 +82,8 @@ class VideoSource:
     def __init__(self, path, *, _images=None):
         self.path = Path(path)
         self._images = _images
+        # what cv2.VideoCapture opens: the file, a stream URL (kept whole) or a camera's index
+        self._open_arg = stream_source(path) if is_stream(path) else str(self.path)
         #: indices of the frames the last iteration skipped (failed to decode)
         self.skipped = []
         #: where the last iteration of a video stopped decoding before the frame count its container
@@ -96,10 +98,13 @@ class VideoSource:
             self.fps = 30.0
             self.size = (first.shape[1], first.shape[0])
             return
-        cap = cv2.VideoCapture(str(self.path))
+        cap = cv2.VideoCapture(self._open_arg)
         try:
             ok, frame = cap.read() if cap.isOpened() else (False, None)
             if not ok or frame is None:
+                if is_stream(path):
+                    raise VideoError(f"cannot read {path}: no camera with that index, or a stream OpenCV cannot "
+                                     "open (or it sent no frame)")
                 raise VideoError(f"{self.path} is not a video OpenCV can decode, or it has no frames")
             n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
             self.frame_count = n if n > 0 else None
@@ -138,7 +143,7 @@ class VideoSource:
                 yield i, frame
             self._warn_skipped(len(self._images))
             return
-        cap = cv2.VideoCapture(str(self.path))
+        cap = cv2.VideoCapture(self._open_arg)
         try:
             i, failed = 0, 0
             while True:
@@ -198,8 +203,37 @@ def _image_files(folder):
     return files
 
 
+#: URL schemes read as live streams by OpenCV (FFmpeg); http(s) too when the name is a video's
+STREAM_SCHEMES = ("rtsp://", "rtsps://", "rtmp://", "udp://", "tcp://", "srt://")
+
+
+def is_stream(path):
+    """Whether ``path`` is a camera (its index: ``"0"``, ``"1"``...) or a stream URL that OpenCV opens
+    itself: ``rtsp://``, ``rtmp://``, ``udp://``..., or an ``http(s)://`` URL of a video file or
+    playlist (``.mp4``, ``.m3u8``, ...)."""
+    s = str(path)
+    if s.isdigit():
+        return True
+    low = s.lower()
+    if low.startswith(STREAM_SCHEMES):
+        return True
+    if low.startswith(("http://", "https://")):
+        tail = low.split("?", 1)[0].rsplit("/", 1)[-1]
+        return os.path.splitext(tail)[1] in VIDEO_EXT | {".m3u8", ".mpd", ".ts", ".flv"}
+    return False
+
+
+def stream_source(path):
+    """What :class:`cv2.VideoCapture` opens for a stream: a camera's index as an int, else the URL."""
+    s = str(path)
+    return int(s) if s.isdigit() else s
+
+
 def open_video(path):
-    """Open a video file, an image-sequence folder or a clip folder (see module doc)."""
+    """Open a video file, an image-sequence folder or a clip folder (see module doc), a camera by its
+    index (``"0"``) or a stream URL (:func:`is_stream`)."""
+    if is_stream(path) and not Path(str(path)).exists():
+        return VideoSource(str(path))
     p = Path(path)
     if not p.exists():
         raise VideoError(f"{p} does not exist")

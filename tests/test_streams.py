@@ -1,0 +1,59 @@
+"""`vistrack run` on a stream (issue 37, item 5): a URL OpenCV reads itself, here an mp4 served over
+HTTP on 127.0.0.1, tracked like the file with --max-frames; a camera index that is not there is one line."""
+
+import socket
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from cli_helpers import run
+from vistrack.clips import read_groundtruth_csv
+from vistrack.video import VideoWriter, is_stream
+
+
+def test_what_is_a_stream():
+    assert is_stream("0") and is_stream("rtsp://cam/live") and is_stream("http://h:8/v.mp4?x=1")
+    assert not is_stream("http://h:8/girl_otb/") and not is_stream("video.mp4") and not is_stream("clips/0a")
+
+
+@pytest.fixture
+def served(tmp_path):
+    with VideoWriter(tmp_path / "v.mp4", 25, (96, 72), codec="h264") as w:
+        for t in range(30):
+            img = np.full((72, 96, 3), 40, np.uint8)
+            img[20:40, 20 + t:40 + t] = (40, 60, 220)
+            w.write(img)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    server = subprocess.Popen([sys.executable, "-m", "http.server", str(port), "--bind", "127.0.0.1"], cwd=tmp_path,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    for _ in range(50):
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=0.2).close()
+            break
+        except OSError:
+            time.sleep(0.1)
+    yield f"http://127.0.0.1:{port}/v.mp4", tmp_path / "v.mp4"
+    server.kill()
+    server.wait()
+
+
+def test_run_tracks_a_stream_as_it_tracks_the_file(served, tmp_path, capsys):
+    url, local = served
+    tracks = []
+    for src, name in ((url, "s.csv"), (str(local), "f.csv")):
+        code, _, err = run(["run", src, "--init", "20,20,20,20", "--max-frames", "12", "--seed", "2", "--track",
+                            str(tmp_path / name), "-q"], capsys)
+        assert code == 0, err
+        tracks.append(read_groundtruth_csv(tmp_path / name))
+    assert len(tracks[0]["cx"]) == 12
+    np.testing.assert_allclose(tracks[0]["cx"], tracks[1]["cx"])
+
+
+def test_a_camera_that_is_not_there_is_one_line(capsys):
+    code, _, err = run(["run", "57", "--init", "1,1,5,5", "--max-frames", "3"], capsys)
+    assert code != 0 and err.count("\n") == 1 and "no camera with that index" in err
