@@ -31,7 +31,8 @@ from .clips import GroundTruthWarning, load_clip
 from .remote import is_url
 from .results_format import find_result_file, read_result_file
 from .filters import ALGORITHMS, make_filter
-from .metrics import IOU_THRESHOLDS, center_error, iou, lost_frames, summarize_runs
+from .metrics import (PRECISION_THRESHOLDS, center_error, iou, lost_frames, precision, precision_curve,  # noqa: F401
+                      success_auc, success_curve, summarize_runs)
 from .models.registry import get_model_spec
 from .runtime import keep_freed_memory
 from .tasks import (OutLocked, TaskFailed, check_shared, load_task_results, lock_out, stale_tasks, task_done,
@@ -46,8 +47,6 @@ __all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_conf
            "task_fingerprint", "task_done", "stale_tasks", "write_task_result", "write_atomic", "OutLocked",
            "lock_out", "load_task_results", "TaskFailed", "check_shared", "dask_setup"]
 
-#: centre-error thresholds (px) of the precision plot (OTB)
-PRECISION_THRESHOLDS = np.arange(0, 51)
 
 #: OpenCV trackers by name -> constructor attribute (contrib ones may be missing)
 OPENCV_TRACKERS = {"opencv-mil": "TrackerMIL_create", "opencv-kcf": "TrackerKCF_create",
@@ -414,15 +413,16 @@ def summarize(results):
         with np.errstate(invalid="ignore"):
             err_frame = np.where(ok.any(axis=0), np.sum(np.where(ok, err, 0), axis=0) / ok.sum(axis=0), np.nan)
         ious = np.array([r["iou"] for r in rs])[:, vis]
-        success = [float(np.mean(ious > th)) for th in IOU_THRESHOLDS]
-        precision20 = float(np.mean(err[:, vis] <= 20.0))
-        precision = [float(np.mean(err[:, vis] <= th)) for th in PRECISION_THRESHOLDS]
+        # the scores (vistrack.metrics, the one place they are computed): over runs × frames, and per run
+        success = success_curve(ious)
+        precision20 = precision(err[:, vis])
+        prec_curve = precision_curve(err[:, vis])
         every = err[:, vis][np.isfinite(err[:, vis])]
         ms = np.array([np.mean(r["ms"]) if r["ms"] else np.nan for r in rs])
         ess = [e for r in rs for e in r["ess"] if e is not None]
         # per run: the spread over runs of the scores below
-        auc_run = [float(np.mean([np.mean(v > th) for th in IOU_THRESHOLDS])) if v.size else 0.0 for v in ious]
-        prec_run = [float(np.mean(e <= 20.0)) if e.size else 0.0 for e in err[:, vis]]
+        auc_run = [success_auc(v) if v.size else 0.0 for v in ious]
+        prec_run = [precision(e) for e in err[:, vis]]
         lost_run = [float(v[vis].mean()) if vis.any() else 0.0 for v in lost]
         out.append({
             "clip": clip, "algo": algo, "particles": n, "runs": len(rs),
@@ -439,7 +439,7 @@ def summarize(results):
             "success_auc": float(np.mean(success)),
             "success_curve": success,
             "precision_20px": precision20,
-            "precision_curve": precision,
+            "precision_curve": prec_curve,
             "frames_per_s": float(1e3 / ms.mean()) if np.all(np.isfinite(ms)) else None,
             "mean_ess": float(np.mean(ess)) if ess else None,
         })

@@ -18,10 +18,13 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["center_error", "contour_lost_threshold", "plate_frame_measures", "lost_frames", "summarize_runs",
-           "landmark_error", "iou", "success_auc", "IOU_THRESHOLDS", "box_scores"]
+           "landmark_error", "iou", "success_auc", "success_curve", "precision", "precision_curve", "IOU_THRESHOLDS",
+           "PRECISION_THRESHOLDS", "box_scores"]
 
 #: IoU thresholds of the success plot (OTB protocol)
 IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
+#: centre-error thresholds (px) of the precision plot (OTB)
+PRECISION_THRESHOLDS = np.arange(0, 51)
 
 
 def center_error(est_cx, est_cy, true_cx, true_cy):
@@ -82,11 +85,28 @@ def iou(a, b):
         return np.where(union > 0, inter / union, 0.0)
 
 
-def success_auc(ious):
-    """Area under the success plot (OTB): the mean over :data:`IOU_THRESHOLDS` of the share of
-    frames whose IoU ``(frames,)`` exceeds the threshold."""
+def success_curve(ious):
+    """The success plot (OTB): for each of :data:`IOU_THRESHOLDS`, the share of the IoUs ``(...)`` (one
+    run's frames, or runs × frames) above it; NaN counts as 0."""
     ious = np.nan_to_num(np.asarray(ious, float))
-    return float(np.mean([(ious > t).mean() for t in IOU_THRESHOLDS])) if ious.size else float("nan")
+    return [float((ious > t).mean()) for t in IOU_THRESHOLDS]
+
+
+def success_auc(ious):
+    """Area under the success plot (OTB): the mean of :func:`success_curve` (NaN without frames)."""
+    return float(np.mean(success_curve(ious))) if np.size(ious) else float("nan")
+
+
+def precision(errors, px=20.0):
+    """Share of the centre errors ``(...)`` (px; ``inf`` where there is no estimate) at most ``px``: the
+    precision score (OTB: 20 px)."""
+    errors = np.asarray(errors, float)
+    return float(np.mean(errors <= px)) if errors.size else 0.0
+
+
+def precision_curve(errors):
+    """The precision plot (OTB): :func:`precision` at each of :data:`PRECISION_THRESHOLDS`."""
+    return [precision(errors, th) for th in PRECISION_THRESHOLDS]
 
 
 def box_scores(boxes, truth, precision_px=20.0):
@@ -116,7 +136,7 @@ def box_scores(boxes, truth, precision_px=20.0):
         return float("nan"), float("nan"), float("nan")
     err = center_error(b[:, 0] + b[:, 2] / 2, b[:, 1] + b[:, 3] / 2, g[:, 0] + g[:, 2] / 2, g[:, 1] + g[:, 3] / 2)
     err = np.nan_to_num(err, nan=np.inf)
-    return success_auc(iou(b, g)), float(np.mean(err <= precision_px)), float(np.mean(err))
+    return success_auc(iou(b, g)), precision(err, precision_px), float(np.mean(err))
 
 
 def plate_frame_measures(result, truth, aspect):

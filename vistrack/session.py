@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from .clips import format_value
-from .metrics import center_error, iou, landmark_error, lost_frames, plate_frame_measures, success_auc
+from .metrics import center_error, iou, landmark_error, lost_frames, plate_frame_measures, precision, success_auc
 from .particles import DegenerateWeightsWarning
 from .results_format import format_line, result_paths
 from .profiling import STAGES, Timer, profile_stages
@@ -525,7 +525,7 @@ def _box_summary(rows, t, frame_width):
     n = int(vis.sum())
     mean = f"{err[vis & ~searched].mean():.2f} px" if (vis & ~searched).any() else "n/a"
     return (f"vs ground truth ({n} frames with the object): success AUC {success_auc(ious[vis]):.3f}, precision@20px "
-            f"{np.mean(err[vis] <= 20):.3f}, mean centre error {mean} over all of them"
+            f"{precision(err[vis]):.3f}, mean centre error {mean} over all of them"
             + (f" but the {int((vis & searched).sum())} searched before it was found" if (vis & searched).any() else "")
             + f" ({tracked} over tracked frames); lost (centre error > half the object's larger side) in "
             f"{int(lost.sum())} frames")
