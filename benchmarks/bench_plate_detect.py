@@ -56,7 +56,8 @@ def main():
           f"synthetic road scenes {per_frame_ms(det, scenes):.1f}")
     for model in ("box", "plate", "box", "plate"):  # interleaved, twice
         fps = np.median([track_fps(model, frames, gt[0], args.n, s) for s in (1, 2)])
-        print(f"{model} LIS-{args.n} on the dashcam clip ({frames[0].shape[1]}x{frames[0].shape[0]}): {fps:.0f} frames/s")
+        size = f"{frames[0].shape[1]}x{frames[0].shape[0]}"
+        print(f"{model} LIS-{args.n} on the dashcam clip ({size}): {fps:.0f} frames/s")
 
 
 if __name__ == "__main__":

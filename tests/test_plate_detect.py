@@ -6,18 +6,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cli_helpers import run
 from vistrack.data_synth.plate import detection_frames
 from vistrack.metrics import iou
 from vistrack.models.plate_detect import Detection, PlateDetector, _split_touching, acquire, plate_from_row
-
-from cli_helpers import run
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 DASHCAM = REAL / "plate_in_polo_dashcam" / "plate_in_polo_dashcam.mp4"
 
 
 def test_plate_from_row_inverts_the_layout_geometry():
-    # single-row: the row is 0.1-0.9 x 0.2-0.8 of the plate, so a row 80x12 at (110, 53) is the plate 100x20 at (100, 50)
+    # single-row: the row is 0.1-0.9 x 0.2-0.8 of the plate: a row 80x12 at (110, 53) is the plate 100x20 at (100, 50)
     np.testing.assert_allclose(plate_from_row((110, 54, 80, 12), "single-row"), (100, 50, 100, 20), atol=1e-9)
     # jp: the four digits are 0.24-0.92 x 0.51-0.89
     np.testing.assert_allclose(plate_from_row((24, 51, 68, 38), "jp"), (0, 0, 100, 100), atol=1e-9)

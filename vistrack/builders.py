@@ -257,13 +257,7 @@ def _plate(clip, size, init, init_gt, params):
         from .models.plate_detect import PlateSearch
 
         def build(frame, det):
-            # one plate found on real footage, its appearance learned: no entering-car births (they
-            # take the track to other plate-like structure: dashcam from the first box, LIS-100
-            # seeds 1-3, AUC 0.35 / 0.85 / 0.48 with the births, 0.87 / 0.90 / 0.88 without;
-            # docs/experiments.md). --init keeps them: a plate moving 4 px/frame is lost without
-            # the entering search (tests/test_plate_appearance.py)
-            return _plate_from_box(size, det.box, layout or det.layout,
-                                   {"enter_weight": 0.0, "birth_reserve": 0.0, **params}, frame)
+            return _plate_from_box(size, det.box, layout or det.layout, params, frame)
 
         return PlateSearch(build)
     frame = _first_frame(clip) if appearance and box is not None else None
@@ -287,6 +281,11 @@ def _plate_from_box(size, box, layout, params, frame=None):
 
         r = float(box[2]) / max(float(box[3]), 1e-9)
         layout = min(LAYOUTS, key=lambda k: abs(np.log(LAYOUTS[k].aspect / r)))
+    if frame is not None and box is not None:
+        # one plate, its appearance learned: no entering-car births (they take the track to other
+        # plate-like structure: dashcam from the first box, LIS-100 seeds 1-3, AUC 0.35 / 0.85 /
+        # 0.48 with the births; docs/experiments.md, issue 35)
+        params = {"enter_weight": 0.0, "birth_reserve": 0.0, **params}
     model = Plate(size, layout=layout or "jp", **params)
     if box is not None:
         x, y, w, h = (float(v) for v in box)
