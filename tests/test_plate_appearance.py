@@ -74,3 +74,23 @@ def test_appearance_adds_to_the_plate_likelihood_and_can_be_turned_off():
     np.testing.assert_allclose(extra[0], with_app.app.loglik(maps.appearance, with_app._app_boxes(states[:1]))[0])
     np.testing.assert_allclose(with_app.loglik(maps, states), plain.loglik(maps, states) + extra, atol=1e-9)
     assert np.argmax(extra) == 0  # the appearance term peaks at the learned plate
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_the_first_view_anchors_the_adaptation(compiled):
+    """A template that has drifted onto the road adapts on to it without an anchor; with the first view as
+    anchor (the plate model's ``anchor_min_ncc`` 0.5) the road does not match the first plate: no adaptation."""
+    from vistrack import kernels
+    from vistrack.models.appearance import Appearance
+
+    img = draw_plate(road(), 160, 120)
+    box = (160 - PW / 2, 120 - PH / 2, PW, PH)
+    elsewhere = np.array([60.0, 60.0, PW, PH])  # road texture, (cx, cy, w, h)
+    with kernels.numpy_paths(not compiled):
+        for anchor, adapted in ((None, True), (0.5, False)):
+            app = Appearance(img, box, anchor_min_ncc=anchor)
+            obs = app.frame(img, app.roi(elsewhere[None], 20))
+            app.template = app.patches(obs, elsewhere[None])[0]  # drifted: the current template is the road's
+            assert app.anchor_ncc(obs, elsewhere) < 0.5
+            assert app.adapt(obs, elsewhere) is adapted
+    assert model_from_box("plate", img, box).app.anchor_min_ncc == 0.5

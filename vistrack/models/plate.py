@@ -207,8 +207,12 @@ class Plate(VideoModelBase):
         a white car). Returns the :class:`~vistrack.models.appearance.Appearance`."""
         from .appearance import Appearance
 
-        self.app = Appearance(frame, box, **params)
+        self.app = Appearance(frame, box, **{"anchor_min_ncc": self.anchor_min_ncc, **params})
         return self.app
+
+    #: the first view as anchor (:class:`~vistrack.models.appearance.Appearance`'s ``anchor_min_ncc``):
+    #: the learned appearance adapts only on frames whose estimate also matches the first frame's plate
+    anchor_min_ncc = 0.5
 
     def observe(self, maps, particles):
         """The frame's :class:`~vistrack.models.plate_likelihood.PlateObservation`: the feature maps,
