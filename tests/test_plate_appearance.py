@@ -94,3 +94,35 @@ def test_the_first_view_anchors_the_adaptation(compiled):
             assert app.anchor_ncc(obs, elsewhere) < 0.5
             assert app.adapt(obs, elsewhere) is adapted
     assert model_from_box("plate", img, box).app.anchor_min_ncc == 0.5
+
+
+def _rendered_plate_scene(cx, cy, width=120):
+    """A rendered single-row plate (``width`` px) on the road at ``(cx, cy)``, BGR uint8 320 x 240 -> 480 x 360."""
+    from vistrack.data_synth.plate import render_plate
+    from vistrack.models.plate_layout import LAYOUTS
+
+    img = cv2.resize(road(3), (480, 360)).astype(np.float32)
+    plate = cv2.resize(render_plate(LAYOUTS["single-row"], np.random.default_rng(4), 240), None, fx=width / 240,
+                       fy=width / 240, interpolation=cv2.INTER_AREA)
+    h, w = plate.shape[:2]
+    x0, y0 = int(cx - w / 2), int(cy - h / 2)
+    img[y0:y0 + h, x0:x0 + w] = plate
+    return img.astype(np.uint8), (x0, y0, w, h)
+
+
+@pytest.mark.parametrize("detector", [False, True])
+def test_a_plate_lost_to_a_jump_is_found_again(detector):
+    """The plate jumps 150 px (a cut, a shaken camera) out of the dynamics' reach: a plate model from a box
+    has no births, so without its detector it stays lost; with it, the next step's births sit at the
+    re-detected plate (Plate.redetect) and the track is back on it and reported."""
+    frames, boxes = zip(*([_rendered_plate_scene(140, 250)] * 4 + [_rendered_plate_scene(300, 120)] * 8))
+    trk = vistrack.Tracker(model="plate", algo="lis", particles=100, seed=1, layout="single-row")
+    trk.init(frames[0], boxes[0])
+    assert trk.model.detector is not None
+    if not detector:
+        trk.model.detector = None
+    for f in frames[1:]:
+        ok, (x, y, w, h) = trk.update(f)
+    bx, by, bw, bh = boxes[-1]
+    near = np.hypot(x + w / 2 - (bx + bw / 2), y + h / 2 - (by + bh / 2)) < 4
+    assert bool(ok and near) is detector

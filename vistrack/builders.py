@@ -293,7 +293,10 @@ def _plate_from_box(size, box, layout, params, frame=None):
         model.prior_mean = np.concatenate([pose, pose, [0.0]])
         model.start = (pose, np.array([0.05 * w, 0.05 * h, 0.03, 0.05 * w]))
         if frame is not None:
+            from .models.plate_detect import PlateDetector
+
             model.learn_appearance(frame, (x, y, w, h))
+            model.detector = PlateDetector()  # the plate searched for again while it is not reported
     return model
 
 
