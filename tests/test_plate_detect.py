@@ -106,15 +106,3 @@ def test_layout_auto_is_for_every_model(capsys):
     # the default "auto" is no plate option: another model runs with it; a forced layout is refused
     code, _, err = run(["run", "nonexistent.mp4", "--model", "box", "--layout", "jp"], capsys)
     assert code == 2
-
-
-@pytest.mark.skipif(not (REAL / "ball1_vot2015").is_dir(), reason="../shared/data not present")
-def test_a_text_banner_that_passes_the_row_test_is_no_plate():
-    # ball1_vot2015 frames 45-52: a banner with a row of five characters, which the character-row path
-    # took for a plate on consecutive frames; the classifier's log-odds at its box (-17) rejects it
-    from vistrack.video import open_video
-
-    frames = [f for i, f in open_video(next((REAL / "ball1_vot2015").glob("*.mp4"))) if 45 <= i <= 52]
-    assert len(PlateDetector(classifier=None).detect(frames[0])) == 1
-    det = PlateDetector()
-    assert sum(len(det.detect(f)) for f in frames) == 0

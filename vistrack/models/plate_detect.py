@@ -88,11 +88,6 @@ class PlateDetector:
 
             classifier = PlateClassifier()
         self.classifier = classifier
-        #: a character-row detection needs at least this log-odds from :attr:`classifier` at its box:
-        #: the dashcam plate's first 40 frames score -6 to -2 there (its outline is no closed rectangle, so
-        #: the classifier's own path misses it), a text banner in ball1_vot2015 that passes the row test on
-        #: 11 of its frames -17 to -16
-        self.row_min_logodds = -10.0
         #: cut components wider than tall into characters (:func:`_split_touching`): rendered
         #: single-row plates found 0.43 -> 0.57 of 40, but the dashcam plate's first boxes 20 %
         #: narrower (IoU 0.94 -> 0.78) and its no-box track lost on most frames: off
@@ -224,10 +219,7 @@ class PlateDetector:
             r = self.char_row(small, box)
             if r is None:
                 continue
-            plate = refine_outline(small, plate_from_row(r["row"], r["layout"]), r["row"])
-            if self.classifier is not None and self.classifier.score(small, plate[None])[0] < self.row_min_logodds:
-                continue
-            plate = plate / k
+            plate = refine_outline(small, plate_from_row(r["row"], r["layout"]), r["row"]) / k
             if not _inside(plate, gray.shape, 2.0):
                 continue
             found.append(Detection(plate, r["chars"] * min(r["span"], 1.0), r["layout"], r["chars"]))
