@@ -1,6 +1,7 @@
 """Plate on real footage (issue 35), side by side in one run: the detection stage's time per
 640x480 frame while it searches, and plate LIS-N tracking frames/s beside the box model's on the
-dashcam clip (both from the first ground-truth box, frames decoded once, in memory).
+dashcam clip (both from the first ground-truth box, frames decoded once, in memory, after a
+warm-up run of each).
 
     python benchmarks/bench_plate_detect.py [--n 100] [--frames 30]
 """
@@ -54,6 +55,8 @@ def main():
         detection_frames(args.frames, seed=6, with_plate=False)[0]
     print(f"detection, ms per 640x480 frame (best of 3): dashcam resized {per_frame_ms(det, dash):.1f}, "
           f"synthetic road scenes {per_frame_ms(det, scenes):.1f}")
+    for model in ("box", "plate"):  # warm-up: the compiled kernels loaded from numba's cache, not timed
+        track_fps(model, frames[:5], gt[0], args.n, 1)
     for model in ("box", "plate", "box", "plate"):  # interleaved, twice
         fps = np.median([track_fps(model, frames, gt[0], args.n, s) for s in (1, 2)])
         size = f"{frames[0].shape[1]}x{frames[0].shape[0]}"

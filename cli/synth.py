@@ -11,6 +11,7 @@ from vistrack.data_synth.contour import CLUTTER, make_contour_clip
 from vistrack.data_synth.landmarks import make_landmark_clip
 from vistrack.data_synth.perturb import LIGHTS, Perturbation, perturb_clip, read_clip
 from vistrack.data_synth.plate import make_plate_clip
+from vistrack.data_synth.plate_composite import composite_plate_clip
 from vistrack.data_synth.render import prepare_suite
 
 from .options import SEED, Fraction, Size
@@ -190,6 +191,42 @@ def perturb(clip, out, light, gain, blur, shake, zoom, drop, seed, quiet):
         n = _make(perturb_clip, out, clip=clip, p=p, progress=bar.update)
     if not quiet:
         click.echo(f"wrote {out} ({p.name}: {n} of {len(gt)} frames, ground truth transformed)")
+
+
+@synth.command("plate-on-car")
+@click.argument("clip", type=click.Path(exists=True))
+@click.option("--out", required=True, type=click.Path(file_okay=False), help="Folder of the new clip.")
+@click.option("--layout", type=click.Choice(["single-row", "jp"]), default="single-row", show_default=True,
+              help="Layout of the rendered plate.")
+@click.option("--width", default=0.4, show_default=True, type=click.FloatRange(0.05, 1.0),
+              help="Plate width as a share of the car box's width.")
+@click.option("--upscale", default=1.0, show_default=True, type=click.FloatRange(1.0, 8.0),
+              help="Enlarge the frames by this factor first (bicubic): a small car's plate is a few px high.")
+@click.option("--blur", default=0.7, show_default=True, type=click.FloatRange(0, 20),
+              help="Gaussian blur (px) of the plate, to match the clip's sharpness.")
+@click.option("--noise", default=2.0, show_default=True, type=click.FloatRange(0, 50),
+              help="Sensor noise (grey levels) on the plate.")
+@click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the plate's characters and noise.")
+@click.option("--quiet", "-q", is_flag=True, help="Print only errors.")
+def plate_on_car(clip, out, layout, width, upscale, blur, noise, seed, quiet):
+    """A rendered plate composited onto the car of a real CLIP (a folder or video whose box ground
+    truth is the car, e.g. car4), in the clip's light, blur and noise: OUT/<name>_plate.mp4,
+    groundtruth_rect.txt (the plate's exact boxes, 0-based x,y,w,h) and composite.json.
+
+    \b
+    Examples:
+      vistrack synth plate-on-car ../shared/data/real/car4_otb_first100 --out car4-jp --layout jp
+      vistrack synth plate-on-car ../shared/data/real/car4_otb_first100 --out car4-eu --upscale 2
+    """
+    try:
+        read_clip(clip)
+    except ValueError as e:
+        raise click.ClickException(str(e)) from None
+    out = _out_dir(out)
+    n = _make(composite_plate_clip, out, clip=clip, layout=layout, seed=seed, width=width, blur=blur, noise=noise,
+              upscale=upscale)
+    if not quiet:
+        click.echo(f"wrote {out} ({layout} plate on the car, {n} frames, exact ground truth)")
 
 
 #: per kind: clip maker, default frames, default size

@@ -323,11 +323,15 @@ def make_plate_clip(out, *, frames=300, size=(640, 480), seed=0, cars=3, layout=
     return meta
 
 
-def detection_frames(n, *, layout="jp", seed=0, size=(640, 480), widths=(90.0, 180.0), with_plate=True):
+def detection_frames(n, *, layout="jp", seed=0, size=(640, 480), widths=(90.0, 180.0), with_plate=True,
+                     backgrounds=None):
     """``n`` still road scenes for the plate detector: the scene of :func:`make_plate_clip` (buildings,
     text signs, grilles, lane marks) and, with ``with_plate``, one car whose plate (``layout``) is
     ``widths`` px wide (uniform), sheared by ±6°, parked in the lower half; lighting and sensor noise
     as in the clips (no motion blur: a car the detector has to find first is a car in view).
+
+    ``backgrounds``: BGR frames (e.g. of real clips); each scene's background is one of them (drawn
+    at random), resized to ``size``, instead of the synthetic road scene.
 
     Returns ``(frames, boxes)``: BGR uint8 frames and each plate's bounding box ``(x, y, w, h)``
     (``None`` without a plate)."""
@@ -336,7 +340,10 @@ def detection_frames(n, *, layout="jp", seed=0, size=(640, 480), widths=(90.0, 1
     rng = np.random.default_rng(seed)
     frames, boxes = [], []
     for _ in range(n):
-        img = _background((w, h), rng)
+        if backgrounds is None:
+            img = _background((w, h), rng)
+        else:
+            img = cv2.resize(backgrounds[int(rng.integers(len(backgrounds)))], (w, h)).astype(np.float32)
         box = None
         if with_plate:
             plate = render_plate(lay, rng, 240)

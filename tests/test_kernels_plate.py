@@ -77,6 +77,33 @@ def test_line_scans_equal_the_numpy_path(scene, prior):
     assert sa == sb
 
 
+def test_line_scans_with_an_appearance_map_equal_the_numpy_path(scene):
+    """The scans with a learned appearance's map added (``amap``: a map over part of the frame,
+    read bilinearly and clamped at its border) draw the same as the numpy path."""
+    model, obs, prev, x = scene
+    prop = model.lis_proposal()
+    centre = prop.kernel.predict_mean(prev)[:, :2]
+    half = np.minimum(model.plate_size(x), 3 * model.sigma[:2])
+    amap = (np.random.default_rng(2).normal(0, 3, (40, 60)).astype(np.float32), np.array([0.5, -20.0, 0.5, -30.0]))
+    (a, sa), (b, sb) = _draws(lambda rng: prop._line_scans(x, obs, rng, centre, half, 24, prior=(centre,
+                                                                                                   model.sigma[:2]),
+                                                           amap=amap))
+    np.testing.assert_array_equal(a[0], b[0])
+    np.testing.assert_allclose(a[1], b[1], rtol=1e-13, atol=0)
+    assert sa == sb
+    (c, _), _ = _draws(lambda rng: prop._line_scans(x, obs, rng, centre, half, 24, prior=(centre, model.sigma[:2])))
+    assert not np.array_equal(a[0], c[0])  # the map changes the draws
+
+
+def test_map_values_bilinear_and_clamped():
+    from vistrack.models.plate_proposal import map_values
+
+    m = np.arange(12, dtype=np.float32).reshape(3, 4)  # value 4 i + j at row i, column j
+    amap = (m, np.array([1.0, 0.0, 1.0, 0.0]))
+    np.testing.assert_allclose(map_values(amap, np.array([1.5, 0.25]), np.array([1.0, 0.5])), [5.5, 2.25])
+    np.testing.assert_allclose(map_values(amap, np.array([-3.0, 9.0]), np.array([-1.0, 7.0])), [0.0, 11.0])
+
+
 def test_plate_proposal_sample_equal_the_numpy_path(scene):
     """The whole proposal — tracked scans and the entering particles' search — draws the same."""
     model, obs, prev, x = scene

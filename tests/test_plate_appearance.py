@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+import pytest
 
 import vistrack
 from vistrack.builders import model_from_box
@@ -35,13 +36,18 @@ def centre(t):
     return 120 + 4.0 * t, 150 + 1.5 * t
 
 
-def test_plate_follows_a_yellow_plate_after_learning_it():
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_plate_follows_a_yellow_plate_after_learning_it(seed):
+    """Without entering-car births (a plate from a box has none) the line scans must reach the
+    plate: with the rendered-plate likelihood's scans alone, whose mode on this plate is a character
+    pitch (8 px) to the side, seed 1 drifted 8 px; the appearance map in the scans keeps it."""
     bg = road()
     frames = [draw_plate(bg, *centre(t)) for t in range(20)]
     cx, cy = centre(0)
-    trk = vistrack.Tracker(model="plate", algo="lis", particles=100, seed=1, layout="single-row")
+    trk = vistrack.Tracker(model="plate", algo="lis", particles=100, seed=seed, layout="single-row")
     trk.init(frames[0], (cx - PW / 2, cy - PH / 2, PW, PH))
     assert trk.model.app is not None
+    assert trk.model.enter_weight == 0 and trk.model.birth_reserve == 0
     errs = []
     for t in range(1, 20):
         ok, (x, y, w, h) = trk.update(frames[t])
@@ -68,3 +74,55 @@ def test_appearance_adds_to_the_plate_likelihood_and_can_be_turned_off():
     np.testing.assert_allclose(extra[0], with_app.app.loglik(maps.appearance, with_app._app_boxes(states[:1]))[0])
     np.testing.assert_allclose(with_app.loglik(maps, states), plain.loglik(maps, states) + extra, atol=1e-9)
     assert np.argmax(extra) == 0  # the appearance term peaks at the learned plate
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_the_first_view_anchors_the_adaptation(compiled):
+    """A template that has drifted onto the road adapts on to it without an anchor; with the first view as
+    anchor (the plate model's ``anchor_min_ncc`` 0.5) the road does not match the first plate: no adaptation."""
+    from vistrack import kernels
+    from vistrack.models.appearance import Appearance
+
+    img = draw_plate(road(), 160, 120)
+    box = (160 - PW / 2, 120 - PH / 2, PW, PH)
+    elsewhere = np.array([60.0, 60.0, PW, PH])  # road texture, (cx, cy, w, h)
+    with kernels.numpy_paths(not compiled):
+        for anchor, adapted in ((None, True), (0.5, False)):
+            app = Appearance(img, box, anchor_min_ncc=anchor)
+            obs = app.frame(img, app.roi(elsewhere[None], 20))
+            app.template = app.patches(obs, elsewhere[None])[0]  # drifted: the current template is the road's
+            assert app.anchor_ncc(obs, elsewhere) < 0.5
+            assert app.adapt(obs, elsewhere) is adapted
+    assert model_from_box("plate", img, box).app.anchor_min_ncc == 0.5
+
+
+def _rendered_plate_scene(cx, cy, width=120):
+    """A rendered single-row plate (``width`` px) on the road at ``(cx, cy)``, BGR uint8 320 x 240 -> 480 x 360."""
+    from vistrack.data_synth.plate import render_plate
+    from vistrack.models.plate_layout import LAYOUTS
+
+    img = cv2.resize(road(3), (480, 360)).astype(np.float32)
+    plate = cv2.resize(render_plate(LAYOUTS["single-row"], np.random.default_rng(4), 240), None, fx=width / 240,
+                       fy=width / 240, interpolation=cv2.INTER_AREA)
+    h, w = plate.shape[:2]
+    x0, y0 = int(cx - w / 2), int(cy - h / 2)
+    img[y0:y0 + h, x0:x0 + w] = plate
+    return img.astype(np.uint8), (x0, y0, w, h)
+
+
+@pytest.mark.parametrize("detector", [False, True])
+def test_a_plate_lost_to_a_jump_is_found_again(detector):
+    """The plate jumps 150 px (a cut, a shaken camera) out of the dynamics' reach: a plate model from a box
+    has no births, so without its detector it stays lost; with it, the next step's births sit at the
+    re-detected plate (Plate.redetect) and the track is back on it and reported."""
+    frames, boxes = zip(*([_rendered_plate_scene(140, 250)] * 4 + [_rendered_plate_scene(300, 120)] * 8))
+    trk = vistrack.Tracker(model="plate", algo="lis", particles=100, seed=1, layout="single-row")
+    trk.init(frames[0], boxes[0])
+    assert trk.model.detector is not None
+    if not detector:
+        trk.model.detector = None
+    for f in frames[1:]:
+        ok, (x, y, w, h) = trk.update(f)
+    bx, by, bw, bh = boxes[-1]
+    near = np.hypot(x + w / 2 - (bx + bw / 2), y + h / 2 - (by + bh / 2)) < 4
+    assert bool(ok and near) is detector

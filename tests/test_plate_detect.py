@@ -56,19 +56,28 @@ def test_acquire_needs_the_plate_in_consecutive_frames():
 
 
 def test_no_false_plates_in_plate_free_synthetic_scenes():
-    # the road scenes' text signs, grilles and windows: at most 0.05 false plates per frame
+    # the road scenes' text signs, grilles and windows: at most 0.05 false plates per frame (issue 35)
     frames, _ = detection_frames(30, seed=6, with_plate=False)
     det = PlateDetector()
     assert sum(len(det.detect(f)) for f in frames) / len(frames) <= 0.05
 
 
-def test_finds_rendered_single_row_plates():
-    # issue 35 asks recall >= 0.95 for both layouts; this guards today's level (single-row 0.45 on 40
-    # frames, the Japanese layout's four bold digits are not found yet: docs/experiments.md)
-    frames, boxes = detection_frames(30, layout="single-row", seed=5)
+@pytest.mark.parametrize("layout", ["single-row", "jp"])
+def test_finds_rendered_plates_of_both_layouts(layout):
+    # issue 35: recall >= 0.95 (IoU >= 0.5) on both layouts, the layout told right; seed 5 is not among the
+    # classifier's training seeds (benchmarks/train_plate_classifier.py: 100-120)
+    frames, boxes = detection_frames(30, layout=layout, seed=5)
     det = PlateDetector()
-    hits = sum(any(iou(d.box, b) >= 0.5 for d in det.detect(f)) for f, b in zip(frames, boxes))
-    assert hits / len(frames) >= 0.35
+    found = [[d for d in det.detect(f) if iou(d.box, b) >= 0.5] for f, b in zip(frames, boxes)]
+    assert sum(bool(d) for d in found) / len(frames) >= 0.95
+    assert sum(bool(d) and d[0].layout == layout for d in found) / len(frames) >= 0.95
+
+
+def test_the_character_row_path_alone_misses_the_bold_jp_digits():
+    # what the classifier adds: without it the Japanese layout's touching digits are not found
+    frames, boxes = detection_frames(10, layout="jp", seed=5)
+    det = PlateDetector(classifier=None)
+    assert not any(any(iou(d.box, b) >= 0.5 for d in det.detect(f)) for f, b in zip(frames, boxes))
 
 
 @pytest.mark.skipif(not DASHCAM.is_file(), reason="../shared/data not present")

@@ -323,13 +323,12 @@ def _plate(clip, size, init, init_gt, params):
         from .models.plate_detect import PlateSearch
 
         def build(frame, det):
-            # one plate found on real footage, its appearance learned: no entering-car births (they
-            # take the track to other plate-like structure: dashcam from the first box, LIS-100
-            # seeds 1-3, AUC 0.35 / 0.85 / 0.48 with the births, 0.87 / 0.90 / 0.88 without;
-            # docs/experiments.md). --init keeps them: a plate moving 4 px/frame is lost without
-            # the entering search (tests/test_plate_appearance.py)
-            return _plate_from_box(size, det.box, layout or det.layout,
-                                   {"enter_weight": 0.0, "birth_reserve": 0.0, **params}, frame)
+            # the angle's random walk 0.003 rad/frame, not 0.01: started from a detection, the angle
+            # wandered 3 -> 9 degrees on the dashcam clip blurred 7 px (the learned appearance reads the
+            # parallelogram's axis-aligned box and hardly holds it): no box, seeds 1-3, AUC 0.70 / 0.68
+            # / 0.47 -> 0.77 / 0.75 / 0.77, mean of the 10 plate clips 0.832 -> 0.850. From a box 0.01
+            # stays: 0.003 lowered every clip there (dashcam 0.877 -> 0.861; docs/experiments.md, issue 35)
+            return _plate_from_box(size, det.box, layout or det.layout, params, frame, angle_sigma=0.003)
 
         return PlateSearch(build)
     frame = _first_frame(clip, start_frame(clip, init, init_gt)) if appearance and box is not None else None
@@ -343,9 +342,11 @@ def _layout(params):
     return None if layout == "auto" else layout
 
 
-def _plate_from_box(size, box, layout, params, frame=None):
+def _plate_from_box(size, box, layout, params, frame=None, angle_sigma=None):
     """A plate model started at ``box`` (or acquiring when ``None``); with the first ``frame``,
-    the appearance of the plate in the box is learned too (:meth:`Plate.learn_appearance`)."""
+    the appearance of the plate in the box is learned too (:meth:`Plate.learn_appearance`) and the
+    detector kept for :meth:`Plate.redetect`; ``angle_sigma``: the angle's random walk (rad/frame)
+    instead of the model's, unless ``sigma`` is given."""
     from .models.plate import Plate
 
     if layout is None and box is not None:  # the layout whose aspect ratio is nearest the box's
@@ -353,6 +354,11 @@ def _plate_from_box(size, box, layout, params, frame=None):
 
         r = float(box[2]) / max(float(box[3]), 1e-9)
         layout = min(LAYOUTS, key=lambda k: abs(np.log(LAYOUTS[k].aspect / r)))
+    if frame is not None and box is not None:
+        # one plate, its appearance learned: no entering-car births (they take the track to other
+        # plate-like structure: dashcam from the first box, LIS-100 seeds 1-3, AUC 0.35 / 0.85 /
+        # 0.48 with the births; docs/experiments.md, issue 35)
+        params = {"enter_weight": 0.0, "birth_reserve": 0.0, **params}
     model = Plate(size, layout=layout or "jp", **params)
     if box is not None:
         x, y, w, h = (float(v) for v in box)
@@ -360,7 +366,12 @@ def _plate_from_box(size, box, layout, params, frame=None):
         model.prior_mean = np.concatenate([pose, pose, [0.0]])
         model.start = (pose, np.array([0.05 * w, 0.05 * h, 0.03, 0.05 * w]))
         if frame is not None:
+            from .models.plate_detect import PlateDetector
+
             model.learn_appearance(frame, (x, y, w, h))
+            model.detector = PlateDetector()  # the plate searched for again while it is not reported
+    if angle_sigma is not None and params.get("sigma") is None:
+        model.sigma[2] = float(angle_sigma)
     return model
 
 

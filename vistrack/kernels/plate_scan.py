@@ -92,8 +92,25 @@ def _scan_value(img, base, ox, oy, tab, index, coef, n, log1p, border, buf, mean
 
 
 @njit(cache=True, forceinline=True)
+def map_value(m, a, x, y):
+    """The bilinear value of the map ``m`` at the frame point ``(x, y)``, as
+    :func:`~vistrack.models.plate_proposal.map_values` computes it."""
+    hh, ww = m.shape
+    u = min(max(a[0] * x + a[1], 0.0), ww - 1.0)
+    v = min(max(a[2] * y + a[3], 0.0), hh - 1.0)
+    j0, i0 = int(np.floor(u)), int(np.floor(v))
+    j1, i1 = min(j0 + 1, ww - 1), min(i0 + 1, hh - 1)
+    fu, fv = u - j0, v - i0
+    m00, m01 = np.float64(m[i0, j0]), np.float64(m[i0, j1])
+    m10, m11 = np.float64(m[i1, j0]), np.float64(m[i1, j1])
+    top = m00 + fu * (m01 - m00)
+    bot = m10 + fu * (m11 - m10)
+    return top + fv * (bot - top)
+
+
+@njit(cache=True, forceinline=True)
 def _one_scan(img, x, n, tab, index, base, coef, axis, centre, half, other, k, prior, sig, beta, gum, u,
-              log1p, border, work):
+              log1p, border, work, has_map, amap, a):
     """One line of :func:`line_scans` for particle ``n``: the cells along ``axis`` (0: u, 1: w) of
     ``centre ± half`` with the other coordinate at ``other``; returns the drawn coordinate, the
     log probability of its cell and the cell's width."""
@@ -102,6 +119,8 @@ def _one_scan(img, x, n, tab, index, base, coef, axis, centre, half, other, k, p
         c = centre[n, axis] + ((j + 0.5) / k * 2 - 1) * half[n, axis]
         ox, oy = (c - x[n, 0], other - x[n, 1]) if axis == 0 else (other - x[n, 0], c - x[n, 1])
         v = _scan_value(img, base, ox, oy, tab, index, coef, n, log1p, border, buf, means)
+        if has_map:
+            v = v + (map_value(amap, a, c, other) if axis == 0 else map_value(amap, a, other, c))
         if prior:
             d = (c - centre[n, axis]) / sig[axis]
             v = v - 0.5 * (d * d)
@@ -113,14 +132,15 @@ def _one_scan(img, x, n, tab, index, base, coef, axis, centre, half, other, k, p
 
 @njit(cache=True, nogil=True)
 def line_scans(img, x, tan, aspect, tab_h, coef_h, tab_v, coef_v, centre, half, k, prior, sig, beta, gum, unif,
-               log1p, border, uv, log_q):
+               log1p, border, uv, log_q, has_map, amap, a):
     """``PlateLISProposal._line_scans`` of the poses ``x (n, 4)`` (``tan (n,)`` their ``tan θ``):
     ``w`` from ``r^h`` on the vertical line through ``centre (n, 2)`` (``± half[:, 1]``, ``k``
     cells), then ``u`` from ``r^v`` on the horizontal line at it; with ``prior`` each cell's value
     also takes ``-(c - centre)² / (2 sig²)`` on its axis. ``tab_h``, ``tab_v`` are the scans'
     ``(points, sets, features)`` tables, ``coef_h (n, F_h)``, ``coef_v`` their coefficients,
-    ``gum (2, n, k)`` and ``unif (2, n)`` the two draws' Gumbel and uniform variates. Writes the new
-    ``uv (n, 2)`` and their ``log_q (n,)``."""
+    ``gum (2, n, k)`` and ``unif (2, n)`` the two draws' Gumbel and uniform variates; with
+    ``has_map`` each cell's value also takes the learned appearance's map ``amap`` at the cell
+    centre (:func:`map_value` with ``a``). Writes the new ``uv (n, 2)`` and their ``log_q (n,)``."""
     ih, iv = set_index(tab_h[1], tab_h[2]), set_index(tab_v[1], tab_v[2])
     nf = max(tab_h[2].shape[0], tab_v[2].shape[0])
     work = (np.empty(nf * max(ih[2], iv[2]), np.float32), np.empty(nf, np.float32), np.empty(k), np.empty(k))
@@ -129,9 +149,9 @@ def line_scans(img, x, tan, aspect, tab_h, coef_h, tab_v, coef_v, centre, half, 
         place(tab_h[0], x[n, 0], x[n, 1], x[n, 3], tan[n], aspect, base_h)
         place(tab_v[0], x[n, 0], x[n, 1], x[n, 3], tan[n], aspect, base_v)
         w, lqh, cell_h = _one_scan(img, x, n, tab_h, ih, base_h, coef_h, 1, centre, half, centre[n, 0], k, prior,
-                                   sig, beta, gum[0], unif[0, n], log1p, border, work)
+                                   sig, beta, gum[0], unif[0, n], log1p, border, work, has_map, amap, a)
         u, lqv, cell_v = _one_scan(img, x, n, tab_v, iv, base_v, coef_v, 0, centre, half, w, k, prior, sig, beta,
-                                   gum[1], unif[1, n], log1p, border, work)
+                                   gum[1], unif[1, n], log1p, border, work, has_map, amap, a)
         uv[n, 0], uv[n, 1] = u, w
         log_q[n] = lqh - np.log(cell_h) + lqv - np.log(cell_v)
     return uv, log_q

@@ -167,12 +167,17 @@ class Appearance:
         About this many grid points for the template.
     adapt_rate, adapt_min_ncc : float
         Adaptation rate ``α`` (0: never adapt) and the confidence bar.
+    anchor_min_ncc : float or None
+        The first view as anchor: a frame adapts only if the estimate's patch also correlates
+        at least this much with the first frame's template (``None``: no such test), so that a
+        template that has drifted cannot keep adapting to what it drifted onto.
     grey : bool or None
         Force grey-level bins; ``None``: from :func:`~vistrack.features.is_grey`.
     """
 
     def __init__(self, frame, box, *, work_size=32.0, lambda_colour=35.0, kappa=1.0, ring=0.3,
-                 lambda_template=25.0, template_points=256, adapt_rate=0.1, adapt_min_ncc=0.6, grey=None):
+                 lambda_template=25.0, template_points=256, adapt_rate=0.1, adapt_min_ncc=0.6, grey=None,
+                 anchor_min_ncc=None):
         x, y, w, h = (float(v) for v in box)
         if not (w > 0 and h > 0 and np.isfinite([x, y, w, h]).all()):
             raise ValueError(f"the box needs a finite position and positive size, got {box}")
@@ -182,6 +187,7 @@ class Appearance:
         self.lambda_colour, self.kappa, self.ring = lambda_colour, kappa, ring
         self.lambda_template = lambda_template
         self.adapt_rate, self.adapt_min_ncc = adapt_rate, adapt_min_ncc
+        self.anchor_min_ncc = anchor_min_ncc
         a = w / h
         mx = int(np.clip(round(np.sqrt(template_points * a)), 4, 64))
         my = int(np.clip(round(template_points / mx), 4, 64))
@@ -300,6 +306,8 @@ class Appearance:
         confident frame; returns whether it adapted."""
         if self.adapt_rate <= 0:
             return False
+        if self.anchor_min_ncc is not None and not self.anchor_ncc(obs, box) >= self.anchor_min_ncc:
+            return False
         if kernels.use():
             return self._adapt_compiled(obs, np.ascontiguousarray(box, float))
         b = np.asarray(box, float)[None]
@@ -313,6 +321,14 @@ class Appearance:
         inner, _ = obs.histograms(b[:, 0], b[:, 1], b[:, 2], b[:, 3])
         self.colour.adapt(inner[0], a / 2)
         return True
+
+    def anchor_ncc(self, obs, box):
+        """The correlation of the patch at ``box (4,)`` with the first frame's template."""
+        template, self.template = self.template, self.template_first
+        try:
+            return float(self.ncc(obs, np.asarray(box, float).reshape(1, 4))[0])
+        finally:
+            self.template = template
 
     def _adapt_compiled(self, obs, box):
         """:meth:`adapt` in one compiled call (:func:`~vistrack.kernels.box_frame.adapt_template`)."""

@@ -207,8 +207,12 @@ class Plate(VideoModelBase):
         a white car). Returns the :class:`~vistrack.models.appearance.Appearance`."""
         from .appearance import Appearance
 
-        self.app = Appearance(frame, box, **params)
+        self.app = Appearance(frame, box, **{"anchor_min_ncc": self.anchor_min_ncc, **params})
         return self.app
+
+    #: the first view as anchor (:class:`~vistrack.models.appearance.Appearance`'s ``anchor_min_ncc``):
+    #: the learned appearance adapts only on frames whose estimate also matches the first frame's plate
+    anchor_min_ncc = 0.5
 
     def observe(self, maps, particles):
         """The frame's :class:`~vistrack.models.plate_likelihood.PlateObservation`: the feature maps,
@@ -250,12 +254,54 @@ class Plate(VideoModelBase):
         return np.stack([x + w / 2, y + h / 2, w, h], axis=1)
 
     def adapt(self, obs, estimate):
-        """Adapt the appearance on a confident frame (:meth:`Appearance.adapt`)."""
+        """Adapt the appearance on a confident frame (:meth:`Appearance.adapt`); with a :attr:`detector`,
+        set the next step's births (:meth:`redetect`)."""
         if self.app is None:
             return False
         b = self._app_boxes(estimate)
         frame = obs.appearance_frames(b, self.app.ring * 0.5 * (b[:, 2] + b[:, 3]), margin=float(b[0, 2]))[0][0]
-        return self.app.adapt(frame, b[0])
+        adapted = self.app.adapt(frame, b[0])
+        if self.detector is not None:
+            self.redetect(obs, estimate)
+        return adapted
+
+    # -- re-detection while the plate is not reported (real footage) ---------------------------
+    #: a :class:`~vistrack.models.plate_detect.PlateDetector` (set for real footage, with a learned
+    #: appearance): while the estimate is not reported, the plate is searched for again (:meth:`redetect`)
+    detector = None
+    #: the weight of the births at a re-detected plate (the entering component's, for the next step)
+    redetect_weight = 0.2
+    _births = None  # the saved (enter_weight, entering parts) while the births sit at a detection
+
+    def redetect(self, obs, estimate):
+        """The births of the next step (the entering component of ``K``, chosen after this frame, so a
+        function of the frames so far): while the estimate is not reported (:meth:`visible`), a
+        Gaussian about the detection (:attr:`detector`) that matches the first frame's plate best
+        (template correlation at least :attr:`anchor_min_ncc`), with weight :attr:`redetect_weight`
+        and the ``--init`` spread; else the model's own entering component (none for a plate from a
+        box). A plate model started from a box has no births, so once lost (a shaking camera moved
+        the plate out of the dynamics' reach) it stayed lost. Returns whether births were set."""
+        s = np.asarray(estimate, float).reshape(1, -1)
+        pose = None
+        if not self.visible(obs, s[0]):
+            dets = self.detector.detect(obs.maps.frame)
+            if dets:
+                boxes = np.array([[d.box[0] + d.box[2] / 2, d.box[1] + d.box[3] / 2, d.box[2], d.box[3]] for d in dets])
+                grow = self.app.ring * 0.5 * (boxes[:, 2] + boxes[:, 3])
+                ncc = np.full(len(boxes), -np.inf)
+                for frame, idx in obs.appearance_frames(boxes, grow, margin=float(np.median(boxes[:, 2]))):
+                    ncc[idx] = [self.app.anchor_ncc(frame, b) for b in boxes[idx]]
+                k = int(np.argmax(ncc))
+                if ncc[k] >= (self.anchor_min_ncc if self.anchor_min_ncc is not None else -np.inf):
+                    pose = np.array([boxes[k, 0], boxes[k, 1], 0.0, boxes[k, 2]])
+        if self._births is None and pose is not None:
+            self._births = (self.enter_weight, self._enter_parts)
+        if pose is not None:
+            std = np.array([0.05 * pose[3], 0.05 * pose[3] / self.layout.aspect, 0.03, 0.05 * pose[3]])
+            self.enter_weight, self._enter_parts = self.redetect_weight, [(1.0, pose, std)]
+        elif self._births is not None:
+            (self.enter_weight, self._enter_parts), self._births = self._births, None
+        return pose is not None
 
     # -- likelihood and output ------------------------------------------------------
     def loglik(self, obs, states):

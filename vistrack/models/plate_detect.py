@@ -79,8 +79,15 @@ class PlateDetector:
         Cut touching characters apart (off: see :attr:`split`).
     """
 
-    def __init__(self, min_chars=5, gaps=(5, 9, 15), max_side=720, char_height=32, split=False):
+    def __init__(self, min_chars=5, gaps=(5, 9, 15), max_side=720, char_height=32, split=False, classifier="default"):
         self.min_chars = int(min_chars)
+        #: the learned test of the rectangle candidates (:class:`~vistrack.models.plate_classifier.PlateClassifier`;
+        #: ``None``: the character-row path alone)
+        if classifier == "default":
+            from .plate_classifier import PlateClassifier
+
+            classifier = PlateClassifier()
+        self.classifier = classifier
         #: cut components wider than tall into characters (:func:`_split_touching`): rendered
         #: single-row plates found 0.43 -> 0.57 of 40, but the dashcam plate's first boxes 20 %
         #: narrower (IoU 0.94 -> 0.78) and its no-box track lost on most frames: off
@@ -181,6 +188,26 @@ class PlateDetector:
             return None
         return n, span, (left, top, right - left, bottom - top), layout
 
+    def _classified(self, small, k, shape):
+        """The rectangle candidates of ``small`` (the frame at scale ``k``) that :attr:`classifier`
+        takes for plates, as :class:`Detection` s in frame px: the plate's box is the rectangle's,
+        the layout the one nearest its aspect ratio, the score ``10 +`` the log-odds (ranked above
+        the character-row path's, whose scores are at most the characters in the row), ``chars`` 0."""
+        from .plate_classifier import rectangle_candidates
+
+        if self.classifier is None:
+            return []
+        boxes = rectangle_candidates(small)
+        if len(boxes) == 0:
+            return []
+        s = self.classifier.score(small, boxes)
+        out = []
+        for b, v in zip(boxes, s):
+            plate = b / k
+            if v > self.classifier.threshold and _inside(plate, shape, 2.0):
+                out.append(Detection(plate, 10.0 + float(v), _layout_of(plate), 0))
+        return out
+
     # -- the whole frame ---------------------------------------------------------------
     def detect(self, frame):
         """The plates in ``frame`` (BGR or grey), best first: a list of :class:`Detection`."""
@@ -196,12 +223,21 @@ class PlateDetector:
             if not _inside(plate, gray.shape, 2.0):
                 continue
             found.append(Detection(plate, r["chars"] * min(r["span"], 1.0), r["layout"], r["chars"]))
+        found += self._classified(small, k, gray.shape)
         found.sort(key=lambda d: -d.score)
         keep = []
         for d in found:  # one detection per plate: the strongest
             if all(iou(d.box, e.box) < 0.3 for e in keep):
                 keep.append(d)
         return keep
+
+
+def _layout_of(box):
+    """The layout whose aspect ratio is nearest the box's ``w / h`` (in log)."""
+    from .plate_layout import LAYOUTS
+
+    r = float(box[2]) / max(float(box[3]), 1e-9)
+    return min(("jp", "single-row"), key=lambda name: abs(np.log(LAYOUTS[name].aspect / r)))
 
 
 def _split_touching(st, aspect=0.62):
