@@ -8,8 +8,8 @@ Candidates
     :class:`~vistrack.models.plate_detect.PlateDetector` misses them).
 Features
     :func:`window_features`: the candidate box grown by :data:`GROW` of its size on each side,
-    resized to a 64×32 window, its HOG (Dalal and Triggs 2005; 8×8 cells, 16×16 blocks, 9
-    orientations: 756 values), and the box's log aspect ratio.
+    resized to a 64×32 window, its HOG (Dalal and Triggs 2005, scikit-image's; 8×8 cells, 16×16
+    blocks, 9 orientations: 756 values), and the box's log aspect ratio.
 Classifier
     A logistic regression over the standardised features, ``score = b + Σ_f c_f (x_f - μ_f) / σ_f``
     (log-odds of a plate); its coefficients are in ``plate_classifier.npz`` beside this module,
@@ -36,8 +36,13 @@ GROW = (0.08, 0.15)
 _WEIGHTS = Path(__file__).with_name("plate_classifier.npz")
 
 
-def _hog():
-    return cv2.HOGDescriptor(WINDOW, (16, 16), (8, 8), (8, 8), 9)
+def _hog(patch):
+    """HOG of a :data:`WINDOW` patch (scikit-image's; OpenCV's ``HOGDescriptor`` is not in every
+    OpenCV build): 8×8 cells, 2×2-cell blocks normalised by L2-Hys, 9 orientations — 756 values."""
+    from skimage.feature import hog
+
+    return hog(patch, orientations=9, pixels_per_cell=(8, 8), cells_per_block=(2, 2), block_norm="L2-Hys",
+               feature_vector=True)
 
 
 def rectangle_candidates(gray, low=40, high=120, min_h=8, max_w_frac=0.5):
@@ -61,7 +66,6 @@ def rectangle_candidates(gray, low=40, high=120, min_h=8, max_w_frac=0.5):
 def window_features(gray, boxes):
     """Features ``(M, 757)`` float32 of ``boxes (M, 4)`` ``(x, y, w, h)`` in ``gray (H, W) uint8``: the
     HOG of each grown box resized to :data:`WINDOW` (756) and ``log(w / h)``."""
-    hog = _hog()
     H, W = gray.shape
     out = np.empty((len(boxes), 757), np.float32)
     for i, (x, y, w, h) in enumerate(np.asarray(boxes, float)):
@@ -71,7 +75,7 @@ def window_features(gray, boxes):
         crop = gray[y0:max(y1, y0 + 1), x0:max(x1, x0 + 1)]
         interp = cv2.INTER_AREA if crop.shape[1] > WINDOW[0] else cv2.INTER_LINEAR
         patch = cv2.resize(crop, WINDOW, interpolation=interp)
-        out[i, :756] = hog.compute(patch).ravel()
+        out[i, :756] = _hog(patch)
         out[i, 756] = np.log(w / h)
     return out
 
