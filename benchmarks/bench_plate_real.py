@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from vistrack.metrics import iou, success_auc
+from vistrack.results_format import read_result_file
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 DASHCAM = REAL / "plate_in_polo_dashcam"
@@ -55,7 +56,7 @@ def auc(clip, results):
     gt = np.loadtxt(clip / "groundtruth_rect.txt", delimiter=",")
     if not results.is_file():  # nothing found: no frame reported
         return 0.0
-    r = np.loadtxt(results, delimiter=",").reshape(-1, 4)
+    r = np.nan_to_num(read_result_file(results, "otb"))  # run --results: OTB's 1-based format
     return float(success_auc(iou(r[:len(gt)], gt[:len(r)])))
 
 
