@@ -188,6 +188,9 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
                                      layout=layout, no_colour=no_colour, template_path=template_path, targets=targets)
     frames, lead = _frames(clip.source, max_frames), ()
     if isinstance(model, PlateSearch):  # real footage without a box: find the plate first
+        if not quiet:  # which model and why, on one line (the error below is the one line with -q)
+            click.echo("no --init and no model in meta.json: looking for a license plate (the plate model) in the "
+                       "first 30 frames; to track any other object give --init x,y,w,h", err=True)
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", VideoDecodeWarning)
