@@ -356,24 +356,7 @@ def _wait_for(p, ready, timeout):
 def interrupt(sig, ready, group=False, then=None):
     """A driver: start the command, send ``sig`` once ``ready(w)`` (to the process group with
     ``group``: Ctrl-C in a terminal), then collect; ``then(w, res)`` may run a follow-up."""
-
-    def driver(w, argv, timeout):
-        t0 = time.time()
-        p = _popen(argv, w, group)
-        if not _wait_for(p, lambda: ready(w), timeout):
-            res = _finish(p, t0, timeout)
-            res.note = "finished before the signal" if not res.timeout else ""
-            return res
-        if group:
-            os.killpg(p.pid, sig)
-        else:
-            p.send_signal(sig)
-        res = _finish(p, t0, timeout)
-        if then and not res.timeout:
-            res = then(w, res, timeout)
-        return res
-
-    return driver
+    return signals([sig], ready, group, then)
 
 
 def _lines(path):
@@ -432,8 +415,9 @@ def kill_worker(w, argv, timeout):
     return _finish(p, t0, timeout)
 
 
-def signals(sigs, ready, group=False):
-    """A driver: start the command, send the signals ``sigs`` one after the other once ``ready(w)``."""
+def signals(sigs, ready, group=False, then=None):
+    """A driver: start the command, send the signals ``sigs`` one after the other once ``ready(w)``
+    (to the process group with ``group``), then collect; ``then(w, res, timeout)`` may run a follow-up."""
 
     def driver(w, argv, timeout):
         t0 = time.time()
@@ -444,7 +428,10 @@ def signals(sigs, ready, group=False):
             return res
         for sig in sigs:
             os.killpg(p.pid, sig) if group else p.send_signal(sig)
-        return _finish(p, t0, timeout)
+        res = _finish(p, t0, timeout)
+        if then and not res.timeout:
+            res = then(w, res, timeout)
+        return res
 
     return driver
 

@@ -13,10 +13,8 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
-
-from vistrack.video import VideoWriter
+from clip_helpers import square_clip
 
 DASK = shutil.which("dask") or str(Path(sys.executable).with_name("dask"))
 pytestmark = pytest.mark.skipif(not Path(DASK).exists(), reason="the dask command is not installed")
@@ -26,18 +24,6 @@ def free_port():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
-
-
-def square_clip(folder, frames=20):
-    folder.mkdir(parents=True)
-    gt = []
-    with VideoWriter(folder / "sq.mp4", 25, (96, 72)) as w:
-        for t in range(frames):
-            img = np.full((72, 96, 3), 40, np.uint8)
-            img[20:40, 20 + t:40 + t] = (40, 60, 220)
-            w.write(img)
-            gt.append((20 + t, 20, 20, 20))
-    np.savetxt(folder / "groundtruth_rect.txt", gt, fmt="%d", delimiter=",")
 
 
 def wait_for(predicate, timeout, what):
@@ -60,7 +46,7 @@ def eval_args(clip, out, *extra):
 
 def test_eval_on_a_cluster_without_a_shared_filesystem_equals_the_local_run(tmp_path):
     served = tmp_path / "served"
-    square_clip(served / "sq")
+    square_clip(served / "sq", 20)
     procs = []
     env = {**os.environ, "PYTHONWARNINGS": "ignore"}
     try:

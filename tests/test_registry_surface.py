@@ -2,7 +2,7 @@
 
 import json
 
-import numpy as np
+from clip_helpers import square_clip
 
 from cli_helpers import run
 from vistrack.cli.eval import eval_cmd
@@ -10,21 +10,6 @@ from vistrack.cli.run import RUN_ALGOS
 from vistrack.data_synth.contour import make_contour_clip
 from vistrack.evaluation import check_algos
 from vistrack.models.registry import DEFAULT_MODEL, MODELS, all_algos
-from vistrack.video import VideoWriter
-
-
-def square_clip(folder, frames=8):
-    """A real-style clip: ``<name>.mp4`` and ``groundtruth_rect.txt``, no meta.json."""
-    folder.mkdir(parents=True)
-    gt = []
-    with VideoWriter(folder / f"{folder.name}.mp4", 30, (96, 72)) as w:
-        for t in range(frames):
-            img = np.full((72, 96, 3), 40, np.uint8)
-            img[20:40, 30 + t:50 + t] = (40, 60, 220)
-            w.write(img)
-            gt.append((30 + t, 20, 20, 20))
-    np.savetxt(folder / "groundtruth_rect.txt", gt, fmt="%d", delimiter=",")
-    return folder
 
 
 def test_every_algorithm_run_offers_is_one_eval_accepts():
@@ -38,7 +23,8 @@ def test_every_algorithm_run_offers_is_one_eval_accepts():
 
 
 def test_eval_without_model_tracks_a_real_clip_with_run_s_default(tmp_path, capsys):
-    clip = square_clip(tmp_path / "sq")
+    clip = tmp_path / "sq"
+    square_clip(clip)
     code, _, err = run(["eval", str(clip), "--algos", "lis", "--particles", "20", "--runs", "1", "--in-process",
                         "--workers", "1", "--out", str(tmp_path / "e"), "-q"], capsys)
     assert code == 0, err

@@ -8,22 +8,8 @@ import shutil
 import subprocess
 import sys
 
-import numpy as np
 import pytest
-
-from vistrack.video import VideoWriter
-
-
-def square_clip(folder, frames):
-    folder.mkdir(parents=True)
-    gt = []
-    with VideoWriter(folder / f"{folder.name}.mp4", 25, (96, 72)) as w:
-        for t in range(frames):
-            img = np.full((72, 96, 3), 40, np.uint8)
-            img[20:40, 20 + t:40 + t] = (40, 60, 220)
-            w.write(img)
-            gt.append((20 + t, 20, 20, 20))
-    np.savetxt(folder / "groundtruth_rect.txt", gt, fmt="%d", delimiter=",")
+from clip_helpers import square_clip
 
 
 @pytest.fixture(scope="module")
