@@ -106,3 +106,16 @@ def test_ruff_check_passes():
     res = subprocess.run([sys.executable, "-m", "ruff", "check", "--no-cache", str(ROOT)], cwd=ROOT,
                          capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stdout + res.stderr
+
+
+def test_the_layering_holds():
+    """import-linter's contracts in pyproject.toml: no import circle between vistrack's packages and
+    modules, the library never imports the command line, models never import filters or the engine,
+    the core imports nothing above it (docs/architecture.md)."""
+    pytest.importorskip("importlinter", reason="import-linter is not installed (pip install '.[test]')")
+    lint = Path(sys.executable).with_name("lint-imports")
+    cmd = [str(lint)] if lint.exists() else [sys.executable, "-c", "from importlinter.cli import "
+                                             "lint_imports_command; lint_imports_command()"]
+    res = subprocess.run([*cmd, "--no-cache"], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-2000:]
+    assert "0 broken" in res.stdout

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
+
 from clip_helpers import square_clip
 
 DASK = shutil.which("dask") or str(Path(sys.executable).with_name("dask"))

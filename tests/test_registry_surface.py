@@ -2,9 +2,8 @@
 
 import json
 
-from clip_helpers import square_clip
-
 from cli_helpers import run
+from clip_helpers import square_clip
 from vistrack.cli.eval import eval_cmd
 from vistrack.cli.run import RUN_ALGOS
 from vistrack.data_synth.contour import make_contour_clip

@@ -21,9 +21,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models.kernel import PriorKernel, Transition
 from ..models.protocol import require
 from ..particles import ParticleSet, checked_weights
+from ..transition import PriorKernel, Transition
 from .resampler import make_resampler
 
 __all__ = ["ParticleFilter", "filter_steps"]

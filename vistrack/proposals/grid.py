@@ -27,8 +27,8 @@ from __future__ import annotations
 import numpy as np
 
 from .. import kernels
-from ..models.kernel import Transition
 from ..particles import logsumexp
+from ..transition import Transition
 
 __all__ = ["MapProposal", "categorical_rows", "inverse_cdf_rows"]
 

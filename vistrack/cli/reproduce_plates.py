@@ -7,7 +7,7 @@ import click
 from vistrack.evaluation import entries_config
 
 from .options import check_writable
-from .reproduce import _check_entries, _clip_suite, _report, _run
+from .reproduce_common import _check_entries, _clip_suite, _report, _run
 
 __all__ = ["overlap"]
 

@@ -3,16 +3,13 @@
 from __future__ import annotations
 
 import os
-from contextlib import contextmanager
 from pathlib import Path
 
 import click
 import numpy as np
-from tqdm import tqdm
 
-from vistrack.engine import EngineError, run_grid
-from vistrack.evaluation import (OPENCV_TRACKERS, EvalConfig, OutLocked, TaskFailed, check_algos, find_clips,
-                                 load_task_results, lock_out, result_files, score_result_file, summarize, task_list)
+from vistrack.evaluation import (OPENCV_TRACKERS, EvalConfig, check_algos, find_clips,
+                                 load_task_results, result_files, score_result_file, summarize, task_list)
 from vistrack.report import write_eval_outputs
 from vistrack.builders import MODELS as MODEL_NAMES
 from vistrack.clips import load_clip
@@ -21,39 +18,10 @@ from vistrack.models.registry import DEFAULT_MODEL, all_algos, clip_model, get_m
 from vistrack.runtime import check_particle_memory
 from vistrack.video import VideoError
 
+from .grid import _locked, run_tasks
 from .options import SEED, IntList, StrList
 
-__all__ = ["eval_cmd", "run_tasks"]
-
-@contextmanager
-def _locked(out):
-    """:func:`vistrack.tasks.lock_out` with its refusal as one error line."""
-    try:
-        with lock_out(out):
-            yield
-    except OutLocked as e:
-        raise click.ClickException(str(e)) from None
-
-
-def run_tasks(tasks, out, *, scheduler=None, workers=0, timeout=10, in_process=False, resume=False, quiet=False,
-              desc="tasks", runner=None):
-    """:func:`vistrack.engine.run_grid` with a progress bar, its refusals and failures as one error line
-    and its notes on stderr (even with ``quiet``)."""
-    bar = []  # the progress bar, shown once the workers are there
-
-    def progress(k):
-        bar[0].update(k)
-
-    try:
-        run_grid(tasks, out, scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process,
-                 resume=resume, progress=progress, runner=runner, notify=lambda m: click.echo(m, err=True),
-                 on_ready=lambda: bar.append(tqdm(total=len(tasks), unit="task", desc=desc, disable=quiet)))
-    except (OutLocked, EngineError, TaskFailed) as e:
-        raise click.ClickException(str(e)) from None
-    finally:
-        for b in bar:
-            b.close()
-
+__all__ = ["eval_cmd"]
 
 def _equal_time(cfg, clips, frames=30):
     """N per algorithm for the time per frame of the first algorithm at the first N (thesis Tables 4.1, 4.3)."""

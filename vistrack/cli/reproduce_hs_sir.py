@@ -8,8 +8,8 @@ from vistrack.evaluation import entries_config
 from vistrack.reproduce.hs_sir import HSConfig, equal_time_entries, hs_results, hs_tasks, likelihood_params
 
 from .options import check_writable
-from .reproduce import (_check_entries, _clip_suite, _plots_dir, _report, _run, engine_options, output_options,
-                        reproduce, suite_options)
+from .reproduce_common import (_check_entries, _clip_suite, _plots_dir, _report, _run, engine_options,
+                               output_options, suite_options)
 
 __all__ = ["Likelihood", "hs_sir"]
 
@@ -30,7 +30,7 @@ class Likelihood(click.ParamType):
 
 
 
-@reproduce.command("hs-sir")
+@click.command("hs-sir")
 @suite_options("Folder of colour contour clip folders; made there with --make if missing "
                "[default: hs-sir-clips].", "240x180", "basic-sir:3000,rb-ss-hs-sir:400",
                "ALGO:N pairs: basic-sir, hs-sir, rb-hs-sir, rb-ss-hs-sir (and bootstrap, ls-n-ips, lis, ...).",

@@ -14,7 +14,7 @@ from vistrack.models.registry import DEFAULT_MODEL, get_model_spec
 from vistrack.report import write_eval_outputs
 from vistrack.video import VideoError
 
-from .eval import run_tasks
+from .grid import run_tasks
 from .options import SEED
 from .run import run
 
