@@ -12,114 +12,27 @@ exit path, so the frames so far play.
 
 from __future__ import annotations
 
-import csv
 import itertools
-import os
-import signal
 import time
 import warnings
-from contextlib import contextmanager, nullcontext
+from contextlib import nullcontext
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from .clips import format_value
-from .metrics import center_error, iou, landmark_error, lost_frames, plate_frame_measures, precision, success_auc
 from .particles import DegenerateWeightsWarning
-from .results_format import format_line, result_paths
 from .profiling import STAGES, Timer, profile_stages
 from .render import annotate, annotate_targets
+from .results_format import result_paths
+from .run_summary import summary_lines
+from .signals import HARD_STOP, Terminated, deferred_signals, stop_on_signals, stop_reason
+from .track_files import TrackCSV
 from .tracking import top_particles, track, warm_up
-from .outputs import OutputLock, is_device, temporary_name
-from .video import VideoWriter
+from .video_writer import VideoWriter
 
-__all__ = ["TrackCSV", "VideoRun", "track_row", "target_rows", "track_video", "summary_lines", "Terminated", "stop_on_signals"]
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised where the run is, so that it ends as cleanly as on Ctrl-C."""
-
-
-@contextmanager
-def stop_on_signals():
-    """Within the block SIGTERM raises :class:`Terminated` (SIGINT already raises
-    ``KeyboardInterrupt``); the previous handler is restored after."""
-    def handler(signum, frame):
-        raise Terminated()
-
-    try:
-        old = signal.signal(signal.SIGTERM, handler)
-    except ValueError:  # not the main thread: leave signals alone
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, old)
-
-
-class TrackCSV:
-    """Track rows (dicts) written as they come: header from the first row, one flushed row per
-    :meth:`write` to ``path.part``; :meth:`close` renames it to ``path`` (module docstring); a
-    device or pipe (``/dev/stdout``) is written directly.
-    ``boxes``: a result file of the tracking toolkits instead (:mod:`vistrack.results_format`):
-    ``"otb"`` (or ``True``), ``"got10k"``, ``"vot"`` — ``x,y,w,h`` per frame, no header — or
-    ``"time"``, GOT-10k's seconds per frame."""
-
-    def __init__(self, path, boxes=False):
-        self.path = Path(path)
-        # a device or pipe (/dev/stdout) is written directly: a part file renamed over it would replace it
-        self.direct = is_device(self.path)
-        # one live writer per output (a second run refuses it: OutputBusy), and a temporary name of its own
-        self._lock = OutputLock(self.path, "results file" if boxes else "track file")
-        try:
-            self.part = self.path if self.direct else temporary_name(self.path)
-            self._f = open(self.part, "w", newline="")
-        except BaseException:
-            self._lock.release()
-            raise
-        self._w = csv.writer(self._f)
-        self.boxes = "otb" if boxes is True else (boxes or None)
-        self.columns = None
-        self.rows = 0
-        self._done = False
-
-    def write(self, row):
-        """Write one track ``row`` (a dict: column -> value; ``visible``, ``cx``, ``cy``, ``w``, ``h`` for the box
-        format) and flush it."""
-        if self.boxes == "time":
-            self._f.write(f"{float(row.get('ms') or 0.0) / 1e3:.6f}\n")
-        elif self.boxes:
-            box = (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"])
-            self._f.write(format_line(box, bool(row["visible"]), self.boxes, self.rows) + "\n")
-        else:
-            if self.columns is None:
-                self.columns = list(row)
-                self._w.writerow(self.columns)
-            self._w.writerow([format_value(row.get(c, "")) for c in self.columns])
-        self._f.flush()
-        self.rows += 1
-
-    def close(self):
-        """Close and rename to :attr:`path` (a run without frames removes the part file); after a
-        write error (disk full) the rows written whole so far are kept."""
-        if self._done:
-            return
-        self._done = True
-        try:
-            self._f.close()
-        except OSError:
-            pass
-        try:
-            if self.direct:
-                return
-            if self.rows:
-                os.replace(self.part, self.path)
-            else:
-                self.part.unlink(missing_ok=True)
-        finally:
-            self._lock.release()
+# TrackCSV, summary_lines and the signal handling live in track_files, run_summary and signals (re-exported)
+__all__ = ["TrackCSV", "VideoRun", "track_row", "target_rows", "track_video", "summary_lines", "Terminated",
+           "stop_on_signals", "deferred_signals", "HARD_STOP"]
 
 
 @dataclass
@@ -247,48 +160,19 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     if profile:
         frames = run.timer.timed_iter(frames, "decode")
     with deferred_signals() as stop:  # from opening the outputs to closing them: a signal waits for the frame
-        outs, writer = [], None
-        try:  # an output another run holds (OutputBusy) or cannot write: none of them left behind
-            if track_path:
-                outs.append(TrackCSV(track_path))
-            if results_path:
-                box_path, time_path = result_paths(results_path, results_format, sequence)
-                box_path.parent.mkdir(parents=True, exist_ok=True)
-                outs.append(TrackCSV(box_path, boxes=results_format))
-                if time_path is not None:
-                    outs.append(TrackCSV(time_path, boxes="time"))
-            writer = VideoWriter(out_path, *video_info, codec="auto", atomic=True) if out_path else None
-        except BaseException:
-            _close_all(outs, writer)
-            raise
+        outs, writer = _open_outputs(track_path, results_path, results_format, sequence, out_path, video_info)
         run.video_note = writer.note if writer else None
-        for index, frame in lead:  # searched without finding the object (PlateSearch)
-            row = {"frame": index, "visible": 0, **model.describe(np.full(model.dim, np.nan)),
-                   "ess": 0.0, "ms": 0.0, "lost_reason": "not found"}
-            run.rows.append(row)
-            for o in outs:
-                o.write(row)
-            if writer:
-                writer.write(annotate(frame, [], [], f"#{index}  {label}  searching"))
+        _record_lead(run, lead, model, outs, writer, label)
         t0 = time.perf_counter()
         try:
             with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
                 warnings.simplefilter("ignore", DegenerateWeightsWarning)
-                expected, last = (lead[-1][0] + 1 if len(lead) else 0), None
-                for res in track(frames, filt, particles, rng):
-                    for i in range(expected, res.index):  # frames before the start, or that failed to decode
-                        _record_decode(run, i, res, model, outs, writer, label, notify, progress, i < start)
-                    _record(run, res, model, outs, writer, show_particles, label, notify)
-                    if progress:
-                        progress(run.rows[-1]["ess"])
-                    expected, last = res.index + 1, res
-                    if stop.reason:
-                        break
-                if not stop.reason and last is not None and frame_count:
-                    for i in range(expected, int(frame_count)):
-                        _record_decode(run, i, last, model, outs, writer, label, notify, progress)
+                first = lead[-1][0] + 1 if len(lead) else 0
+                _track_loop(run, track(frames, filt, particles, rng), model, outs, writer, stop, first=first,
+                            start=start, frame_count=frame_count, show_particles=show_particles, label=label,
+                            notify=notify, progress=progress)
         except (KeyboardInterrupt, SystemError) as e:  # Terminated is a KeyboardInterrupt
-            run.stopped = _stop_reason(e)
+            run.stopped = stop_reason(e)
         finally:
             run.wall = time.perf_counter() - t0
             _close_all(outs, writer)
@@ -297,50 +181,58 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     return run
 
 
-class _Stop:
-    """What :func:`deferred_signals` caught: ``reason`` (``None``, ``"interrupt"`` or
-    ``"terminate"``) and how many signals."""
+def _track_loop(run, results, model, outs, writer, stop, *, first, start, frame_count, show_particles, label, notify,
+                progress):
+    """Record every frame result of ``results`` into ``run`` and the outputs, with a row for every
+    frame between them (before ``start``: "not started"; else failed to decode) and after the last
+    one up to an exact ``frame_count``; stops after the frame in hand once ``stop.reason`` is set."""
+    expected, last = first, None
+    for res in results:
+        for i in range(expected, res.index):  # frames before the start, or that failed to decode
+            _record_decode(run, i, res, model, outs, writer, label, notify, progress, i < start)
+        _record(run, res, model, outs, writer, show_particles, label, notify)
+        if progress:
+            progress(run.rows[-1]["ess"])
+        expected, last = res.index + 1, res
+        if stop.reason:
+            return
+    if last is not None and frame_count:
+        for i in range(expected, int(frame_count)):
+            _record_decode(run, i, last, model, outs, writer, label, notify, progress)
 
-    def __init__(self):
-        self.reason, self.count = None, 0
 
-
-#: signals after which a run stops at once (raises) instead of after the frame in hand
-HARD_STOP = 3
-
-
-@contextmanager
-def deferred_signals():
-    """Within the block SIGINT and SIGTERM set a flag (the yielded object's ``reason``:
-    ``"terminate"`` once a SIGTERM came, else ``"interrupt"``) instead of raising, so the frame in
-    hand is finished and every writer flushed before the run stops; the :data:`HARD_STOP`-th
-    signal raises (``KeyboardInterrupt``, or :class:`Terminated` for SIGTERM) for a run that does
-    not come back. A SIGINT the process ignores (a background job) stays ignored. Outside the
-    main thread signals are left alone."""
-    import threading
-
-    stop = _Stop()
-    if threading.current_thread() is not threading.main_thread():
-        yield stop
-        return
-
-    def handler(signum, frame):
-        stop.count += 1
-        if stop.reason is None or signum == signal.SIGTERM:  # a SIGTERM (shutdown) outranks Ctrl-C
-            stop.reason = "terminate" if signum == signal.SIGTERM else "interrupt"
-        if stop.count >= HARD_STOP:
-            raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
-
-    old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    for s, h in old.items():
-        if h is not signal.SIG_IGN:
-            signal.signal(s, handler)
+def _open_outputs(track_path, results_path, results_format, sequence, out_path, video_info):
+    """``(outs, writer)``: the track CSV and result files (:class:`TrackCSV`) and the annotated video
+    of a run; an output another run holds (``OutputBusy``) or that cannot be written leaves none of
+    them behind."""
+    outs, writer = [], None
     try:
-        yield stop
-    finally:
-        for s, h in old.items():
-            if h is not signal.SIG_IGN and h is not None:
-                signal.signal(s, h)
+        if track_path:
+            outs.append(TrackCSV(track_path))
+        if results_path:
+            box_path, time_path = result_paths(results_path, results_format, sequence)
+            box_path.parent.mkdir(parents=True, exist_ok=True)
+            outs.append(TrackCSV(box_path, boxes=results_format))
+            if time_path is not None:
+                outs.append(TrackCSV(time_path, boxes="time"))
+        writer = VideoWriter(out_path, *video_info, codec="auto", atomic=True) if out_path else None
+    except BaseException:
+        _close_all(outs, writer)
+        raise
+    return outs, writer
+
+
+def _record_lead(run, lead, model, outs, writer, label):
+    """Rows (``visible=0``, "not found") and unmarked video frames for the frames searched without
+    finding the object (:class:`~vistrack.models.plate_detect.PlateSearch`)."""
+    for index, frame in lead:
+        row = {"frame": index, "visible": 0, **model.describe(np.full(model.dim, np.nan)),
+               "ess": 0.0, "ms": 0.0, "lost_reason": "not found"}
+        run.rows.append(row)
+        for o in outs:
+            o.write(row)
+        if writer:
+            writer.write(annotate(frame, [], [], f"#{index}  {label}  searching"))
 
 
 def _close_all(outs, writer):
@@ -352,16 +244,6 @@ def _close_all(outs, writer):
     finally:
         if writer:
             writer.close()
-
-
-def _stop_reason(exc):
-    """``"terminate"`` (SIGTERM) or ``"interrupt"`` (Ctrl-C) for the exception that stopped a run;
-    re-raises any other. A signal that arrives while a compiled kernel is being called surfaces as
-    a ``SystemError`` caused by the handler's exception (numba's dispatcher returns with it set)."""
-    cause = exc.__cause__ if isinstance(exc, SystemError) else exc
-    if not isinstance(cause, KeyboardInterrupt):
-        raise exc
-    return "terminate" if isinstance(cause, Terminated) else "interrupt"
 
 
 def _warmed(frames, filt, particles):
@@ -443,89 +325,3 @@ def _record_decode(run, index, near, model, outs, writer, label, notify=None, pr
         progress(row["ess"])
 
 
-def summary_lines(run, particles, *, model_name, model, truth, frame_width, objects=None):
-    """The summary ``vistrack run`` prints: speed and ESS, then the comparison with ground
-    truth when there is one (landmark error; plate lost/vertex error/false reports; success
-    AUC, precision at 20 px and centre error for box-level truth; for several targets, MOTA and
-    IDF1 against ``objects``, the columns of the clip's ``objects.csv``)."""
-    rows, n = run.rows, len(run.rows)
-    ms = np.array([r["ms"] for r in rows if r["ess"] > 0] or [np.nan])  # not the frames searched (lead)
-    lines = [f"{n} frames, {n / max(run.wall, 1e-9):.0f} frames/s end to end ({1e3 / ms.mean():.0f} frames/s in "
-             f"the filter), mean ESS {run.ess_sum / n:.1f} of {particles}"
-             + (f", {run.degenerate} degenerate frames" if run.degenerate else "")]
-    split = run.stage_split()
-    if split:
-        lines.append("ms per frame: " + ", ".join(f"{s} {split[s]:.2f}" for s in (*STAGES, "other"))
-                     + f" (total {split['total']:.2f}, drawing and writing included in other)")
-    if run.losses:
-        lines.append(_lost_line(run))
-    if run.target_rows:  # several targets: scored against the clip's objects.csv
-        return lines + ([] if objects is None else [_mot_line(run, objects, model)])
-    if truth is None:
-        return lines
-    if model_name == "landmarks" and "lx0" in truth:
-        err = landmark_error(rows, truth, model.k)
-        lines.append(f"vs ground truth: mean landmark error {err.mean():.2f} px (per frame: median "
-                     f"{np.median(err):.2f}, max {err.max():.2f})")
-    elif model_name == "plate" and "x0" in truth:
-        rec = {"reported": [r["visible"] for r in rows],
-               "vertices": [[r[f"{c}{i}"] for i in range(4) for c in "xy"] for r in rows]}
-        has, err, lost, false = plate_frame_measures(rec, truth, model.layout.aspect)
-        ok = has & ~lost
-        mean = f"{np.nanmean(err[ok]):.2f} px" if ok.any() else "n/a (never tracked)"
-        lines.append(f"vs ground truth: plate lost in {int(lost.sum())} of {int(has.sum())} plate frames; mean vertex "
-                     f"error {mean} when tracked; {int(false.sum())} frames reported a plate where there was none")
-    elif "w" in truth and "cx" in truth:
-        lines.append(_box_summary(rows, truth, frame_width))
-    return lines
-
-
-def _mot_line(run, objects, model):
-    """One line: the CLEAR-MOT and identity scores of the run's target rows against ``objects``."""
-    from .mot import clear_mot, objects_by_frame
-
-    cols = {k: np.array([r[k] for r in run.target_rows], float) for k in ("frame", "visible", "id", "scale")
-            + tuple(f"{c}{i}" for i in range(4) for c in "xy")}
-    frames = int(max(r["frame"] for r in run.rows)) + 1
-    truth = objects_by_frame(objects)[:frames]
-    s = clear_mot(truth, objects_by_frame(cols, len(truth)), model.layout.aspect)
-    fmt = lambda v: "n/a" if v is None else f"{v:.3f}"  # noqa: E731
-    return (f"vs ground truth (objects.csv, {s['objects']} plates over the frames): MOTA {fmt(s['mota'])}, IDF1 "
-            f"{fmt(s['idf1'])}, {s['switches']} identity switches, {s['false_positives']} false positives, "
-            f"{s['misses']} misses; {s['empty_frame_reports']} plates reported in the {s['frames_without']} frames "
-            "without one")
-
-
-def _lost_line(run):
-    """One line: in how many frames the object was not reported, why, and where it was first lost."""
-    reasons = {}
-    for r in run.rows:
-        if r["lost_reason"]:
-            reasons[r["lost_reason"]] = reasons.get(r["lost_reason"], 0) + 1
-    first, reason, detail = run.losses[0]
-    times = f"; lost {len(run.losses)} times" if len(run.losses) > 1 else ""
-    return (f"object not reported (visible=0) in {sum(reasons.values())} of {len(run.rows)} frames ("
-            + ", ".join(f"{k} {v}" for k, v in reasons.items()) + f"); first lost at frame {first} ({reason}: "
-            f"{detail}){times}")
-
-
-def _box_summary(rows, t, frame_width):
-    k = np.array([r["frame"] for r in rows], int)
-    m = int(np.sum(k < len(t["cx"])))
-    k = k[:m]
-    est = np.array([[rows[i]["cx"], rows[i]["cy"], rows[i]["w"], rows[i]["h"]] for i in range(m)], float)
-    err = center_error(est[:, 0], est[:, 1], t["cx"][k], t["cy"][k])
-    ious = iou(np.column_stack([est[:, :2] - est[:, 2:] / 2, est[:, 2:]]),
-               np.column_stack([t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k]]))
-    vis = (t["w"][k] > 0) & (t["h"][k] > 0)
-    searched = np.isnan(err)  # frames searched before the object was found: no estimate, lost
-    lost = (lost_frames("size", np.nan_to_num(err), frame_width, truth={"w": t["w"][k], "h": t["h"][k]})
-            | searched) & vis
-    tracked = f"{err[vis & ~lost].mean():.2f} px" if (vis & ~lost).any() else "none"
-    n = int(vis.sum())
-    mean = f"{err[vis & ~searched].mean():.2f} px" if (vis & ~searched).any() else "n/a"
-    return (f"vs ground truth ({n} frames with the object): success AUC {success_auc(ious[vis]):.3f}, precision@20px "
-            f"{precision(err[vis]):.3f}, mean centre error {mean} over all of them"
-            + (f" but the {int((vis & searched).sum())} searched before it was found" if (vis & searched).any() else "")
-            + f" ({tracked} over tracked frames); lost (centre error > half the object's larger side) in "
-            f"{int(lost.sum())} frames")

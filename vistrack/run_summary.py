@@ -1,0 +1,99 @@
+"""What ``vistrack run`` prints after a run: losses, time per stage, and the scores against
+ground truth (success AUC, precision, centre error; MOTA and IDF1 for several targets)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .metrics import center_error, iou, landmark_error, lost_frames, plate_frame_measures, precision, success_auc
+from .profiling import STAGES
+
+__all__ = ["summary_lines"]
+
+
+def summary_lines(run, particles, *, model_name, model, truth, frame_width, objects=None):
+    """The summary ``vistrack run`` prints: speed and ESS, then the comparison with ground
+    truth when there is one (landmark error; plate lost/vertex error/false reports; success
+    AUC, precision at 20 px and centre error for box-level truth; for several targets, MOTA and
+    IDF1 against ``objects``, the columns of the clip's ``objects.csv``)."""
+    rows, n = run.rows, len(run.rows)
+    ms = np.array([r["ms"] for r in rows if r["ess"] > 0] or [np.nan])  # not the frames searched (lead)
+    lines = [f"{n} frames, {n / max(run.wall, 1e-9):.0f} frames/s end to end ({1e3 / ms.mean():.0f} frames/s in "
+             f"the filter), mean ESS {run.ess_sum / n:.1f} of {particles}"
+             + (f", {run.degenerate} degenerate frames" if run.degenerate else "")]
+    split = run.stage_split()
+    if split:
+        lines.append("ms per frame: " + ", ".join(f"{s} {split[s]:.2f}" for s in (*STAGES, "other"))
+                     + f" (total {split['total']:.2f}, drawing and writing included in other)")
+    if run.losses:
+        lines.append(_lost_line(run))
+    if run.target_rows:  # several targets: scored against the clip's objects.csv
+        return lines + ([] if objects is None else [_mot_line(run, objects, model)])
+    if truth is None:
+        return lines
+    if model_name == "landmarks" and "lx0" in truth:
+        err = landmark_error(rows, truth, model.k)
+        lines.append(f"vs ground truth: mean landmark error {err.mean():.2f} px (per frame: median "
+                     f"{np.median(err):.2f}, max {err.max():.2f})")
+    elif model_name == "plate" and "x0" in truth:
+        rec = {"reported": [r["visible"] for r in rows],
+               "vertices": [[r[f"{c}{i}"] for i in range(4) for c in "xy"] for r in rows]}
+        has, err, lost, false = plate_frame_measures(rec, truth, model.layout.aspect)
+        ok = has & ~lost
+        mean = f"{np.nanmean(err[ok]):.2f} px" if ok.any() else "n/a (never tracked)"
+        lines.append(f"vs ground truth: plate lost in {int(lost.sum())} of {int(has.sum())} plate frames; mean vertex "
+                     f"error {mean} when tracked; {int(false.sum())} frames reported a plate where there was none")
+    elif "w" in truth and "cx" in truth:
+        lines.append(_box_summary(rows, truth, frame_width))
+    return lines
+
+
+def _mot_line(run, objects, model):
+    """One line: the CLEAR-MOT and identity scores of the run's target rows against ``objects``."""
+    from .mot import clear_mot, objects_by_frame
+
+    cols = {k: np.array([r[k] for r in run.target_rows], float) for k in ("frame", "visible", "id", "scale")
+            + tuple(f"{c}{i}" for i in range(4) for c in "xy")}
+    frames = int(max(r["frame"] for r in run.rows)) + 1
+    truth = objects_by_frame(objects)[:frames]
+    s = clear_mot(truth, objects_by_frame(cols, len(truth)), model.layout.aspect)
+    fmt = lambda v: "n/a" if v is None else f"{v:.3f}"  # noqa: E731
+    return (f"vs ground truth (objects.csv, {s['objects']} plates over the frames): MOTA {fmt(s['mota'])}, IDF1 "
+            f"{fmt(s['idf1'])}, {s['switches']} identity switches, {s['false_positives']} false positives, "
+            f"{s['misses']} misses; {s['empty_frame_reports']} plates reported in the {s['frames_without']} frames "
+            "without one")
+
+
+def _lost_line(run):
+    """One line: in how many frames the object was not reported, why, and where it was first lost."""
+    reasons = {}
+    for r in run.rows:
+        if r["lost_reason"]:
+            reasons[r["lost_reason"]] = reasons.get(r["lost_reason"], 0) + 1
+    first, reason, detail = run.losses[0]
+    times = f"; lost {len(run.losses)} times" if len(run.losses) > 1 else ""
+    return (f"object not reported (visible=0) in {sum(reasons.values())} of {len(run.rows)} frames ("
+            + ", ".join(f"{k} {v}" for k, v in reasons.items()) + f"); first lost at frame {first} ({reason}: "
+            f"{detail}){times}")
+
+
+def _box_summary(rows, t, frame_width):
+    k = np.array([r["frame"] for r in rows], int)
+    m = int(np.sum(k < len(t["cx"])))
+    k = k[:m]
+    est = np.array([[rows[i]["cx"], rows[i]["cy"], rows[i]["w"], rows[i]["h"]] for i in range(m)], float)
+    err = center_error(est[:, 0], est[:, 1], t["cx"][k], t["cy"][k])
+    ious = iou(np.column_stack([est[:, :2] - est[:, 2:] / 2, est[:, 2:]]),
+               np.column_stack([t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k]]))
+    vis = (t["w"][k] > 0) & (t["h"][k] > 0)
+    searched = np.isnan(err)  # frames searched before the object was found: no estimate, lost
+    lost = (lost_frames("size", np.nan_to_num(err), frame_width, truth={"w": t["w"][k], "h": t["h"][k]})
+            | searched) & vis
+    tracked = f"{err[vis & ~lost].mean():.2f} px" if (vis & ~lost).any() else "none"
+    n = int(vis.sum())
+    mean = f"{err[vis & ~searched].mean():.2f} px" if (vis & ~searched).any() else "n/a"
+    return (f"vs ground truth ({n} frames with the object): success AUC {success_auc(ious[vis]):.3f}, precision@20px "
+            f"{precision(err[vis]):.3f}, mean centre error {mean} over all of them"
+            + (f" but the {int((vis & searched).sum())} searched before it was found" if (vis & searched).any() else "")
+            + f" ({tracked} over tracked frames); lost (centre error > half the object's larger side) in "
+            f"{int(lost.sum())} frames")

@@ -1,0 +1,87 @@
+"""Signals during a run: Ctrl-C and SIGTERM stop it after the frame in hand, every output flushed
+(:func:`deferred_signals`); the exception a SIGTERM raises (:class:`Terminated`)."""
+
+from __future__ import annotations
+
+import signal
+from contextlib import contextmanager
+
+__all__ = ["Terminated", "stop_on_signals", "deferred_signals", "stop_reason", "HARD_STOP"]
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the run is, so that it ends as cleanly as on Ctrl-C."""
+
+
+@contextmanager
+def stop_on_signals():
+    """Within the block SIGTERM raises :class:`Terminated` (SIGINT already raises
+    ``KeyboardInterrupt``); the previous handler is restored after."""
+    def handler(signum, frame):
+        raise Terminated()
+
+    try:
+        old = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+class _Stop:
+    """What :func:`deferred_signals` caught: ``reason`` (``None``, ``"interrupt"`` or
+    ``"terminate"``) and how many signals."""
+
+    def __init__(self):
+        self.reason, self.count = None, 0
+
+
+#: signals after which a run stops at once (raises) instead of after the frame in hand
+HARD_STOP = 3
+
+
+@contextmanager
+def deferred_signals():
+    """Within the block SIGINT and SIGTERM set a flag (the yielded object's ``reason``:
+    ``"terminate"`` once a SIGTERM came, else ``"interrupt"``) instead of raising, so the frame in
+    hand is finished and every writer flushed before the run stops; the :data:`HARD_STOP`-th
+    signal raises (``KeyboardInterrupt``, or :class:`Terminated` for SIGTERM) for a run that does
+    not come back. A SIGINT the process ignores (a background job) stays ignored. Outside the
+    main thread signals are left alone."""
+    import threading
+
+    stop = _Stop()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def handler(signum, frame):
+        stop.count += 1
+        if stop.reason is None or signum == signal.SIGTERM:  # a SIGTERM (shutdown) outranks Ctrl-C
+            stop.reason = "terminate" if signum == signal.SIGTERM else "interrupt"
+        if stop.count >= HARD_STOP:
+            raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+    old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    for s, h in old.items():
+        if h is not signal.SIG_IGN:
+            signal.signal(s, handler)
+    try:
+        yield stop
+    finally:
+        for s, h in old.items():
+            if h is not signal.SIG_IGN and h is not None:
+                signal.signal(s, h)
+
+
+def stop_reason(exc):
+    """``"terminate"`` (SIGTERM) or ``"interrupt"`` (Ctrl-C) for the exception that stopped a run;
+    re-raises any other. A signal that arrives while a compiled kernel is being called surfaces as
+    a ``SystemError`` caused by the handler's exception (numba's dispatcher returns with it set)."""
+    cause = exc.__cause__ if isinstance(exc, SystemError) else exc
+    if not isinstance(cause, KeyboardInterrupt):
+        raise exc
+    return "terminate" if isinstance(cause, Terminated) else "interrupt"
