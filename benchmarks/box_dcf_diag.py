@@ -1,10 +1,13 @@
 """The box model with the correlation filter (issue 34) on every real clip with ground truth, seeds 1-3.
 
     python benchmarks/box_dcf_diag.py [--seeds 1,2,3] [--clips ...] [--opts '{"lambda_dcf": 20}'] [--opencv MIL,KCF,CSRT]
+                                      [--fresh]
 
 Prints per clip the mean success AUC over seeds, the worst seed, precision at 20 px and tracking-only
 frames/s (``bench_real``'s timing: init + update, frames decoded beforehand), and the mean over clips.
-OpenCV's trackers do not depend on the seed: their rows are cached in ``/tmp/vistrack_opencv_rows.json``.
+OpenCV's trackers do not depend on the seed: their rows are cached in ``/tmp/vistrack_opencv_rows.json``
+(``--fresh``: run again, so that their frames/s come from the same run as vistrack's). ``--opts`` is a JSON
+dict of box-model options (``vistrack.Tracker(model="box", **opts)``).
 """
 
 import argparse
@@ -45,6 +48,8 @@ def main():
     ap.add_argument("--opts", default="{}")
     ap.add_argument("--opencv", default="")
     ap.add_argument("--particles", type=int, default=100)
+    ap.add_argument("--fresh", action="store_true", help="run the OpenCV trackers again (their frames/s from this "
+                                                           "run, for speed ratios) and refresh the cache")
     args = ap.parse_args()
     cv2.setNumThreads(1)
     seeds = [int(s) for s in args.seeds.split(",")]
@@ -65,14 +70,15 @@ def main():
               f"{fps:>9.0f}  seeds " + " ".join(f"{v:.3f}" for v in sc[:, 0]), flush=True)
         for name in [c for c in args.opencv.split(",") if c]:
             key = f"{clip}/{name}"
-            if key not in cache and opencv_tracker(name) is not None:
+            if (args.fresh or key not in cache) and opencv_tracker(name) is not None:
                 b, t = run_opencv(frames, gt[0], name)
                 cache[key] = [*map(float, scores(b, gt)), len(frames) / t]
                 CACHE.write_text(json.dumps(cache))
             if key in cache:
                 a, p, _, f = cache[key]
                 rows.setdefault(name, []).append(a)
-                print(f"{clip:<24} {name:<10} {a:>6.3f} {a:>6.3f} {p:>6.3f} {f:>9.0f}")
+                print(f"{clip:<24} {name:<10} {a:>6.3f} {a:>6.3f} {p:>6.3f} {f:>9.0f}"
+                      + (f"  vistrack/{name} speed {fps / f:.1f}x" if args.fresh else ""))
     print(f"mean AUC vistrack {np.mean(means):.3f} " + " ".join(f"{k} {np.mean(v):.3f}" for k, v in rows.items()))
 
 

@@ -86,6 +86,21 @@ def test_filter_response_peaks_where_the_object_moved():
     assert (x, y) == pytest.approx((77.0, 52.0), abs=3.0) and val > 0
 
 
+def test_orientation_kernel_equals_the_numpy_path():
+    from vistrack import kernels
+
+    rng = np.random.default_rng(5)
+    patch = cv2.GaussianBlur(rng.random((37, 52)).astype(np.float32) * 255, (0, 0), 1.2)
+    patch[5:9, :] = 0.0  # flat rows: zero gradient
+    a = dcf_features(patch, n_orient=6).copy()
+    with kernels.numpy_paths():
+        b = dcf_features(patch, n_orient=6).copy()
+    np.testing.assert_array_equal(a, b)
+    with kernels.numpy_paths():
+        c = dcf_features(patch, n_orient=9).copy()
+    np.testing.assert_array_equal(dcf_features(patch, n_orient=9), c)
+
+
 def test_features_known_answers():
     flat = np.full((16, 20), 90.0, np.float32)
     f = dcf_features(flat)

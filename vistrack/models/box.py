@@ -11,7 +11,11 @@ Dynamics (AR(2), as the contour and plate models)
 Likelihood
     :class:`~vistrack.models.appearance.Appearance`: colour histogram against the ring
     around the box (Bhattacharyya) + normalised cross-correlation with a grey template,
-    learned from the first frame and adapted on confident frames.
+    learned from the first frame and adapted on confident frames; with the correlation filter
+    (``dcf``, the default since issue 34), plus ``λ_dcf`` times its response at the state
+    (:class:`~vistrack.models.correlation.CorrelationFilter`: gradient-orientation and
+    brightness-normalised grey features, a 3-scale search about the dynamics' prediction,
+    adapted on frames where the object is reported, anchored to the first frame's filter).
 Local moves (thesis 001, §4.3–4.5)
     ``ls-n-ips``: ``LS_λ`` = mean shift on the back-projection of the target histogram
     (:meth:`Appearance.mean_shift`), the move rejected when it goes further than ``λ``
@@ -21,9 +25,13 @@ Local moves (thesis 001, §4.3–4.5)
     drawn by inversion of the cumulative ``q g``, the LIS step compiled in two calls:
     :meth:`lis_step`).
     ``lls``: the exact ``r`` on a grid of the window (:class:`~vistrack.proposals.Window`).
+    With the correlation filter, ``lis``'s proposal is its response mixed with ``K``
+    (:class:`~vistrack.proposals.correlation.CorrelationProposal`, exact density, proper weights).
 Lost
     ``visible=0`` where ``log r`` at the estimate falls far below its running level, the
     scale below a floor or the centre leaves the frame (:mod:`~vistrack.models.collapse`).
+    With the filter, while lost, each frame is searched whole (:meth:`Box._redetect`) and the
+    particles re-seeded where the object is found (the track CSV's ``redetected``).
 """
 
 from __future__ import annotations
@@ -135,6 +143,7 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         self.blob_cell = 0.25 * side  # the colour-blob proposal's cell (frame px)
         self.learn_blob(frame, _inner_ellipse(frame.shape[:2], (x, y, w, h)))
         self.cf = CorrelationFilter(frame, (x, y, w, h), **(dcf_options or {})) if dcf else None
+        self._reach = 1.0 if dcf else 1.0 + self.window  # the observed region's reach, in 4 innovation stds
         if dcf:  # log r's scale with the filter's term: lost 35 below the running level (issue 34)
             self.collapse_options = {"drop": float(collapse_drop)}
         self.lambda_dcf, self.dcf_share, self.dcf_scale_std = float(lambda_dcf), float(dcf_share), float(dcf_scale_std)
@@ -242,7 +251,8 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
     def observe(self, maps, particles):
         """The frame's :class:`~vistrack.models.appearance.AppearanceFrame` over the region the
         particles can reach: their predicted boxes grown by 4 innovation stds, the LIS window's
-        reach and the velocity (the first box and the prior's spread on the first frame); with the
+        reach (not with the correlation filter: its proposal has no window) and the velocity (the
+        first box and the prior's spread on the first frame); with the
         correlation filter, that region and the filter's search region, and the filter's response
         there as ``obs.dcf``; while the track is lost, about a whole-frame search's find (:meth:`_redetect`)."""
         self._reentry = False
@@ -255,12 +265,12 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         elif kernels.use():
             from ..kernels.box_frame import predicted_roi
 
-            roi = predicted_roi(np.ascontiguousarray(particles.states, float), self.damping, self.size0,
-                                4 * self.sigma[0], 1 + self.window, float(self.app.ring), np.empty(4, np.int64))
+            roi = predicted_roi(np.ascontiguousarray(particles.states, float), self._d, self.size0,
+                                4 * self.sigma[0], self._reach, float(self.app.ring), np.empty(4, np.int64))
             roi = tuple(int(v) for v in roi)
         else:
             states = self.predict_mean(particles.states)
-            reach = 4 * self.sigma[0] * np.exp(states[:, 2].max()) * (1 + self.window)
+            reach = 4 * self.sigma[0] * np.exp(states[:, 2].max()) * self._reach
             roi = self.app.roi(self.boxes(states), reach)
         if particles is None or self.cf is None:
             obs = self.app.frame(maps.frame, roi)
@@ -328,8 +338,8 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         done = self.app.adapt(obs, self.boxes(estimate)[0])
         resp = getattr(obs, "dcf", None)
         if resp is not None and not self._lost:
-            e = np.asarray(estimate, float).reshape(1, -1)
-            self.cf.adapt(obs.frame_image, e[0, :2], float(e[0, 2]), float(resp.read(e)[0]))
+            e = np.asarray(estimate, float).ravel()
+            self.cf.adapt(obs.frame_image, e[:2], float(e[2]))
         return done
 
     def check_lost(self, obs, state):

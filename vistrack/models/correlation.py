@@ -28,6 +28,9 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+import scipy.fft as sfft
+
+from .. import kernels
 
 __all__ = ["CorrelationFilter", "DCFResponse", "dcf_features"]
 
@@ -43,16 +46,22 @@ def dcf_features(patch, n_orient=6, cell=4, out=None):
     gx = cv2.Sobel(patch, cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT)
     gy = cv2.Sobel(patch, cv2.CV_32F, 0, 1, ksize=1, borderType=cv2.BORDER_REFLECT)
     mag, ang = cv2.cartToPolar(gx, gy)
-    pos = (ang % np.float32(np.pi)) * np.float32(n_orient / np.pi)  # unsigned orientation in bins
-    lo = pos.astype(np.int32)
-    frac = pos - lo
-    lo %= n_orient
-    hi = (lo + 1) % n_orient
     energy = cv2.boxFilter(mag * mag, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
     norm = np.float32(1.0) / np.sqrt(energy + np.float32(1e-2))
+    if kernels.use():
+        from ..kernels.dcf import orientation_bins
+
+        orientation_bins(mag, ang, n_orient, out)
+    else:
+        pos = (ang % np.float32(np.pi)) * np.float32(n_orient / np.pi)  # unsigned orientation in bins
+        lo = pos.astype(np.int32)
+        frac = pos - lo.astype(np.float32)
+        lo %= n_orient
+        hi = (lo + 1) % n_orient
+        for k in range(n_orient):
+            out[k + 1] = np.where(lo == k, mag * (1 - frac), 0) + np.where(hi == k, mag * frac, 0)
     for k in range(n_orient):
-        ch = np.where(lo == k, mag * (1 - frac), 0) + np.where(hi == k, mag * frac, 0)
-        cv2.boxFilter(ch.astype(np.float32), -1, (cell, cell), dst=out[k + 1], borderType=cv2.BORDER_REFLECT)
+        cv2.boxFilter(out[k + 1], -1, (cell, cell), dst=out[k + 1], borderType=cv2.BORDER_REFLECT)
         out[k + 1] *= norm
     return out
 
@@ -153,7 +162,7 @@ class CorrelationFilter:
         Orientation channels.
     """
 
-    def __init__(self, frame, box, *, cell_size=24.0, padding=1.0, sigma=0.1, lam=1e-2, rate=0.02, anchor=0.2,
+    def __init__(self, frame, box, *, cell_size=24.0, padding=1.0, sigma=0.1, lam=1e-2, rate=0.005, anchor=0.2,
                  n_scales=3, scale_step=1.04, n_orient=6):
         x, y, w, h = (float(v) for v in box)
         self.size0 = np.array([w, h])
@@ -170,13 +179,11 @@ class CorrelationFilter:
         sg = sigma * cell_size
         yy, xx = np.mgrid[0:ph, 0:pw]
         label = np.exp(-0.5 * ((xx - pw // 2) ** 2 + (yy - ph // 2) ** 2) / sg**2)
-        self.G = np.fft.rfft2(label)
+        self.G = sfft.rfft2(label)
         self._feat = np.empty((self.n_orient + 1, ph, pw), np.float32)
         a, b = self._learn(np.asarray(frame), np.array([x + w / 2, y + h / 2]), 0.0)
         self.A, self.B = a, b
         self.A0, self.B0 = a.copy(), b.copy()
-        #: the running level of the response's peak on frames reported (for the re-detection bar)
-        self.level = 1.0
 
     # -- patches ---------------------------------------------------------------------------------
     def patch(self, frame, centre, log_scale):
@@ -193,7 +200,7 @@ class CorrelationFilter:
     def spectrum(self, frame, centre, log_scale):
         """The windowed features' DFT ``(C, ph, pw // 2 + 1)`` of the patch about ``centre``."""
         feat = dcf_features(self.patch(frame, centre, log_scale), self.n_orient, out=self._feat)
-        return np.fft.rfft2(feat * self.hann)
+        return sfft.rfft2(feat * self.hann)
 
     def _learn(self, frame, centre, log_scale):
         F = self.spectrum(frame, centre, log_scale)
@@ -212,26 +219,25 @@ class CorrelationFilter:
         maps = np.empty((len(self.log_scales),) + self.shape, np.float32)
         for k, ds in enumerate(self.log_scales):
             Z = self.spectrum(frame, centre, log_scale + ds)
-            maps[k] = np.fft.irfft2(np.sum(np.conj(A) * Z, axis=0) / den, s=self.shape)
+            maps[k] = sfft.irfft2(np.sum(np.conj(A) * Z, axis=0) / den, s=self.shape)
         px = self.f * np.exp(-(log_scale + self.log_scales))
         return DCFResponse(maps, log_scale + self.log_scales, centre, self.anchor_px, px)
 
-    def adapt(self, frame, centre, log_scale, peak):
-        """Adapt ``A, B`` towards the patch at the estimate (a frame where the object is reported) and the
-        running level of the peak towards ``peak``."""
+    def adapt(self, frame, centre, log_scale):
+        """Adapt ``A, B`` towards the patch of ``frame`` about the estimate ``centre`` (frame px) at
+        ``log_scale`` (on a frame where the object is reported)."""
         a, b = self._learn(frame, centre, log_scale)
         r = self.rate
         self.A = (1 - r) * self.A + r * a
         self.B = (1 - r) * self.B + r * b
-        self.level = 0.9 * self.level + 0.1 * float(peak)
 
     def search(self, frame, log_scale, stride=2):
         """Whole-frame search at ``log_scale``: the applied filter's spatial taps correlated with the frame's
         features at the filter's resolution shrunk by ``stride``. Returns ``(x, y, value)``: the best
         centre (frame px) and its response."""
         A, B = self.filter()
-        taps = np.fft.irfft2(A / (B + self.lam)[None], s=self.shape)  # h (C, ph, pw): y[n] = sum_m h[m] z[m + n]
-        taps = np.fft.fftshift(taps, axes=(1, 2))  # the object's centre at the middle (label at anchor)
+        taps = sfft.irfft2(A / (B + self.lam)[None], s=self.shape)  # h (C, ph, pw): y[n] = sum_m h[m] z[m + n]
+        taps = sfft.fftshift(taps, axes=(1, 2))  # the object's centre at the middle (label at anchor)
         s = self.f * np.exp(-log_scale) / stride
         h, w = frame.shape[:2]
         img = _grey(cv2.resize(frame, (max(8, int(round(w * s))), max(8, int(round(h * s)))),
