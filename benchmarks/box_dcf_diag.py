@@ -1,7 +1,7 @@
 """The box model with the correlation filter (issue 34) on every real clip with ground truth, seeds 1-3.
 
-    python benchmarks/box_dcf_diag.py [--seeds 1,2,3] [--clips ...] [--opts '{"lambda_dcf": 20}'] [--opencv MIL,KCF,CSRT]
-                                      [--fresh]
+    python benchmarks/box_dcf_diag.py [--seeds 1,2,3] [--clips ...] [--opts '{"lambda_dcf": 20}']
+                                      [--opencv MIL,KCF,CSRT] [--fresh]
 
 Prints per clip the mean success AUC over seeds, the worst seed, precision at 20 px and tracking-only
 frames/s (``bench_real``'s timing: init + update, frames decoded beforehand), and the mean over clips.
@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_real import DATA, load, opencv_tracker, run_opencv, scores  # noqa: E402
+from bench_real import load, opencv_tracker, run_opencv, scores  # noqa: E402
 
 import vistrack  # noqa: E402
 from vistrack.runtime import keep_freed_memory  # noqa: E402

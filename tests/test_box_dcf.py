@@ -5,12 +5,12 @@ import csv
 import cv2
 import numpy as np
 import pytest
+from cli_helpers import run
 from scipy import stats
 
 import vistrack
 from vistrack.models.correlation import CorrelationFilter, DCFResponse, dcf_features
 from vistrack.proposals.correlation import CorrelationProposal
-from cli_helpers import run
 
 
 class _Stub:
@@ -180,3 +180,51 @@ def test_track_csv_has_the_redetected_column(tmp_path, capsys):
     assert len(found) == 1 and BACK <= found[0] <= BACK + 5
     assert rows[found[0]]["visible"] == "1" and rows[found[0]]["lost_reason"] == ""
     assert rows[found[0] - 1]["visible"] == "0" and rows[found[0] - 1]["lost_reason"] != ""
+
+
+def test_correlation_proposal_weights_match_a_brute_force_posterior():
+    """Proper weighting: one LIS step with the correlation proposal from particles at rest; the mean
+    weight is the evidence ∫ r K and the weighted mean pose the posterior mean, both also by brute
+    force on a grid of centres and log-scales."""
+    from vistrack.features import FeatureMaps
+    from vistrack.filters import make_filter
+    from vistrack.models.box import Box
+    from vistrack.particles import ParticleSet, logsumexp
+
+    rng = np.random.default_rng(6)
+    bg = cv2.GaussianBlur(rng.integers(70, 180, (120, 160, 3)).astype(np.uint8), (0, 0), 3)
+    obj = np.zeros((20, 20, 3), np.uint8)
+    obj[:] = (30, 120, 230)
+    obj[::5] = 20
+
+    def scene(x, y):
+        f = bg.copy()
+        f[y:y + 20, x:x + 20] = obj
+        return f
+
+    model = Box(scene(60, 50), (60, 50, 20, 20), adapt_rate=0, sigma_xy=0.15, lambda_dcf=20.0,
+                dcf_tempering=(20.0, 0.05), lambda_colour=6.0, lambda_template=4.0)
+    pose = np.array([70.0, 60.0, 0.0])
+    n = 30000
+    prev = np.tile(np.concatenate([pose, pose]), (n, 1))
+    obs = model.observe(FeatureMaps(scene(62, 49)), ParticleSet(prev))
+    filt = make_filter("lis", model)
+    z, lw, _, _ = filt.propose(prev, obs, np.random.default_rng(0), filt.kernel)
+    assert np.all(np.isfinite(lw))
+    w = np.exp(lw - lw.max())
+    sd, sl = model.sigma[0], model.sigma[2]
+    cs = np.arange(-4 * sd, 4 * sd + 1e-9, 0.25)
+    ls = np.arange(-4 * sl, 4 * sl + 1e-9, sl / 4)
+    du, dv, dl = (a.ravel() for a in np.meshgrid(cs, cs, ls, indexing="ij"))
+    grid = np.tile(np.concatenate([pose, pose]), (du.size, 1))
+    grid[:, 0] += du
+    grid[:, 1] += dv
+    grid[:, 2] += dl
+    lp = model.loglik(obs, grid) + model.transition_logpdf(grid, prev[:1].repeat(len(grid), 0))
+    vol = 0.25 * 0.25 * (sl / 4)
+    assert logsumexp(lw) - np.log(n) == pytest.approx(logsumexp(lp) + np.log(vol), abs=0.1)
+    g = np.exp(lp - lp.max())
+    mean_is, mean_grid = (w @ z[:, :3]) / w.sum(), (g @ grid[:, :3]) / g.sum()
+    np.testing.assert_allclose(mean_is[:2], mean_grid[:2], atol=0.15)
+    assert mean_is[2] == pytest.approx(mean_grid[2], abs=0.003)
+    assert np.hypot(*(mean_grid[:2] - pose[:2])) > 1.0  # the posterior moved towards the object (2, -1)

@@ -45,10 +45,10 @@ from ..proposals import MapProposal, Window
 from ..proposals.correlation import CorrelationProposal
 from ..proposals.translation import TranslationMoves
 from .appearance import Appearance
-from .innovation import ARInnovation
-from .kernel import is_prior
 from .collapse import CollapseCheck
 from .correlation import CorrelationFilter
+from .innovation import ARInnovation
+from .kernel import is_prior
 from .protocol import VideoModelBase
 
 __all__ = ["Box"]
@@ -105,7 +105,8 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         at the estimate fell by 43-47 on the synthetic clip of ``tests/test_box_dcf.py`` when the object
         vanished.
     dcf_options : dict or None
-        Passed to :class:`~vistrack.models.correlation.CorrelationFilter`.
+        Passed to :class:`~vistrack.models.correlation.CorrelationFilter` (its ``padding``: ``4 sigma_xy``
+        unless given, so that the search region about the dynamics' prediction holds 4 innovation stds).
     **appearance
         Passed to :class:`~vistrack.models.appearance.Appearance`.
     """
@@ -118,8 +119,8 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
 
     def __init__(self, frame, box, *, sigma_xy=None, sigma_scale=None, damping=0.5, prior_std=(0.04, 0.02),
                  window=2.5, map_stride=1, dcf=True, lambda_dcf=60.0, dcf_share=0.5, dcf_tempering=(60.0, 0.05),
-                 dcf_scale_std=0.02, redetect=0.5, reentry=0.05, collapse_drop=35.0, dcf_options=None,
-                 **appearance):
+                 dcf_scale_std=0.02, redetect=0.5, reentry=0.05, collapse_drop=35.0,
+                 dcf_options=None, **appearance):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
             raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
@@ -142,7 +143,9 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         self.map_stride = int(map_stride)
         self.blob_cell = 0.25 * side  # the colour-blob proposal's cell (frame px)
         self.learn_blob(frame, _inner_ellipse(frame.shape[:2], (x, y, w, h)))
-        self.cf = CorrelationFilter(frame, (x, y, w, h), **(dcf_options or {})) if dcf else None
+        # the search region: the box grown by 4 innovation stds of the centre on each side, about the prediction
+        dcf_options = {"padding": 4.0 * sigma_xy, **(dcf_options or {})}
+        self.cf = CorrelationFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
         self._reach = 1.0 if dcf else 1.0 + self.window  # the observed region's reach, in 4 innovation stds
         if dcf:  # log r's scale with the filter's term: lost 35 below the running level (issue 34)
             self.collapse_options = {"drop": float(collapse_drop)}

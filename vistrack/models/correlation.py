@@ -162,7 +162,7 @@ class CorrelationFilter:
         Orientation channels.
     """
 
-    def __init__(self, frame, box, *, cell_size=24.0, padding=1.0, sigma=0.1, lam=1e-2, rate=0.005, anchor=0.2,
+    def __init__(self, frame, box, *, cell_size=24.0, padding=1.0, sigma=0.1, lam=1e-2, rate=0.0025, anchor=0.2,
                  n_scales=3, scale_step=1.04, n_orient=6):
         x, y, w, h = (float(v) for v in box)
         self.size0 = np.array([w, h])

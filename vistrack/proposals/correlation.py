@@ -66,7 +66,7 @@ class CorrelationProposal:
         p = np.exp(resp.cell_log_p(t, s))
         c = np.cumsum(p)
         k = np.minimum(np.searchsorted(c, u[:, 0] * c[-1], side="right"), len(p) - 1)
-        h, w = resp.maps.shape[1:]
+        w = resp.maps.shape[2]
         (ox, oy), a = resp.cell_origin()
         x = ox + a * (k % w + u[:, 1] - 0.5)
         y = oy + a * (k // w + u[:, 2] - 0.5)
