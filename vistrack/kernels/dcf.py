@@ -16,7 +16,7 @@ __all__ = ["orientation_bins"]
 @njit(cache=True, nogil=True)
 def orientation_bins(mag, ang, n_orient, out):
     """``out (n_orient + 1, H, W) float32``, channels ``1..n_orient``: the magnitude ``mag (H, W)`` split
-    between the two bins about ``(ang mod π) n_orient / π`` (``ang (H, W)`` radians, float32) in
+    between the two bins about ``(ang mod π) n_orient / π`` (``ang (H, W)`` radians in ``[0, 2π)``, float32) in
     proportion to the distance, as ``dcf_features``' numpy path; channel 0 untouched."""
     h, w = mag.shape
     pi = np.float32(np.pi)
@@ -28,7 +28,9 @@ def orientation_bins(mag, ang, n_orient, out):
                 out[k, i, j] = 0.0
     for i in range(h):
         for j in range(w):
-            a = ang[i, j] % pi
+            a = ang[i, j]  # in [0, 2 pi) from cv2.cartToPolar: a mod pi is exact (Sterbenz)
+            if a >= pi:
+                a -= pi
             pos = a * scale
             lo = np.int32(pos)
             frac = pos - np.float32(lo)

@@ -83,6 +83,7 @@ class DCFResponse:
         self.peak = float(maps[k].max())
         i, j = np.unravel_index(int(np.argmax(maps[k])), maps[k].shape)
         self.peak_xy = self.centre + (np.array([j, i], float) - self.anchor) / self.px[k]
+        self._log_p = {}
 
     def read(self, states):
         """Response ``(N,)`` at the centres ``states[:, :2]`` (frame px), bilinear in position and linear
@@ -98,23 +99,23 @@ class DCFResponse:
             k0 = np.minimum(pos.astype(np.intp), len(ls) - 2)
             t = pos - k0
         out = np.zeros(len(s))
-        for k in range(len(ls)):
-            wk = np.where(k0 == k, 1 - t, 0.0) + np.where(k0 + 1 == k, t, 0.0)
-            sel = wk > 0
-            if sel.any():
-                u = (s[sel, 0] - self.centre[0]) * self.px[k] + self.anchor[0]
-                v = (s[sel, 1] - self.centre[1]) * self.px[k] + self.anchor[1]
-                out[sel] += wk[sel] * _bilinear(self.maps[k], u, v)
+        for k, wk in ((k0, 1 - t), (k0 + 1, t)):  # the two scales about each state, all states at once
+            k = np.minimum(k, len(ls) - 1)
+            u = (s[:, 0] - self.centre[0]) * self.px[k] + self.anchor[0]
+            v = (s[:, 1] - self.centre[1]) * self.px[k] + self.anchor[1]
+            out += wk * _bilinear(self.maps, k, u, v)
         return out
 
     # -- the proposal's density over the best scale's map --------------------------------------------
     def cell_log_p(self, tempering, floor):
         """``log`` probabilities ``(H W,)`` of the best map's cells: ``(1 - s) e / Σ e + s / (H W)`` with
         ``e = exp(t (y - max y))`` (``t, s = tempering, floor``)."""
-        m = self.maps[self.best].astype(float).ravel()
-        e = np.exp(tempering * (m - m.max()))
-        p = (1 - floor) * e / e.sum() + floor / e.size
-        return np.log(p)
+        key = (float(tempering), float(floor))
+        if key not in self._log_p:  # kept: the proposal's draws and its density read it on the same frame
+            m = self.maps[self.best].astype(float).ravel()
+            e = np.exp(tempering * (m - m.max()))
+            self._log_p[key] = np.log((1 - floor) * e / e.sum() + floor / e.size)
+        return self._log_p[key]
 
     def cell_origin(self):
         """Frame position ``(x, y)`` of the best map's cell ``(0, 0)``'s centre and the cell's side (frame px)."""
@@ -122,16 +123,17 @@ class DCFResponse:
         return self.centre - self.anchor * side, side
 
 
-def _bilinear(img, u, v):
-    """Bilinear samples of ``img (H, W)`` at ``(u, v)`` (column, row; pixel centres at integers); 0 outside."""
-    h, w = img.shape
+def _bilinear(maps, k, u, v):
+    """Bilinear samples of ``maps[k] (N of (H, W))`` at ``(u, v)`` (column, row; pixel centres at
+    integers), one map per point; 0 outside."""
+    h, w = maps.shape[1:]
     u0, v0 = np.floor(u).astype(np.intp), np.floor(v).astype(np.intp)
     a, b = u - u0, v - v0
     out = np.zeros(len(u))
     for du, dv, wt in ((0, 0, (1 - a) * (1 - b)), (1, 0, a * (1 - b)), (0, 1, (1 - a) * b), (1, 1, a * b)):
         uu, vv = u0 + du, v0 + dv
         ok = (uu >= 0) & (uu < w) & (vv >= 0) & (vv < h)
-        out[ok] += wt[ok] * img[vv[ok], uu[ok]]
+        out += np.where(ok, wt * maps[k, np.clip(vv, 0, h - 1), np.clip(uu, 0, w - 1)], 0.0)
     return out
 
 
@@ -160,10 +162,14 @@ class CorrelationFilter:
         The scale search.
     n_orient : int
         Orientation channels.
+    reuse : bool
+        Adapt on the last search's patch at the scale nearest the estimate's, the label moved to the
+        estimate (a phase ramp on its DFT), rather than on a new patch about the estimate (one feature
+        extraction and DFT fewer per frame).
     """
 
     def __init__(self, frame, box, *, cell_size=24.0, padding=1.0, sigma=0.1, lam=1e-2, rate=0.0025, anchor=0.2,
-                 n_scales=3, scale_step=1.04, n_orient=6):
+                 n_scales=3, scale_step=1.04, n_orient=6, reuse=False):
         x, y, w, h = (float(v) for v in box)
         self.size0 = np.array([w, h])
         self.f = cell_size / np.sqrt(w * h)  # feature px per frame px at scale 1
@@ -180,6 +186,10 @@ class CorrelationFilter:
         yy, xx = np.mgrid[0:ph, 0:pw]
         label = np.exp(-0.5 * ((xx - pw // 2) ** 2 + (yy - ph // 2) ** 2) / sg**2)
         self.G = sfft.rfft2(label)
+        self._fy, self._fx = sfft.fftfreq(ph)[:, None], sfft.rfftfreq(pw)[None, :]
+        self.reuse = bool(reuse)
+        self._last = None  # the last search's spectra, centre, log-scales and scale factors
+        self._applied = None  # the filter applied (:meth:`filter`)
         self._feat = np.empty((self.n_orient + 1, ph, pw), np.float32)
         a, b = self._learn(np.asarray(frame), np.array([x + w / 2, y + h / 2]), 0.0)
         self.A, self.B = a, b
@@ -200,7 +210,7 @@ class CorrelationFilter:
     def spectrum(self, frame, centre, log_scale):
         """The windowed features' DFT ``(C, ph, pw // 2 + 1)`` of the patch about ``centre``."""
         feat = dcf_features(self.patch(frame, centre, log_scale), self.n_orient, out=self._feat)
-        return sfft.rfft2(feat * self.hann)
+        return sfft.rfft2(np.multiply(feat, self.hann, out=feat))
 
     def _learn(self, frame, centre, log_scale):
         F = self.spectrum(frame, centre, log_scale)
@@ -208,28 +218,44 @@ class CorrelationFilter:
 
     # -- detection and adaptation ------------------------------------------------------------------
     def filter(self):
-        """``(A, B)`` applied: the adapted filter mixed with the first frame's by ``γ``."""
-        g = self.anchor
-        return (1 - g) * self.A + g * self.A0, (1 - g) * self.B + g * self.B0
+        """``(A, B)`` applied: the adapted filter mixed with the first frame's by ``γ`` (kept until the
+        next :meth:`adapt`)."""
+        if self._applied is None:
+            g = self.anchor
+            self._applied = (1 - g) * self.A + g * self.A0, (1 - g) * self.B + g * self.B0
+        return self._applied
 
     def detect(self, frame, centre, log_scale):
         """The :class:`DCFResponse` of a search region about ``centre`` at the scales about ``log_scale``."""
         A, B = self.filter()
-        den = B + self.lam
+        den, conj_a = B + self.lam, np.conj(A)
         maps = np.empty((len(self.log_scales),) + self.shape, np.float32)
+        spectra = []
         for k, ds in enumerate(self.log_scales):
             Z = self.spectrum(frame, centre, log_scale + ds)
-            maps[k] = sfft.irfft2(np.sum(np.conj(A) * Z, axis=0) / den, s=self.shape)
+            maps[k] = sfft.irfft2(np.sum(conj_a * Z, axis=0) / den, s=self.shape)
+            spectra.append(Z)
         px = self.f * np.exp(-(log_scale + self.log_scales))
+        self._last = (spectra, np.asarray(centre, float).copy(), log_scale + self.log_scales, px)
         return DCFResponse(maps, log_scale + self.log_scales, centre, self.anchor_px, px)
 
     def adapt(self, frame, centre, log_scale):
         """Adapt ``A, B`` towards the patch of ``frame`` about the estimate ``centre`` (frame px) at
         ``log_scale`` (on a frame where the object is reported)."""
-        a, b = self._learn(frame, centre, log_scale)
+        last, self._last = self._last, None
+        if self.reuse and last is not None:  # the last search's patch at the nearest scale, the label moved
+            spectra, c0, scales, px = last
+            k = int(np.argmin(np.abs(scales - log_scale)))
+            dx, dy = (np.asarray(centre, float) - c0) * px[k]
+            F = spectra[k]
+            g = self.G * np.exp(-2j * np.pi * (self._fx * dx + self._fy * dy))
+            a, b = np.conj(g) * F, np.sum((F * np.conj(F)).real, axis=0)
+        else:
+            a, b = self._learn(frame, centre, log_scale)
         r = self.rate
         self.A = (1 - r) * self.A + r * a
         self.B = (1 - r) * self.B + r * b
+        self._applied = None
 
     def search(self, frame, log_scale, stride=2):
         """Whole-frame search at ``log_scale``: the applied filter's spatial taps correlated with the frame's
