@@ -129,11 +129,12 @@ def _bilinear(maps, k, u, v):
     h, w = maps.shape[1:]
     u0, v0 = np.floor(u).astype(np.intp), np.floor(v).astype(np.intp)
     a, b = u - u0, v - v0
+    flat, base = maps.reshape(-1), k * (h * w)
     out = np.zeros(len(u))
     for du, dv, wt in ((0, 0, (1 - a) * (1 - b)), (1, 0, a * (1 - b)), (0, 1, (1 - a) * b), (1, 1, a * b)):
         uu, vv = u0 + du, v0 + dv
         ok = (uu >= 0) & (uu < w) & (vv >= 0) & (vv < h)
-        out += np.where(ok, wt * maps[k, np.clip(vv, 0, h - 1), np.clip(uu, 0, w - 1)], 0.0)
+        out += np.where(ok, wt * flat[np.where(ok, base + vv * w + uu, 0)], 0.0)
     return out
 
 
