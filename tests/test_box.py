@@ -131,7 +131,7 @@ def test_box_lis_weights_match_a_brute_force_posterior():
     # (the map proposal is coarser than r; the wider the window, the more cells where q is far
     # below r K), and 6000 of them pin the evidence only for a flat r on a narrow window. Proper
     # weighting holds for any window; with the default 2.5 the estimate needs far more samples.
-    model = Box(draw_object(bg, 150, 110), obj_box(150, 110), sigma_xy=0.1, sigma_scale=1e-9, adapt_rate=0,
+    model = Box(draw_object(bg, 150, 110), obj_box(150, 110), sigma_xy=0.1, sigma_scale=1e-9, adapt_rate=0, dcf=False,
                 lambda_colour=10, lambda_template=6, window=1.5)
     frame = draw_object(bg, 153, 108)
     pose = np.array([150.0, 110.0, 0.0])

@@ -43,7 +43,7 @@ def moving_box_frames(n=20, seed=0):
 def tracked():
     """A box tracker after 8 frames (kernels on), with the next frame's observation."""
     frames, box = moving_box_frames(10)
-    t = vistrack.Tracker(model="box", particles=60, seed=1)
+    t = vistrack.Tracker(model="box", particles=60, seed=1, dcf=False)  # the map proposal
     t.init(frames[0], box)
     for f in frames[1:8]:
         t.update(f)

@@ -82,9 +82,12 @@ class VideoRun:
 
 def track_row(model, res):
     """The track-CSV row of a :class:`~vistrack.tracking.FrameResult`: ``frame, visible``, the
-    model's :meth:`describe` columns, ``ess, ms, lost_reason``."""
+    model's :meth:`describe` columns, ``redetected`` (a model that re-detects a lost object, the box
+    model's: 1 on the frame it is re-found), ``ess, ms, lost_reason``."""
     row = {"frame": res.index, "visible": int(res.visible)}
     row.update(model.describe(res.estimate))
+    if getattr(model, "redetect", None) is not None:
+        row["redetected"] = int(res.redetected)
     row["ess"], row["ms"], row["lost_reason"] = res.ess, res.ms, res.lost_reason
     return row
 

@@ -39,6 +39,9 @@ class FrameResult:
     #: targets as ``(ids (M,), states (M, d1))``, the ids kept from frame to frame
     #: (:class:`~vistrack.mot.Identities`); ``None`` for a single-target model
     targets: tuple = None
+    #: the model re-found the object on this frame after a loss (a whole-frame search, the box model's
+    #: ``redetect``) and reports it here (the track CSV's ``redetected``)
+    redetected: bool = False
 
     @property
     def ess(self):
@@ -113,7 +116,8 @@ class FrameStepper:
             states = self.model.targets(obs, est)
             targets = (self.identities.assign(index, self.model.target_box(states)), states)
         ms = (time.perf_counter() - t0) * 1e3
-        return FrameResult(index, frame, self.particles, est, ms, maps, obs, reason, detail, targets)
+        redetected = bool(getattr(obs, "redetected", False)) and not reason
+        return FrameResult(index, frame, self.particles, est, ms, maps, obs, reason, detail, targets, redetected)
 
 
 def warm_up(filt, n, frame):

@@ -11,7 +11,11 @@ Dynamics (AR(2), as the contour and plate models)
 Likelihood
     :class:`~vistrack.models.appearance.Appearance`: colour histogram against the ring
     around the box (Bhattacharyya) + normalised cross-correlation with a grey template,
-    learned from the first frame and adapted on confident frames.
+    learned from the first frame and adapted on confident frames; with the correlation filter
+    (``dcf``, the default since issue 34), plus ``λ_dcf`` times its response at the state
+    (:class:`~vistrack.models.correlation.CorrelationFilter`: gradient-orientation and
+    brightness-normalised grey features, a 3-scale search about the dynamics' prediction,
+    adapted on frames where the object is reported, anchored to the first frame's filter).
 Local moves (thesis 001, §4.3–4.5)
     ``ls-n-ips``: ``LS_λ`` = mean shift on the back-projection of the target histogram
     (:meth:`Appearance.mean_shift`), the move rejected when it goes further than ``λ``
@@ -21,9 +25,13 @@ Local moves (thesis 001, §4.3–4.5)
     drawn by inversion of the cumulative ``q g``, the LIS step compiled in two calls:
     :meth:`lis_step`).
     ``lls``: the exact ``r`` on a grid of the window (:class:`~vistrack.proposals.Window`).
+    With the correlation filter, ``lis``'s proposal is its response mixed with ``K``
+    (:class:`~vistrack.proposals.correlation.CorrelationProposal`, exact density, proper weights).
 Lost
     ``visible=0`` where ``log r`` at the estimate falls far below its running level, the
     scale below a floor or the centre leaves the frame (:mod:`~vistrack.models.collapse`).
+    With the filter, while lost, each frame is searched whole (:meth:`Box._redetect`) and the
+    particles re-seeded where the object is found (the track CSV's ``redetected``).
 """
 
 from __future__ import annotations
@@ -34,11 +42,13 @@ from .. import kernels
 from ..features import remap_points
 from ..gaussian import diag_logpdf
 from ..proposals import MapProposal, Window
+from ..proposals.correlation import CorrelationProposal
 from ..proposals.translation import TranslationMoves
 from .appearance import Appearance
+from .collapse import CollapseCheck
+from .correlation import CorrelationFilter
 from .innovation import ARInnovation
 from .kernel import is_prior
-from .collapse import CollapseCheck
 from .protocol import VideoModelBase
 
 __all__ = ["Box"]
@@ -53,10 +63,13 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         The first frame.
     box : tuple of float
         ``(x, y, w, h)`` of the object in ``frame``.
-    sigma_xy : float
-        Std of the centre's innovation per frame, as a share of ``sqrt(w_0 h_0)``.
-    sigma_scale : float
-        Std of the log-scale's innovation per frame.
+    sigma_xy : float or None
+        Std of the centre's innovation per frame, as a share of ``sqrt(w_0 h_0)`` (``None``: 0.25 with
+        the correlation filter, whose likelihood lets fast objects such as a kicked ball be followed;
+        0.06 without).
+    sigma_scale : float or None
+        Std of the log-scale's innovation per frame (``None``: 0.02 with the filter, whose scale search
+        then moves the scale; 0.002 without).
     damping : float
         ``d``: share of the last frame's velocity carried over.
     prior_std : tuple of float
@@ -68,6 +81,32 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         ``cv2.matchTemplate`` about 4x cheaper (0.46 -> 0.12 ms on girl_otb) but lowered the success
         AUC on the real clips (girl 0.650 -> 0.632, 12 seeds; hand 0.44 -> 0.39, 24 and 36 seeds; car4
         0.819 -> 0.813): 1 by default (``docs/experiments.md``, speed, third pass).
+    dcf : bool
+        Learn a correlation filter (:class:`~vistrack.models.correlation.CorrelationFilter`) whose
+        response is LIS's proposal (:class:`~vistrack.proposals.correlation.CorrelationProposal`) and a
+        term ``λ_dcf y`` of ``log r``; ``False``: the colour/template map proposal alone (before issue 34).
+    lambda_dcf : float
+        ``λ_dcf``, the weight of the response ``y`` (about 1 at the object) in ``log r``.
+    dcf_share : float
+        ``β``: the share of particles drawn from the response (the rest from ``K``).
+    dcf_tempering : tuple of float
+        ``(t, s)``: the response's cells drawn ``∝ (1 - s) exp(t (y - max y)) / Σ + s / C``.
+    dcf_scale_std : float
+        ``σ_l`` of the proposal's log-scale about the best scale of the search.
+    redetect : float or None
+        While the object is reported lost, search the whole frame with the filter and centre the search
+        region at the best place when ``log r`` there is within ``redetect`` times the collapse test's
+        ``drop`` of its running level (``None``: never); the dynamics then has a share ``reentry`` of a
+        pose uniform over the frame (:meth:`predict`).
+    reentry : float
+        That share.
+    collapse_drop : float
+        With the filter, the collapse test's ``drop`` (:attr:`collapse_options`: 55 without it): ``log r``
+        at the estimate fell by 43-47 on the synthetic clip of ``tests/test_box_dcf.py`` when the object
+        vanished.
+    dcf_options : dict or None
+        Passed to :class:`~vistrack.models.correlation.CorrelationFilter` (its ``padding``: ``4 sigma_xy``
+        unless given, so that the search region about the dynamics' prediction holds 4 innovation stds).
     **appearance
         Passed to :class:`~vistrack.models.appearance.Appearance`.
     """
@@ -78,14 +117,22 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
     #: (27 runs) was 43, an object that vanishes from a textured background falls by 75
     collapse_options = {"drop": 55.0}
 
-    def __init__(self, frame, box, *, sigma_xy=0.06, sigma_scale=0.002, damping=0.5, prior_std=(0.04, 0.02),
-                 window=2.5, map_stride=1, **appearance):
+    def __init__(self, frame, box, *, sigma_xy=None, sigma_scale=None, damping=0.5, prior_std=(0.04, 0.02),
+                 window=2.5, map_stride=1, dcf=True, lambda_dcf=60.0, dcf_share=0.5, dcf_tempering=(60.0, 0.05),
+                 dcf_scale_std=0.02, redetect=0.5, reentry=0.05, collapse_drop=35.0,
+                 dcf_options=None, **appearance):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
             raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
         self.frame_size = (frame.shape[1], frame.shape[0])
         self.size0 = np.array([w, h])
+        if dcf:  # the colour and template terms weaker beside the filter's (docs/experiments.md, issue 34)
+            appearance = {"lambda_colour": 12.0, "lambda_template": 8.0, **appearance}
         self.app = Appearance(frame, (x, y, w, h), **appearance)
+        if sigma_xy is None:
+            sigma_xy = 0.25 if dcf else 0.06
+        if sigma_scale is None:
+            sigma_scale = 0.02 if dcf else 0.002
         side = float(np.sqrt(w * h))
         self.sigma = np.array([sigma_xy * side, sigma_xy * side, sigma_scale])
         self.damping = np.array([damping, damping, 0.0])
@@ -96,6 +143,21 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         self.map_stride = int(map_stride)
         self.blob_cell = 0.25 * side  # the colour-blob proposal's cell (frame px)
         self.learn_blob(frame, _inner_ellipse(frame.shape[:2], (x, y, w, h)))
+        # the search region: the box grown by 4 innovation stds of the centre on each side, about the prediction
+        dcf_options = {"padding": 4.0 * sigma_xy, **(dcf_options or {})}
+        self.cf = CorrelationFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
+        self._reach = 1.0 if dcf else 1.0 + self.window  # the observed region's reach, in 4 innovation stds
+        if dcf:  # log r's scale with the filter's term: lost 35 below the running level (issue 34)
+            self.collapse_options = {"drop": float(collapse_drop)}
+        self.lambda_dcf, self.dcf_share, self.dcf_scale_std = float(lambda_dcf), float(dcf_share), float(dcf_scale_std)
+        self.dcf_tempering = tuple(float(v) for v in dcf_tempering)
+        self.redetect = None if redetect is None else float(redetect)
+        self.reentry = float(reentry)
+        self._lost = False  # the last frame's collapse test said lost
+        self._last_scale = 0.0  # the log-scale of the last frame reported
+        self._d = self.damping  # this frame's damping: 0 on the frame after a re-detection (no velocity)
+        self._found = False  # this frame is a re-detection
+        self._reentry = False  # this frame's dynamics has the re-entry share
 
     # -- geometry ---------------------------------------------------------------------
     def boxes(self, states):
@@ -148,63 +210,149 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         """The mean of the AR(2) ``K``: ``z + d (z - z')``, with ``z`` as the new previous pose; ``(N, 6)`` ->
         ``(N, 6)``."""
         z1, z2 = states[:, :3], states[:, 3:]
-        return np.concatenate([z1 + self.damping * (z1 - z2), z1], axis=1)
+        return np.concatenate([z1 + self._d * (z1 - z2), z1], axis=1)
 
     def predict(self, states, rng):
         """A draw from ``K``: the mean plus ``σ_c e^{l}`` noise on the centre and ``σ_l`` on the log-scale;
-        ``(N, 6)`` -> ``(N, 6)``."""
+        ``(N, 6)`` -> ``(N, 6)``. On a frame of re-detection (the track lost, :attr:`redetect`) ``K`` has
+        a share ``reentry`` of a centre uniform over the frame (drawn with ``rng.random((N, 3))`` after
+        the normals)."""
         noise = rng.standard_normal((len(states), 3))
         if kernels.use():
             from ..kernels.box import ar2_predict
 
-            return ar2_predict(np.ascontiguousarray(states, float), self.damping, self.sigma, noise,
-                               np.empty((len(states), 6)))
-        out = self.predict_mean(states)
-        out[:, :3] += self._std(states) * noise
+            out = ar2_predict(np.ascontiguousarray(states, float), self._d, self.sigma, noise,
+                              np.empty((len(states), 6)))
+        else:
+            out = self.predict_mean(states)
+            out[:, :3] += self._std(states) * noise
+        if self._reentry:
+            u = rng.random((len(states), 3))
+            pick = u[:, 0] < self.reentry
+            out[pick, 0] = u[pick, 1] * self.frame_size[0]
+            out[pick, 1] = u[pick, 2] * self.frame_size[1]
         return out
 
     def transition_logpdf(self, new, old):
         """``log K(new|old)``: Gaussian in the current values; the previous values of ``new``
-        are the current values of ``old``."""
+        are the current values of ``old``. On a frame of re-detection, the centre's density is
+        ``(1 - ε) N + ε / (W H)`` (:meth:`predict`)."""
         if kernels.use():
             from ..kernels.box import ar2_logpdf
 
-            return ar2_logpdf(np.ascontiguousarray(new, float), np.ascontiguousarray(old, float), self.damping,
-                              self.sigma, np.empty(len(new)))
-        return diag_logpdf(new[:, :3], self.predict_mean(old)[:, :3], self._std(old))
+            out = ar2_logpdf(np.ascontiguousarray(new, float), np.ascontiguousarray(old, float), self._d,
+                             self.sigma, np.empty(len(new)))
+        else:
+            out = diag_logpdf(new[:, :3], self.predict_mean(old)[:, :3], self._std(old))
+        if self._reentry:
+            log_l = diag_logpdf(new[:, 2:3], old[:, 2:3], self.sigma[2:3])
+            w, h = self.frame_size
+            out = log_l + np.logaddexp(np.log1p(-self.reentry) + out - log_l, np.log(self.reentry) - np.log(w * h))
+        return out
 
     # -- observation --------------------------------------------------------------------
     def observe(self, maps, particles):
         """The frame's :class:`~vistrack.models.appearance.AppearanceFrame` over the region the
         particles can reach: their predicted boxes grown by 4 innovation stds, the LIS window's
-        reach and the velocity (the first box and the prior's spread on the first frame)."""
+        reach (not with the correlation filter: its proposal has no window) and the velocity (the
+        first box and the prior's spread on the first frame); with the
+        correlation filter, that region and the filter's search region, and the filter's response
+        there as ``obs.dcf``; while the track is lost, about a whole-frame search's find (:meth:`_redetect`)."""
+        self._reentry = False
+        self._d = np.zeros(3) if self._found else self.damping
+        self._found = False
         if particles is None:
             states = self.prior_mean[None]
             reach = 4 * self.prior_std[0] * (1 + self.window)
+            roi = self.app.roi(self.boxes(states), reach)
         elif kernels.use():
             from ..kernels.box_frame import predicted_roi
 
-            roi = predicted_roi(np.ascontiguousarray(particles.states, float), self.damping, self.size0,
-                                4 * self.sigma[0], 1 + self.window, float(self.app.ring), np.empty(4, np.int64))
-            return self.app.frame(maps.frame, tuple(int(v) for v in roi))
+            roi = predicted_roi(np.ascontiguousarray(particles.states, float), self._d, self.size0,
+                                4 * self.sigma[0], self._reach, float(self.app.ring), np.empty(4, np.int64))
+            roi = tuple(int(v) for v in roi)
         else:
             states = self.predict_mean(particles.states)
-            reach = 4 * self.sigma[0] * np.exp(states[:, 2].max()) * (1 + self.window)
-        return self.app.frame(maps.frame, self.app.roi(self.boxes(states), reach))
+            reach = 4 * self.sigma[0] * np.exp(states[:, 2].max()) * self._reach
+            roi = self.app.roi(self.boxes(states), reach)
+        if particles is None or self.cf is None:
+            obs = self.app.frame(maps.frame, roi)
+            obs.dcf, obs.dcf_share, obs.redetected, obs.frame_image = None, self.dcf_share, False, maps.frame
+            return obs
+        pred = particles.weights @ self.predict_mean(particles.states)[:, :3]
+        if self._lost and self.redetect is not None:
+            found = self._redetect(maps.frame, roi, pred)
+            if found is not None:
+                return found
+        return self._dcf_frame(maps.frame, roi, pred, self.dcf_share, False)
+
+    def _dcf_frame(self, frame, roi, centre, share, redetected):
+        """The observation over ``roi`` and the correlation filter's search region about ``centre``
+        ``(cx, cy, l)``, with its response (``obs.dcf``), ``β`` and whether it is a re-detection."""
+        resp = self.cf.detect(frame, centre[:2], float(centre[2]))
+        (ox, oy), a = resp.cell_origin()
+        h, w = resp.maps.shape[1:]
+        grow = self.app.ring * float(np.sum(self.size0 * np.exp(resp.log_scales[-1])))
+        x1, y1 = ox + a * (w - 0.5), oy + a * (h - 0.5)
+        roi = (min(roi[0], int(np.floor(ox - grow))), min(roi[1], int(np.floor(oy - grow))),
+               max(roi[2], int(np.ceil(x1 + grow))), max(roi[3], int(np.ceil(y1 + grow))))
+        obs = self.app.frame(frame, roi)
+        obs.dcf, obs.dcf_share, obs.redetected, obs.frame_image = resp, share, redetected, frame
+        return obs
+
+    def _redetect(self, frame, roi, pred):
+        """While the track is lost: the best place of a whole-frame search with the filter
+        (:meth:`CorrelationFilter.search`) at the last reported frame's scale, taken (the observation about it,
+        ``β`` at least 0.9, the dynamics' re-entry share on, and no velocity carried into the next frame's
+        prediction: ``d = 0`` there) when ``log r`` of the pose there at
+        the response's peak is within ``redetect`` times the collapse test's ``drop`` of its running
+        level; ``None`` otherwise."""
+        scale = self._last_scale  # the estimate's scale drifts while the object is lost
+        x, y, _ = self.cf.search(frame, scale)
+        obs = self._dcf_frame(frame, roi, np.array([x, y, scale]), max(self.dcf_share, 0.9), True)
+        r = obs.dcf
+        cand = np.array([[*r.peak_xy, r.log_scales[r.best]]])
+        level, drop = self._collapse.level, self._collapse.drop
+        if level is None or drop is None or not self.loglik(obs, cand)[0] >= level - self.redetect * drop:
+            return None
+        self._reentry = self.reentry > 0
+        self._found = True
+        return obs
 
     def loglik(self, obs, states):
-        """``log r`` of ``states (N, 6)``, shape ``(N,)``."""
+        """``log r`` of ``states (N, 6)``, shape ``(N,)``: the colour and template terms, plus
+        ``λ_dcf`` times the correlation filter's response where the frame has one."""
         if kernels.use():
-            return self.app.loglik_states(obs, np.ascontiguousarray(states, float), self.size0)
-        return self.app.loglik(obs, self.boxes(states))
+            out = self.app.loglik_states(obs, np.ascontiguousarray(states, float), self.size0)
+        else:
+            out = self.app.loglik(obs, self.boxes(states))
+        resp = getattr(obs, "dcf", None)
+        if resp is not None and self.lambda_dcf:
+            out = out + self.lambda_dcf * resp.read(np.atleast_2d(states))
+        return out
 
     def estimate(self, particles):
         """The weighted mean state."""
         return particles.mean()
 
     def adapt(self, obs, estimate):
-        """Adapt the appearance to the estimate on a confident frame (:meth:`Appearance.adapt`)."""
-        return self.app.adapt(obs, self.boxes(estimate)[0])
+        """Adapt the appearance to the estimate on a confident frame (:meth:`Appearance.adapt`) and the
+        correlation filter on a frame where the object is reported (:meth:`CorrelationFilter.adapt`)."""
+        done = self.app.adapt(obs, self.boxes(estimate)[0])
+        resp = getattr(obs, "dcf", None)
+        if resp is not None and not self._lost:
+            e = np.asarray(estimate, float).ravel()
+            self.cf.adapt(obs.frame_image, e[:2], float(e[2]))
+        return done
+
+    def check_lost(self, obs, state):
+        """The collapse test (:class:`~vistrack.models.collapse.CollapseCheck`), remembered for the next
+        frame's re-detection."""
+        out = super().check_lost(obs, state)
+        self._lost = bool(out[0])
+        if not self._lost:
+            self._last_scale = float(np.ravel(state)[2])
+        return out
 
     # -- local moves ------------------------------------------------------------------
     def window_std(self, states=None, kernel=None):
@@ -277,7 +425,11 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         return z, log_incr, x, ll
 
     def lis_proposal(self, kernel=None):
-        """LIS's proposal for a step with ``kernel``: the colour/template map on a grid."""
+        """LIS's proposal for a step with ``kernel``: the correlation filter's response mixed with ``K``
+        (:class:`CorrelationProposal`) with the filter after the first frame, else the colour/template map on a
+        grid (:class:`MapProposal`)."""
+        if self.cf is not None and kernel is not None and not is_prior(kernel):
+            return CorrelationProposal(self, kernel)
         return MapProposal(self, kernel=kernel)
 
     def lls_window(self, kernel=None):

@@ -1,0 +1,230 @@
+"""The box model's correlation filter, its LIS proposal and re-detection after a loss (issue 34)."""
+
+import csv
+
+import cv2
+import numpy as np
+import pytest
+from cli_helpers import run
+from scipy import stats
+
+import vistrack
+from vistrack.models.correlation import CorrelationFilter, DCFResponse, dcf_features
+from vistrack.proposals.correlation import CorrelationProposal
+
+
+class _Stub:
+    dcf_tempering = (3.0, 0.1)
+    dcf_scale_std = 0.05
+    dcf_share = 0.5
+
+
+def _response(rng, shape=(5, 6)):
+    maps = rng.random((3,) + shape).astype(np.float32)
+    maps[1, 2, 3] = 2.0  # the best scale is the middle one
+    return DCFResponse(maps, [-0.1, 0.0, 0.1], centre=(40.0, 30.0), anchor=(3.0, 2.0), px=[0.55, 0.5, 0.45])
+
+
+def test_proposal_density_integrates_to_one_over_the_search_region():
+    resp = _response(np.random.default_rng(0))
+    prop = CorrelationProposal(_Stub(), kernel=None)
+    (ox, oy), a = resp.cell_origin()
+    assert a == pytest.approx(2.0) and (ox, oy) == pytest.approx((34.0, 26.0))
+    h, w = resp.maps.shape[1:]
+    k = 8  # midpoints of k x k sub-cells: the density is constant on each cell
+    xs = ox - a / 2 + a * (np.arange(w * k) + 0.5) / k
+    ys = oy - a / 2 + a * (np.arange(h * k) + 0.5) / k
+    ls = np.linspace(-0.5, 0.5, 2001)
+    gx, gy = np.meshgrid(xs, ys)
+    pts = np.stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)], axis=1)
+    # over the centres at l = l* (= 0): 1 / (sqrt(2 pi) sigma_l), the log-scale's density there
+    area = np.exp(prop.log_density(resp, pts)).sum() * (a / k) ** 2
+    assert area * np.sqrt(2 * np.pi) * _Stub.dcf_scale_std == pytest.approx(1.0, rel=1e-9)
+    # over the log-scale at one centre: that centre's density
+    line = np.exp(prop.log_density(resp, np.stack([np.full_like(ls, ox), np.full_like(ls, oy), ls], 1)))
+    at = np.exp(prop.log_density(resp, np.array([[ox, oy, 0.0]])))[0] * np.sqrt(2 * np.pi) * _Stub.dcf_scale_std
+    assert np.trapezoid(line, ls) == pytest.approx(at, rel=1e-6)
+    outside = np.array([[ox - a, oy, 0.0], [ox, oy + a * h, 0.0]])
+    assert np.all(np.isneginf(prop.log_density(resp, outside)))
+
+
+def test_proposal_draws_follow_its_density():
+    resp = _response(np.random.default_rng(1))
+    prop = CorrelationProposal(_Stub(), kernel=None)
+    rng = np.random.default_rng(2)
+    n = 40000
+    z = prop.draw(resp, rng.random((n, 3)), rng.standard_normal(n))
+    (ox, oy), a = resp.cell_origin()
+    h, w = resp.maps.shape[1:]
+    j = np.floor((z[:, 0] - ox) / a + 0.5).astype(int)
+    i = np.floor((z[:, 1] - oy) / a + 0.5).astype(int)
+    counts = np.bincount(i * w + j, minlength=h * w)
+    p = np.exp(resp.cell_log_p(*_Stub.dcf_tempering))
+    assert p.sum() == pytest.approx(1.0)
+    assert stats.chisquare(counts, n * p).pvalue > 1e-3
+    # inside each cell uniform: the offsets from the cell centre fill (-a/2, a/2) evenly
+    off = (z[:, 0] - ox) / a + 0.5 - j
+    assert stats.kstest(off, "uniform").pvalue > 1e-3
+    assert stats.kstest((z[:, 2] - 0.0) / _Stub.dcf_scale_std, "norm").pvalue > 1e-3
+
+
+def _textured(rng, shape):
+    return cv2.GaussianBlur(rng.integers(0, 255, shape).astype(np.uint8), (0, 0), 1.5)
+
+
+def test_filter_response_peaks_where_the_object_moved():
+    rng = np.random.default_rng(3)
+    frame = _textured(rng, (120, 160, 3))
+    box = (60.0, 40.0, 24.0, 30.0)
+    cf = CorrelationFilter(frame, box)
+    moved = np.roll(frame, (-3, 5), axis=(0, 1))  # the scene 5 px right, 3 px up
+    r = cf.detect(moved, np.array([72.0, 55.0]), 0.0)
+    assert r.best == 1 and r.peak > 0.5
+    assert r.peak_xy == pytest.approx((77.0, 52.0), abs=0.75)
+    assert r.read(np.array([[77.0, 52.0, 0.0]]))[0] > 0.8 * r.peak
+    x, y, val = cf.search(moved, 0.0)
+    assert (x, y) == pytest.approx((77.0, 52.0), abs=3.0) and val > 0
+
+
+def test_orientation_kernel_equals_the_numpy_path():
+    from vistrack import kernels
+
+    rng = np.random.default_rng(5)
+    patch = cv2.GaussianBlur(rng.random((37, 52)).astype(np.float32) * 255, (0, 0), 1.2)
+    patch[5:9, :] = 0.0  # flat rows: zero gradient
+    a = dcf_features(patch, n_orient=6).copy()
+    with kernels.numpy_paths():
+        b = dcf_features(patch, n_orient=6).copy()
+    np.testing.assert_array_equal(a, b)
+    with kernels.numpy_paths():
+        c = dcf_features(patch, n_orient=9).copy()
+    np.testing.assert_array_equal(dcf_features(patch, n_orient=9), c)
+
+
+def test_features_known_answers():
+    flat = np.full((16, 20), 90.0, np.float32)
+    f = dcf_features(flat)
+    assert f.shape == (7, 16, 20) and np.allclose(f, 0.0)
+    ramp = np.tile(np.arange(20, dtype=np.float32) * 3, (16, 1))  # a horizontal gradient: orientation 0
+    f = dcf_features(ramp)
+    assert np.all(f[1, 4:-4, 4:-4] > 0.1) and np.allclose(f[3:6, 4:-4, 4:-4], 0.0, atol=1e-6)
+    bright = dcf_features(ramp * 1.6 + 20)  # light changes scale the features little
+    assert np.allclose(bright[1:], f[1:], rtol=0.02, atol=1e-3) and np.allclose(bright[0], f[0], atol=1e-5)
+
+
+GONE, BACK = 15, 35  # the object gone from GONE, back (elsewhere) from BACK
+
+
+def reappearing_clip(n=48):
+    """An orange striped square moving right 4 px per frame over a textured background, gone for 20 frames,
+    back 90 px lower and moving left; and its boxes."""
+    rng = np.random.default_rng(4)
+    bg = cv2.GaussianBlur(rng.integers(70, 180, (200, 260, 3)).astype(np.uint8), (0, 0), 3)
+    obj = np.zeros((26, 26, 3), np.uint8)
+    obj[:] = (30, 120, 230)  # orange, with dark stripes
+    obj[::6] = 20
+    frames, boxes = [], []
+    for t in range(n):
+        f = bg.copy()
+        x, y = (30 + 4 * t, 40) if t < BACK else (150 - 2 * (t - BACK), 130)
+        if not GONE <= t < BACK:
+            f[y:y + 26, x:x + 26] = obj
+        frames.append(f)
+        boxes.append((x, y, 26, 26))
+    return frames, boxes
+
+
+def _track(frames, box, seed=1):
+    t = vistrack.Tracker(model="box", particles=100, seed=seed)
+    t.init(frames[0], box)
+    out = [(True, t.box, False)]
+    for f in frames[1:]:
+        ok, b = t.update(f)
+        out.append((ok, b, t.result.redetected))
+    return out
+
+
+def test_redetection_finds_the_object_back_within_five_frames():
+    frames, boxes = reappearing_clip()
+    out = _track(frames, boxes[0])
+    assert not any(ok for ok, _, _ in out[GONE + 3:BACK])  # reported lost while it is gone
+    back = next(t for t in range(BACK, len(out)) if out[t][0])
+    assert back <= BACK + 5 and out[back][2]  # found again, and that frame says so
+    cx, cy = np.array(out[back][1][:2]) + np.array(out[back][1][2:]) / 2
+    x, y, w, h = boxes[back]
+    assert np.hypot(cx - x - w / 2, cy - y - h / 2) < 5
+    assert all(ok for ok, _, _ in out[back:])
+    assert sum(r for _, _, r in out) == 1  # the column is 1 on the frame of recovery only
+
+
+def test_same_seed_same_track():
+    frames, boxes = reappearing_clip(24)
+    a, b = _track(frames, boxes[0], seed=7), _track(frames, boxes[0], seed=7)
+    assert [x[1] for x in a] == [x[1] for x in b]
+
+
+def test_track_csv_has_the_redetected_column(tmp_path, capsys):
+    frames, boxes = reappearing_clip()
+    video = tmp_path / "clip"
+    video.mkdir()
+    for k, f in enumerate(frames):
+        cv2.imwrite(str(video / f"{k:04d}.png"), f)
+    track = tmp_path / "t.csv"
+    code, _, err = run(["run", str(video), "--init", ",".join(map(str, boxes[0])), "--seed", "1", "--track",
+                        str(track)], capsys)
+    assert code == 0, err
+    with open(track, newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert list(rows[0])[-4:] == ["redetected", "ess", "ms", "lost_reason"]
+    found = [int(r["frame"]) for r in rows if r["redetected"] == "1"]
+    assert len(found) == 1 and BACK <= found[0] <= BACK + 5
+    assert rows[found[0]]["visible"] == "1" and rows[found[0]]["lost_reason"] == ""
+    assert rows[found[0] - 1]["visible"] == "0" and rows[found[0] - 1]["lost_reason"] != ""
+
+
+def test_correlation_proposal_weights_match_a_brute_force_posterior():
+    """Proper weighting: one LIS step with the correlation proposal from particles at rest; the mean
+    weight is the evidence ∫ r K and the weighted mean pose the posterior mean, both also by brute
+    force on a grid of centres and log-scales."""
+    from vistrack.features import FeatureMaps
+    from vistrack.filters import make_filter
+    from vistrack.models.box import Box
+    from vistrack.particles import ParticleSet, logsumexp
+
+    rng = np.random.default_rng(6)
+    bg = cv2.GaussianBlur(rng.integers(70, 180, (120, 160, 3)).astype(np.uint8), (0, 0), 3)
+    obj = np.zeros((20, 20, 3), np.uint8)
+    obj[:] = (30, 120, 230)
+    obj[::5] = 20
+
+    def scene(x, y):
+        f = bg.copy()
+        f[y:y + 20, x:x + 20] = obj
+        return f
+
+    model = Box(scene(60, 50), (60, 50, 20, 20), adapt_rate=0, sigma_xy=0.15, lambda_dcf=20.0,
+                dcf_tempering=(20.0, 0.05), lambda_colour=6.0, lambda_template=4.0)
+    pose = np.array([70.0, 60.0, 0.0])
+    n = 30000
+    prev = np.tile(np.concatenate([pose, pose]), (n, 1))
+    obs = model.observe(FeatureMaps(scene(62, 49)), ParticleSet(prev))
+    filt = make_filter("lis", model)
+    z, lw, _, _ = filt.propose(prev, obs, np.random.default_rng(0), filt.kernel)
+    assert np.all(np.isfinite(lw))
+    w = np.exp(lw - lw.max())
+    sd, sl = model.sigma[0], model.sigma[2]
+    cs = np.arange(-4 * sd, 4 * sd + 1e-9, 0.25)
+    ls = np.arange(-4 * sl, 4 * sl + 1e-9, sl / 4)
+    du, dv, dl = (a.ravel() for a in np.meshgrid(cs, cs, ls, indexing="ij"))
+    grid = np.tile(np.concatenate([pose, pose]), (du.size, 1))
+    grid[:, 0] += du
+    grid[:, 1] += dv
+    grid[:, 2] += dl
+    lp = model.loglik(obs, grid) + model.transition_logpdf(grid, prev[:1].repeat(len(grid), 0))
+    vol = 0.25 * 0.25 * (sl / 4)
+    assert logsumexp(lw) - np.log(n) == pytest.approx(logsumexp(lp) + np.log(vol), abs=0.1)
+    g = np.exp(lp - lp.max())
+    mean_is, mean_grid = (w @ z[:, :3]) / w.sum(), (g @ grid[:, :3]) / g.sum()
+    np.testing.assert_allclose(mean_is[:2], mean_grid[:2], atol=0.15)
+    assert mean_is[2] == pytest.approx(mean_grid[2], abs=0.003)
+    assert np.hypot(*(mean_grid[:2] - pose[:2])) > 1.0  # the posterior moved towards the object (2, -1)
