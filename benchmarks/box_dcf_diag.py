@@ -20,10 +20,10 @@ import cv2
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_real import load, opencv_tracker, run_opencv, scores  # noqa: E402
-
 import vistrack  # noqa: E402
 from vistrack.runtime import keep_freed_memory  # noqa: E402
+
+from bench_real import load, opencv_tracker, run_opencv, scores  # noqa: E402
 
 ALL = ["girl_otb", "hand_vot2013", "car4_otb_first100", "plate_in_polo_dashcam", "crossing_otb", "soccer_otb",
        "ball1_vot2015"]

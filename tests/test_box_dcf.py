@@ -5,10 +5,10 @@ import csv
 import cv2
 import numpy as np
 import pytest
-from cli_helpers import run
 from scipy import stats
 
 import vistrack
+from cli_helpers import run
 from vistrack.models.correlation import CorrelationFilter, DCFResponse, dcf_features
 from vistrack.proposals.correlation import CorrelationProposal
 
