@@ -39,7 +39,9 @@ def test_a_perfect_result_scores_one_in_every_format(tmp_path, capsys, fmt):
     code, _, err = run(["eval", str(tmp_path / "sq"), "--algos", "", "--results-dir", str(d), "--results-format", fmt,
                         "--out", str(tmp_path / "e"), "-q"], capsys)
     assert code == 0, err
-    (r,) = json.loads((tmp_path / "e" / "results.json").read_text())["results"]
+    data = json.loads((tmp_path / "e" / "results.json").read_text())
+    assert data["config"]["algos"] == [] and data["config"]["particles"] == []  # no default reported as used
+    (r,) = data["results"]
     # every IoU is 1: above every threshold but the last (1.0 itself), as for the ground truth itself
     assert r["success_auc"] == pytest.approx(20 / 21) and r["precision_20px"] == 1.0 and r["mean_error_all"] < 1e-6
 

@@ -202,7 +202,9 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, sc
                                    f"{'folder' if blocked.name == 'tasks' else 'file'}")
     if not os.access(out, os.W_OK):
         raise click.ClickException(f"cannot write the results into {out}: permission denied")
-    cfg = EvalConfig(clips=clip_paths, algos=list(algos), particles=list(particles), runs=runs, seed=seed, model=model)
+    # without algorithms (--algos "" with --results-dir) no particle count was used: none is recorded
+    cfg = EvalConfig(clips=clip_paths, algos=list(algos), particles=list(particles) if algos else [], runs=runs,
+                     seed=seed, model=model)
     engine = dict(scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process, resume=resume,
                   quiet=quiet)
     if targets is not None:
