@@ -46,18 +46,30 @@ def _make(make, out, **kw):
         raise click.ClickException(f"cannot write the clip {out}: {e.strerror or e}") from None
 
 
+def _clip_options(size, frames):
+    """``--out``, ``--frames``, ``--size`` and ``--seed`` of every ``synth`` command that renders a clip."""
+    opts = [click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write."),
+            click.option("--frames", default=frames, show_default=True, type=click.IntRange(min=1),
+                         help="Number of frames to generate."),
+            click.option("--size", default=size, show_default=True, type=Size(), help="Frame size WIDTHxHEIGHT in pixels."),
+            click.option("--seed", default=0, show_default=True, type=SEED,
+                         help="Random seed: the same seed gives the same output, bit for bit.")]
+
+    def decorate(f):
+        for opt in reversed(opts):
+            f = opt(f)
+        return f
+
+    return decorate
+
+
 @click.group()
 def synth():
     """Generate synthetic clips (video.mp4, groundtruth.csv, meta.json)."""
 
 
 @synth.command()
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write.")
-@click.option("--frames", default=300, show_default=True, type=click.IntRange(min=1),
-              help="Number of frames to generate.")
-@click.option("--size", default="320x240", show_default=True, type=Size(), help="Frame size WIDTHxHEIGHT in pixels.")
-@click.option("--seed", default=0, show_default=True, type=SEED,
-              help="Random seed: the same seed gives the same output, bit for bit.")
+@_clip_options("320x240", 300)
 @click.option("--clutter", default="high", show_default=True, type=click.Choice(list(CLUTTER)),
               help="Background edge density and sensor noise.")
 @click.option("--distractor/--no-distractor", default=True, show_default=True,
@@ -80,12 +92,7 @@ def contour(out, frames, size, seed, clutter, distractor, shape, color, quiet):
 
 
 @synth.command()
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write.")
-@click.option("--frames", default=300, show_default=True, type=click.IntRange(min=1),
-              help="Number of frames to generate.")
-@click.option("--size", default="640x480", show_default=True, type=Size(), help="Frame size WIDTHxHEIGHT in pixels.")
-@click.option("--seed", default=0, show_default=True, type=SEED,
-              help="Random seed: the same seed gives the same output, bit for bit.")
+@_clip_options("640x480", 300)
 @click.option("--cars", default=3, show_default=True, type=click.IntRange(min=1), help="Cars driving through.")
 @click.option("--layout", default="jp", show_default=True, type=click.Choice(["jp", "single-row"]),
               help="Plate layout: Japanese (Fig. 1.5) or single-row (European/Indian style).")
@@ -110,13 +117,8 @@ def plate(out, frames, size, seed, cars, layout, overlap, quiet):
 
 
 @synth.command()
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write.")
+@_clip_options("640x480", 200)
 @click.option("--k", "k", default=5, show_default=True, type=click.IntRange(min=3), help="Number of landmarks K.")
-@click.option("--frames", default=200, show_default=True, type=click.IntRange(min=1),
-              help="Number of frames to generate.")
-@click.option("--size", default="640x480", show_default=True, type=Size(), help="Frame size WIDTHxHEIGHT in pixels.")
-@click.option("--seed", default=0, show_default=True, type=SEED,
-              help="Random seed: the same seed gives the same output, bit for bit.")
 @click.option("--clutter-blobs", default=6, show_default=True, type=click.IntRange(min=0),
               help="Drifting blobs identical to the landmarks.")
 @click.option("--occlusion", default=0.01, show_default=True, type=Fraction(),
