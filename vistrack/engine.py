@@ -130,7 +130,11 @@ def execute(tasks, out_dir, client, *, resume=False, progress=None, key_prefix="
         except (OSError, VideoError) as e:
             raise TaskFailed(f"task {name} failed: {e}; the finished task files are kept: "
                              "--resume runs the rest") from None
-        json.loads(text)  # whole JSON, or the task failed
+        try:
+            json.loads(text)  # whole JSON, or the task failed
+        except ValueError:
+            raise TaskFailed(f"task {name} returned a damaged result; the finished task files are kept: "
+                             "--resume runs the rest") from None
         write_atomic(Path(out_dir) / "tasks" / f"{name}.json", text)
         if progress:
             progress(1)

@@ -57,7 +57,11 @@ def local_clip(path, cache=None):
                 fs.get_file(f, str(target))
         else:
             fs.get_file(rpath, str(tmp))
-        os.replace(tmp, dest) if not dest.exists() else shutil.rmtree(tmp, ignore_errors=True)
+        try:
+            os.replace(tmp, dest)
+        except OSError:
+            if not dest.exists():  # else another process fetched it first: theirs is as good
+                raise
     except FileNotFoundError as e:
         raise OSError(f"cannot fetch the clip {s}: {e}") from None
     except Exception as e:

@@ -156,19 +156,18 @@ def _annotated_videos(out, results, max_trackers=8, width=480):
     clip = load_clip(clips[0])
     truth = np.column_stack([clip.truth["cx"] - clip.truth["w"] / 2, clip.truth["cy"] - clip.truth["h"] / 2,
                              clip.truth["w"], clip.truth["h"]])
-    writers, made = [], []
+    writers = [(label, r, out / "videos" / (re.sub(r"[^A-Za-z0-9_.-]+", "_", label) + ".mp4"), k)
+               for k, (label, r) in enumerate(first)]
+    opened = {}
     try:
-        for k, (label, r) in enumerate(first):
-            path = out / "videos" / (re.sub(r"[^A-Za-z0-9_.-]+", "_", label) + ".mp4")
-            writers.append((label, r, path, k))
-        opened = {}
         for i, frame in clip.source:
             if i >= len(truth):
                 break
             f = frame if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
             scale = min(1.0, width / f.shape[1])
+            small = cv2.resize(f, None, fx=scale, fy=scale) if scale < 1 else f  # once per frame
             for label, r, path, k in writers:
-                img = cv2.resize(f, None, fx=scale, fy=scale) if scale < 1 else f.copy()
+                img = small.copy()
                 _draw(img, truth[i] * scale, (0, 200, 0))
                 b = r["boxes"][i] if i < len(r["boxes"]) else None
                 if b is not None:
@@ -180,10 +179,9 @@ def _annotated_videos(out, results, max_trackers=8, width=480):
                                                codec="auto")
                 opened[path].write(img)
     finally:
-        for wr in locals().get("opened", {}).values():
+        for wr in opened.values():
             wr.close()
-    made = [(label, path, clips[0]) for label, _, path, _ in writers if path.exists()]
-    return made
+    return [(label, path, clips[0]) for label, _, path, _ in writers if path.exists()]
 
 
 _COLOURS = [(0, 0, 255), (255, 128, 0), (255, 0, 255), (0, 200, 255), (255, 255, 0), (128, 0, 255), (0, 128, 255),
