@@ -21,9 +21,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import vistrack  # noqa: E402
+from vistrack.metrics import box_scores as scores  # noqa: E402
 from vistrack.runtime import keep_freed_memory  # noqa: E402
 
-from bench_real import load, opencv_tracker, run_opencv, scores  # noqa: E402
+from bench_real import DATA, load, opencv_tracker, run_opencv  # noqa: E402
 
 ALL = ["girl_otb", "hand_vot2013", "car4_otb_first100", "plate_in_polo_dashcam", "crossing_otb", "soccer_otb",
        "ball1_vot2015"]
@@ -36,9 +37,10 @@ def run(frames, box, seed, opts, n=100):
     t = vistrack.Tracker(model="box", algo="lis", particles=n, seed=seed, **opts)
     t0 = time.perf_counter()
     t.init(frames[0], box)
-    out = [t.box]
+    out = [t.box_estimate]
     for f in frames[1:]:
-        out.append(t.update(f)[1])
+        t.update(f)
+        out.append(t.box_estimate)
     return np.array(out), time.perf_counter() - t0
 
 
@@ -58,11 +60,11 @@ def main():
     cache = json.loads(CACHE.read_text()) if CACHE.exists() else {}
     means, rows = [], {}
     # warm the compiled kernels outside the timings
-    frames, gt = load("car4_otb_first100")
+    frames, gt, _ = load(DATA / "car4_otb_first100")
     run(frames[:5], gt[0], 0, opts)
     print(f"{'clip':<24} {'tracker':<10} {'AUC':>6} {'worst':>6} {'P@20':>6} {'frames/s':>9}")
     for clip in args.clips.split(","):
-        frames, gt = load(clip)
+        frames, gt, _ = load(DATA / clip)
         runs = [run(frames, gt[0], s, opts, args.particles) for s in seeds]
         sc = np.array([scores(b, gt) for b, _ in runs])
         fps = len(frames) / np.median([t for _, t in runs])
@@ -72,7 +74,7 @@ def main():
         for name in [c for c in args.opencv.split(",") if c]:
             key = f"{clip}/{name}"
             if (args.fresh or key not in cache) and opencv_tracker(name) is not None:
-                timed = [run_opencv(frames, gt[0], name) for _ in range(len(seeds) if args.fresh else 1)]
+                timed = [run_opencv(frames, gt, name) for _ in range(len(seeds) if args.fresh else 1)]
                 b, t = timed[0][0], np.median([t for _, t in timed])  # deterministic: the same boxes each time
                 cache[key] = [*map(float, scores(b, gt)), len(frames) / t]
                 CACHE.write_text(json.dumps(cache))
