@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .hooks import Redetects, offers
 from .particles import DegenerateWeightsWarning
 from .profiling import STAGES, Timer, profile_stages
 from .render import annotate, annotate_targets
@@ -86,7 +87,7 @@ def track_row(model, res):
     model's: 1 on the frame it is re-found), ``ess, ms, lost_reason``."""
     row = {"frame": res.index, "visible": int(res.visible)}
     row.update(model.describe(res.estimate))
-    if getattr(model, "redetect", None) is not None:
+    if offers(model, Redetects):
         row["redetected"] = int(res.redetected)
     row["ess"], row["ms"], row["lost_reason"] = res.ess, res.ms, res.lost_reason
     return row

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..hooks import FusedPropose, LookAhead, offers
 from ..models.protocol import StateSpaceModel
 from ..proposals import GaussMixtureProposal
 from .base import ParticleFilter
@@ -47,8 +48,8 @@ class LIS(ParticleFilter):
         """A first stage where the local proposal offers one: ``proposal.look_ahead(prev, obs,
         kernel) -> log p̂(Y_t|Z_{t-1}) (N,)`` (or ``None``) tilts the weights before resampling and
         is divided out after, as in AVPF (App. B); ``None`` (no first stage) otherwise."""
-        first = getattr(self.part("proposal", kernel), "look_ahead", None)
-        log_mu = None if first is None else first(particles.states, obs, kernel)
+        proposal = self.part("proposal", kernel)
+        log_mu = proposal.look_ahead(particles.states, obs, kernel) if offers(proposal, LookAhead) else None
         return None if log_mu is None else (np.arange(particles.n), log_mu)
 
     def propose(self, prev, obs, rng, kernel):
@@ -60,8 +61,8 @@ class LIS(ParticleFilter):
         ``(new (N, d), log_incr (N,), predicted (N, d), loglik (N,))``.
         """
         proposal = self.part("proposal", kernel)
-        fused = getattr(proposal, "propose", None)  # the whole step in one pass (the box model's map proposal)
-        out = None if fused is None else fused(prev, obs, rng, kernel)
+        # the whole step in one pass where the proposal can (the box model's map proposal)
+        out = proposal.propose(prev, obs, rng, kernel) if offers(proposal, FusedPropose) else None
         if out is not None:
             return out
         x = kernel.predict(prev, rng)

@@ -30,10 +30,14 @@ from __future__ import annotations
 
 from typing import Protocol, runtime_checkable
 
+# the checks and the optional hooks live in the core (proposals and filters use them without
+# importing the models); re-exported here, with every protocol of the models
+from ..hooks import FusedLISStep, FusedPropose, LookAhead, ProposalMap, Redetects, missing_parts, offers, require  # noqa: F401
+
 __all__ = ["StateSpaceModel", "PredictMean", "LocalSearch", "LearnedSearch", "LocalMoves", "LLSModel", "GridLikelihood",
            "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "InnovationSplit",
            "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
-__all__ += ["Partitions", "PartitionLIS"]
+__all__ += ["Partitions", "PartitionLIS", "LookAhead", "FusedPropose", "FusedLISStep", "ProposalMap", "Redetects"]
 
 
 @runtime_checkable
@@ -369,35 +373,3 @@ class VideoModelBase:
         if self.visible(obs, state):
             return "", ""
         return "not found", "no object passes the model's test at the estimate"
-
-
-def _members(protocol):
-    return sorted(n for n in vars(protocol) if not n.startswith("_") and n not in ("mro",)) + \
-        sorted(getattr(protocol, "__annotations__", {}))
-
-
-def missing_parts(model, protocol):
-    """The parts of ``protocol`` that ``model`` lacks (empty when it offers them all)."""
-    return [n for n in dict.fromkeys(_members(protocol)) if getattr(model, n, None) is None]
-
-
-def offers(model, protocol):
-    """Whether ``model`` offers every part of ``protocol``."""
-    return not missing_parts(model, protocol)
-
-
-def require(model, protocols, who):
-    """Raise ``ValueError`` (one line) unless ``model`` offers every protocol in ``protocols``.
-
-    Parameters
-    ----------
-    model : object
-    protocols : iterable of Protocol classes
-    who : str
-        Who needs them, for the message (e.g. ``"ls-n-ips"``).
-    """
-    for p in protocols:
-        lack = missing_parts(model, p)
-        if lack:
-            raise ValueError(f"{who} needs a model with {', '.join(lack)} ({p.__name__}); "
-                             f"{type(model).__name__} does not supply {'it' if len(lack) == 1 else 'them'}")

@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import kernels
+from ..hooks import FusedLISStep, ProposalMap, offers
 from ..particles import logsumexp
 from ..transition import Transition
 
@@ -83,7 +84,7 @@ class MapProposal:
         The draws: ``rng.random((N, 3))``, the cell by inversion of each row's cumulative ``q g``
         (:func:`inverse_cdf_rows`), then the point in the cell."""
         model = self.model
-        if kernels.use() and hasattr(model, "proposal_qmap"):
+        if kernels.use() and offers(model, ProposalMap):
             return self._sample_map(x, obs, rng)
         u = model.local_coords(x)
         sig = model.window_std(x, self.kernel)[:, None]  # (N, 1)
@@ -102,10 +103,10 @@ class MapProposal:
         """LIS's whole proposal step (:meth:`LIS.propose <vistrack.filters.lis.LIS.propose>`) where the
         model fuses it with the compiled kernels (``model.lis_step(prev, obs, rng, proposal)``, the box
         model's) for its own ``K``; ``None`` otherwise (the filter then calls the parts one by one)."""
-        fused = getattr(self.model, "lis_step", None)
-        if fused is None or not kernels.use() or type(kernel) is not Transition or kernel.model is not self.model:
+        if not (offers(self.model, FusedLISStep) and kernels.use() and type(kernel) is Transition
+                and kernel.model is self.model):
             return None
-        return fused(prev, obs, rng, self)
+        return self.model.lis_step(prev, obs, rng, self)
 
     def _sample_map(self, x, obs, rng):
         """:meth:`sample` for a model whose ``q`` is its map read bilinearly (module docstring),

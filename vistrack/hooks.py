@@ -1,0 +1,83 @@
+"""What a model or a proposal offers: :func:`offers`, :func:`require`, and the optional hooks that
+filters and proposals look for (re-exported by :mod:`vistrack.models.protocol`, with the models'
+protocols). A core module: the filters and proposals check hooks with it without importing the
+models."""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+__all__ = ["offers", "require", "missing_parts", "LookAhead", "FusedPropose", "FusedLISStep", "ProposalMap",
+           "Redetects"]
+
+
+def _members(protocol):
+    return sorted(n for n in vars(protocol) if not n.startswith("_") and n not in ("mro",)) + \
+        sorted(getattr(protocol, "__annotations__", {}))
+
+
+def missing_parts(model, protocol):
+    """The parts of ``protocol`` that ``model`` lacks (empty when it offers them all)."""
+    return [n for n in dict.fromkeys(_members(protocol)) if getattr(model, n, None) is None]
+
+
+def offers(model, protocol):
+    """Whether ``model`` offers every part of ``protocol``."""
+    return not missing_parts(model, protocol)
+
+
+def require(model, protocols, who):
+    """Raise ``ValueError`` (one line) unless ``model`` offers every protocol in ``protocols``.
+
+    Parameters
+    ----------
+    model : object
+    protocols : iterable of Protocol classes
+    who : str
+        Who needs them, for the message (e.g. ``"ls-n-ips"``).
+    """
+    for p in protocols:
+        lack = missing_parts(model, p)
+        if lack:
+            raise ValueError(f"{who} needs a model with {', '.join(lack)} ({p.__name__}); "
+                             f"{type(model).__name__} does not supply {'it' if len(lack) == 1 else 'them'}")
+
+
+@runtime_checkable
+class LookAhead(Protocol):
+    """A local proposal's first stage (:meth:`LIS.look_ahead <vistrack.filters.lis.LIS.look_ahead>`):
+    ``look_ahead(prev (N, d), obs, kernel) -> log p̂(Y_t|Z_{t-1}) (N,)`` or ``None``."""
+
+    def look_ahead(self, prev, obs, kernel): ...
+
+
+@runtime_checkable
+class FusedPropose(Protocol):
+    """A local proposal that does LIS's whole step itself where it can: ``propose(prev, obs, rng,
+    kernel) -> (new, log_incr, predicted, loglik)`` or ``None`` (the filter then calls the parts)."""
+
+    def propose(self, prev, obs, rng, kernel): ...
+
+
+@runtime_checkable
+class FusedLISStep(Protocol):
+    """A model whose compiled kernels do the grid proposal's LIS step (the box model):
+    ``lis_step(prev, obs, rng, proposal)``."""
+
+    def lis_step(self, prev, obs, rng, proposal): ...
+
+
+@runtime_checkable
+class ProposalMap(Protocol):
+    """A model that gives the grid proposal a whole map per frame to draw from (the box model):
+    ``proposal_qmap(obs, states, span)``."""
+
+    def proposal_qmap(self, obs, states, span): ...
+
+
+@runtime_checkable
+class Redetects(Protocol):
+    """A model that searches the frame again for a lost object (the box model: the track CSV's
+    ``redetected`` column); ``redetect`` is its acceptance level, ``None`` when it is off."""
+
+    redetect: float
