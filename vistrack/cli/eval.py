@@ -122,6 +122,25 @@ def _eval_targets(cfg, targets, equal_time, results_dirs, out, engine):
         click.echo(f"wrote {out / 'results.json'}, results.csv and report.md")
 
 
+def _results_folder(out_dir):
+    """``--out`` made and checked before the grid runs: one error line where eval could not write its
+    files (a file where ``tasks/`` goes, a folder where a file goes, no permission)."""
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise click.ClickException(f"cannot create --out {out}: {e.strerror}") from None
+    blocked = next((out / n for n in ("tasks", "results.json", "results.csv", "report.md")
+                    if (out / n).exists() and (out / n).is_dir() != (n == "tasks")), None)
+    if blocked is not None:  # found before the grid runs, not after
+        raise click.ClickException(f"cannot write the results into {out}: {blocked} is a "
+                                   f"{'folder' if blocked.is_dir() else 'file'}, where eval writes a "
+                                   f"{'folder' if blocked.name == 'tasks' else 'file'}")
+    if not os.access(out, os.W_OK):
+        raise click.ClickException(f"cannot write the results into {out}: permission denied")
+    return out
+
+
 def _clips_model(clips):
     """The model of ``eval`` without ``--model``, as ``run`` chooses it: the one the clips' ``meta.json``
     names, else the default; clips naming different models need ``--model``."""
@@ -189,19 +208,7 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, sc
                 check_particle_memory(n, spec.bytes_per_particle, a)
     except (ValueError, VideoError) as e:
         raise click.ClickException(str(e)) from None
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise click.ClickException(f"cannot create --out {out}: {e.strerror}") from None
-    blocked = next((out / n for n in ("tasks", "results.json", "results.csv", "report.md")
-                    if (out / n).exists() and (out / n).is_dir() != (n == "tasks")), None)
-    if blocked is not None:  # found before the grid runs, not after
-        raise click.ClickException(f"cannot write the results into {out}: {blocked} is a "
-                                   f"{'folder' if blocked.is_dir() else 'file'}, where eval writes a "
-                                   f"{'folder' if blocked.name == 'tasks' else 'file'}")
-    if not os.access(out, os.W_OK):
-        raise click.ClickException(f"cannot write the results into {out}: permission denied")
+    out = _results_folder(out_dir)
     # without algorithms (--algos "" with --results-dir) no particle count was used: none is recorded
     cfg = EvalConfig(clips=clip_paths, algos=list(algos), particles=list(particles) if algos else [], runs=runs,
                      seed=seed, model=model)

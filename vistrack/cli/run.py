@@ -171,15 +171,7 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     \b
     Landmarks (seed 000): vistrack synth landmarks --out lm && vistrack run lm --algo pf-eis-mt --out lm.mp4
     """
-    check_writable(track_path, "track file")
-    check_writable(out_path, "annotated video")
-    if results_format == "otb":
-        check_writable(results_path, "results file")
-    elif results_path is not None and os.path.exists(results_path) and not os.path.isdir(results_path):
-        raise click.ClickException(f"--results {results_path}: the {results_format} layout is a folder (SEQ/SEQ_001.txt "
-                                   "inside it), not a file")
-    check_outputs({"--track": track_path, "--out": out_path, "--results": results_path}, video,
-                  inputs=(template_path, init_gt or None))
+    _check_output_paths(video, track_path, out_path, results_path, results_format, (template_path, init_gt or None))
     if init is not None and init_gt is not None:
         raise click.UsageError("give either --init or --init-gt, not both")
     if targets is not None and results_path:
@@ -188,24 +180,7 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
                                      layout=layout, no_colour=no_colour, template_path=template_path, targets=targets)
     frames, lead = _frames(clip.source, max_frames), ()
     if isinstance(model, PlateSearch):  # real footage without a box: find the plate first
-        if not quiet:  # which model and why, on one line (the error below is the one line with -q)
-            click.echo("no --init and no model in meta.json: looking for a license plate (the plate model) in the "
-                       "first 30 frames; to track any other object give --init x,y,w,h", err=True)
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", VideoDecodeWarning)
-                model, found, lead = model.start(frames)
-        except VideoError as e:
-            raise click.ClickException(str(e)) from None
-        if model is None:
-            raise click.ClickException(
-                f"no license plate found in the first {len(lead)} frames of {video}; give its box: "
-                f"vistrack run {video} --init x,y,w,h")
-        frames = itertools.chain([found[:2]], frames)
-        if not quiet:
-            b = found[2].box
-            click.echo(f"plate found in frame {found[0]} at {b[0]:.0f},{b[1]:.0f},{b[2]:.0f},{b[3]:.0f} "
-                       f"({found[2].layout} layout)", err=True)
+        model, frames, lead = _find_plate(model, frames, video, quiet)
     try:
         filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)
     except ValueError as e:
@@ -216,6 +191,41 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     done = _track(clip, frames, model, filt, particles, seed, max_frames, show_particles, quiet,
                   f"{algo} N={particles}", outputs, lead, start=start)
     _report(video, clip, done, name, model, particles, quiet, outputs)
+
+
+def _check_output_paths(video, track_path, out_path, results_path, results_format, inputs):
+    """One error line for an output ``run`` cannot write, or one that is an input or another output."""
+    check_writable(track_path, "track file")
+    check_writable(out_path, "annotated video")
+    if results_format == "otb":
+        check_writable(results_path, "results file")
+    elif results_path is not None and os.path.exists(results_path) and not os.path.isdir(results_path):
+        raise click.ClickException(f"--results {results_path}: the {results_format} layout is a folder "
+                                   "(SEQ/SEQ_001.txt inside it), not a file")
+    check_outputs({"--track": track_path, "--out": out_path, "--results": results_path}, video, inputs=inputs)
+
+
+def _find_plate(search, frames, video, quiet):
+    """``(model, frames, lead)``: the plate model built where :class:`PlateSearch` finds a plate in the
+    first frames, the frames from that one on, and the frames searched before it; one error line with
+    the ``--init`` hint where it finds none."""
+    if not quiet:  # which model and why, on one line (the error below is the one line with -q)
+        click.echo("no --init and no model in meta.json: looking for a license plate (the plate model) in the "
+                   "first 30 frames; to track any other object give --init x,y,w,h", err=True)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", VideoDecodeWarning)
+            model, found, lead = search.start(frames)
+    except VideoError as e:
+        raise click.ClickException(str(e)) from None
+    if model is None:
+        raise click.ClickException(f"no license plate found in the first {len(lead)} frames of {video}; give its "
+                                   f"box: vistrack run {video} --init x,y,w,h")
+    if not quiet:
+        b = found[2].box
+        click.echo(f"plate found in frame {found[0]} at {b[0]:.0f},{b[1]:.0f},{b[2]:.0f},{b[3]:.0f} "
+                   f"({found[2].layout} layout)", err=True)
+    return model, itertools.chain([found[:2]], frames), lead
 
 
 def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, layout, no_colour, template_path,
