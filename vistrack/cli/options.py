@@ -6,7 +6,8 @@ import os
 
 import click
 
-__all__ = ["IntList", "FloatList", "StrList", "Box", "Size", "Fraction", "SEED", "check_writable", "check_outputs"]
+__all__ = ["Ratio",
+           "IntList", "FloatList", "StrList", "Box", "Size", "Fraction", "SEED", "check_writable", "check_outputs"]
 
 #: ``--seed``: numpy takes any non-negative integer
 SEED = click.IntRange(min=0)
@@ -182,3 +183,21 @@ def check_outputs(outputs, video, inputs=()):
         if key in read:  # a hard or symbolic link, another spelling
             raise click.ClickException(f"{opt} {path} would overwrite the input it reads ({read[key]}, the same file "
                                        "under another name); write elsewhere")
+
+
+class Ratio(click.ParamType):
+    """``A:B``, two positive numbers (``--zoom 1:0.6``, ``--gain 0.3:1.6``)."""
+
+    name = "A:B"
+
+    def convert(self, value, param, ctx):
+        """Parse ``value`` into a pair of positive floats; a bad value fails with one usage line."""
+        if isinstance(value, tuple):
+            return value
+        try:
+            a, b = (float(v) for v in str(value).split(":"))
+        except ValueError:
+            self.fail(f"expected two numbers A:B, got {value!r}", param, ctx)
+        if not (0 < a < float("inf") and 0 < b < float("inf")):
+            self.fail(f"expected two positive numbers A:B, got {value!r}", param, ctx)
+        return a, b

@@ -14,7 +14,7 @@ from vistrack.data_synth.plate import make_plate_clip
 from vistrack.data_synth.plate_composite import composite_plate_clip
 from vistrack.data_synth.render import prepare_suite
 
-from .options import SEED, Fraction, Size
+from .options import SEED, Fraction, Ratio, Size
 
 __all__ = ["synth"]
 
@@ -138,36 +138,18 @@ def landmarks(out, k, frames, size, seed, clutter_blobs, occlusion, quiet):
         click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({frames} frames, {size[0]}x{size[1]}, K={k})")
 
 
-class _Ratio(click.ParamType):
-    """``A:B``, two positive numbers (``--zoom 1:0.6``, ``--gain 0.3:1.6``)."""
-
-    name = "A:B"
-
-    def convert(self, value, param, ctx):
-        """Parse ``value`` into a pair of positive floats; a bad value fails with one usage line."""
-        if isinstance(value, tuple):
-            return value
-        try:
-            a, b = (float(v) for v in str(value).split(":"))
-        except ValueError:
-            self.fail(f"expected two numbers A:B, got {value!r}", param, ctx)
-        if not (0 < a < float("inf") and 0 < b < float("inf")):
-            self.fail(f"expected two positive numbers A:B, got {value!r}", param, ctx)
-        return a, b
-
-
 @synth.command()
 @click.argument("clip", type=click.Path(exists=True))
 @click.option("--out", required=True, type=click.Path(file_okay=False), help="Folder of the stressed copy.")
 @click.option("--light", type=click.Choice(LIGHTS), default=None,
               help="ramp: the gain goes linearly from the first --gain factor to the second (dark into light); "
                    "flicker: a random gain per frame between them.")
-@click.option("--gain", default="0.3:1.6", show_default=True, type=_Ratio(), help="Gain range of --light.")
+@click.option("--gain", default="0.3:1.6", show_default=True, type=Ratio(), help="Gain range of --light.")
 @click.option("--blur", default=0, show_default=True, type=click.IntRange(0, 200),
               help="Motion blur: a line kernel K px long along a random direction per frame.")
 @click.option("--shake", default=0.0, show_default=True, type=click.FloatRange(0, 1000),
               help="Camera shake: each frame moved by up to PX px in x and y (uniform).")
-@click.option("--zoom", default=None, type=_Ratio(),
+@click.option("--zoom", default=None, type=Ratio(),
               help="Zoom about the object over the clip: its size goes from A to B times its own (1:0.6 shrinks it).")
 @click.option("--drop", default=0, show_default=True, type=click.IntRange(min=0),
               help="Drop every K-th frame (and its ground-truth row); 0: none.")
