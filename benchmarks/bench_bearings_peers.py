@@ -31,8 +31,8 @@ import numpy as np
 
 from vistrack.filters import filter_steps, make_filter
 from vistrack.gaussian import diag_logpdf
-from vistrack.models.bearings import Bearings, simulate, wrapped_cauchy_logpdf
-from vistrack.models.bearings_xi import XiProposal
+from vistrack.models.bearings.model import Bearings, simulate, wrapped_cauchy_logpdf
+from vistrack.models.bearings.xi import XiProposal
 from vistrack.models.kernel import PriorKernel
 
 try:
@@ -129,7 +129,7 @@ class _Linearised(dists.ProbDist if particles else object):
 
 
 class _Xi(dists.ProbDist if particles else object):
-    """vistrack's ξ move (:class:`~vistrack.models.bearings_xi.XiProposal`) as a `particles` proposal;
+    """vistrack's ξ move (:class:`~vistrack.models.bearings.xi.XiProposal`) as a `particles` proposal;
     ``logpdf`` on the measure of ``PX`` (the noise ξ under K, the state under ``p_0``)."""
 
     dim = 4

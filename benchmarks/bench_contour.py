@@ -21,7 +21,7 @@ from vistrack.clips import load_clip
 from vistrack.data_synth.contour import make_contour_clip
 from vistrack.features import FeatureMaps
 from vistrack.filters import make_filter
-from vistrack.models.contour import Contour
+from vistrack.models.contour.model import Contour
 from vistrack.runtime import keep_freed_memory
 
 from _timing import Timer, run_timed, split_table, stepper

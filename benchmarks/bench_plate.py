@@ -18,7 +18,7 @@ from vistrack.clips import load_clip
 from vistrack.data_synth.plate import make_plate_clip
 from vistrack.features import FeatureMaps
 from vistrack.filters import make_filter
-from vistrack.models.plate import PlateLikelihood
+from vistrack.models.plate.model import PlateLikelihood
 from vistrack.runtime import keep_freed_memory
 
 from _timing import Timer, run_timed, split_table, stepper

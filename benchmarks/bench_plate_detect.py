@@ -15,7 +15,7 @@ import numpy as np
 
 import vistrack
 from vistrack.data_synth.plate import detection_frames
-from vistrack.models.plate_detect import PlateDetector
+from vistrack.models.plate.detect import PlateDetector
 from vistrack.runtime import keep_freed_memory
 from vistrack.video import open_video, read_rects
 

@@ -4,7 +4,7 @@ For each seed: the success AUC and the runs of frames with IoU < 0.1 (3 frames o
 ``--around`` the frames about the first such run, each with the likelihood's parts at the
 ground-truth box and at the estimate, computed on the frame before the model adapts to it:
 ``in`` = ``-λ_c d²(h_in, q)``, ``ring`` = ``-λ_c κ (1 - d²(h_ring, q))``, ``contr`` = the
-back-projection contrast, ``tmpl`` = ``λ_t (ncc - 1)`` (:mod:`vistrack.models.appearance`).
+back-projection contrast, ``tmpl`` = ``λ_t (ncc - 1)`` (:mod:`vistrack.models.box.appearance`).
 Truth above the estimate: the search did not reach it; below: the model prefers the estimate.
 
     python benchmarks/box_diag.py [--clip hand_vot2013] [--seeds 0,8] [--around 8]
@@ -16,7 +16,7 @@ import numpy as np
 
 import vistrack
 from vistrack.metrics import iou
-from vistrack.models.box import Box
+from vistrack.models.box.model import Box
 
 from bench_real import load, scores
 

@@ -21,7 +21,7 @@ from vistrack.builders import build_model
 from vistrack.clips import load_clip
 from vistrack.features import FeatureMaps
 from vistrack.filters import make_filter
-from vistrack.models.spline import edge_peaks, pose_from
+from vistrack.models.contour.spline import edge_peaks, pose_from
 from vistrack.particles import ParticleSet
 from vistrack.reproduce.hs_sir import likelihood_params
 from vistrack.tracking import track

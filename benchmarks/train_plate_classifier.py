@@ -1,4 +1,4 @@
-"""Train the detector's plate/non-plate classifier (vistrack/models/plate_classifier.py) and write
+"""Train the detector's plate/non-plate classifier (vistrack/models/plate/classifier.py) and write
 its coefficients to vistrack/models/plate_classifier.npz.
 
 Samples: the rectangle candidates (``rectangle_candidates``) of
@@ -21,7 +21,7 @@ from sklearn.linear_model import LogisticRegression
 
 from vistrack.data_synth.plate import detection_frames
 from vistrack.metrics import iou
-from vistrack.models.plate_classifier import _WEIGHTS, rectangle_candidates, window_features
+from vistrack.models.plate.classifier import _WEIGHTS, rectangle_candidates, window_features
 from vistrack.video import open_video
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"

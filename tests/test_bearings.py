@@ -6,7 +6,7 @@ from scipy import integrate
 
 from vistrack.data_synth.bearings import simulate
 from vistrack.filters import filter_steps, make_filter
-from vistrack.models.bearings import Bearings, gaussian_fit_to_cauchy, wrapped_cauchy_logpdf
+from vistrack.models.bearings.model import Bearings, gaussian_fit_to_cauchy, wrapped_cauchy_logpdf
 from vistrack.particles import ParticleSet
 
 

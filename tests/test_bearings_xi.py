@@ -1,7 +1,7 @@
-"""The ξ proposal of the bearings model (vistrack.models.bearings_xi): its density matches its
+"""The ξ proposal of the bearings model (vistrack.models.bearings.xi): its density matches its
 samples, LIS with it is properly weighted (the mean weight is p(y | Z_{t-1}), by quadrature),
 moves stay on the support of K, the same seed gives the same output, and the compiled kernels
-(vistrack.kernels.bearings) equal the numpy path."""
+(vistrack.models.bearings.kernels) equal the numpy path."""
 
 import numpy as np
 import pytest
@@ -9,8 +9,8 @@ import pytest
 from vistrack import kernels
 from vistrack.data_synth.bearings import simulate
 from vistrack.filters import LIS, filter_steps, make_filter
-from vistrack.models.bearings import Bearings, wrapped_cauchy_logpdf
-from vistrack.models.bearings_xi import XiProposal
+from vistrack.models.bearings.model import Bearings, wrapped_cauchy_logpdf
+from vistrack.models.bearings.xi import XiProposal
 
 MODEL = Bearings(1)
 S = 0.5 * MODEL.sigma_eta  # the position's noise std under K
@@ -153,7 +153,7 @@ def test_unknown_proposal_is_one_clear_error():
 @pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 @pytest.mark.parametrize("ships, first", [(1, False), (3, False), (3, True)])
 def test_compiled_kernels_equal_the_numpy_path(ships, first):
-    """vistrack.kernels.bearings: the same draws, the same moves and densities (1e-12 relative)."""
+    """vistrack.models.bearings.kernels: the same draws, the same moves and densities (1e-12 relative)."""
     m = Bearings(ships)
     rng = np.random.default_rng(0)
     prev = m.sample_prior(200, rng)

@@ -79,8 +79,8 @@ def test_models_learn_the_blob_from_the_first_frame():
     """Box and contour (through the builder) learn the target's colour; a contour built by hand
     says what it lacks in one line."""
     from vistrack.filters import make_filter
-    from vistrack.models.box import Box
-    from vistrack.models.contour import Contour
+    from vistrack.models.box.model import Box
+    from vistrack.models.contour.model import Contour
 
     img, disc = scene()
     box = Box(img, (42, 12, 16, 16))  # the disc's bounding box: its corners are background

@@ -9,8 +9,8 @@ import pytest
 
 import vistrack
 from vistrack.features import bin_integrals, box_sums, colour_bins, is_grey, n_colour_bins
-from vistrack.models.appearance import Appearance
-from vistrack.models.box import Box
+from vistrack.models.box.appearance import Appearance
+from vistrack.models.box.model import Box
 from vistrack.particles import logsumexp
 
 H, W = 240, 320
@@ -260,7 +260,7 @@ def test_working_image_places_content_where_to_work_reads_it():
     a bright square's centroid in the working image is at ``to_work`` of its frame centre on both
     axes. Resizing to the rounded size put it 0.38 / 0.34 working px short (the dashcam plate's
     upward offset, ``docs/experiments.md``)."""
-    from vistrack.models.appearance import AppearanceFrame
+    from vistrack.models.box.appearance import AppearanceFrame
 
     frame = np.full((310, 320, 3), 20, np.uint8)
     frame[250:260, 280:290] = 220

@@ -9,7 +9,7 @@ from scipy import stats
 
 import vistrack
 from cli_helpers import run
-from vistrack.models.correlation import CorrelationFilter, DCFResponse, dcf_features
+from vistrack.models.box.correlation import CorrelationFilter, DCFResponse, dcf_features
 from vistrack.proposals.correlation import CorrelationProposal
 
 
@@ -188,7 +188,7 @@ def test_correlation_proposal_weights_match_a_brute_force_posterior():
     force on a grid of centres and log-scales."""
     from vistrack.features import FeatureMaps
     from vistrack.filters import make_filter
-    from vistrack.models.box import Box
+    from vistrack.models.box.model import Box
     from vistrack.particles import ParticleSet, logsumexp
 
     rng = np.random.default_rng(6)

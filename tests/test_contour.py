@@ -9,7 +9,7 @@ from vistrack.clips import load_clip
 from vistrack.features import FeatureMaps
 from vistrack.filters import make_filter
 from vistrack.metrics import center_error
-from vistrack.models.contour import BSpline, Contour, ellipse_template, pose_from, pose_params
+from vistrack.models.contour.model import BSpline, Contour, ellipse_template, pose_from, pose_params
 from vistrack.tracking import track
 
 

@@ -1,4 +1,4 @@
-"""The neural-network local search of LS-N-IPS (thesis 001 §4.3.1, Fig. 4.5; vistrack.models.contour_nn)."""
+"""The neural-network local search of LS-N-IPS (thesis 001 §4.3.1, Fig. 4.5; vistrack.models.contour.nn)."""
 
 import cv2
 import numpy as np
@@ -6,8 +6,8 @@ import pytest
 
 from vistrack.features import FeatureMaps
 from vistrack.filters import make_filter
-from vistrack.models import contour_nn as nn
-from vistrack.models.contour import Contour, ellipse_template, pose_from
+from vistrack.models.contour import nn
+from vistrack.models.contour.model import Contour, ellipse_template, pose_from
 
 SIZE = (240, 180)
 NOISELESS = nn.NNSearchConfig(samples=3000, hidden=(32,), epochs=60, noise=0.0, miss=0.0, clutter=0.0)
@@ -147,7 +147,7 @@ def test_missing_or_corrupt_cache_is_rebuilt(tmp_path, monkeypatch):
 def test_options_are_checked():
     with pytest.raises(ValueError, match="choose lms or nn"):
         model(search="cnn")
-    from vistrack.models.box import Box
+    from vistrack.models.box.model import Box
 
     assert "ls-n-ips-nn" in __import__("vistrack.filters", fromlist=["ALGORITHMS"]).ALGORITHMS
     with pytest.raises(ValueError, match=r"ls-n-ips-nn \(a learned local search\) needs a model with searcher"):

@@ -96,7 +96,7 @@ def test_contour_kernels_equal_the_numpy_path(contour_clip):
     off, gn = model._profiles_wide(obs, z, 12.0)
     grid = model._search_grid()[0]
     nrm = model.measurement_lines(z)[1]
-    from vistrack.models.spline import edge_peaks
+    from vistrack.models.contour.spline import edge_peaks
 
     thresh = model._threshold(obs)
     ref = model._grid_from_peaks(off, edge_peaks(gn, thresh), nrm, grid)
@@ -114,7 +114,7 @@ def test_contour_tracks_identical_with_kernels(contour_clip, algo):
 
 
 def test_plate_kernels_equal_the_numpy_path(plate_clip):
-    from vistrack.models.plate_likelihood import plate_map
+    from vistrack.models.plate.likelihood import plate_map
 
     model, stepper, _ = track(plate_clip, "plate", "lis", 60, 30, fast=False)
     frame = dict(plate_clip.source)[30]
@@ -137,7 +137,7 @@ def test_plate_tracks_identical_with_kernels(plate_clip):
 
 
 def test_appearance_kernels_equal_the_numpy_path():
-    from vistrack.models.appearance import Appearance
+    from vistrack.models.box.appearance import Appearance
 
     rng = np.random.default_rng(0)
     frame = cv2.GaussianBlur(rng.integers(0, 256, (120, 160, 3), dtype=np.uint8), (0, 0), 2)
@@ -174,13 +174,19 @@ def test_every_kernel_releases_the_gil():
     it run (the private and inlined helpers run inside an entry point, which has released the GIL
     already)."""
     import importlib
+    import pkgutil
 
     from numba.core.registry import CPUDispatcher
 
-    names = ["appearance", "bearings", "box", "box_frame", "contour", "contour_search", "plate", "plate_scan",
-             "sampling"]
-    kernels = [(m, k, f) for m in names for k, f in vars(importlib.import_module(f"vistrack.kernels.{m}")).items()
-               if isinstance(f, CPUDispatcher) and f.__module__ == f"vistrack.kernels.{m}"]
+    import vistrack
+
+    # every compiled module: vistrack.kernels's and each model package's ``*kernels`` modules
+    names = [m.name for m in pkgutil.walk_packages(vistrack.__path__, "vistrack.")
+             if m.name.startswith("vistrack.kernels.") or m.name.endswith("kernels")]
+    assert {"vistrack.kernels.sampling", "vistrack.models.box.kernels",
+            "vistrack.models.plate.scan_kernels"} <= set(names)
+    kernels = [(m, k, f) for m in names for k, f in vars(importlib.import_module(m)).items()
+               if isinstance(f, CPUDispatcher) and f.__module__ == m]
     assert len([k for _, k, _ in kernels if not k.startswith("_")]) > 25
     held = [f"{m}.{k}" for m, k, f in kernels
             if not (k.startswith("_") or f.targetoptions.get("forceinline") or f.targetoptions.get("nogil"))]

@@ -1,4 +1,4 @@
-"""The box model's compiled filter step (vistrack.kernels.box) against the numpy paths it replaces.
+"""The box model's compiled filter step (vistrack.models.box.kernels) against the numpy paths it replaces.
 
 Tolerances: the prediction, the transition density, the proposal map's scores, the map proposal's
 draws (``z``, ``log alpha``, ``log q``, and the generator left in the same state) and the collapse
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import vistrack
-import vistrack.models.appearance
+import vistrack.models.box.appearance
 from kernel_helpers import both
 from vistrack import kernels
 from vistrack.features import FeatureMaps
@@ -94,7 +94,7 @@ def test_region_of_interest_equals_the_numpy_path(tracked):
 
 def test_frame_features_equal_the_numpy_path():
     frames, box = moving_box_frames(1)
-    app = vistrack.models.appearance.Appearance(frames[0], box)
+    app = vistrack.models.box.appearance.Appearance(frames[0], box)
     for roi in ((0, 0, 160, 120), (37, 21, 90, 70), (5, 5, 6, 9), (3, 3, 10, 4)):
         a, b = both(lambda: app.frame(frames[0], roi))
         for name in ("texture", "labels", "ii"):

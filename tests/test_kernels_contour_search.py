@@ -1,4 +1,4 @@
-"""The contour's LMS local search in two fused compiled passes (:mod:`vistrack.kernels.contour_search`)
+"""The contour's LMS local search in two fused compiled passes (:mod:`vistrack.models.contour.search_kernels`)
 against the step-by-step kernels and numpy steps it replaces (``Contour.fused_search = False``):
 equal bit for bit, states and log-likelihoods, and so are the tracks."""
 
@@ -71,7 +71,7 @@ def test_grid_tables_equal_the_direct_sum():
     per line) give each line's term exactly as summing the kernel over its features there."""
     from numba import njit
 
-    from vistrack.kernels.contour import _is_peak, grid
+    from vistrack.models.contour.kernels import _is_peak, grid
 
     @njit(cache=False)
     def direct(gn, thresh, start, nrm, offsets, kern, c, out):

@@ -1,4 +1,4 @@
-"""The plate LIS proposal's compiled draws (vistrack.kernels.plate_scan) against the numpy path.
+"""The plate LIS proposal's compiled draws (vistrack.models.plate.scan_kernels) against the numpy path.
 
 Tolerance: none — the cells, the drawn points, ``log q`` and the generator's state after the
 draws are equal bit for bit (the kernels take the Gumbel and uniform variates drawn by numpy in
@@ -96,7 +96,7 @@ def test_line_scans_with_an_appearance_map_equal_the_numpy_path(scene):
 
 
 def test_map_values_bilinear_and_clamped():
-    from vistrack.models.plate_proposal import map_values
+    from vistrack.models.plate.proposal import map_values
 
     m = np.arange(12, dtype=np.float32).reshape(3, 4)  # value 4 i + j at row i, column j
     amap = (m, np.array([1.0, 0.0, 1.0, 0.0]))

@@ -5,7 +5,7 @@ import pytest
 
 from vistrack.data_synth.landmarks import observe, simulate
 from vistrack.filters import make_filter
-from vistrack.models.landmarks import Landmarks, regular_polygon, shape_step, tangent_basis
+from vistrack.models.landmarks.model import Landmarks, regular_polygon, shape_step, tangent_basis
 from vistrack.reproduce.landmarks import LandmarksConfig, landmarks_run, run_landmarks
 
 

@@ -145,7 +145,7 @@ def test_each_group_samples_the_partitions_in_its_ordering():
 @pytest.mark.parametrize("algo", PARTITIONED)
 def test_same_seed_same_output(algo):
     from vistrack.filters import filter_steps
-    from vistrack.models.bearings import simulate
+    from vistrack.models.bearings.model import simulate
 
     model = Bearings(3)
     _, obs = simulate(model, 4, np.random.default_rng(2))

@@ -1,10 +1,10 @@
-"""The detector's learned plate test (vistrack.models.plate_classifier): its candidates, features and
+"""The detector's learned plate test (vistrack.models.plate.classifier): its candidates, features and
 decision, by known answers."""
 
 import cv2
 import numpy as np
 
-from vistrack.models.plate_classifier import WINDOW, PlateClassifier, rectangle_candidates, window_features
+from vistrack.models.plate.classifier import WINDOW, PlateClassifier, rectangle_candidates, window_features
 
 
 def _frame_with_rectangle():

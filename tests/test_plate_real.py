@@ -8,7 +8,7 @@ import pytest
 
 from vistrack.builders import model_from_box
 from vistrack.features import FeatureMaps
-from vistrack.models.plate_detect import PlateDetector
+from vistrack.models.plate.detect import PlateDetector
 from vistrack.video import open_video, read_rects
 
 CLIP = Path(__file__).resolve().parents[2] / "shared" / "data" / "real" / "plate_in_polo_dashcam"

@@ -5,7 +5,7 @@ import pytest
 
 from vistrack.cli import main
 from vistrack.clips import load_clip
-from vistrack.models.plate_layout import LAYOUTS, plate_vertices
+from vistrack.models.plate.layout import LAYOUTS, plate_vertices
 
 
 @pytest.fixture(scope="module")
@@ -47,7 +47,7 @@ def test_plate_likelihood_has_a_narrow_dominant_peak_at_the_plate(road):
     """Fig. 1.6: over a (u, w) grid at the true angle and scale, the maximum of r is at the
     true plate, and poses 15 % of the plate width away are far less likely."""
     from vistrack.features import FeatureMaps
-    from vistrack.models.plate import PlateLikelihood
+    from vistrack.models.plate.model import PlateLikelihood
 
     clip = load_clip(road)
     t = clip.truth
@@ -71,7 +71,7 @@ def test_plate_line_scans_read_the_terms_the_weight_uses(road):
     extra pixel sets of a term included — so with the scans' point density equal to the full
     one they agree exactly; every feature is in exactly one term."""
     from vistrack.features import FeatureMaps
-    from vistrack.models.plate import PlateLikelihood
+    from vistrack.models.plate.model import PlateLikelihood
 
     clip = load_clip(road)
     t = clip.truth
@@ -92,11 +92,11 @@ def test_plate_scale_banded_weights_interpolate_in_log_s(road):
     """Scale-banded coefficients (``w_0`` at plate width ``s_0``, ``w_1`` at ``s_1``, linear in
     log s between them, constant outside): ``log r`` is the plain likelihood with ``w_0`` below
     ``s_0``, with ``w_1`` above ``s_1`` and the log-s mix of the two between — and it is the
-    regression score of :func:`~vistrack.models.plate_fit.design` with the fitted vector split by
-    :func:`~vistrack.models.plate_fit.split_weights`, so the fit and the filters agree."""
+    regression score of :func:`~vistrack.models.plate.fit.design` with the fitted vector split by
+    :func:`~vistrack.models.plate.fit.split_weights`, so the fit and the filters agree."""
     from vistrack.features import FeatureMaps
-    from vistrack.models.plate import PlateLikelihood
-    from vistrack.models.plate_fit import design, feature_likelihood, split_weights
+    from vistrack.models.plate.fit import design, feature_likelihood, split_weights
+    from vistrack.models.plate.model import PlateLikelihood
 
     clip = load_clip(road)
     t = clip.truth
@@ -148,8 +148,8 @@ def test_plate_log_odds_separate_plates_from_clutter(road640):
     up to 2.5 — misses some of its frames; the suite's plates score below 2.5 in under 1 % of
     their frames.)"""
     from vistrack.features import FeatureMaps
-    from vistrack.models.plate import Plate
-    from vistrack.models.plate_fit import scan_poses
+    from vistrack.models.plate.fit import scan_poses
+    from vistrack.models.plate.model import Plate
 
     clip = load_clip(road640)
     t = clip.truth
@@ -190,7 +190,7 @@ def test_plate_lis_proposal_is_a_proper_density_on_the_window(entering):
     import cv2
 
     from vistrack.features import FeatureMaps
-    from vistrack.models.plate import Plate
+    from vistrack.models.plate.model import Plate
 
     g = np.random.default_rng(1)
     img = cv2.GaussianBlur((g.random((240, 320)) * 255).astype(np.uint8), (0, 0), 2)
@@ -223,7 +223,7 @@ def test_plate_lis_proposal_is_a_proper_density_on_the_window(entering):
 
 
 def test_plate_dynamics_entering_branch(rng):
-    from vistrack.models.plate import Plate
+    from vistrack.models.plate.model import Plate
 
     model = Plate((640, 480))
     prev = model.sample_prior(4000, rng)
@@ -253,7 +253,7 @@ def test_plate_entering_search_lands_births_on_the_plate(road640):
     0.1 rad, 20 % off) end within a third of the plate height (the 'not lost' tolerance) at
     least 1.5 times as often, and are never outside their window."""
     from vistrack.features import FeatureMaps
-    from vistrack.models.plate import Plate, PlateLISProposal
+    from vistrack.models.plate.model import Plate, PlateLISProposal
 
     clip = load_clip(road640)
     t = clip.truth
@@ -292,7 +292,7 @@ def test_plate_lls_grid_finds_the_plate_and_lls_tracks_it(road):
     the lead now and then — in 1 of 8 seeds with N = 100, 5 of 8 with N = 50.)"""
     from vistrack.features import FeatureMaps
     from vistrack.filters import make_filter
-    from vistrack.models.plate import Plate
+    from vistrack.models.plate.model import Plate
     from vistrack.tracking import track
 
     clip = load_clip(road)
@@ -333,7 +333,7 @@ def test_plate_sharpness_scales_log_r_but_not_the_report(road):
     """``sharpness`` multiplies ``log r`` (the learnt log-odds) everywhere the filters read it —
     full, sparse and line-scan evaluations — while ``visible`` still thresholds the log-odds."""
     from vistrack.features import FeatureMaps
-    from vistrack.models.plate import Plate
+    from vistrack.models.plate.model import Plate
 
     clip = load_clip(road)
     t = clip.truth
@@ -355,7 +355,7 @@ def test_plate_sharpness_scales_log_r_but_not_the_report(road):
 def test_plate_estimate_is_the_main_mode_not_the_mean_of_two(rng):
     """A posterior split between a plate and a plate-like sign: the estimate is the weighted
     mean of the heavier cluster (within half a plate of the best particle), not a point between."""
-    from vistrack.models.plate import Plate
+    from vistrack.models.plate.model import Plate
     from vistrack.particles import ParticleSet
 
     model = Plate((640, 480))
@@ -394,7 +394,7 @@ def test_plate_lis_weights_match_a_brute_force_posterior(road):
     about the plate, the angle known. The mean weight estimates the evidence ∫ r p0 and the
     weighted mean of (u, w, s) the posterior mean — both also computed by brute force on a grid."""
     from vistrack.features import FeatureMaps
-    from vistrack.models.plate import Plate
+    from vistrack.models.plate.model import Plate
     from vistrack.particles import logsumexp
 
     clip = load_clip(road)
@@ -449,7 +449,7 @@ def test_plate_lis_dynamics_window_weights_match_a_brute_force_posterior(road):
     the angle and scale known. The mean weight is the evidence ∫ r N_uw and the weighted mean of
     (u, w) the posterior mean, both also by brute force on a grid; the box window agrees too."""
     from vistrack.features import FeatureMaps
-    from vistrack.models.plate import Plate, PlateLISProposal
+    from vistrack.models.plate.model import Plate, PlateLISProposal
     from vistrack.particles import logsumexp
 
     clip = load_clip(road)
@@ -554,8 +554,8 @@ def test_fit_plate_separates_plates_from_background_and_prints_the_coefficients(
     most true plates above log-odds 0 and almost no random or nearby pose; the command prints every
     feature's coefficient."""
     from cli_helpers import run
-    from vistrack.models.plate import PlateLikelihood
-    from vistrack.models.plate_fit import fit_plate_coefficients
+    from vistrack.models.plate.fit import fit_plate_coefficients
+    from vistrack.models.plate.model import PlateLikelihood
 
     code, _, err = run(["synth", "plate", "--out", str(tmp_path / "c1"), "--frames", "12", "--size", "320x240",
                         "--seed", "101"], capsys)

@@ -8,7 +8,7 @@ import pytest
 
 from cli_helpers import run
 from vistrack.clips import load_clip, read_groundtruth_csv
-from vistrack.models.plate_layout import plate_vertices
+from vistrack.models.plate.layout import plate_vertices
 from vistrack.mot import FrameObjects, Identities, clear_mot, objects_by_frame
 from vistrack.particles import ParticleSet
 
@@ -104,7 +104,7 @@ def test_identities_follow_moving_boxes_and_start_new_ones():
 
 
 def _model(k=3):
-    from vistrack.models.plates import Plates
+    from vistrack.models.plate.plates import Plates
 
     return Plates((640, 480), k)
 
@@ -256,7 +256,7 @@ def test_a_plate_covered_from_one_side_is_not_reported(one_car):
     so the plate is reported only without the half test. The compiled and numpy paths agree."""
     from vistrack import kernels
     from vistrack.features import FeatureMaps
-    from vistrack.models.plates import Plates
+    from vistrack.models.plate.plates import Plates
 
     t, k = one_car.truth, 36
     assert t["visible"][k] > 0

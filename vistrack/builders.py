@@ -11,7 +11,7 @@ import numpy as np
 
 from .clips import read_groundtruth_csv
 from .features import FeatureMaps, is_grey
-from .models.contour import Contour
+from .models.contour.model import Contour
 from .models.registry import MODELS as _REGISTRY
 from .models.registry import ModelSpec, get_model_spec, register
 from .video import VideoError, _short, groundtruth_origin, read_rects
@@ -177,7 +177,7 @@ def _spec(name):
 
 
 def _box_from_box(frame, box, **params):
-    from .models.box import Box
+    from .models.box.model import Box
 
     return Box(frame, box, **params)
 
@@ -259,7 +259,7 @@ def _plate_from_clip(clip, *, init, init_gt, template, targets=None, **params):
     if targets is not None:  # several plates at once: acquired by the slots' births
         if init is not None or init_gt is not None:
             raise VideoError("--targets finds the plates by itself: give no --init or --init-gt")
-        from .models.plates import Plates
+        from .models.plate.plates import Plates
 
         params.pop("appearance", None)
         layout = _layout(params) or (clip.meta or {}).get("layout") or "jp"
@@ -277,7 +277,7 @@ def _landmarks(clip, size, init_gt, template, params):
     """Landmark model started from the first frame's landmarks: ``--template FILE`` (x y per
     line), ``--init-gt`` (lx0.., ly0.. columns), or the clip's meta.json; the clip's centre,
     scale and dynamics when meta.json has them."""
-    from .models.landmark_video import LandmarkVideo
+    from .models.landmarks.video import LandmarkVideo
 
     meta = clip.meta or {}
     if template is not None:
@@ -308,7 +308,7 @@ def _landmarks(clip, size, init_gt, template, params):
 def _plate(clip, size, init, init_gt, params):
     """Plate model; without a start, on a rendered clip it acquires plates through the entering-car
     component, on real footage (the appearance on) it is a
-    :class:`~vistrack.models.plate_detect.PlateSearch` that finds the plate in the first frames and
+    :class:`~vistrack.models.plate.detect.PlateSearch` that finds the plate in the first frames and
     starts there. The layout is the given one, the clip's, the one nearest the start box's aspect
     ratio, the detection's, or jp."""
     box = init
@@ -320,7 +320,7 @@ def _plate(clip, size, init, init_gt, params):
     if appearance == "auto":  # a rendered clip: the plate likelihood alone, as the thesis experiments
         appearance = not (clip.meta or {}).get("model")
     if box is None and appearance:  # real footage without a box: find the plate first (PlateSearch)
-        from .models.plate_detect import PlateSearch
+        from .models.plate.detect import PlateSearch
 
         def build(frame, det):
             # the angle's random walk 0.003 rad/frame, not 0.01: started from a detection, the angle
@@ -347,10 +347,10 @@ def _plate_from_box(size, box, layout, params, frame=None, angle_sigma=None):
     the appearance of the plate in the box is learned too (:meth:`Plate.learn_appearance`) and the
     detector kept for :meth:`Plate.redetect`; ``angle_sigma``: the angle's random walk (rad/frame)
     instead of the model's, unless ``sigma`` is given."""
-    from .models.plate import Plate
+    from .models.plate.model import Plate
 
     if layout is None and box is not None:  # the layout whose aspect ratio is nearest the box's
-        from .models.plate_layout import LAYOUTS
+        from .models.plate.layout import LAYOUTS
 
         r = float(box[2]) / max(float(box[3]), 1e-9)
         layout = min(LAYOUTS, key=lambda k: abs(np.log(LAYOUTS[k].aspect / r)))
@@ -366,7 +366,7 @@ def _plate_from_box(size, box, layout, params, frame=None, angle_sigma=None):
         model.prior_mean = np.concatenate([pose, pose, [0.0]])
         model.start = (pose, np.array([0.05 * w, 0.05 * h, 0.03, 0.05 * w]))
         if frame is not None:
-            from .models.plate_detect import PlateDetector
+            from .models.plate.detect import PlateDetector
 
             model.learn_appearance(frame, (x, y, w, h))
             model.detector = PlateDetector()  # the plate searched for again while it is not reported
@@ -418,7 +418,7 @@ register(ModelSpec("box", _THESIS + _HISTORY,
 register(ModelSpec("contour", _THESIS + _HISTORY + ("ls-n-ips-nn",),
                    "B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
                    from_box=_contour_from_box, from_clip=_contour_from_clip, bytes_per_particle=48_000))
-#: with ``targets`` (several plates at once, :class:`~vistrack.models.plates.Plates`): partitioned sampling too
+#: with ``targets`` (several plates at once, :class:`~vistrack.models.plate.plates.Plates`): partitioned sampling too
 PLATES_ALGOS = ("partitioned-lis", "partitioned", "branched-partitioned-lis", "branched-partitioned", "lis",
                 "bootstrap", "condensation")
 register(ModelSpec("plate", ("lis", "bootstrap", "condensation", "lls", "avpf"),

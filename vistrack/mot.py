@@ -33,7 +33,7 @@ __all__ = ["MultiTarget", "Identities", "FrameObjects", "objects_by_frame", "pla
 @runtime_checkable
 class MultiTarget(Protocol):
     """A video model that reports several targets per frame (the plate slots of
-    :class:`~vistrack.models.plates.Plates`): each frame's targets are single-target states
+    :class:`~vistrack.models.plate.plates.Plates`): each frame's targets are single-target states
     ``(M, d1)`` with their boxes, outlines and track-file columns."""
 
     def targets(self, obs, estimate):

@@ -143,7 +143,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         the same either way.
     lead : sequence of (int, ndarray)
         Frames before ``frames`` that were searched for the object without finding it
-        (:class:`~vistrack.models.plate_detect.PlateSearch`): each gets a row with ``visible=0``
+        (:class:`~vistrack.models.plate.detect.PlateSearch`): each gets a row with ``visible=0``
         and ``lost_reason`` "not found" (NaN geometry), and its frame unmarked in the video.
     frame_count : int or None
         The number of frames the input holds, where it is exact (an image folder): frames after
@@ -228,7 +228,7 @@ def _open_outputs(track_path, results_path, results_format, sequence, out_path, 
 
 def _record_lead(run, lead, model, outs, writer, label):
     """Rows (``visible=0``, "not found") and unmarked video frames for the frames searched without
-    finding the object (:class:`~vistrack.models.plate_detect.PlateSearch`)."""
+    finding the object (:class:`~vistrack.models.plate.detect.PlateSearch`)."""
     for index, frame in lead:
         row = {"frame": index, "visible": 0, **model.describe(np.full(model.dim, np.nan)),
                "ess": 0.0, "ms": 0.0, "lost_reason": "not found"}

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from vistrack.models.plate_fit import fit_plate_coefficients
+from vistrack.models.plate.fit import fit_plate_coefficients
 
 from .options import FloatList
 

@@ -15,8 +15,8 @@ from vistrack.builders import MODELS, PLATES_ALGOS, build_model, read_support_po
 from vistrack.clips import load_clip
 from vistrack.filters import make_filter
 from vistrack.models.registry import MODELS as MODEL_REGISTRY
-from vistrack.models.contour_nn import network_for
-from vistrack.models.plate_detect import PlateSearch
+from vistrack.models.contour.nn import network_for
+from vistrack.models.plate.detect import PlateSearch
 from vistrack.evaluation import sequence_name
 from vistrack.results_format import FORMATS, result_paths
 from vistrack.models.registry import DEFAULT_MODEL, all_algos, get_model_spec

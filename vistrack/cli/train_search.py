@@ -5,8 +5,8 @@ from __future__ import annotations
 import click
 
 from vistrack.builders import read_support_points
-from vistrack.models.contour import Contour
-from vistrack.models.contour_nn import NNSearchConfig, load_or_train
+from vistrack.models.contour.model import Contour
+from vistrack.models.contour.nn import NNSearchConfig, load_or_train
 from vistrack.video import VideoError
 
 from .options import SEED, Size

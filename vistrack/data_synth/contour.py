@@ -17,7 +17,7 @@ over a static background full of edges:
 
 Ground truth per frame: ``frame, visible, cx, cy, w, h, angle_deg, scale`` and
 the support points ``qx0..qx{n-1}, qy0..qy{n-1}``. ``cx, cy`` is the mean of the
-support points (the pose centre of :class:`vistrack.models.contour.Contour`);
+support points (the pose centre of :class:`vistrack.models.contour.model.Contour`);
 ``w, h`` the bounding box of the outline.
 """
 
@@ -28,7 +28,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from vistrack.models.contour import BSpline
+from vistrack.models.contour.model import BSpline
 from vistrack.video import VideoWriter
 
 from .render import add_noise, atomic_clip, clutter_background, lighting, motion_blur, smooth_noise, write_clip_files

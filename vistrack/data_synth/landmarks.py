@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from vistrack.models.landmarks import VIDEO_DYNAMICS, Landmarks, simulate
-from vistrack.models.landmarks import sample_observations as observe
+from vistrack.models.landmarks.model import VIDEO_DYNAMICS, Landmarks, simulate
+from vistrack.models.landmarks.model import sample_observations as observe
 from vistrack.video import VideoWriter
 
 from .render import add_noise, atomic_clip, clutter_background, lighting, smooth_noise, write_clip_files
@@ -83,7 +83,7 @@ def make_landmark_clip(out, *, k=5, frames=200, size=(640, 480), seed=0, clutter
     """Render a landmark clip into ``out`` (video.mp4, groundtruth.csv, meta.json).
 
     ``K`` bright blobs at ``centre + scale_px · h_t`` (``h_t = z_t e^{s_t + jθ_t}``
-    follows the model (5) with :data:`~vistrack.models.landmarks.VIDEO_DYNAMICS`,
+    follows the model (5) with :data:`~vistrack.models.landmarks.model.VIDEO_DYNAMICS`,
     from the regular K-gon), so scale and rotation are about the image centre
     and the shape deforms. Clutter: ``clutter_blobs`` identical blobs drifting
     over a textured background with edges; each landmark is occluded (not

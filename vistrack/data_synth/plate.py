@@ -7,7 +7,7 @@ view at a time, with stretches without any plate. The scene has buildings,
 signs with text and grilles (plate-like clutter), illumination change, motion
 blur on the moving car and sensor noise.
 
-Plates follow a :class:`~vistrack.models.plate_layout.PlateLayout`: the
+Plates follow a :class:`~vistrack.models.plate.layout.PlateLayout`: the
 Japanese layout of Fig. 1.5 (white, bordered, a top row of small characters,
 a small glyph at the left and four large digits) or a single-row layout.
 
@@ -39,7 +39,7 @@ import cv2
 import numpy as np
 
 from vistrack.clips import write_track_csv
-from vistrack.models.plate_layout import LAYOUTS, plate_vertices
+from vistrack.models.plate.layout import LAYOUTS, plate_vertices
 from vistrack.video import VideoWriter
 
 from .render import add_noise, atomic_clip, lighting, motion_blur, smooth_noise, write_clip_files

@@ -26,7 +26,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from vistrack.models.plate_layout import LAYOUTS
+from vistrack.models.plate.layout import LAYOUTS
 from vistrack.video import VideoWriter
 
 from .perturb import read_clip

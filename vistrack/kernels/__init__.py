@@ -7,16 +7,17 @@ as the reference and as the fallback where numba is missing:
 
 - :mod:`~vistrack.kernels.sampling`: bilinear samples exactly as ``cv2.remap`` (``INTER_LINEAR``,
   1/32-pixel fixed point) and numpy's pairwise summation;
-- :mod:`~vistrack.kernels.contour`: the contour's measurement lines, edge features, likelihood and
-  the local-search grid;
-- :mod:`~vistrack.kernels.contour_search`: the contour's LMS local search fused into two passes;
-- :mod:`~vistrack.kernels.plate`: the plate likelihood's 4-channel map and pixel-set means (the
-  likelihood, the sparse search and the line scans);
-- :mod:`~vistrack.kernels.plate_scan`: the plate LIS proposal's line scans of all particles in one
-  call, and its cell draws;
-- :mod:`~vistrack.kernels.appearance`: the box model's colour bins, per-bin integral images,
-  colour term and template correlation;
-- :mod:`~vistrack.kernels.bearings`: the bearings ξ proposal's move and first stage.
+- :mod:`~vistrack.kernels.appearance`: colour bins, per-bin integral images, the colour term and the
+  template correlation (the feature maps and the box, contour and plate appearance);
+- :mod:`~vistrack.kernels.grid`: the grid proposal's draws (:class:`~vistrack.proposals.grid.MapProposal`);
+- :mod:`~vistrack.kernels.laplace`: the bearings ξ proposal's Laplace parts, plain numpy that the
+  bearings kernels compile.
+
+Each model family keeps its own kernels in its package (:mod:`vistrack.models.box.kernels`,
+:mod:`~vistrack.models.box.frame_kernels`, :mod:`~vistrack.models.box.dcf_kernels`,
+:mod:`vistrack.models.contour.kernels`, :mod:`~vistrack.models.contour.search_kernels`,
+:mod:`vistrack.models.plate.kernels`, :mod:`~vistrack.models.plate.scan_kernels`,
+:mod:`vistrack.models.bearings.kernels`); this package holds what they share and :func:`use`.
 
 Every entry point releases the GIL (``nogil``): the decoding thread of ``vistrack run`` runs beside
 them. Kernels are compiled on first use and cached on disk (``cache=True``; loading them takes 0.1–1 s,

@@ -1,10 +1,10 @@
-"""The box model's appearance (:mod:`~vistrack.models.appearance`), compiled.
+"""The box model's appearance (:mod:`~vistrack.models.box.appearance`), compiled.
 
 - :func:`colour_labels` is :func:`~vistrack.features.colour_bins` of an HSV image (integer
   arithmetic: equal).
 - :func:`bin_integrals` is :func:`~vistrack.features.bin_integrals` without the one-hot array
   (integer counts: equal).
-- :func:`ncc` is :meth:`Appearance.ncc <vistrack.models.appearance.Appearance.ncc>`: the texture
+- :func:`ncc` is :meth:`Appearance.ncc <vistrack.models.box.appearance.Appearance.ncc>`: the texture
   sampled as ``cv2.remap`` samples it (bit for bit) and the dot products and norms summed in
   sample order (numpy's BLAS sums in another order: 1e-12 relative).
 - :func:`colour_loglik` is ``AppearanceFrame.histograms`` and ``TargetColour.loglik`` in one pass

@@ -1,5 +1,5 @@
-"""The bearings ξ proposal's Laplace parts (:class:`~vistrack.models.bearings_xi.XiProposal`), plain
-numpy and scalar arithmetic: the numpy path calls it on arrays and :mod:`vistrack.kernels.bearings`
+"""The bearings ξ proposal's Laplace parts (:class:`~vistrack.models.bearings.xi.XiProposal`), plain
+numpy and scalar arithmetic: the numpy path calls it on arrays and :mod:`vistrack.models.bearings.kernels`
 compiles this very function for its loop (it lives here so that the kernels need not import the
 model that uses them)."""
 
@@ -14,7 +14,7 @@ _LOG_SQRT_2PI = 0.5 * np.log(2 * np.pi)
 
 def laplace_parts(a, m, s, gam):
     """``log_m1, log_m2, u_b, s_b`` of :meth:`XiProposal.parts` for arrays or scalars (the
-    compiled kernel :mod:`vistrack.kernels.bearings` compiles this very function)."""
+    compiled kernel :mod:`vistrack.models.bearings.kernels` compiles this very function)."""
     c2 = s * s + (gam * a) ** 2
     log_m1 = np.log(a) - 0.5 * m * m / c2 - 0.5 * np.log(c2) - _LOG_SQRT_2PI
     u = m

@@ -1,7 +1,7 @@
 """LIS's importance function from a correlation filter's response (thesis 001, §4.5; issue 34).
 
 The observation goes into the proposal: with probability ``β`` a particle's new pose is drawn from
-the correlation filter's response over the search region (:class:`~vistrack.models.correlation.DCFResponse`,
+the correlation filter's response over the search region (:class:`~vistrack.models.box.correlation.DCFResponse`,
 the best scale's map), else from the dynamics ``K``. The response map's cells are drawn with
 probabilities ``p_c = (1 - s) e_c / Σ e + s / C`` (``e = exp(t (y - max y))``, ``C`` cells), the
 centre uniformly inside the cell (side ``a`` frame px) and the log-scale from
@@ -33,7 +33,7 @@ class CorrelationProposal:
     ----------
     model : object
         Supplies ``dcf_share`` (``β``), ``dcf_tempering`` (``(t, s)``) and ``dcf_scale_std`` (``σ_l``);
-        the observation supplies ``obs.dcf`` (a :class:`~vistrack.models.correlation.DCFResponse` or
+        the observation supplies ``obs.dcf`` (a :class:`~vistrack.models.box.correlation.DCFResponse` or
         ``None``: then ``z = x``, the bootstrap step) and ``obs.dcf_share`` (``β`` of this frame).
     kernel : Transition
         The step's ``K``.

@@ -17,8 +17,8 @@ Gumbel-max with one draw per cell: the same distribution, 81 times the ``log`` p
 
 With the compiled kernels (:mod:`vistrack.kernels`), a model whose ``q`` is a map read
 bilinearly (``proposal_work``, ``proposal_qmap`` and ``proposal_tempering``, as the box model's)
-is sampled in two compiled calls (:func:`~vistrack.kernels.box.grid_points`,
-:func:`~vistrack.kernels.box.map_sample`) from the same draws, and a model with ``lis_step``
+is sampled in two compiled calls (:func:`~vistrack.kernels.grid.grid_points`,
+:func:`~vistrack.kernels.grid.map_sample`) from the same draws, and a model with ``lis_step``
 runs LIS's whole proposal step itself (:meth:`MapProposal.propose`).
 """
 
@@ -111,7 +111,7 @@ class MapProposal:
     def _sample_map(self, x, obs, rng):
         """:meth:`sample` for a model whose ``q`` is its map read bilinearly (module docstring),
         compiled: the same draws, ``q g`` summed in the linear domain."""
-        from ..kernels.box import grid_points, map_sample
+        from ..kernels.grid import grid_points, map_sample
 
         model = self.model
         x = np.ascontiguousarray(x, dtype=float)

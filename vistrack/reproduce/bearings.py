@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..filters import ALGORITHMS, filter_steps, make_filter
-from ..models.bearings import LIS_PROPOSALS, Bearings, simulate
+from ..models.bearings.model import LIS_PROPOSALS, Bearings, simulate
 from ..particles import DegenerateWeightsWarning
 
 __all__ = ["BearingsConfig", "run_bearings", "bearing_tasks", "run_bearing_task", "bearing_results", "DEFAULT_ALGOS",
@@ -40,7 +40,7 @@ class BearingsConfig:
     steps: int = 10
     algos: list = field(default_factory=lambda: list(DEFAULT_ALGOS))
     particles: list = field(default_factory=lambda: [100, 500, 3000])
-    #: LIS's local proposal (:data:`~vistrack.models.bearings.LIS_PROPOSALS`)
+    #: LIS's local proposal (:data:`~vistrack.models.bearings.model.LIS_PROPOSALS`)
     proposal: str = "xi"
     seed: int = 0
     resample: str = "systematic"

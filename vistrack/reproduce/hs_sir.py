@@ -40,7 +40,7 @@ class HSConfig(ContourConfig):
 
 
 #: the edge likelihood's parameters that ``likelihood`` may set, with their types
-#: (:class:`~vistrack.models.contour.Contour`)
+#: (:class:`~vistrack.models.contour.model.Contour`)
 LIKELIHOOD_KEYS = {"sigma_edge": float, "q_miss": float, "clutter_density": float, "measure_per_segment": int,
                    "edge_threshold": float}
 

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..filters import make_filter
-from ..models.landmarks import Landmarks, simulate
+from ..models.landmarks.model import Landmarks, simulate
 from ..particles import DegenerateWeightsWarning, ParticleSet
 
 __all__ = ["LandmarksConfig", "PAPER", "run_landmarks", "landmarks_run", "landmark_tasks", "run_landmark_task",

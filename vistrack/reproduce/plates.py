@@ -2,7 +2,7 @@
 clips with up to three plates in view (``make_plate_clip(overlap=True)``).
 
 Every (clip, algorithm, N, run) is one task of the evaluation engine (:mod:`vistrack.evaluation`):
-the multi-plate model (:class:`~vistrack.models.plates.Plates`, ``targets`` slots) tracks the clip
+the multi-plate model (:class:`~vistrack.models.plate.plates.Plates`, ``targets`` slots) tracks the clip
 with no initial box — plates are acquired by the slots' births — and the task records per frame
 the reported plates with their ids (:class:`~vistrack.mot.Identities`), the time spent and the
 ESS. Run ``r`` on clip ``c`` uses ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]`` for every

@@ -1,0 +1,147 @@
+"""The box model's per-frame bookkeeping (:mod:`~vistrack.models.box.model`), compiled: one call each
+where numpy makes a dozen small ones.
+
+- :func:`predicted_roi` is ``Box.observe``'s region: ``Appearance.roi`` of the boxes of
+  ``Box.predict_mean`` of the particles, grown by the reach (the same arithmetic in the same
+  order; ``math.exp`` where numpy may use its own SIMD ``exp``: the integers agree unless a
+  bound falls within an ulp of an integer).
+- :func:`frame_features` is ``AppearanceFrame``'s maps after the grey and HSV conversions: the
+  texture (grey level and its 3x3 Sobel gradient, ``BORDER_REFLECT``: sums of integers, equal to
+  OpenCV's), the colour labels and their bin integrals (equal) in one call.
+- :func:`adapt_template` is ``Appearance.adapt`` up to the colour histogram's update: the patch
+  of the estimate sampled as ``cv2.remap`` samples it (:func:`~vistrack.kernels.appearance.ncc`'s
+  sampling), its correlation with the template, the new template and the box's bin counts
+  (sums in sample order where numpy's BLAS sums in another: 1e-12 relative,
+  ``tests/test_kernels_box.py``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ...kernels.appearance import _box_count, bin_integrals, colour_labels
+from ...kernels.sampling import NONFINITE, corner_float, fma_lerp, inside, lerp_fma, pairwise_sum
+
+__all__ = ["predicted_roi", "adapt_template", "frame_features"]
+
+
+@njit(cache=True, nogil=True)
+def predicted_roi(states, damping, size0, reach_sd, reach_factor, ring, out):
+    """``out (4,)`` int64: ``(x0, y0, x1, y1)``, the bounding box of the boxes ``(cx, cy, w_0 e^l,
+    h_0 e^l)`` of the predicted means ``z + d (z - z')`` of ``states (N, 6)``, grown by
+    ``reach_sd e^{max l} reach_factor`` and by ``ring / 2`` times the largest ``w + h`` (floor / ceil)."""
+    lo_x = lo_y = np.inf
+    hi_x = hi_y = top_wh = top_l = -np.inf
+    for n in range(states.shape[0]):
+        cx = states[n, 0] + damping[0] * (states[n, 0] - states[n, 3])
+        cy = states[n, 1] + damping[1] * (states[n, 1] - states[n, 4])
+        lv = states[n, 2] + damping[2] * (states[n, 2] - states[n, 5])
+        e = math.exp(lv)
+        w, h = size0[0] * e, size0[1] * e
+        lo_x, hi_x = min(lo_x, cx - w / 2), max(hi_x, cx + w / 2)
+        lo_y, hi_y = min(lo_y, cy - h / 2), max(hi_y, cy + h / 2)
+        top_wh, top_l = max(top_wh, w + h), max(top_l, lv)
+    g = reach_sd * math.exp(top_l) * reach_factor + ring * 0.5 * top_wh
+    out[0], out[1] = math.floor(lo_x - g), math.floor(lo_y - g)
+    out[2], out[3] = math.ceil(hi_x + g), math.ceil(hi_y + g)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _patch(texture, box, gx, gy, x0, y0, f, out):
+    """The raw samples of ``Appearance.patches`` for one ``box (4,)``: grey levels ``out[:M]`` and the
+    gradient ``(gx, gy)`` interleaved in ``out[M:]``, row-major over the grid."""
+    mx, my = gx.shape[0], gy.shape[0]
+    m = mx * my
+    zero, nan = np.float32(0.0), np.float32(np.nan)
+    h, w = texture.shape[0], texture.shape[1]
+    for r in range(my):
+        for c in range(mx):
+            i = r * mx + c
+            ix, _, a, _ = corner_float(np.float32((box[0] + gx[c] * box[2] - x0) * f - 0.5), zero)
+            _, iy, _, b = corner_float(zero, np.float32((box[1] + gy[r] * box[3] - y0) * f - 0.5))
+            for k in range(3):
+                if ix != NONFINITE and iy != NONFINITE and inside(ix, iy, w, h):
+                    y0_, x0_ = np.uint64(iy), np.uint64(ix)
+                    y1_, x1_ = y0_ + np.uint64(1), x0_ + np.uint64(1)
+                    s = fma_lerp(texture[y0_, x0_, k], texture[y0_, x1_, k], texture[y1_, x0_, k],
+                                 texture[y1_, x1_, k], a, b)
+                else:
+                    jx, jy = (NONFINITE, NONFINITE) if ix == NONFINITE or iy == NONFINITE else (ix, iy)
+                    s = lerp_fma(texture, jx, jy, a, b, k, zero, nan)
+                out[i if k == 0 else m + 2 * i + k - 1] = np.float64(s)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _unit(v, lo, hi, centre):
+    """``v[lo:hi]`` made zero-mean (``centre``) and unit-norm in place (``_unit_rows``; norm floor 1e-6)."""
+    if centre:
+        mean = pairwise_sum(v, lo, hi) / (hi - lo)
+        for i in range(lo, hi):
+            v[i] = v[i] - mean
+    sq = 0.0
+    for i in range(lo, hi):
+        sq += v[i] * v[i]
+    norm = max(math.sqrt(sq), 1e-6)
+    for i in range(lo, hi):
+        v[i] = v[i] / norm
+
+
+@njit(cache=True, nogil=True)
+def adapt_template(texture, ii, box, gx, gy, x0, y0, f, template, rate, min_ncc, new_template, counts):
+    """``Appearance.adapt`` of ``box (4,)`` (cx, cy, w, h; frame px): returns the estimate's ``ncc``
+    with ``template``; where it is at least ``min_ncc`` writes ``unit((1 - rate) T + rate v)`` into
+    ``new_template (3M,)`` and the box's bin counts (from the integral image ``ii``) into ``counts``."""
+    m = gx.shape[0] * gy.shape[0]
+    v = _patch(texture, box, gx, gy, x0, y0, f, np.empty(3 * m))
+    _unit(v, 0, m, True)
+    _unit(v, m, 3 * m, False)
+    ncc = 0.0
+    for i in range(3 * m):
+        v[i] = v[i] * np.sqrt(0.5)
+        ncc += v[i] * template[i]
+    if not ncc >= min_ncc:
+        return ncc
+    for i in range(3 * m):
+        new_template[i] = (1 - rate) * template[i] + rate * v[i]
+    _unit(new_template, 0, m, True)
+    _unit(new_template, m, 3 * m, False)
+    for i in range(3 * m):
+        new_template[i] = new_template[i] * np.sqrt(0.5)
+    u, w = (box[0] - x0) * f, (box[1] - y0) * f
+    hw, hh = 0.5 * f * box[2], 0.5 * f * box[3]
+    ix0, iy0, ix1, iy1 = int(np.rint(u - hw)), int(np.rint(w - hh)), int(np.rint(u + hw)), int(np.rint(w + hh))
+    for b in range(ii.shape[2]):
+        counts[b] = _box_count(ii, ix0, iy0, ix1, iy1, b)
+    return ncc
+
+
+@njit(cache=True, forceinline=True)
+def _reflect(i, n):
+    """``BORDER_REFLECT`` of an index one step outside ``[0, n)``."""
+    return 0 if i < 0 else (n - 1 if i >= n else i)
+
+
+@njit(cache=True, nogil=True)
+def frame_features(grey, hsv, n_bins, texture, labels):
+    """``texture (H, W, 3)`` float32 = (grey, Sobel x, Sobel y) of ``grey (H, W)`` uint8 (3x3,
+    ``BORDER_REFLECT``), ``labels (H, W)`` the colour bins of ``hsv`` (:func:`colour_labels`);
+    returns their bin integrals (:func:`bin_integrals`)."""
+    h, w = grey.shape
+    for y in range(h):
+        ya, yb = _reflect(y - 1, h), _reflect(y + 1, h)
+        for x in range(w):
+            xa, xb = _reflect(x - 1, w), _reflect(x + 1, w)
+            dx = (2 * (int(grey[y, xb]) - int(grey[y, xa])) + int(grey[ya, xb]) - int(grey[ya, xa])
+                  + int(grey[yb, xb]) - int(grey[yb, xa]))
+            dy = (2 * (int(grey[yb, x]) - int(grey[ya, x])) + int(grey[yb, xa]) - int(grey[ya, xa])
+                  + int(grey[yb, xb]) - int(grey[ya, xb]))
+            texture[y, x, 0] = np.float32(grey[y, x])
+            texture[y, x, 1] = np.float32(dx)
+            texture[y, x, 2] = np.float32(dy)
+    colour_labels(hsv, labels)
+    return bin_integrals(labels, n_bins)

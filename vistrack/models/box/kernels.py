@@ -1,0 +1,138 @@
+"""The box model's filter step (:mod:`~vistrack.models.box.model`, LIS), compiled: fewer, larger calls.
+
+Each kernel does what a chain of small numpy calls does per frame, with the same arithmetic in
+the same order (``tests/test_kernels_box.py`` states each tolerance):
+
+- :func:`ar2_predict` and :func:`ar2_logpdf`: ``Box.predict`` (the normal draws made by numpy,
+  in the same order) and ``Box.transition_logpdf``;
+- :func:`box_loglik`: ``Box.loglik`` (the boxes, the colour term and the template correlation);
+- :func:`lis_predict` and :func:`lis_weigh`: ``LIS.propose`` with the map proposal
+  (:func:`~vistrack.kernels.grid.grid_points`, :func:`~vistrack.kernels.grid.map_sample`)
+  and the likelihood and transition densities in two calls about the proposal map.
+
+``exp`` and ``log`` are the C library's here and in numpy's scalar loops (equal where numpy has
+no SIMD loop for them: the tests compare with a 1e-12 tolerance).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ...kernels.appearance import colour_loglik, ncc
+from ...kernels.grid import grid_points, map_sample
+
+__all__ = ["ar2_predict", "ar2_logpdf", "box_loglik", "map_scores", "lis_predict", "lis_weigh"]
+
+_LOG2PI = float(np.log(2.0 * np.pi))  # as vistrack.gaussian and vistrack.proposals.grid
+
+
+@njit(cache=True, nogil=True)
+def ar2_predict(states, damping, sigma, noise, out):
+    """``Box.predict``: ``out (N, 6)`` = ``(z + d (z - z') + σ e^{l} ε, z)`` with the centre's std
+    scaled by ``e^{l}`` of the old state and ``noise (N, 3)`` the normal draws."""
+    for n in range(states.shape[0]):
+        e = math.exp(states[n, 2])
+        for k in range(3):
+            z1, z2 = states[n, k], states[n, 3 + k]
+            sd = sigma[k] * e if k < 2 else sigma[k]
+            out[n, k] = (z1 + damping[k] * (z1 - z2)) + sd * noise[n, k]
+            out[n, 3 + k] = z1
+    return out
+
+
+@njit(cache=True, nogil=True)
+def ar2_logpdf(new, old, damping, sigma, out):
+    """``Box.transition_logpdf``: ``log K(new|old) (N,)``, Gaussian in the current values about
+    ``z + d (z - z')`` with std ``σ e^{l}`` (centre) and ``σ_l``."""
+    for n in range(new.shape[0]):
+        e = math.exp(old[n, 2])
+        sq = logs = 0.0
+        for k in range(3):
+            z1, z2 = old[n, k], old[n, 3 + k]
+            sd = sigma[k] * e if k < 2 else sigma[k]
+            r = (new[n, k] - (z1 + damping[k] * (z1 - z2))) / sd
+            if k == 0:
+                sq, logs = r * r, math.log(sd)
+            else:
+                sq += r * r
+                logs += math.log(sd)
+        out[n] = -0.5 * sq - logs - 0.5 * 3 * _LOG2PI
+    return out
+
+
+@njit(cache=True, nogil=True)
+def box_loglik(states, size0, ii, texture, x0, y0, f, ring, bg_weight, q, bp, lam_c, kappa, gx, gy, template,
+               lam_t, out):
+    """``Box.loglik``: ``log r (N,)`` of ``states (N, >=3)`` whose boxes are ``(cx, cy, w_0 e^l, h_0 e^l)``:
+    the colour term (:func:`~vistrack.kernels.appearance.colour_loglik`) plus ``λ_t (ncc - 1)``
+    (:func:`~vistrack.kernels.appearance.ncc`)."""
+    n = states.shape[0]
+    boxes = np.empty((n, 4))
+    for i in range(n):
+        e = math.exp(states[i, 2])
+        boxes[i, 0], boxes[i, 1] = states[i, 0], states[i, 1]
+        boxes[i, 2], boxes[i, 3] = size0[0] * e, size0[1] * e
+    rc = colour_loglik(ii, x0, y0, f, boxes, ring, bg_weight, q, bp, lam_c, kappa, np.empty(n))
+    c = ncc(texture, boxes, gx, gy, x0, y0, f, template, np.empty(n))
+    for i in range(n):
+        out[i] = rc[i] + lam_t * (c[i] - 1.0)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def map_scores(ncc, s_in, s_out, g, area_in, area_ring, lam_t, lam_c, out):
+    """The end of ``Appearance.proposal_map`` in float32, as numpy computes it with Python-float
+    scalars: ``λ_t (nan_to_num(ncc) - 1) + λ_c (s_in / area_in - (s_out shifted by g - s_in) / area_ring)``
+    into ``out (hh, ww)`` (``ncc``'s shape; ``s_out`` read ``g`` rows and columns back, 0 before)."""
+    one, lt, lc = np.float32(1.0), np.float32(lam_t), np.float32(lam_c)
+    ai, ar = np.float32(area_in), np.float32(area_ring)
+    big = np.finfo(np.float32).max
+    for i in range(out.shape[0]):
+        for j in range(out.shape[1]):
+            v = ncc[i, j]
+            if np.isnan(v):
+                v = np.float32(0.0)
+            elif np.isinf(v):
+                v = big if v > 0 else -big
+            o = s_out[i - g, j - g] if i >= g and j >= g else np.float32(0.0)
+            out[i, j] = lt * (v - one) + lc * (s_in[i, j] / ai - (o - s_in[i, j]) / ar)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def lis_predict(prev, damping, sigma, noise, window_sd, offsets, x0, y0, f, x, sig, uw, vw, span):
+    """The first half of the box's LIS proposal step (``LIS.propose`` with :class:`MapProposal
+    <vistrack.proposals.grid.MapProposal>`): the prediction ``x (N, 6)`` (:func:`ar2_predict`),
+    the window stds ``sig (N,)`` (``Box.window_std``: ``window_sd e^{l}``) and the grid points
+    and their span (:func:`grid_points`). Returns ``span``."""
+    ar2_predict(prev, damping, sigma, noise, x)
+    for n in range(x.shape[0]):
+        sig[n] = window_sd * math.exp(x[n, 2])
+    return grid_points(x, sig, offsets, x0, y0, f, uw, vw, span)
+
+
+@njit(cache=True, nogil=True)
+def lis_weigh(prev, x, sig, offsets, g_unit, log_g_unit, cell, uw, vw, qmap, u0, v0, step, border, keep, floor,
+              draws, damping, sigma, size0, ii, texture, x0, y0, f, ring, bg_weight, q, bp, lam_c, kappa, gx, gy,
+              template, lam_t, z, log_incr, ll):
+    """The second half: ``z (N, 6)`` drawn from the map (:func:`map_sample`), ``log r`` of ``z`` into
+    ``ll`` (:func:`box_loglik`) and LIS's log increment ``log α + log r - log q + log K(z|prev) -
+    log K(x|prev)`` (``-inf`` where ``log α`` is not finite) into ``log_incr``."""
+    n = x.shape[0]
+    z_u, log_alpha, log_q = np.empty((n, 2)), np.empty(n), np.empty(n)
+    map_sample(x, sig, offsets, g_unit, log_g_unit, cell, uw, vw, qmap, u0, v0, step, border, keep, floor, draws,
+               z_u, log_alpha, log_q)
+    for i in range(n):
+        for k in range(x.shape[1]):
+            z[i, k] = x[i, k]
+        z[i, 0], z[i, 1] = z_u[i, 0], z_u[i, 1]
+    box_loglik(z, size0, ii, texture, x0, y0, f, ring, bg_weight, q, bp, lam_c, kappa, gx, gy, template, lam_t, ll)
+    lz = ar2_logpdf(z, prev, damping, sigma, np.empty(n))
+    lx = ar2_logpdf(x, prev, damping, sigma, np.empty(n))
+    for i in range(n):
+        v = (((log_alpha[i] + ll[i]) - log_q[i]) + lz[i]) - lx[i]
+        log_incr[i] = v if np.isfinite(log_alpha[i]) else -np.inf
+    return z

@@ -1,0 +1,462 @@
+"""A generic box model for any object started from an ``--init`` box (real footage; beyond the seeds).
+
+State
+    ``(cx, cy, l, cx', cy', l')``, shape ``(N, 6)``: the box centre (px) and its log-scale
+    ``l`` relative to the first box (``w = w_0 e^l``, ``h = h_0 e^l``), and the previous
+    frame's values.
+Dynamics (AR(2), as the contour and plate models)
+    ``c_t = c_{t-1} + d (c_{t-1} - c_{t-2}) + σ_c e^{l_{t-1}} ε`` on the centre (``d = 0.5``,
+    ``σ_c = sigma_xy · sqrt(w_0 h_0)``), a random walk ``l_t = l_{t-1} + σ_l ε`` on the
+    log-scale. The prior ``p_0`` is a Gaussian about the first box with zero velocity.
+Likelihood
+    :class:`~vistrack.models.box.appearance.Appearance`: colour histogram against the ring
+    around the box (Bhattacharyya) + normalised cross-correlation with a grey template,
+    learned from the first frame and adapted on confident frames; with the correlation filter
+    (``dcf``, the default since issue 34), plus ``λ_dcf`` times its response at the state
+    (:class:`~vistrack.models.box.correlation.CorrelationFilter`: gradient-orientation and
+    brightness-normalised grey features, a 3-scale search about the dynamics' prediction,
+    adapted on frames where the object is reported, anchored to the first frame's filter).
+Local moves (thesis 001, §4.3–4.5)
+    ``ls-n-ips``: ``LS_λ`` = mean shift on the back-projection of the target histogram
+    (:meth:`Appearance.mean_shift`), the move rejected when it goes further than ``λ``
+    (half the box's mean side) or lowers ``r`` (eq. 4.1). ``lis``: a grid of translations
+    about the prediction with ``q`` from one per-frame map
+    (:meth:`Appearance.proposal_map`; :class:`~vistrack.proposals.MapProposal`; the cell
+    drawn by inversion of the cumulative ``q g``, the LIS step compiled in two calls:
+    :meth:`lis_step`).
+    ``lls``: the exact ``r`` on a grid of the window (:class:`~vistrack.proposals.Window`).
+    With the correlation filter, ``lis``'s proposal is its response mixed with ``K``
+    (:class:`~vistrack.proposals.correlation.CorrelationProposal`, exact density, proper weights).
+Lost
+    ``visible=0`` where ``log r`` at the estimate falls far below its running level, the
+    scale below a floor or the centre leaves the frame (:mod:`~vistrack.models.collapse`).
+    With the filter, while lost, each frame is searched whole (:meth:`Box._redetect`) and the
+    particles re-seeded where the object is found (the track CSV's ``redetected``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ... import kernels
+from ...features import remap_points
+from ...gaussian import diag_logpdf
+from ...proposals import MapProposal, Window
+from ...proposals.correlation import CorrelationProposal
+from ...proposals.translation import TranslationMoves
+from .appearance import Appearance
+from ..collapse import CollapseCheck
+from .correlation import CorrelationFilter
+from ..innovation import ARInnovation
+from ..kernel import is_prior
+from ..protocol import VideoModelBase
+
+__all__ = ["Box"]
+
+
+class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
+    """Box tracking model with appearance learned from the first frame.
+
+    Parameters
+    ----------
+    frame : ndarray of shape (H, W, 3) uint8 BGR, or (H, W)
+        The first frame.
+    box : tuple of float
+        ``(x, y, w, h)`` of the object in ``frame``.
+    sigma_xy : float or None
+        Std of the centre's innovation per frame, as a share of ``sqrt(w_0 h_0)`` (``None``: 0.25 with
+        the correlation filter, whose likelihood lets fast objects such as a kicked ball be followed;
+        0.06 without).
+    sigma_scale : float or None
+        Std of the log-scale's innovation per frame (``None``: 0.02 with the filter, whose scale search
+        then moves the scale; 0.002 without).
+    damping : float
+        ``d``: share of the last frame's velocity carried over.
+    prior_std : tuple of float
+        Std of ``p_0`` on the centre (share of ``sqrt(w_0 h_0)``) and on the log-scale.
+    window : float
+        LIS/LLS window std as a multiple of the innovation's std.
+    map_stride : int
+        The LIS proposal map's step in working pixels (:meth:`Appearance.proposal_map`): 2 makes
+        ``cv2.matchTemplate`` about 4x cheaper (0.46 -> 0.12 ms on girl_otb) but lowered the success
+        AUC on the real clips (girl 0.650 -> 0.632, 12 seeds; hand 0.44 -> 0.39, 24 and 36 seeds; car4
+        0.819 -> 0.813): 1 by default (``docs/experiments.md``, speed, third pass).
+    dcf : bool
+        Learn a correlation filter (:class:`~vistrack.models.box.correlation.CorrelationFilter`) whose
+        response is LIS's proposal (:class:`~vistrack.proposals.correlation.CorrelationProposal`) and a
+        term ``λ_dcf y`` of ``log r``; ``False``: the colour/template map proposal alone (before issue 34).
+    lambda_dcf : float
+        ``λ_dcf``, the weight of the response ``y`` (about 1 at the object) in ``log r``.
+    dcf_share : float
+        ``β``: the share of particles drawn from the response (the rest from ``K``).
+    dcf_tempering : tuple of float
+        ``(t, s)``: the response's cells drawn ``∝ (1 - s) exp(t (y - max y)) / Σ + s / C``.
+    dcf_scale_std : float
+        ``σ_l`` of the proposal's log-scale about the best scale of the search.
+    redetect : float or None
+        While the object is reported lost, search the whole frame with the filter and centre the search
+        region at the best place when ``log r`` there is within ``redetect`` times the collapse test's
+        ``drop`` of its running level (``None``: never); the dynamics then has a share ``reentry`` of a
+        pose uniform over the frame (:meth:`predict`).
+    reentry : float
+        That share.
+    collapse_drop : float
+        With the filter, the collapse test's ``drop`` (:attr:`collapse_options`: 55 without it): ``log r``
+        at the estimate fell by 43-47 on the synthetic clip of ``tests/test_box_dcf.py`` when the object
+        vanished.
+    dcf_options : dict or None
+        Passed to :class:`~vistrack.models.box.correlation.CorrelationFilter` (its ``padding``: ``4 sigma_xy``
+        unless given, so that the search region about the dynamics' prediction holds 4 innovation stds).
+    **appearance
+        Passed to :class:`~vistrack.models.box.appearance.Appearance`.
+    """
+
+    dim = 6
+    #: lost (``visible=0``) when ``log r`` at the estimate falls 55 below its running level
+    #: (:mod:`~vistrack.models.collapse`): the largest fall while tracking girl, hand and car4
+    #: (27 runs) was 43, an object that vanishes from a textured background falls by 75
+    collapse_options = {"drop": 55.0}
+
+    def __init__(self, frame, box, *, sigma_xy=None, sigma_scale=None, damping=0.5, prior_std=(0.04, 0.02),
+                 window=2.5, map_stride=1, dcf=True, lambda_dcf=60.0, dcf_share=0.5, dcf_tempering=(60.0, 0.05),
+                 dcf_scale_std=0.02, redetect=0.5, reentry=0.05, collapse_drop=35.0,
+                 dcf_options=None, **appearance):
+        x, y, w, h = (float(v) for v in box)
+        if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
+            raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
+        self.frame_size = (frame.shape[1], frame.shape[0])
+        self.size0 = np.array([w, h])
+        if dcf:  # the colour and template terms weaker beside the filter's (docs/experiments.md, issue 34)
+            appearance = {"lambda_colour": 12.0, "lambda_template": 8.0, **appearance}
+        self.app = Appearance(frame, (x, y, w, h), **appearance)
+        if sigma_xy is None:
+            sigma_xy = 0.25 if dcf else 0.06
+        if sigma_scale is None:
+            sigma_scale = 0.02 if dcf else 0.002
+        side = float(np.sqrt(w * h))
+        self.sigma = np.array([sigma_xy * side, sigma_xy * side, sigma_scale])
+        self.damping = np.array([damping, damping, 0.0])
+        self.prior_std = np.array([prior_std[0] * side, prior_std[0] * side, prior_std[1]])
+        self.init_pose = np.array([x + w / 2, y + h / 2, 0.0])
+        self.prior_mean = np.concatenate([self.init_pose, self.init_pose])
+        self.window = float(window)
+        self.map_stride = int(map_stride)
+        self.blob_cell = 0.25 * side  # the colour-blob proposal's cell (frame px)
+        self.learn_blob(frame, _inner_ellipse(frame.shape[:2], (x, y, w, h)))
+        # the search region: the box grown by 4 innovation stds of the centre on each side, about the prediction
+        dcf_options = {"padding": 4.0 * sigma_xy, **(dcf_options or {})}
+        self.cf = CorrelationFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
+        self._reach = 1.0 if dcf else 1.0 + self.window  # the observed region's reach, in 4 innovation stds
+        if dcf:  # log r's scale with the filter's term: lost 35 below the running level (issue 34)
+            self.collapse_options = {"drop": float(collapse_drop)}
+        self.lambda_dcf, self.dcf_share, self.dcf_scale_std = float(lambda_dcf), float(dcf_share), float(dcf_scale_std)
+        self.dcf_tempering = tuple(float(v) for v in dcf_tempering)
+        self.redetect = None if redetect is None else float(redetect)
+        self.reentry = float(reentry)
+        self._lost = False  # the last frame's collapse test said lost
+        self._last_scale = 0.0  # the log-scale of the last frame reported
+        self._d = self.damping  # this frame's damping: 0 on the frame after a re-detection (no velocity)
+        self._found = False  # this frame is a re-detection
+        self._reentry = False  # this frame's dynamics has the re-entry share
+
+    # -- geometry ---------------------------------------------------------------------
+    def boxes(self, states):
+        """``(N, 4)`` boxes ``(cx, cy, w, h)`` of ``states``."""
+        s = np.atleast_2d(states)
+        wh = self.size0 * np.exp(s[:, 2:3])
+        return np.concatenate([s[:, :2], wh], axis=1)
+
+    def box(self, states):
+        """``(N, 4)`` boxes ``(x, y, w, h)`` (top-left corner) of ``states``."""
+        b = self.boxes(states)
+        return np.concatenate([b[:, :2] - b[:, 2:] / 2, b[:, 2:]], axis=1)
+
+    def outline(self, states):
+        """Box corners ``(N, 4, 2)`` for drawing."""
+        x, y, w, h = self.box(states).T
+        return np.stack([np.stack([x, y], 1), np.stack([x + w, y], 1), np.stack([x + w, y + h], 1),
+                         np.stack([x, y + h], 1)], axis=1)
+
+    def describe(self, state):
+        """Track-file fields of one state: ``cx, cy, w, h, angle_deg, scale``."""
+        cx, cy, w, h = self.boxes(state)[0]
+        return {"cx": cx, "cy": cy, "w": w, "h": h, "angle_deg": 0.0, "scale": float(np.exp(np.ravel(state)[2]))}
+
+    # -- dynamics ---------------------------------------------------------------------
+    def _std(self, old):
+        """Innovation std ``(N, 3)``: the centre's scales with the old box."""
+        sd = np.broadcast_to(self.sigma, (len(old), 3)).copy()
+        sd[:, :2] *= np.exp(old[:, 2:3])
+        return sd
+
+    def innovation_std(self, old):
+        """Std ``(N, 3)`` of the current values given ``old`` (:class:`~vistrack.models.innovation.ARInnovation`)."""
+        return self._std(old)
+
+    def blob_image(self, obs):
+        """The colour-blob proposal looks at the observation's region at the working resolution."""
+        return obs.image, obs.x0, obs.y0, obs.f
+
+    def sample_prior(self, n, rng):
+        """``n`` states ``(n, 6)`` from ``p_0``: a Gaussian about the first box, zero velocity (previous = current)."""
+        z = self.init_pose + self.prior_std * rng.standard_normal((n, 3))
+        return np.concatenate([z, z], axis=1)
+
+    def prior_logpdf(self, states):
+        """``log p_0`` of the current pose of ``states (N, 6)`` -> ``(N,)``."""
+        return diag_logpdf(states[:, :3], self.init_pose, self.prior_std)
+
+    def predict_mean(self, states):
+        """The mean of the AR(2) ``K``: ``z + d (z - z')``, with ``z`` as the new previous pose; ``(N, 6)`` ->
+        ``(N, 6)``."""
+        z1, z2 = states[:, :3], states[:, 3:]
+        return np.concatenate([z1 + self._d * (z1 - z2), z1], axis=1)
+
+    def predict(self, states, rng):
+        """A draw from ``K``: the mean plus ``σ_c e^{l}`` noise on the centre and ``σ_l`` on the log-scale;
+        ``(N, 6)`` -> ``(N, 6)``. On a frame of re-detection (the track lost, :attr:`redetect`) ``K`` has
+        a share ``reentry`` of a centre uniform over the frame (drawn with ``rng.random((N, 3))`` after
+        the normals)."""
+        noise = rng.standard_normal((len(states), 3))
+        if kernels.use():
+            from .kernels import ar2_predict
+
+            out = ar2_predict(np.ascontiguousarray(states, float), self._d, self.sigma, noise,
+                              np.empty((len(states), 6)))
+        else:
+            out = self.predict_mean(states)
+            out[:, :3] += self._std(states) * noise
+        if self._reentry:
+            u = rng.random((len(states), 3))
+            pick = u[:, 0] < self.reentry
+            out[pick, 0] = u[pick, 1] * self.frame_size[0]
+            out[pick, 1] = u[pick, 2] * self.frame_size[1]
+        return out
+
+    def transition_logpdf(self, new, old):
+        """``log K(new|old)``: Gaussian in the current values; the previous values of ``new``
+        are the current values of ``old``. On a frame of re-detection, the centre's density is
+        ``(1 - ε) N + ε / (W H)`` (:meth:`predict`)."""
+        if kernels.use():
+            from .kernels import ar2_logpdf
+
+            out = ar2_logpdf(np.ascontiguousarray(new, float), np.ascontiguousarray(old, float), self._d,
+                             self.sigma, np.empty(len(new)))
+        else:
+            out = diag_logpdf(new[:, :3], self.predict_mean(old)[:, :3], self._std(old))
+        if self._reentry:
+            log_l = diag_logpdf(new[:, 2:3], old[:, 2:3], self.sigma[2:3])
+            w, h = self.frame_size
+            out = log_l + np.logaddexp(np.log1p(-self.reentry) + out - log_l, np.log(self.reentry) - np.log(w * h))
+        return out
+
+    # -- observation --------------------------------------------------------------------
+    def observe(self, maps, particles):
+        """The frame's :class:`~vistrack.models.box.appearance.AppearanceFrame` over the region the
+        particles can reach: their predicted boxes grown by 4 innovation stds, the LIS window's
+        reach (not with the correlation filter: its proposal has no window) and the velocity (the
+        first box and the prior's spread on the first frame); with the
+        correlation filter, that region and the filter's search region, and the filter's response
+        there as ``obs.dcf``; while the track is lost, about a whole-frame search's find (:meth:`_redetect`)."""
+        self._reentry = False
+        self._d = np.zeros(3) if self._found else self.damping
+        self._found = False
+        if particles is None:
+            states = self.prior_mean[None]
+            reach = 4 * self.prior_std[0] * (1 + self.window)
+            roi = self.app.roi(self.boxes(states), reach)
+        elif kernels.use():
+            from .frame_kernels import predicted_roi
+
+            roi = predicted_roi(np.ascontiguousarray(particles.states, float), self._d, self.size0,
+                                4 * self.sigma[0], self._reach, float(self.app.ring), np.empty(4, np.int64))
+            roi = tuple(int(v) for v in roi)
+        else:
+            states = self.predict_mean(particles.states)
+            reach = 4 * self.sigma[0] * np.exp(states[:, 2].max()) * self._reach
+            roi = self.app.roi(self.boxes(states), reach)
+        if particles is None or self.cf is None:
+            obs = self.app.frame(maps.frame, roi)
+            obs.dcf, obs.dcf_share, obs.redetected, obs.frame_image = None, self.dcf_share, False, maps.frame
+            return obs
+        pred = particles.weights @ self.predict_mean(particles.states)[:, :3]
+        if self._lost and self.redetect is not None:
+            found = self._redetect(maps.frame, roi, pred)
+            if found is not None:
+                return found
+        return self._dcf_frame(maps.frame, roi, pred, self.dcf_share, False)
+
+    def _dcf_frame(self, frame, roi, centre, share, redetected):
+        """The observation over ``roi`` and the correlation filter's search region about ``centre``
+        ``(cx, cy, l)``, with its response (``obs.dcf``), ``β`` and whether it is a re-detection."""
+        resp = self.cf.detect(frame, centre[:2], float(centre[2]))
+        (ox, oy), a = resp.cell_origin()
+        h, w = resp.maps.shape[1:]
+        grow = self.app.ring * float(np.sum(self.size0 * np.exp(resp.log_scales[-1])))
+        x1, y1 = ox + a * (w - 0.5), oy + a * (h - 0.5)
+        roi = (min(roi[0], int(np.floor(ox - grow))), min(roi[1], int(np.floor(oy - grow))),
+               max(roi[2], int(np.ceil(x1 + grow))), max(roi[3], int(np.ceil(y1 + grow))))
+        obs = self.app.frame(frame, roi)
+        obs.dcf, obs.dcf_share, obs.redetected, obs.frame_image = resp, share, redetected, frame
+        return obs
+
+    def _redetect(self, frame, roi, pred):
+        """While the track is lost: the best place of a whole-frame search with the filter
+        (:meth:`CorrelationFilter.search`) at the last reported frame's scale, taken (the observation about it,
+        ``β`` at least 0.9, the dynamics' re-entry share on, and no velocity carried into the next frame's
+        prediction: ``d = 0`` there) when ``log r`` of the pose there at
+        the response's peak is within ``redetect`` times the collapse test's ``drop`` of its running
+        level; ``None`` otherwise."""
+        scale = self._last_scale  # the estimate's scale drifts while the object is lost
+        x, y, _ = self.cf.search(frame, scale)
+        obs = self._dcf_frame(frame, roi, np.array([x, y, scale]), max(self.dcf_share, 0.9), True)
+        r = obs.dcf
+        cand = np.array([[*r.peak_xy, r.log_scales[r.best]]])
+        level, drop = self._collapse.level, self._collapse.drop
+        if level is None or drop is None or not self.loglik(obs, cand)[0] >= level - self.redetect * drop:
+            return None
+        self._reentry = self.reentry > 0
+        self._found = True
+        return obs
+
+    def loglik(self, obs, states):
+        """``log r`` of ``states (N, 6)``, shape ``(N,)``: the colour and template terms, plus
+        ``λ_dcf`` times the correlation filter's response where the frame has one."""
+        if kernels.use():
+            out = self.app.loglik_states(obs, np.ascontiguousarray(states, float), self.size0)
+        else:
+            out = self.app.loglik(obs, self.boxes(states))
+        resp = getattr(obs, "dcf", None)
+        if resp is not None and self.lambda_dcf:
+            out = out + self.lambda_dcf * resp.read(np.atleast_2d(states))
+        return out
+
+    def estimate(self, particles):
+        """The weighted mean state."""
+        return particles.mean()
+
+    def adapt(self, obs, estimate):
+        """Adapt the appearance to the estimate on a confident frame (:meth:`Appearance.adapt`) and the
+        correlation filter on a frame where the object is reported (:meth:`CorrelationFilter.adapt`)."""
+        done = self.app.adapt(obs, self.boxes(estimate)[0])
+        resp = getattr(obs, "dcf", None)
+        if resp is not None and not self._lost:
+            e = np.asarray(estimate, float).ravel()
+            self.cf.adapt(obs.frame_image, e[:2], float(e[2]))
+        return done
+
+    def check_lost(self, obs, state):
+        """The collapse test (:class:`~vistrack.models.collapse.CollapseCheck`), remembered for the next
+        frame's re-detection."""
+        out = super().check_lost(obs, state)
+        self._lost = bool(out[0])
+        if not self._lost:
+            self._last_scale = float(np.ravel(state)[2])
+        return out
+
+    # -- local moves ------------------------------------------------------------------
+    def window_std(self, states=None, kernel=None):
+        """Window std on the centre (px): ``window`` innovation stds of ``kernel`` (``p_0`` on
+        the first step, :mod:`~vistrack.models.kernel`), per particle ``(N,)`` with ``states``,
+        else the scalar at scale 1."""
+        base = self.window * (self.prior_std[0] if is_prior(kernel) else self.sigma[0])
+        return base if states is None else base * np.exp(states[:, 2])
+
+    #: the LIS map's tempering and flat share: ``q = (1 - s) e / max e + s`` with ``e = exp(t (m - max m))``
+    #: the tempered map read bilinearly and ``max e`` over each particle's grid (``(t, s)``)
+    proposal_tempering = (0.5, 0.05)
+
+    def proposal_work(self, obs):
+        """``(x0, y0, f)``: frame px ``x`` is working px ``(x - x0) f`` of the proposal map."""
+        return float(obs.x0), float(obs.y0), float(obs.f)
+
+    def proposal_qmap(self, obs, states, span):
+        """The LIS proposal map of the frame ``(e (H', W') float32, u0, v0, step)`` (map pixel ``(i, j)``
+        at working centre ``(u0 + step j, v0 + step i)``) or ``()``: ``exp(t (m - max m))`` of
+        :meth:`Appearance.proposal_map` ``m`` at the mean size of ``states`` and stride
+        :attr:`map_stride`, over the working ``span`` ``(u_min, u_max, v_min, v_max)`` the points read
+        (:attr:`proposal_tempering`); computed on the first call of the frame and kept on ``obs``."""
+        if obs.proposal is None:
+            w, h = self.size0 * np.exp(np.mean(states[:, 2]))
+            pm = self.app.proposal_map(obs, w, h, span=span, stride=self.map_stride)
+            if pm:
+                m = pm[0]
+                pm = (np.exp(np.float32(self.proposal_tempering[0]) * (m - m.max())),) + tuple(pm[1:])
+            obs.proposal = pm or ()
+        return obs.proposal
+
+    def proposal_log_q(self, obs, states, points):
+        """The map's ``log q`` at centres ``points (N, G, 2)`` (frame px), for the LIS proposal:
+        :meth:`proposal_qmap` read bilinearly, over its maximum on each row, mixed with 5 % of a
+        flat floor (a defensive share; :attr:`proposal_tempering`)."""
+        u, v = obs.to_work(points[..., 0], points[..., 1])
+        qmap = self.proposal_qmap(obs, states, (u.min(), u.max(), v.min(), v.max()))
+        n, g, _ = points.shape
+        if not qmap:
+            return np.zeros((n, g))
+        e, u0, v0, step = qmap
+        floor = self.proposal_tempering[1]
+        val = remap_points(e, (u - u0) / step, (v - v0) / step, border=float(e.min())).astype(float)
+        top = val.max(axis=1, keepdims=True)
+        return np.log((1 - floor) * np.divide(val, top, out=np.ones_like(val), where=top > 0) + floor)
+
+    def lis_step(self, prev, obs, rng, proposal):
+        """``LIS.propose`` with ``proposal`` (this model's :class:`MapProposal` of ``K``) in two compiled
+        calls (:func:`~vistrack.models.box.kernels.lis_predict`, :func:`~vistrack.models.box.kernels.lis_weigh`) about
+        the proposal map: the same draws in the same order and the same arithmetic as the calls one
+        by one. Returns ``(z, log_incr, x, log r(z))``."""
+        from .kernels import lis_predict, lis_weigh
+
+        prev = np.ascontiguousarray(prev, float)
+        n, g = len(prev), len(proposal.offsets)
+        x, sig, uw, vw = np.empty((n, 6)), np.empty(n), np.empty((n, g)), np.empty((n, g))
+        x0, y0, f = self.proposal_work(obs)
+        span = lis_predict(prev, self.damping, self.sigma, rng.standard_normal((n, 3)), self.window * self.sigma[0],
+                           proposal.offsets, x0, y0, f, x, sig, uw, vw, np.empty(4))
+        qmap = self.proposal_qmap(obs, x, tuple(span))
+        m, u0, v0, step = qmap if qmap else (np.zeros((0, 1), np.float32), 0.0, 0.0, 1.0)
+        floor, app, c = self.proposal_tempering[1], self.app, self.app.colour
+        z, log_incr, ll = np.empty((n, 6)), np.empty(n), np.empty(n)
+        lis_weigh(prev, x, sig, proposal.offsets, proposal.g_unit, proposal.log_g_unit, float(proposal.cell), uw, vw,
+                  m[..., None], float(u0), float(v0), float(step), float(m.min()) if qmap else 0.0, 1.0 - floor,
+                  float(floor), rng.random((n, 3)), self.damping, self.sigma, self.size0, obs.ii, obs.texture, x0, y0,
+                  f, float(app.ring), c.bg_weight, c.q, c._bp, float(c.lambda_colour), float(c.kappa), *app.grid_axes,
+                  app.template, float(app.lambda_template), z, log_incr, ll)
+        return z, log_incr, x, ll
+
+    def lis_proposal(self, kernel=None):
+        """LIS's proposal for a step with ``kernel``: the correlation filter's response mixed with ``K``
+        (:class:`CorrelationProposal`) with the filter after the first frame, else the colour/template map on a
+        grid (:class:`MapProposal`)."""
+        if self.cf is not None and kernel is not None and not is_prior(kernel):
+            return CorrelationProposal(self, kernel)
+        return MapProposal(self, kernel=kernel)
+
+    def lls_window(self, kernel=None):
+        """LLS's Gaussian window on the centre, :meth:`window_std` of ``kernel``."""
+        return Window("gaussian", [self.window_std(kernel=kernel)] * 2, grid=5, truncate=2.5)
+
+    def local_search(self, obs, states):
+        """``LS_λ``: mean shift of the centres on the back-projection; a move longer than ``λ``
+        (half the box's mean side) or one that lowers ``r`` is rejected (eq. 4.1). Returns the
+        states and their ``log r``."""
+        b = self.boxes(states)
+        c = self.app.mean_shift(obs, b)
+        lam = 0.25 * (b[:, 2] + b[:, 3])
+        moved = self.with_local(states, c)
+        ok = np.all(np.abs(c - states[:, :2]) <= lam[:, None], axis=1)
+        ll_x = self.loglik(obs, states)
+        ll_z = np.where(ok, self.loglik(obs, moved), -np.inf)
+        keep = ll_z >= ll_x
+        return np.where(keep[:, None], moved, states), np.where(keep, ll_z, ll_x)
+
+
+def _inner_ellipse(shape, box, share=0.8):
+    """Mask ``(H, W)`` of the ellipse inscribed in ``share`` of the box (its corners are background)."""
+    import cv2
+
+    x, y, w, h = box
+    mask = np.zeros(shape, np.uint8)
+    cv2.ellipse(mask, (int(round(x + w / 2)), int(round(y + h / 2))),
+                (max(1, int(round(share * w / 2))), max(1, int(round(share * h / 2)))), 0, 0, 360, 1, -1)
+    return mask
