@@ -2,62 +2,26 @@
 
 An entry names the model, the algorithms that run on it (the default first), a one-line
 description and how to build it: from a box in the first frame (``from_box``) and/or from a
-clip (``from_clip``). Adding a model is its module plus one :func:`register` call; the
-built-in models are registered in :mod:`vistrack.builders`.
+clip (``from_clip``): a :class:`~vistrack.models.spec.ModelSpec`. Adding a model is its module plus
+one :func:`register` call; each built-in model's entry is its package's ``builder.SPEC``
+(:mod:`vistrack.models.box.builder`, :mod:`~vistrack.models.contour.builder`,
+:mod:`~vistrack.models.plate.builder`, :mod:`~vistrack.models.landmarks.builder`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Callable
+from .box.builder import SPEC as _BOX
+from .contour.builder import SPEC as _CONTOUR
+from .landmarks.builder import SPEC as _LANDMARKS
+from .plate.builder import SPEC as _PLATE
+from .spec import ModelSpec
 
 __all__ = ["ModelSpec", "MODELS", "DEFAULT_MODEL", "register", "get_model_spec", "all_algos", "clip_model"]
 
 
-@dataclass(frozen=True)
-class ModelSpec:
-    """One registered video model.
-
-    Attributes
-    ----------
-    name : str
-    algos : tuple of str
-        Algorithms that run on it, the default first.
-    description : str
-    box_init : bool
-        Whether it can start from an ``(x, y, w, h)`` box.
-    from_box : callable or None
-        ``from_box(frame, box, **params) -> model``: started from ``box`` ``(x, y, w, h)`` in the
-        first ``frame`` (BGR or grey array); what ``vistrack.Tracker`` and ``run --init`` call.
-    from_clip : callable or None
-        ``from_clip(clip, *, init, init_gt, template, **params) -> model`` for ``run`` and
-        ``eval`` on a clip; ``None``: ``from_box`` at the start box (``init`` or the first
-        ground-truth row) in the clip's first frame.
-    lost_rule : {"centre", "plate"}
-        How ``eval`` decides a frame is lost (:func:`vistrack.metrics.lost_frames`).
-    bytes_per_particle : int
-        Peak working memory of one step per particle (bytes; measured, rounded up), for
-        :func:`vistrack.runtime.check_particle_memory`.
-    """
-
-    name: str
-    algos: tuple
-    description: str
-    box_init: bool = True
-    from_box: Callable | None = None
-    from_clip: Callable | None = None
-    lost_rule: str = "centre"
-    bytes_per_particle: int = 64_000
-    #: algorithms that track several targets at once (``run``/``eval --targets K``), the default first
-    multi_algos: tuple = ()
-
-    @property
-    def default_algo(self):
-        """The default algorithm: the first of :attr:`algos`."""
-        return self.algos[0]
-
-
-MODELS: dict[str, ModelSpec] = {}
+#: the registered models by name: the built-in ones (each package's ``builder.SPEC``), then any
+#: added by :func:`register`
+MODELS: dict[str, ModelSpec] = {s.name: s for s in (_BOX, _CONTOUR, _PLATE, _LANDMARKS)}
 
 #: the model ``run``, ``eval``, ``demo`` and ``vistrack.Tracker`` use when neither the user nor the
 #: clip (its ``meta.json``) names one: any object, from a box

@@ -85,7 +85,7 @@ class Plates(VideoModelBase):
         exactly at 10.0 %. Rescoring the training runs (seeds 201–203, partitioned LIS-100, two
         runs each) at 0 / 1 / 2 / 2.5 / 3 gave MOTA 0.867 / 0.868 / 0.869 / 0.868 / 0.866
         (0.864 without).
-    **plate_params
+    **plate_params : dict
         The single plate's parameters (:class:`~vistrack.models.plate.model.Plate`): the AR(2), the
         entering mixture, the likelihood, the birth reserve.
     """

@@ -1,0 +1,104 @@
+"""Where a run starts: the start box and frame from the user's ``--init`` / ``--init-gt`` and the clip.
+
+Shared by :mod:`vistrack.builders` and the model packages' builders (``vistrack.models.*.builder``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .clips import read_groundtruth_csv
+from .video import VideoError, groundtruth_origin, read_rects
+
+__all__ = ["MAX_BOX_FACTOR", "initial_truth", "start_frame", "check_start_box", "first_frame", "start_box"]
+
+
+def initial_truth(clip, init_gt):
+    """The first visible ground-truth row as a dict, from the clip or from ``init_gt``.
+
+    ``init_gt`` is ``""``/``True`` for the clip's own ground truth, or a path to a
+    ``groundtruth.csv`` or an OTB ``x,y,w,h`` file.
+    """
+    if init_gt in ("", True, None):
+        truth = clip.truth
+        if truth is None:
+            raise VideoError(f"--init-gt: {clip.folder} has no groundtruth.csv or groundtruth_rect.txt; "
+                             "give a file (--init-gt FILE) or a box (--init x,y,w,h)")
+    else:
+        p = Path(init_gt)
+        if not p.is_file():
+            raise VideoError(f"--init-gt: {p} does not exist")
+        if p.suffix == ".csv":
+            truth = read_groundtruth_csv(p)
+        else:
+            r = read_rects(p, origin=groundtruth_origin(p))
+            truth = {"visible": ((r[:, 2] > 0) & (r[:, 3] > 0)).astype(float), "cx": r[:, 0] + r[:, 2] / 2,
+                     "cy": r[:, 1] + r[:, 3] / 2, "w": r[:, 2], "h": r[:, 3]}
+    vis = np.flatnonzero(np.asarray(truth["visible"]) > 0)
+    if not len(vis):
+        raise VideoError("--init-gt: the object is not visible in any ground-truth row")
+    row = {k: float(v[vis[0]]) for k, v in truth.items() if np.asarray(v).dtype.kind in "fiub"}
+    if "w" in row and "cx" in row:
+        check_start_box((row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"]),
+                        clip.source.size, f"the first ground-truth box (frame {int(vis[0])})")
+    return row
+
+
+def start_frame(clip, init=None, init_gt=None):
+    """The frame a run starts from: the first frame whose ground-truth row has the object
+    (``init_gt`` given, no ``init``), else 0. Frames before it are not tracked (``vistrack run``
+    gives them rows with ``lost_reason`` "not started"; their ground truth has no box to score)."""
+    if init is not None or init_gt is None:
+        return 0
+    if init_gt in ("", True):
+        truth = clip.truth
+        if truth is None:
+            return 0
+    else:
+        p = Path(init_gt)
+        if p.suffix == ".csv":
+            truth = read_groundtruth_csv(p)
+        else:
+            r = read_rects(p, origin=groundtruth_origin(p))
+            truth = {"visible": ((r[:, 2] > 0) & (r[:, 3] > 0)).astype(float)}
+    vis = np.flatnonzero(np.asarray(truth["visible"]) > 0)
+    return int(vis[0]) if len(vis) else 0
+
+
+#: a start box may be at most this many times the frame's width and height
+MAX_BOX_FACTOR = 2
+
+
+def check_start_box(box, size, what="--init box"):
+    """Raise :class:`VideoError` unless ``box`` ``(x, y, w, h)`` is one to start tracking from in
+    a frame of ``size`` ``(width, height)``: finite, a positive size, at least 2 px of it inside
+    the frame each way, and at most :data:`MAX_BOX_FACTOR` times the frame's width and height."""
+    fw, fh = size
+    x, y, w, h = (float(v) for v in box)
+    text = f"{x:.6g},{y:.6g},{w:.6g},{h:.6g}"
+    if not all(np.isfinite([x, y, w, h])) or w <= 0 or h <= 0:
+        raise VideoError(f"{what} {text} needs finite numbers and a positive size (width and height)")
+    if w > MAX_BOX_FACTOR * fw or h > MAX_BOX_FACTOR * fh:
+        raise VideoError(f"{what} {text} is far larger than the {fw}x{fh} frame (at most {MAX_BOX_FACTOR} times "
+                         "its width and height): give the object's box")
+    if min(x + w, fw) - max(x, 0) < 2 or min(y + h, fh) - max(y, 0) < 2:
+        raise VideoError(f"{what} {text} lies outside the {fw}x{fh} frame (less than 2 px of it inside): "
+                         "give a box on the object")
+
+
+def first_frame(clip, index=0):
+    """The first decodable frame of ``clip`` at or after ``index`` (the start frame)."""
+    for i, frame in clip.source:
+        if i >= index:
+            return frame
+    raise VideoError(f"{clip.source.path}: no frame could be decoded" + (f" from frame {index} on" if index else ""))
+
+
+def start_box(clip, init, init_gt):
+    """The start box ``(x, y, w, h)``: ``init``, or the first ground-truth row."""
+    if init is not None:
+        return tuple(float(v) for v in init)
+    row = initial_truth(clip, init_gt)
+    return (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"])
