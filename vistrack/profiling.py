@@ -14,6 +14,17 @@ import time
 from collections import defaultdict
 from contextlib import contextmanager
 
+from .models.protocol import (
+    FusedLISStep,
+    GridLikelihood,
+    LocalMixture,
+    LocalSearch,
+    MapLogQ,
+    StateSpaceModel,
+    VideoModel,
+    offers,
+)
+
 __all__ = ["Timer", "STAGES", "profile_stages"]
 
 STAGES = ("decode", "features", "likelihood", "proposal", "resampling", "adapt")
@@ -69,9 +80,12 @@ class Timer:
             yield item
 
 
-#: what each stage times: (owner kind, method names)
-_MODEL_PARTS = {"features": ("observe",), "likelihood": ("loglik", "loglik_local_grid"),
-                "proposal": ("local_search", "local_mixture", "proposal_log_q", "lis_step"), "adapt": ("adapt",)}
+#: what each stage times: the model's methods, each with the protocol that offers it
+_MODEL_PARTS = {"features": ((VideoModel, "observe"),),
+                "likelihood": ((StateSpaceModel, "loglik"), (GridLikelihood, "loglik_local_grid")),
+                "proposal": ((LocalSearch, "local_search"), (LocalMixture, "local_mixture"),
+                             (MapLogQ, "proposal_log_q"), (FusedLISStep, "lis_step")),
+                "adapt": ((VideoModel, "adapt"),)}
 #: (``lis_step``: the box model's compiled LIS step, its likelihood inside: counted as proposal)
 _MAP_PARTS = ("gradient", "colour_labels", "integral")
 
@@ -89,18 +103,16 @@ def profile_stages(model, filt, timer):
     restore = []
 
     def wrap_class(cls, name, part):
-        if callable(getattr(cls, name, None)) and not isinstance(vars(cls).get(name), (staticmethod, classmethod)):
+        if not isinstance(vars(cls).get(name), (staticmethod, classmethod)):
             restore.append((cls, name, timer.wrap(cls, name, part), name in vars(cls)))
 
-    for part, names in _MODEL_PARTS.items():
-        for name in names:
-            wrap_class(type(model), name, part)
-    resampler = getattr(filt, "resampler", None)
-    if resampler is not None:
-        restore.append((resampler, "scheme", timer.wrap(resampler, "scheme", "resampling"), True))
-    prop = getattr(filt, "proposal", None)
-    if prop is not None:
-        wrap_class(type(prop), "sample", "proposal")
+    for part, entries in _MODEL_PARTS.items():
+        for protocol, name in entries:
+            if offers(model, protocol):
+                wrap_class(type(model), name, part)
+    restore.append((filt.resampler, "scheme", timer.wrap(filt.resampler, "scheme", "resampling"), True))
+    if filt.proposal is not None:
+        wrap_class(type(filt.proposal), "sample", "proposal")
     for name in _MAP_PARTS:
         wrap_class(FeatureMaps, name, "features")
     try:

@@ -104,6 +104,12 @@ class VideoSource:
         finally:
             cap.release()
 
+    @property
+    def exact_count(self):
+        """Whether :attr:`frame_count` is exact: an image folder's is; a container's is what its header
+        says (frames may be fewer, or more)."""
+        return self._images is not None
+
     def __len__(self):
         if self.frame_count is None:
             raise TypeError("frame count unknown for this container")

@@ -297,7 +297,7 @@ def _track(clip, frames, model, filt, particles, seed, max_frames, show_particle
     src = clip.source
     total = src.frame_count if max_frames is None else min(max_frames, src.frame_count or max_frames)
     # an image folder's frame count is exact: frames after the last decodable one get rows too
-    exact = total if getattr(src, "_images", None) is not None else None
+    exact = total if src.exact_count else None
     frames = ((i, f) for i, f in frames if i >= start)
     bar = tqdm(total=total, unit="frame", disable=quiet, dynamic_ncols=True, desc=label, initial=len(lead))
 

@@ -19,9 +19,11 @@ same for all algorithms of the thesis:
 
 from __future__ import annotations
 
+from operator import methodcaller
+
 import numpy as np
 
-from ..models.protocol import require
+from ..models.protocol import offers, require
 from ..particles import ParticleSet, checked_weights
 from ..transition import PriorKernel, Transition
 from .resampler import make_resampler
@@ -53,8 +55,11 @@ class ParticleFilter:
     name = "base"
     #: the model protocols this filter needs (:mod:`vistrack.models.protocol`)
     needs = ()
-    #: parts whose default the model builds per kernel: attribute -> model method name
+    #: parts whose default the model builds per kernel: attribute -> (the protocol that offers it,
+    #: its method's name)
     model_parts = {}
+    #: the local proposal in use (filters with one set it from the model or the caller)
+    proposal = None
 
     def __init__(self, model, *, resample="systematic", ess_threshold=None, birth_reserve=None):
         require(model, self.needs, self.name)
@@ -78,8 +83,9 @@ class ParticleFilter:
     def _set_part(self, attr, value):
         """Use ``value`` as part ``attr``, or (``None``) what the model builds for each kernel;
         ``self.<attr>`` is the part of ``K``."""
-        if value is None and getattr(self.model, self.model_parts[attr], None) is None:
-            raise ValueError(f"{self.name} needs a model with {self.model_parts[attr]} (its {attr}); "
+        protocol, method = self.model_parts[attr]
+        if value is None and not offers(self.model, protocol):
+            raise ValueError(f"{self.name} needs a model with {method} (its {attr}); "
                              f"{type(self.model).__name__} does not supply it")
         self._given[attr] = value
         setattr(self, attr, self.part(attr, self.kernel))
@@ -92,7 +98,7 @@ class ParticleFilter:
             return value
         key = (attr, kernel.first)
         if key not in self._built:
-            self._built[key] = getattr(self.model, self.model_parts[attr])(kernel)
+            self._built[key] = methodcaller(self.model_parts[attr][1], kernel)(self.model)
         return self._built[key]
 
     def first_step(self, obs, n, rng):

@@ -124,7 +124,7 @@ class HistorySampling(ParticleFilter):
     """
 
     needs = (StateSpaceModel, InnovationSplit)
-    model_parts = {"proposal": "innovation_proposal"}
+    model_parts = {"proposal": (InnovationSplit, "innovation_proposal")}
     #: whether the step starts by resampling by the policy (HS-SIR's pair draw resamples instead)
     resamples_first = True
 

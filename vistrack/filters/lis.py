@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..hooks import FusedPropose, LookAhead, offers
-from ..models.protocol import StateSpaceModel
+from ..models.protocol import LISModel, StateSpaceModel
 from ..proposals import GaussMixtureProposal
 from .base import ParticleFilter
 
@@ -38,7 +38,7 @@ class LIS(ParticleFilter):
 
     name = "lis"
     needs = (StateSpaceModel,)
-    model_parts = {"proposal": "lis_proposal"}
+    model_parts = {"proposal": (LISModel, "lis_proposal")}
 
     def __init__(self, model, proposal=None, **kwargs):
         super().__init__(model, **kwargs)

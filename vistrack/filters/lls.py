@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models.protocol import GridLikelihood, LocalMoves, StateSpaceModel, offers
+from ..models.protocol import GridLikelihood, LLSModel, LocalMoves, StateSpaceModel, offers
 from ..particles import logsumexp
 from ..proposals import Window, categorical_rows
 from .base import ParticleFilter
@@ -38,7 +38,7 @@ class LLS(ParticleFilter):
 
     name = "lls"
     needs = (StateSpaceModel, LocalMoves)
-    model_parts = {"window": "lls_window"}
+    model_parts = {"window": (LLSModel, "lls_window")}
 
     def __init__(self, model, window=None, **kwargs):
         super().__init__(model, **kwargs)

@@ -5,7 +5,7 @@
 
 from __future__ import annotations
 
-from ..models.protocol import StateSpaceModel
+from ..models.protocol import SIRModel, StateSpaceModel
 from .base import ParticleFilter
 
 __all__ = ["SIR"]
@@ -26,7 +26,7 @@ class SIR(ParticleFilter):
 
     name = "sir"
     needs = (StateSpaceModel,)
-    model_parts = {"proposal": "sir_proposal"}
+    model_parts = {"proposal": (SIRModel, "sir_proposal")}
 
     def __init__(self, model, proposal=None, **kwargs):
         super().__init__(model, **kwargs)

@@ -10,7 +10,8 @@ local coordinates; each method's docstring gives its arguments and results.
 * :class:`LocalSearch`: LS-N-IPS (§4.3).
 * :class:`LocalMoves`: LLS and LIS, which act on local coordinates (§4.4.3).
 * :class:`LLSModel`, :class:`GridLikelihood`: LLS's window (§4.4) and an optional speed-up.
-* :class:`LISModel`: LIS's local proposal (§4.5).
+* :class:`LISModel`: LIS's local proposal (§4.5); :class:`LocalMixture`, :class:`MapLogQ`: what the
+  Gauss-mixture and the grid proposals read.
 * :class:`Births`, :class:`ReservedLineages`: the birth reserve of a model with entering
   objects (the plate model's entering cars, §4.5.3).
 * :class:`LaplaceModel`, :class:`EISModel`: PF-Doucet, PF-EIS, PF-EIS-MT (seed 000 §2–3).
@@ -37,7 +38,8 @@ from ..hooks import FusedLISStep, FusedPropose, LookAhead, ProposalMap, Redetect
 __all__ = ["StateSpaceModel", "PredictMean", "LocalSearch", "LearnedSearch", "LocalMoves", "LLSModel", "GridLikelihood",
            "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "InnovationSplit",
            "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
-__all__ += ["Partitions", "PartitionLIS", "LookAhead", "FusedPropose", "FusedLISStep", "ProposalMap", "Redetects"]
+__all__ += ["LocalMixture", "MapLogQ", "Partitions", "PartitionLIS", "LookAhead", "FusedPropose", "FusedLISStep",
+            "ProposalMap", "Redetects"]
 
 
 @runtime_checkable
@@ -152,6 +154,23 @@ class LISModel(Protocol):
         log_alpha (N,), log_q (N,))``: ``z`` drawn from ``q g(x - .) / α`` about the predictions
         ``x`` (``prev``, the resampled ``Z_{t-1}``, lets a window follow ``K`` itself).
         """
+
+
+@runtime_checkable
+class LocalMixture(Protocol):
+    """A Gaussian-mixture local proposal (:class:`~vistrack.proposals.GaussMixtureProposal`; the
+    contour, bearings and toy models): ``local_mixture(obs, states) -> (log_p (N, B, n),
+    mu (N, B, n, k), ...)`` about each state (the proposal's docstring gives the full form)."""
+
+    def local_mixture(self, obs, states): ...
+
+
+@runtime_checkable
+class MapLogQ(Protocol):
+    """The grid proposal's map (:class:`~vistrack.proposals.MapProposal`; the box model):
+    ``proposal_log_q(obs, states (N, d), points (N, G, 2)) -> log q (N, G)`` at translations."""
+
+    def proposal_log_q(self, obs, states, points): ...
 
 
 @runtime_checkable

@@ -175,6 +175,10 @@ class Appearance:
         Force grey-level bins; ``None``: from :func:`~vistrack.features.is_grey`.
     """
 
+    #: the template as a resized image for the proposal map, with what it was made from
+    #: (:func:`~vistrack.models.box.appearance_map.proposal_map` keeps it; ``None`` until then)
+    map_template = None
+
     def __init__(self, frame, box, *, work_size=32.0, lambda_colour=35.0, kappa=1.0, ring=0.3,
                  lambda_template=25.0, template_points=256, adapt_rate=0.1, adapt_min_ncc=0.6, grey=None,
                  anchor_min_ncc=None):

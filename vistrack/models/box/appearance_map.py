@@ -62,13 +62,13 @@ def proposal_map(app, obs, w, h, span=None, stride=1):
 def _template_image(app, tw, th):
     """The template as a ``th x tw`` float32 image (grey, gx, gy), kept until the template or the
     size changes (adaptation replaces the template's array)."""
-    kept = getattr(app, "_map_template", None)
+    kept = app.map_template
     if kept is None or kept[0] is not app.template or kept[1] != (tw, th):
         my, mx = app.grid_shape
         m = my * mx
         img = np.dstack([app.template[:m].reshape(my, mx), app.template[m:].reshape(my, mx, 2)])
         kept = app.template, (tw, th), cv2.resize(img.astype(np.float32), (tw, th), interpolation=cv2.INTER_LINEAR)
-        app._map_template = kept
+        app.map_template = kept
     return kept[2]
 
 

@@ -177,6 +177,7 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
             raise ValueError(f"unknown local search {search!r}; choose lms or nn")
         self.search = search
         self.nn_search = None  # the network of search="nn", trained or loaded on first use (contour_nn)
+        self.point_keys = [f"qx{i}" for i in range(self.n)] + [f"qy{i}" for i in range(self.n)]  # describe()'s
 
     @classmethod
     def from_box(cls, box, frame_size, *, n=24, **kwargs):
@@ -395,7 +396,5 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
         scale, angle = pose_params(z)
         row = dict(zip(("cx", "cy"), z[:2].tolist()), w=float(x.max() - x.min()), h=float(y.max() - y.min()),
                    angle_deg=float(angle), scale=float(scale))
-        if getattr(self, "_point_keys", None) is None:
-            self._point_keys = [f"qx{i}" for i in range(self.n)] + [f"qy{i}" for i in range(self.n)]
-        row.update(zip(self._point_keys, q.T.ravel().tolist()))
+        row.update(zip(self.point_keys, q.T.ravel().tolist()))
         return row

@@ -18,6 +18,12 @@ __all__ = ["ContourMoves"]
 class ContourMoves:
     """Mixin of :class:`~vistrack.models.contour.model.Contour`: local search and local moves."""
 
+    # per-frame caches, made on first use
+    _search_cache = None
+    _scratch = None
+    _grid_cache = None
+    _pair_cache = None
+
     #: the LMS search in two fused compiled passes (:meth:`_search_compiled`) where the kernels are
     #: on and there is no colour term; ``False``: the step-by-step path (the reference in the tests)
     fused_search = True
@@ -121,7 +127,7 @@ class ContourMoves:
         middle samples, kernel and constant, the grid's float32 cast, pair kernel and table of
         two-feature terms (filled as frames need it; all cached while the model's parameters stay)."""
         key = (tuple(self.search_lambda), reach_lms, self.half_line, self.sigma_edge, self.log_c)
-        cached = getattr(self, "_search_cache", None)
+        cached = self._search_cache
         if cached is None or cached[0] != key:
             h = int(np.ceil(np.hypot(*self.search_lambda[:2]) + reach_lms)) + self.half_line
             off = np.arange(-h, h + 1, dtype=float)
@@ -137,7 +143,7 @@ class ContourMoves:
         edge strengths, ``p̂ - p0``, the translated poses and ``log r`` at the prediction."""
         m = len(self.meas0)
         key = (n, m, n_samples)
-        cached = getattr(self, "_scratch", None)
+        cached = self._scratch
         if cached is None or cached[0] != key:
             cached = self._scratch = (key, (np.empty((n, m, n_samples), np.float32), np.empty((n, 2 * m)),
                                             np.empty((n, 4)), np.empty(n)))
@@ -170,7 +176,7 @@ class ContourMoves:
         (cached while ``search_lambda``, ``grid_step`` and ``sigma_edge`` stay)."""
         lx, ly = self.search_lambda[:2]
         step = max(1.0, self.grid_step * self.sigma_edge)
-        cached = getattr(self, "_grid_cache", None)
+        cached = self._grid_cache
         if cached is None or cached[0] != (lx, ly, step):
             gx = np.arange(-np.floor(lx / step), np.floor(lx / step) + 1) * step
             gy = np.arange(-np.floor(ly / step), np.floor(ly / step) + 1) * step
@@ -243,7 +249,7 @@ class ContourMoves:
     def _pair_kernel(self, off):
         """``exp(-(ν_j - ν_k)² / 2σ²)`` float32 ``(L, L)`` of the line offsets ``off`` (cached per ``off``, ``σ``)."""
         key = (len(off), float(off[0]), self.sigma_edge)
-        cached = getattr(self, "_pair_cache", None)
+        cached = self._pair_cache
         if cached is None or cached[0] != key:
             kern = np.exp(-0.5 * ((off[:, None] - off[None, :]) / self.sigma_edge) ** 2).astype(np.float32)
             self._pair_cache = (key, kern)

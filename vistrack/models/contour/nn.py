@@ -255,8 +255,8 @@ def load_or_train(model, cfg=None, path=None, notify=None):
 
 def network_for(model, notify=None):
     """The model's network (``model.nn_search``), loaded or trained on first use."""
-    if getattr(model, "nn_search", None) is None:
-        model.nn_search = load_or_train(model, getattr(model, "nn_config", None), notify=notify)[0]
+    if model.nn_search is None:
+        model.nn_search = load_or_train(model, notify=notify)[0]
     return model.nn_search
 
 

@@ -153,7 +153,7 @@ class PlateLISProposal:
         ones those can be a character pitch off the plate (tests/test_plate_appearance.py: the
         yellow plate's ``log r_plate`` is 3.4 higher 8 px to the side, where the appearance's is
         14 lower), and with 100 particles no draw was left on the plate."""
-        app, m = getattr(obs, "appearance", None), self.model
+        app, m = obs.appearance, self.model
         if m.app is None or app is None or len(x) == 0:
             return None
         b = m._app_boxes(x)
