@@ -17,11 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
+from .remote import is_url
 from .video import VideoError, find_groundtruth, groundtruth_origin, open_video, read_rects
 
 __all__ = ["Clip", "load_clip", "excluded_frames",
            "read_meta", "read_groundtruth_csv", "write_track_csv", "format_value", "excerpt_clip",
-           "GroundTruthWarning"]
+           "GroundTruthWarning", "find_clips", "sequence_name"]
 
 
 @dataclass
@@ -242,3 +243,77 @@ def excerpt_clip(src, dst, frames):
             box = (t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k])
             f.write(",".join(f"{v:.2f}" for v in (box if t["visible"][k] > 0 else (0, 0, 0, 0))) + "\n")
     return dst
+
+
+# -- clip folders from the user's paths (eval, run) ------------------------------------------
+def _is_clip(p):
+    """A clip folder: a synthetic clip, or images (``img/``, VOT's ``color/``, or in the folder) or a
+    video with box ground truth of a known layout (OTB, VOT, GOT-10k, LaSOT)."""
+    return ((p / "video.mp4").is_file() or (p / "img").is_dir() or (p / "color").is_dir()
+            or (p / "groundtruth_rect.txt").is_file() or (p / "groundtruth.txt").is_file()
+            or (p / "groundtruth.csv").is_file())
+
+
+def _dataset_clips(p):
+    """The clip folders of a dataset root ``p``: a VOT workspace (``sequences/``), a GOT-10k split or
+    VOT's ``sequences`` (``list.txt`` names them, in its order), a folder of clip folders, or LaSOT's
+    ``root/category/sequence``; ``[]`` when there is none."""
+    if (p / "sequences").is_dir() and not _is_clip(p):
+        p = p / "sequences"
+    if (p / "list.txt").is_file():
+        names = [n.strip() for n in (p / "list.txt").read_text(errors="replace").splitlines() if n.strip()]
+        missing = [n for n in names if not (p / n).is_dir()]
+        if missing:
+            raise VideoError(f"{p / 'list.txt'} names sequences that are not folders in {p}: "
+                             + ", ".join(missing[:5]) + (" ..." if len(missing) > 5 else ""))
+        return [p / n for n in names]
+    # hidden folders are not clips: synth renders into .NAME.partial-PID before renaming it
+    subs = sorted(q for q in p.iterdir() if q.is_dir() and not q.name.startswith("."))
+    clips = [q for q in subs if _is_clip(q)]
+    if clips:
+        return clips
+    return [r for q in subs for r in sorted(q.iterdir()) if r.is_dir() and not r.name.startswith(".") and _is_clip(r)]
+
+
+def find_clips(paths):
+    """Clip folders from clip folders, videos or dataset roots (folders of clip folders; a LaSOT root
+    with category folders; a GOT-10k split or a VOT workspace, in its ``list.txt`` order).
+
+    Raises ``VideoError`` for a missing path, an empty directory, or a clip
+    without ground truth (eval needs it; ``run`` does not).
+    """
+    clips = []
+    for raw in paths:
+        if is_url(raw):  # one clip folder, fetched where it is read (vistrack.remote)
+            clips.append(str(raw))
+            continue
+        p = Path(raw)
+        if not p.exists():
+            raise VideoError(f"{p} does not exist")
+        if p.is_file() or _is_clip(p):
+            clips.append(p)
+            continue
+        sub = _dataset_clips(p)
+        if not sub:
+            raise VideoError(f"{p} holds no clips (folders with a video or images and box ground truth: OTB, VOT, "
+                             "GOT-10k, LaSOT or vistrack's own layout)")
+        clips.extend(sub)
+    for c in clips:
+        truth = load_clip(c).truth
+        if truth is None:
+            raise VideoError(f"{c} has no ground truth (groundtruth.csv or groundtruth_rect.txt): "
+                             "eval needs ground truth; `vistrack run` does not")
+        if not np.any(truth["visible"] > 0):
+            raise VideoError(f"the ground truth of {c} has no frame with the object in view (every row empty, NaN "
+                             "or 0,0,0,0): eval starts each run from the first box in view")
+    return clips
+
+
+def sequence_name(clip):
+    """A clip's sequence name: its folder's (a video's parent folder's; a URL's last part); result files
+    are named after it."""
+    if is_url(clip):
+        return str(clip).rstrip("/").rsplit("/", 1)[-1]
+    p = Path(clip)
+    return p.parent.name if p.is_file() else p.name
+

@@ -27,12 +27,12 @@ from pathlib import Path
 import numpy as np
 
 from .builders import build_model, start_frame
-from .clips import GroundTruthWarning, load_clip
-from .remote import is_url
+from .clips import GroundTruthWarning, find_clips, load_clip, sequence_name  # noqa: F401  (find_clips: re-exported)
 from .results_format import find_result_file, read_result_file
 from .filters import ALGORITHMS, make_filter
-from .metrics import (PRECISION_THRESHOLDS, center_error, iou, lost_frames, precision, precision_curve,  # noqa: F401
-                      success_auc, success_curve, summarize_runs)
+from .metrics import (PRECISION_THRESHOLDS, center_error, iou, lost_frames, pooled_summary, precision,  # noqa: F401
+                      precision_curve, success_auc, success_curve)
+from .metrics import summarize as metrics_summarize
 from .models.registry import get_model_spec
 from .runtime import keep_freed_memory
 from .tasks import (OutLocked, TaskFailed, check_shared, load_task_results, lock_out, stale_tasks, task_done,
@@ -41,7 +41,7 @@ from .tracking import track
 from .video import VideoError
 
 __all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_config", "run_task", "summarize",
-           "pooled_summary", "OPENCV_TRACKERS", "check_algos",
+           "pooled_summary", "OPENCV_TRACKERS", "check_algos", "sequence_name",
            "score_boxes", "score_result_file", "result_files",
            # the engine's task files (vistrack.tasks), re-exported
            "task_fingerprint", "task_done", "stale_tasks", "write_task_result", "write_atomic", "OutLocked",
@@ -97,78 +97,6 @@ def check_algos(algos):
         elif a not in ALGORITHMS:
             known = sorted(set(ALGORITHMS) | set(OPENCV_TRACKERS))
             raise ValueError(f"unknown algorithm {a!r}; choose from {', '.join(known)}")
-
-
-def _is_clip(p):
-    """A clip folder: a synthetic clip, or images (``img/``, VOT's ``color/``, or in the folder) or a
-    video with box ground truth of a known layout (OTB, VOT, GOT-10k, LaSOT)."""
-    return ((p / "video.mp4").is_file() or (p / "img").is_dir() or (p / "color").is_dir()
-            or (p / "groundtruth_rect.txt").is_file() or (p / "groundtruth.txt").is_file()
-            or (p / "groundtruth.csv").is_file())
-
-
-def _dataset_clips(p):
-    """The clip folders of a dataset root ``p``: a VOT workspace (``sequences/``), a GOT-10k split or
-    VOT's ``sequences`` (``list.txt`` names them, in its order), a folder of clip folders, or LaSOT's
-    ``root/category/sequence``; ``[]`` when there is none."""
-    if (p / "sequences").is_dir() and not _is_clip(p):
-        p = p / "sequences"
-    if (p / "list.txt").is_file():
-        names = [n.strip() for n in (p / "list.txt").read_text(errors="replace").splitlines() if n.strip()]
-        missing = [n for n in names if not (p / n).is_dir()]
-        if missing:
-            raise VideoError(f"{p / 'list.txt'} names sequences that are not folders in {p}: "
-                             + ", ".join(missing[:5]) + (" ..." if len(missing) > 5 else ""))
-        return [p / n for n in names]
-    # hidden folders are not clips: synth renders into .NAME.partial-PID before renaming it
-    subs = sorted(q for q in p.iterdir() if q.is_dir() and not q.name.startswith("."))
-    clips = [q for q in subs if _is_clip(q)]
-    if clips:
-        return clips
-    return [r for q in subs for r in sorted(q.iterdir()) if r.is_dir() and not r.name.startswith(".") and _is_clip(r)]
-
-
-def find_clips(paths):
-    """Clip folders from clip folders, videos or dataset roots (folders of clip folders; a LaSOT root
-    with category folders; a GOT-10k split or a VOT workspace, in its ``list.txt`` order).
-
-    Raises ``VideoError`` for a missing path, an empty directory, or a clip
-    without ground truth (eval needs it; ``run`` does not).
-    """
-    clips = []
-    for raw in paths:
-        if is_url(raw):  # one clip folder, fetched where it is read (vistrack.remote)
-            clips.append(str(raw))
-            continue
-        p = Path(raw)
-        if not p.exists():
-            raise VideoError(f"{p} does not exist")
-        if p.is_file() or _is_clip(p):
-            clips.append(p)
-            continue
-        sub = _dataset_clips(p)
-        if not sub:
-            raise VideoError(f"{p} holds no clips (folders with a video or images and box ground truth: OTB, VOT, "
-                             "GOT-10k, LaSOT or vistrack's own layout)")
-        clips.extend(sub)
-    for c in clips:
-        truth = load_clip(c).truth
-        if truth is None:
-            raise VideoError(f"{c} has no ground truth (groundtruth.csv or groundtruth_rect.txt): "
-                             "eval needs ground truth; `vistrack run` does not")
-        if not np.any(truth["visible"] > 0):
-            raise VideoError(f"the ground truth of {c} has no frame with the object in view (every row empty, NaN "
-                             "or 0,0,0,0): eval starts each run from the first box in view")
-    return clips
-
-
-def sequence_name(clip):
-    """A clip's sequence name: its folder's (a video's parent folder's; a URL's last part); result files
-    are named after it."""
-    if is_url(clip):
-        return str(clip).rstrip("/").rsplit("/", 1)[-1]
-    p = Path(clip)
-    return p.parent.name if p.is_file() else p.name
 
 
 def _name(clip):
@@ -393,77 +321,13 @@ def score_result_file(clip_path, path, name, fmt="otb"):
     return result
 
 
+def summarize(results):
+    """Per clip × algo × N summaries of task results (:func:`vistrack.metrics.summarize`; OpenCV's
+    trackers marked as no particle filter)."""
+    return metrics_summarize(results, not_filters=OPENCV_TRACKERS)
+
+
 class ResultsLengthWarning(UserWarning):
     """A result file and the ground truth differ in their number of frames."""
-
-
-def summarize(results):
-    """Per clip × algo × N summaries (list of dicts, in first-seen order) from task results."""
-    groups = {}
-    for r in results:
-        groups.setdefault((r["clip"], r["algo"], r["particles"]), []).append(r)
-    out = []
-    for (clip, algo, n), rs in groups.items():
-        rs = sorted(rs, key=lambda r: r["run"])
-        vis = np.array(rs[0]["visible"], bool)
-        err = np.array([[np.inf if e is None else e for e in r["error"]] for r in rs])
-        lost = np.array([r["lost"] for r in rs], bool) & vis
-        ok = ~lost & vis
-        p_lost = lost.mean(axis=0)
-        with np.errstate(invalid="ignore"):
-            err_frame = np.where(ok.any(axis=0), np.sum(np.where(ok, err, 0), axis=0) / ok.sum(axis=0), np.nan)
-        ious = np.array([r["iou"] for r in rs])[:, vis]
-        # the scores (vistrack.metrics, the one place they are computed): over runs × frames, and per run
-        success = success_curve(ious)
-        precision20 = precision(err[:, vis])
-        prec_curve = precision_curve(err[:, vis])
-        every = err[:, vis][np.isfinite(err[:, vis])]
-        ms = np.array([np.mean(r["ms"]) if r["ms"] else np.nan for r in rs])
-        ess = [e for r in rs for e in r["ess"] if e is not None]
-        # per run: the spread over runs of the scores below
-        auc_run = [success_auc(v) if v.size else 0.0 for v in ious]
-        prec_run = [precision(e) for e in err[:, vis]]
-        lost_run = [float(v[vis].mean()) if vis.any() else 0.0 for v in lost]
-        out.append({
-            "clip": clip, "algo": algo, "particles": n, "runs": len(rs),
-            # OpenCV's trackers and other trackers' result files have no particles (their N means nothing)
-            "particle_filter": algo not in OPENCV_TRACKERS and not rs[0].get("external", False),
-            "success_auc_sd": float(np.std(auc_run)), "precision_20px_sd": float(np.std(prec_run)),
-            "p_lost_sd": float(np.std(lost_run)),
-            "mean_error": float(err[ok].mean()) if ok.any() else None,
-            "mean_error_all": float(every.mean()) if every.size else None,
-            "p_lost": float(p_lost[vis].mean()) if vis.any() else 0.0,
-            "p_lost_final": float(p_lost[-1]),
-            "p_lost_per_frame": p_lost.tolist(),
-            "error_per_frame": [None if not np.isfinite(v) else float(v) for v in err_frame],
-            "success_auc": float(np.mean(success)),
-            "success_curve": success,
-            "precision_20px": precision20,
-            "precision_curve": prec_curve,
-            "frames_per_s": float(1e3 / ms.mean()) if np.all(np.isfinite(ms)) else None,
-            "mean_ess": float(np.mean(ess)) if ess else None,
-        })
-    return out
-
-
-def pooled_summary(results):
-    """Per (algo, N) over all clips and runs (same frame count): P(lost) per frame, at the
-    last frame and averaged, mean error over frames not lost, ms per frame, mean ESS."""
-    groups = {}
-    for r in results:
-        groups.setdefault((r["algo"], r["particles"]), []).append(r)
-    out = []
-    for (algo, n), rs in groups.items():
-        err = np.array([[np.inf if e is None else e for e in r["error"]] for r in rs])
-        s = summarize_runs(err, np.array([r["lost"] for r in rs], bool))
-        ms = float(np.mean([np.mean(r["ms"]) for r in rs]))
-        ess = [e for r in rs for e in r["ess"] if e is not None]
-        out.append({"algo": algo, "particles": n, "clips": len({r["clip"] for r in rs}),
-                    "runs": len(rs) // max(1, len({r["clip"] for r in rs})),
-                    "p_lost_final": s["p_lost_final"], "p_lost_mean": s["p_lost_mean"], "mean_error": s["mean_error"],
-                    "ms_per_frame": ms, "frames_per_s": 1e3 / ms, "mean_ess": float(np.mean(ess)) if ess else None,
-                    "p_lost_per_frame": s["p_lost_per_frame"].tolist(),
-                    "error_per_frame": [None if not np.isfinite(v) else float(v) for v in s["error_per_frame"]]})
-    return out
 
 
