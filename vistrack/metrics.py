@@ -19,7 +19,8 @@ import numpy as np
 
 __all__ = ["center_error", "contour_lost_threshold", "plate_frame_measures", "lost_frames", "summarize_runs",
            "landmark_error", "iou", "success_auc", "success_curve", "precision", "precision_curve", "IOU_THRESHOLDS",
-           "PRECISION_THRESHOLDS", "box_scores", "summarize", "pooled_summary"]
+           "PRECISION_THRESHOLDS", "box_scores", "summarize", "pooled_summary",
+           "equal_time_n", "equal_time_search"]
 
 #: IoU thresholds of the success plot (OTB protocol)
 IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
@@ -252,3 +253,42 @@ def pooled_summary(results):
                     "error_per_frame": [None if not np.isfinite(v) else float(v) for v in s["error_per_frame"]]})
     return out
 
+
+# -- equal-time particle counts (thesis Tables 3.1, 4.1, 4.3) ---------------------------------------
+def equal_time_n(t, n, budget, *, min_slope=0.0, checks=0, tolerance=1.25):
+    """The particle count whose time ``t(N)`` matches ``budget``: a straight line through ``t(n)`` and
+    ``t(2n)`` (time per particle ``(t(2n) - t(n)) / n``, at least ``min_slope · t(n) / n`` so that a
+    slope lost in timing noise cannot pick a huge N), then up to ``checks`` timings at the pick, each
+    scaling it by ``budget / t`` while it takes over ``tolerance · budget``.
+
+    Returns ``(N, t(n), t(2n))``. ``eval --equal-time`` uses ``min_slope=0.1, checks=3``; the
+    history-sampling and several-plate reproductions the plain line.
+    """
+    t1, t2 = t(n), t(2 * n)
+    per = max((t2 - t1) / n, min_slope * t1 / n, 1e-6)
+    m = int(max(1, round(n + (budget - t1) / per)))
+    for _ in range(checks):
+        tm = t(m)
+        if tm <= tolerance * budget:
+            break
+        m = max(1, int(m * budget / tm))
+    return m, t1, t2
+
+
+def equal_time_search(t, n, budget, steps):
+    """``(N, t(N))`` with ``t(N)`` closest to ``budget`` (in ratio) among the N tried: ``n``, then
+    ``steps`` steps, each a secant step through the last two N (kept within a factor 4 of the
+    last), or the last N scaled by ``budget / t`` where the secant has no positive slope (the
+    bearings reproduction: a straight line through N and 2N is thrown far off by one noisy timing
+    when the answer lies far from N)."""
+    tried = {n: t(n)}
+    a, b = None, max(1, round(n * budget / tried[n]))
+    for _ in range(steps):
+        if b in tried:
+            break
+        tried[b] = t(b)
+        slope = (tried[b] - tried[a]) / (b - a) if a is not None else 0.0
+        c = b + (budget - tried[b]) / slope if slope > 0 else b * budget / tried[b]
+        a, b = b, int(max(1, round(min(max(c, b / 4), 4 * b))))
+    best = min(tried, key=lambda k: abs(np.log(tried[k] / budget)))
+    return best, tried[best]

@@ -15,6 +15,7 @@ from vistrack.builders import MODELS as MODEL_NAMES
 from vistrack.clips import load_clip
 from vistrack.results_format import FORMATS
 from vistrack.models.registry import DEFAULT_MODEL, all_algos, clip_model, get_model_spec
+from vistrack.metrics import equal_time_n
 from vistrack.runtime import check_particle_memory
 from vistrack.video import VideoError
 
@@ -62,16 +63,7 @@ def _equal_time(cfg, clips, frames=30):
     budget = ms(cfg.algos[0], n_ref)
     chosen = {cfg.algos[0]: n_ref}
     for algo in cfg.algos[1:]:
-        t1, t2 = ms(algo, n_ref), ms(algo, 2 * n_ref)
-        # ms per particle (t(N) = t1 + per (N - n_ref)); a slope lost in timing noise is taken as at
-        # least a tenth of the mean time per particle, so one noisy pair cannot pick a huge N
-        per = max((t2 - t1) / n_ref, 0.1 * t1 / n_ref, 1e-6)
-        n = int(max(1, round(n_ref + (budget - t1) / per)))
-        for _ in range(3):  # check the pick: a run at N must not take well over the budget
-            t = ms(algo, n)
-            if t <= 1.25 * budget:
-                break
-            n = max(1, int(n * budget / t))
+        n = equal_time_n(lambda k: ms(algo, k), n_ref, budget, min_slope=0.1, checks=3)[0]
         try:
             check_particle_memory(n, bpp, algo)
         except ValueError:

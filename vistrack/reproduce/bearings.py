@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..filters import ALGORITHMS, filter_steps, make_filter
+from ..metrics import equal_time_search
 from ..models.bearings.model import LIS_PROPOSALS, Bearings, simulate
 from ..particles import DegenerateWeightsWarning
 
@@ -123,9 +124,9 @@ def equal_time_pairs(cfg, runs=3, repeats=3, steps=4):
     """``(algo, N)`` pairs at equal time per run (as ``eval --equal-time``): for every N of
     ``cfg.particles``, the first algorithm at N and every other at the N whose time per run
     is closest to it. Times are the best of ``repeats`` timings, in CPU time, of ``runs`` runs
-    on the first sequence in this process; the N tried are :func:`_search`'s (a straight line
-    through N and 2N, as eval fits, is thrown far off by one noisy timing when the answer lies
-    far from N). Returns ``(pairs, {"algo:N": ms per run})``, the times at the answers."""
+    on the first sequence in this process; the N tried are
+    :func:`~vistrack.metrics.equal_time_search`'s. Returns ``(pairs, {"algo:N": ms per run})``, the
+    times at the answers."""
     model = Bearings(cfg.ships, proposal=cfg.proposal)
     _, obs, seeds = _sequence(cfg, model, 0)
     seeds = seeds[:runs]
@@ -139,27 +140,10 @@ def equal_time_pairs(cfg, runs=3, repeats=3, steps=4):
         budget = times[f"{cfg.algos[0]}:{n}"] = ms(cfg.algos[0], n)
         pairs.append((cfg.algos[0], int(n)))
         for algo in cfg.algos[1:]:
-            m, t = _search(lambda k: ms(algo, k), int(n), budget, steps)
+            m, t = equal_time_search(lambda k: ms(algo, k), int(n), budget, steps)
             pairs.append((algo, m))
             times[f"{algo}:{m}"] = t
     return pairs, times
-
-
-def _search(t, n, budget, steps):
-    """``(N, t(N))`` with ``t(N)`` closest to ``budget`` (in ratio) among the N tried: ``n``, then
-    ``steps`` steps, each a secant step through the last two N (kept within a factor 4 of the
-    last), or the last N scaled by ``budget / t`` where the secant has no positive slope."""
-    tried = {n: t(n)}
-    a, b = None, max(1, round(n * budget / tried[n]))
-    for _ in range(steps):
-        if b in tried:
-            break
-        tried[b] = t(b)
-        slope = (tried[b] - tried[a]) / (b - a) if a is not None else 0.0
-        c = b + (budget - tried[b]) / slope if slope > 0 else b * budget / tried[b]
-        a, b = b, int(max(1, round(min(max(c, b / 4), 4 * b))))
-    best = min(tried, key=lambda k: abs(np.log(tried[k] / budget)))
-    return best, tried[best]
 
 
 def bearing_tasks(cfg):

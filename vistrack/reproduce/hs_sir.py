@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..metrics import equal_time_n
 from .contour import ContourConfig, contour_results, contour_tasks
 
 __all__ = ["HSConfig", "DEFAULT_ENTRIES", "LIKELIHOOD_KEYS", "hs_tasks", "hs_results", "equal_time_entries",
@@ -109,9 +110,7 @@ def equal_time_entries(clip_path, entries, frames=20, likelihood=None):
     budget = _ms_per_frame(fr, model, ref_algo, ref_n)
     out, times = [(ref_algo, ref_n)], {f"{ref_algo}:{ref_n}": budget}
     for algo, n in entries[1:]:
-        t1, t2 = _ms_per_frame(fr, model, algo, n), _ms_per_frame(fr, model, algo, 2 * n)
-        per = max((t2 - t1) / n, 1e-6)  # ms per particle
-        m = int(max(1, round(n + (budget - t1) / per)))
+        m, t1, _ = equal_time_n(lambda k: _ms_per_frame(fr, model, algo, k), n, budget)
         out.append((algo, m))
         times[f"{algo}:{n}"] = t1
     return out, times

@@ -24,6 +24,7 @@ from ..builders import build_model
 from ..clips import load_clip
 from ..evaluation import entry_tasks, prepare_worker, write_task_result
 from ..filters import make_filter
+from ..metrics import equal_time_n
 from ..mot import FrameObjects, clear_mot, objects_by_frame
 from ..particles import DegenerateWeightsWarning
 from ..tracking import track
@@ -166,8 +167,7 @@ def plates_equal_time(clip_path, entries, targets, frames=60):
     budget = ms(ref_algo, ref_n)
     out, times = [(ref_algo, ref_n)], {f"{ref_algo}:{ref_n}": budget}
     for algo, n in entries[1:]:
-        t1, t2 = ms(algo, n), ms(algo, 2 * n)
-        per = max((t2 - t1) / n, 1e-6)
-        out.append((algo, int(max(1, round(n + (budget - t1) / per)))))
+        m, t1, t2 = equal_time_n(lambda k: ms(algo, k), n, budget)
+        out.append((algo, m))
         times[f"{algo}:{n}"], times[f"{algo}:{2 * n}"] = t1, t2
     return out, times
