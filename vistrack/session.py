@@ -8,6 +8,12 @@ and is renamed to ``PATH`` when the run ends for any reason (done, Ctrl-C, SIGTE
 error), so ``PATH`` is always a whole CSV of the frames tracked; a killed process leaves only
 the ``.part`` file (whole rows up to the last frame). The annotated video is closed on every
 exit path, so the frames so far play.
+
+Every frame of the input is accounted for: a frame that failed to decode (an index missing
+from the frames) gets a row with ``visible=0`` and ``lost_reason`` ``"decode"`` (the
+filter's state carried over, ``ms`` 0), a ``0,0,0,0`` results line and a blank annotated
+frame saying so. A signal (Ctrl-C, SIGTERM; :func:`deferred_signals`) stops the run after
+the frame in hand, so that the track, the results and the video hold the same frames.
 """
 
 from __future__ import annotations
@@ -112,7 +118,8 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
                 video_info=None, show_particles=10, label="", progress=None, notify=None, profile=True,
                 frame_count=None, start=0, lead=(), results_format="otb", sequence="sequence"):
     """Track ``frames`` (iterable of ``(index, frame)``), writing the track CSV and annotated video as
-    it goes; stops cleanly on Ctrl-C / SIGTERM (:func:`stop_on_signals`). Returns a :class:`VideoRun`.
+    it goes; every frame of the input accounted for and a signal honoured after the frame in hand
+    (module docstring). Returns a :class:`VideoRun`.
 
     Parameters
     ----------
@@ -123,40 +130,24 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     track_path, out_path, results_path : path or None
         Track CSV (:class:`TrackCSV`), annotated mp4 and result file (``x,y,w,h``; for GOT-10k and
         VOT the results folder, :func:`~vistrack.results_format.result_paths`).
-    results_format : {"otb", "got10k", "vot"}
-        The result file's format (:mod:`vistrack.results_format`; OTB's is 1-based).
-    sequence : str
-        The sequence's name in the GOT-10k and VOT result layouts.
-    video_info : tuple or None
-        ``(fps, (width, height))`` for the annotated video.
-    show_particles : int
-        Draw this many highest-weight particles.
-    label : str
-        Text drawn on every annotated frame after the frame number.
-    progress : callable or None
-        ``progress(ess)`` after every frame (a progress bar).
-    notify : callable or None
-        ``notify(index, reason, detail)`` on the first frame of every stretch where the
-        object is lost (``visible=0``; :mod:`vistrack.models.collapse`).
+    results_format, sequence : str
+        The result file's format, ``otb`` (1-based), ``got10k`` or ``vot``
+        (:mod:`vistrack.results_format`), and the sequence's name in the GOT-10k and VOT layouts.
+    video_info, show_particles, label : tuple or None, int, str
+        ``(fps, (width, height))`` for the annotated video; draw this many highest-weight particles,
+        and ``label`` after the frame number.
+    progress, notify : callable or None
+        ``progress(ess)`` after every frame (a progress bar); ``notify(index, reason, detail)`` on the
+        first frame of every stretch where the object is lost (:mod:`vistrack.models.collapse`).
     profile : bool
-        Time the stages (:mod:`vistrack.profiling`) into ``VideoRun.timer``; the tracks are
-        the same either way.
+        Time the stages (:mod:`vistrack.profiling`) into ``VideoRun.timer`` (the same tracks).
     lead : sequence of (int, ndarray)
-        Frames before ``frames`` that were searched for the object without finding it
-        (:class:`~vistrack.models.plate.detect.PlateSearch`): each gets a row with ``visible=0``
-        and ``lost_reason`` "not found" (NaN geometry), and its frame unmarked in the video.
-    frame_count : int or None
-        The number of frames the input holds, where it is exact (an image folder): frames after
-        the last one decoded get rows too.
-    start : int
-        The frame tracking starts from (:func:`~vistrack.builders.start_frame`): earlier frames
-        get rows with ``visible=0`` and ``lost_reason`` ``"not started"``.
-
-    Every frame of the input is accounted for: a frame that failed to decode (an index missing
-    from ``frames``) gets a row with ``visible=0`` and ``lost_reason`` ``"decode"`` (the
-    filter's state carried over, ``ms`` 0), a ``0,0,0,0`` results line and a blank annotated
-    frame saying so. A signal (Ctrl-C, SIGTERM; :func:`deferred_signals`) stops the run after
-    the frame in hand, so that the track, the results and the video hold the same frames.
+        Frames before ``frames`` searched without finding the object
+        (:class:`~vistrack.models.plate.detect.PlateSearch`): rows with ``visible=0``, "not found".
+    frame_count, start : int or None, int
+        The input's exact frame count (an image folder: frames after the last one decoded get rows
+        too), and the frame tracking starts from (:func:`~vistrack.starts.start_frame`; earlier
+        frames get rows with ``lost_reason`` "not started").
     """
     run = VideoRun()
     run.timer = Timer() if profile else None
