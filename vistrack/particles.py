@@ -136,10 +136,6 @@ class ParticleSet:
         dx = self.states - w @ self.states
         return (dx * w[:, None]).T @ dx
 
-    def normalized(self):
-        """The same set with log-weights shifted so that the weights sum to one."""
-        return ParticleSet(self.states, self.log_weights - logsumexp(self.log_weights), self.degenerate, self.loglik)
-
     def resample(self, idx):
         """Equally weighted set ``states[idx]``."""
         return ParticleSet(self.states[idx])

@@ -28,7 +28,35 @@ from .trax import trax
 __all__ = ["cli", "main"]
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class VistrackGroup(click.Group):
+    """The command group whose :meth:`main` gives one-line errors and exit codes (:func:`main`), so
+    that click's ``CliRunner`` sees exactly what the console sees."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        """Run the group, turn usage errors into one line. SIGTERM stops any command as Ctrl-C does
+        (files in progress are finished or removed, never left half-written); an operating-system
+        error (disk full, permission denied) is one line too. Exits (``SystemExit``) with the code."""
+        try:
+            with stop_on_signals(), _one_line_warnings():
+                code = super().main(args=args, prog_name=prog_name or "vistrack", complete_var=complete_var,
+                                    standalone_mode=False, **extra)
+        except click.exceptions.NoArgsIsHelpError as e:
+            click.echo(e.ctx.get_help() if e.ctx else str(e))
+            sys.exit(0)
+        except click.ClickException as e:
+            msg = e.format_message().replace("\n", " ")
+            click.echo(f"Error: {msg}", err=True)
+            sys.exit(e.exit_code)
+        except (click.exceptions.Abort, KeyboardInterrupt) as e:
+            _stopped(e)
+        except OSError as e:
+            where = f": {e.filename}" if e.filename else ""
+            click.echo(f"Error: {e.strerror or e}{where}", err=True)
+            sys.exit(1)
+        sys.exit(code if isinstance(code, int) else 0)
+
+
+@click.group(cls=VistrackGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="vistrack")
 def cli():
     """vistrack: particle-filter object tracking that uses the observation well.
@@ -82,23 +110,5 @@ def _stopped(e):
 
 
 def main(argv=None):
-    """Console entry point: run the group, turn usage errors into one line. SIGTERM stops any
-    command as Ctrl-C does (files in progress are finished or removed, never left half-written);
-    an operating-system error (disk full, permission denied) is one line too."""
-    try:
-        with stop_on_signals(), _one_line_warnings():
-            code = cli.main(args=argv, prog_name="vistrack", standalone_mode=False)
-    except click.exceptions.NoArgsIsHelpError as e:
-        click.echo(e.ctx.get_help() if e.ctx else str(e))
-        sys.exit(0)
-    except click.ClickException as e:
-        msg = e.format_message().replace("\n", " ")
-        click.echo(f"Error: {msg}", err=True)
-        sys.exit(e.exit_code)
-    except (click.exceptions.Abort, KeyboardInterrupt) as e:
-        _stopped(e)
-    except OSError as e:
-        where = f": {e.filename}" if e.filename else ""
-        click.echo(f"Error: {e.strerror or e}{where}", err=True)
-        sys.exit(1)
-    sys.exit(code if isinstance(code, int) else 0)
+    """Console entry point: :meth:`VistrackGroup.main` on ``argv`` (default: the command line)."""
+    cli.main(args=argv)

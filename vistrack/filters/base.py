@@ -109,12 +109,6 @@ class ParticleFilter:
         prior = ParticleSet(np.zeros((n, self.model.dim)))
         return self._update(prior, obs, rng, self.prior_kernel)
 
-    def initialize(self, n, rng):
-        """``n`` equally weighted particles from the prior ``p_0``."""
-        if n < 1:
-            raise ValueError(f"number of particles must be positive, got {n}")
-        return ParticleSet(self.model.sample_prior(n, rng))
-
     def look_ahead(self, particles, obs, rng, kernel):
         """First stage: ``(parent (M,), log p̂ (M,))``, candidates descending from
         ``particles.states[parent]`` and their look-ahead log-likelihoods, or ``None``

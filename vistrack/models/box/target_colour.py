@@ -36,7 +36,6 @@ class TargetColour:
         self.bg_weight = np.where(b > 0, np.minimum(1.0, b_min / np.maximum(b, 1e-12)), 1.0)
         self.lambda_colour, self.kappa = float(lambda_colour), float(kappa)
         self.q = self.normalise(inner)
-        self.q_first = self.q.copy()
         q_raw = inner / max(inner.sum(), 1)
         b_raw = b / max(b.sum(), 1)
         self.backprojection = (q_raw / (q_raw + b_raw + 1e-3)).astype(np.float32)

@@ -47,10 +47,6 @@ SLOT = 10
 
 
 class Plates(VideoModelBase):
-    #: ``log r = Σ_j log π_j`` holds in the slots' order 0..K-1 (the exclusion is against the slots
-    #: before), not in the other orders of branched partitioning: the final weights take ``r``
-    factorised_likelihood = False
-
     """``K`` plate slots with per-slot presence (module docstring).
 
     Parameters
@@ -89,6 +85,10 @@ class Plates(VideoModelBase):
         The single plate's parameters (:class:`~vistrack.models.plate.model.Plate`): the AR(2), the
         entering mixture, the likelihood, the birth reserve.
     """
+
+    #: ``log r = Σ_j log π_j`` holds in the slots' order 0..K-1 (the exclusion is against the slots
+    #: before), not in the other orders of branched partitioning: the final weights take ``r``
+    factorised_likelihood = False
 
     def __init__(self, frame_size, targets=3, layout="jp", *, birth=0.1, death=0.05, start_present=0.1,
                  exclusion=-50.0, offset=2.0, gain=3.0, report=3.5, report_half=2.0, **plate_params):

@@ -9,6 +9,7 @@ from ... import kernels
 from ...gaussian import diag_logpdf
 from ..kernel import Transition
 from .likelihood import BORDER
+from .observation import PlateObservation
 
 __all__ = ["PlateLISProposal", "map_values"]
 
@@ -153,7 +154,7 @@ class PlateLISProposal:
         ones those can be a character pitch off the plate (tests/test_plate_appearance.py: the
         yellow plate's ``log r_plate`` is 3.4 higher 8 px to the side, where the appearance's is
         14 lower), and with 100 particles no draw was left on the plate."""
-        app, m = obs.appearance, self.model
+        app, m = (obs.appearance if isinstance(obs, PlateObservation) else None), self.model
         if m.app is None or app is None or len(x) == 0:
             return None
         b = m._app_boxes(x)
