@@ -108,12 +108,8 @@ def test_local_search_moves_towards_the_edges(rng):
 
 
 @pytest.fixture(scope="module")
-def small_clip(tmp_path_factory):
-    from vistrack.data_synth.contour import make_contour_clip
-
-    out = tmp_path_factory.mktemp("clip")
-    make_contour_clip(out, frames=40, size=(160, 120), seed=4, clutter="low", distractor=False)
-    return out
+def small_clip(synth_clip):
+    return synth_clip("contour", frames=40, size=(160, 120), seed=4, clutter="low", distractor=False)
 
 
 def test_synthetic_clip_files(small_clip):

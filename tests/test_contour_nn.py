@@ -91,12 +91,8 @@ def test_search_on_an_image_at_a_moved_pose(noiseless_net, rng):
 
 
 @pytest.fixture(scope="module")
-def small_clip(tmp_path_factory):
-    from vistrack.data_synth.contour import make_contour_clip
-
-    out = tmp_path_factory.mktemp("clip")
-    make_contour_clip(out, frames=10, size=(160, 120), seed=4, clutter="low", distractor=False)
-    return out
+def small_clip(synth_clip):
+    return synth_clip("contour", frames=10, size=(160, 120), seed=4, clutter="low", distractor=False)
 
 
 def test_same_seed_same_network_and_track(small_clip):

@@ -9,6 +9,7 @@ association); the history-index law of Fig. 3.5 is checked against its formula.
 import numpy as np
 import pytest
 from scipy import stats
+from weighting_helpers import one_step_runs
 
 from vistrack.filters import ALGORITHMS, RBHSSIR, make_filter
 from vistrack.filters.history import draw_rows
@@ -47,12 +48,8 @@ def moments(model, p):
 
 def replicate(filt, model, first=False):
     states, w = previous(model)
-    runs = []
-    for r in range(REPS):
-        rng = np.random.default_rng(r)
-        p = filt.first_step(None, N, rng) if first else filt.step(ParticleSet(states, np.log(w)), None, rng)
-        runs.append(moments(model, p))
-    return {k: np.array([m[k] for m in runs]) for k in runs[0]}
+    return one_step_runs(filt, ParticleSet(states, np.log(w)), REPS, lambda p: moments(model, p),
+                         first=N if first else None)
 
 
 CASES = [(a, rest, {}) for a in FAMILY for rest in (False, True)] + [

@@ -20,12 +20,8 @@ pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not inst
 
 
 @pytest.fixture(scope="module")
-def clip(tmp_path_factory):
-    from vistrack.data_synth.contour import make_contour_clip
-
-    d = tmp_path_factory.mktemp("contour")
-    make_contour_clip(d, frames=10, size=(320, 240), seed=5)
-    return load_clip(d)
+def clip(synth_clip):
+    return load_clip(synth_clip("contour", frames=10, size=(320, 240), seed=5))
 
 
 def searched(model, obs, states, fused):

@@ -9,6 +9,7 @@ the filters' estimates must match them within Monte-Carlo error, as in test_prop
 import numpy as np
 import pytest
 from scipy import stats
+from weighting_helpers import one_step_runs
 
 import vistrack
 from cli_helpers import run
@@ -78,11 +79,8 @@ def exact():
 
 def replicate(filt):
     """REPS one-step runs: ``(Σ w, posterior mean (2,))`` per run."""
-    out = []
-    for r in range(REPS):
-        p = filt.step(ParticleSet(np.tile(X_PREV, (N, 1))), None, np.random.default_rng(r))
-        out.append([np.exp(p.log_weights).sum(), *p.mean()])
-    return np.array(out)
+    return one_step_runs(filt, ParticleSet(np.tile(X_PREV, (N, 1))), REPS,
+                         lambda p: [np.exp(p.log_weights).sum(), *p.mean()])
 
 
 @pytest.mark.parametrize("model", [TwoTargets, TemperedTwoTargets])

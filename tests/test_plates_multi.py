@@ -17,12 +17,8 @@ TRACK_HEADER = "frame,visible,id,cx,cy,w,h,angle_deg,scale,x0,y0,x1,y1,x2,y2,x3,
 
 
 @pytest.fixture(scope="module")
-def road(tmp_path_factory):
-    from vistrack.data_synth.plate import make_plate_clip
-
-    out = tmp_path_factory.mktemp("road") / "clip"
-    make_plate_clip(out, frames=60, size=(320, 240), seed=4, cars=6, overlap=True)
-    return out
+def road(synth_clip):
+    return synth_clip("plate", frames=60, size=(320, 240), seed=4, cars=6, overlap=True)
 
 
 def test_overlap_objects_csv_format(road):

@@ -9,6 +9,7 @@ reproduce them within Monte-Carlo error.
 import numpy as np
 import pytest
 from scipy import stats
+from weighting_helpers import one_step_runs
 
 from vistrack.filters import AVPF, LIS, LLS, SIR, Bootstrap, GaussMixtureProposal, Window
 from vistrack.models import GaussMixtureToy
@@ -47,14 +48,11 @@ def exact(model):
 
 def replicate(filt):
     """REPS independent one-step runs: unnormalised (J_N) and normalised (I_N) estimates."""
-    out = []
-    for r in range(REPS):
-        rng = np.random.default_rng(r)
-        p = filt.step(ParticleSet(np.full((N, 1), X_PREV)), None, rng)
-        w = np.exp(p.log_weights)
-        x = p.states[:, 0]
-        out.append([w.sum(), w @ x, w @ x**2, p.mean()[0]])
-    return np.array(out)
+    def stat(p):
+        w, x = np.exp(p.log_weights), p.states[:, 0]
+        return [w.sum(), w @ x, w @ x**2, p.mean()[0]]
+
+    return one_step_runs(filt, ParticleSet(np.full((N, 1), X_PREV)), REPS, stat)
 
 
 def within(est, truth, k=4.5):
