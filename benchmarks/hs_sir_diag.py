@@ -91,7 +91,8 @@ def edges(args):
             if i % 3:
                 continue
             obs = model.observe(FeatureMaps(fr), None)
-            peaks = edge_peaks(model._profiles(obs, true_pose(clip.truth, i)[None], off)[0], model._threshold(obs))
+            peaks = edge_peaks(model.edge_profiles(obs, true_pose(clip.truth, i)[None], off)[0],
+                               model.feature_threshold(obs))
             for p in peaks:
                 pos = off[p]
                 near = pos[np.abs(pos) <= 6]

@@ -84,9 +84,9 @@ def test_contour_kernels_equal_the_numpy_path(contour_clip):
     obs = FeatureMaps(dict(contour_clip.source)[6])
     x = model.predict(stepper.particles.states, np.random.default_rng(1))
     z = x[:, :4]
-    for fn in (lambda: model._profiles(obs, z, model.line_offsets),
+    for fn in (lambda: model.edge_profiles(obs, z, model.line_offsets),
                lambda: model._profiles_wide(obs, z, 12.0)[1],
-               lambda: model._profiles(obs, z, np.linspace(-1, 1, 9)[None, None] * np.arange(1, 31)[:, None, None],
+               lambda: model.edge_profiles(obs, z, np.linspace(-1, 1, 9)[None, None] * np.arange(1, 31)[:, None, None],
                                        support=True),
                lambda: model.local_search(obs, x)[0]):
         a, b = both(fn)
@@ -98,7 +98,7 @@ def test_contour_kernels_equal_the_numpy_path(contour_clip):
     nrm = model.measurement_lines(z)[1]
     from vistrack.models.contour.spline import edge_peaks
 
-    thresh = model._threshold(obs)
+    thresh = model.feature_threshold(obs)
     ref = model._grid_from_peaks(off, edge_peaks(gn, thresh), nrm, grid)
     np.testing.assert_allclose(model._grid_from_peaks(off, gn, nrm, grid, thresh), ref, rtol=1e-5)
 

@@ -92,8 +92,8 @@ class ContourColour:
             n = len(z)
             return np.zeros(n) if offsets is None else np.zeros((n, len(offsets)))
         labels = obs.colour_labels(self.colour_grey)
-        p_in = self._place(z, self.colour_points_in)
-        p_out = self._place(z, self.colour_points_out)
+        p_in = self.place_points(z, self.colour_points_in)
+        p_out = self.place_points(z, self.colour_points_out)
         if offsets is not None:
             d = np.asarray(offsets, float)[None, :, None, :]
             p_in, p_out = p_in[:, None] + d, p_out[:, None] + d

@@ -5,7 +5,7 @@ gradient map (:meth:`~vistrack.features.FeatureMaps.gradient`); points ``q`` and
 ``nrm`` ``(N, M, 2)`` are float32, as the numpy path casts them; offsets ``off (K, L)`` float32
 with ``K`` 1 (shared) or ``N`` (per pose).
 
-- :func:`profiles` is ``Contour._profiles`` (samples bit for bit those of ``cv2.remap``, the
+- :func:`profiles` is ``Contour.edge_profiles`` (samples bit for bit those of ``cv2.remap``, the
   same float32 arithmetic): equal to the numpy path.
 - :func:`loglik` and :func:`loglik_profiles` are ``Contour._loglik_from_profiles`` of the
   profiles (fused: no ``(N, M, L)`` array): the same edge features; the sum of the Gaussian
@@ -42,7 +42,7 @@ def _inside(w, h, x, y):
 
 @njit(cache=True, forceinline=True)
 def _edge(g0, g1, nx, ny, polarity, cos2):
-    """Edge strength of gradient ``(g0, g1)`` along the normal (``Contour._profiles``)."""
+    """Edge strength of gradient ``(g0, g1)`` along the normal (``Contour.edge_profiles``)."""
     gn = g0 * nx
     gn += g1 * ny
     if polarity != 0:
@@ -58,7 +58,7 @@ def _edge(g0, g1, nx, ny, polarity, cos2):
 
 @njit(cache=True)
 def _pose(gxy, q, nrm, n, off, polarity, cos2, out):
-    """Pose ``n``'s edge strengths ``out (M, L)`` along its lines (``Contour._profiles``). A line
+    """Pose ``n``'s edge strengths ``out (M, L)`` along its lines (``Contour.edge_profiles``). A line
     whose two ends read inside the map reads inside everywhere (the corners are monotone along
     it) and takes the unchecked loop (no array passed to a function per sample: numba would
     count references on every call)."""
@@ -246,7 +246,7 @@ def nearest_edge(gn, thresh, off, shift, reach, out):
 
 @njit(cache=True, nogil=True)
 def place(z, pts0, n0, q, nrm):
-    """``Contour._place`` and ``Contour._turn`` in one pass: template points ``pts0 (M, 2)`` under the
+    """``Contour.place_points`` and ``Contour._turn`` in one pass: template points ``pts0 (M, 2)`` under the
     poses ``z (N, >=4)`` into ``q (N, M, 2)`` and the unit vectors ``n0 (M, 2)`` rotated by their
     angles into ``nrm (N, M, 2)``, float64, with numpy's arithmetic in numpy's order (equal)."""
     for k in range(z.shape[0]):

@@ -151,7 +151,6 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
         self.dense_matrix = self.spline.dense()
         self.polarity = polarity
         self.gradient_sigma = float(gradient_sigma)
-
         self.init_pose = np.asarray(init_pose, dtype=float).reshape(4)
         self.sigma = np.array([sigma_xy if sigma_xy is not None else 0.08 * self.size,
                                0, sigma_a, sigma_b], dtype=float)
@@ -198,7 +197,7 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
         """``(1 + a, b)`` per pose: the similarity's linear part."""
         return 1.0 + z[..., 2], z[..., 3]
 
-    def _place(self, z, pts0):
+    def place_points(self, z, pts0):
         """Template points ``pts0 (m, 2)`` under poses ``z (N, 4)``: ``(N, m, 2)``."""
         c, s = self._rot(z)
         px, py = pts0[:, 0], pts0[:, 1]
@@ -215,15 +214,15 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
         return np.stack([c * nx - s * ny, s * nx + c * ny], axis=-1)
 
     def _placed(self, z, pts0, n0):
-        """:meth:`_place` and :meth:`_turn` of ``pts0, n0`` (compiled where the kernels are on; equal)."""
+        """:meth:`place_points` and :meth:`_turn` of ``pts0, n0`` (compiled where the kernels are on; equal)."""
         if kernels.use():
             from .kernels import place
             return place(z, pts0, n0, *(np.empty((len(z),) + pts0.shape) for _ in "qn"))
-        return self._place(z, pts0), self._turn(z, n0)
+        return self.place_points(z, pts0), self._turn(z, n0)
 
     def support_points(self, z):
         """Support points ``q = W z + q0`` as ``(N, n, 2)`` for poses ``z (N, 4)``."""
-        return self._placed(z, self.q0, self.normals0)[0] if kernels.use() else self._place(z, self.q0)
+        return self._placed(z, self.q0, self.normals0)[0] if kernels.use() else self.place_points(z, self.q0)
 
     def normals(self, z):
         """Unit outward normals ``(N, n, 2)`` at the support points."""
@@ -288,7 +287,7 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
         q, nrm = lines
         return obs.gradient(self.gradient_sigma)[0], q.astype(np.float32), nrm.astype(np.float32)
 
-    def _profiles(self, obs, z, offsets, support=False, lines=None):
+    def edge_profiles(self, obs, z, offsets, support=False, lines=None):
         """Edge strength along the measurement lines ``(N, M, L)`` at ``offsets``
         (``(L,)`` or ``(N, 1, L)``; at the support points with ``support=True``).
 
@@ -336,7 +335,7 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
                                 self.gradient_sigma)
         gn = (g[..., 0] * nrm[..., 0:1] + g[..., 1] * nrm[..., 1:2])[0]  # (M, L)
         best = np.take_along_axis(gn, np.argmax(np.abs(gn), axis=1)[:, None], 1)[:, 0]
-        strong = np.abs(best) > self._threshold(obs)
+        strong = np.abs(best) > self.feature_threshold(obs)
         self.polarity = saved
         if strong.sum() < 0.5 * len(best):
             return self.polarity
@@ -347,7 +346,7 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
             self.polarity = -1
         return self.polarity
 
-    def _threshold(self, obs):
+    def feature_threshold(self, obs):
         return self.edge_threshold * max(obs.gradient(self.gradient_sigma)[1], 1e-6)
 
     def loglik(self, obs, states):
@@ -358,10 +357,10 @@ class Contour(CollapseCheck, ContourMoves, ContourColour, TranslationMoves, ARIn
 
             gxy, q, nrm = self._lines32(obs, z)
             ll = loglik(gxy, q, nrm, self.line_offsets.astype(np.float32), self.polarity or 0,
-                        np.float32(self.cos_min**2), np.float32(self._threshold(obs)), self._line_kernel(),
+                        np.float32(self.cos_min**2), np.float32(self.feature_threshold(obs)), self._line_kernel(),
                         np.exp(self.log_c), np.empty(len(z)))
         else:
-            ll = self._loglik_from_profiles(self._profiles(obs, z, self.line_offsets), self._threshold(obs))
+            ll = self._loglik_from_profiles(self.edge_profiles(obs, z, self.line_offsets), self.feature_threshold(obs))
         if self.colour is not None:
             ll = ll + self.colour_loglik(obs, z)
         return ll

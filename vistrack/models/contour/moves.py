@@ -36,8 +36,8 @@ class ContourMoves:
         scale, _ = pose_params(z)
         reach = self.search_length * scale * reach_factor  # (N,)
         off = reach[:, None, None] * np.linspace(-1.0, 1.0, samples)  # (N, 1, L)
-        gn = self._profiles(obs, z, off, support=True)
-        peaks = edge_peaks(gn, self._threshold(obs))
+        gn = self.edge_profiles(obs, z, off, support=True)
+        peaks = edge_peaks(gn, self.feature_threshold(obs))
         score = np.where(peaks, -np.abs(off), -np.inf)
         best = np.argmax(score, axis=-1)  # (N, n)
         found = peaks.any(axis=-1)
@@ -78,7 +78,7 @@ class ContourMoves:
             return self._search_compiled(obs, states, grid, step)
         pts, nrm = self.measurement_lines(z)
         off, gn = self._profiles_wide(obs, z, np.hypot(*self.search_lambda[:2]) + reach_lms, lines=(pts, nrm))
-        thresh, fast = self._threshold(obs), kernels.use()
+        thresh, fast = self.feature_threshold(obs), kernels.use()
         peaks = None if fast else edge_peaks(gn, thresh)
         ll_grid = self._grid_from_peaks(off, gn if fast else peaks, nrm, grid, thresh if fast else None)
         delta = grid[np.argmax(ll_grid, axis=1)]  # (N, 2)
@@ -112,7 +112,7 @@ class ContourMoves:
         (:mod:`vistrack.models.contour.search_kernels`; equal bit for bit to the steps below)."""
         from .search_kernels import accept, search_lines
 
-        gxy, thresh = obs.gradient(self.gradient_sigma)[0], np.float32(self._threshold(obs))
+        gxy, thresh = obs.gradient(self.gradient_sigma)[0], np.float32(self.feature_threshold(obs))
         k = self._search_consts(grid, reach_lms)
         gn, d, z_t, ll_x = self._search_scratch(len(states), len(k["off"]))
         pol, cos2 = self.polarity or 0, np.float32(self.cos_min**2)
@@ -202,12 +202,12 @@ class ContourMoves:
         (:attr:`line_offsets` are their middle samples); ``lines``: :meth:`measurement_lines` of ``z``."""
         h = int(np.ceil(reach)) + self.half_line
         off = np.arange(-h, h + 1, dtype=float)
-        return off, self._profiles(obs, z, off, lines=lines)
+        return off, self.edge_profiles(obs, z, off, lines=lines)
 
     def _peaks_wide(self, obs, z, reach):
         """Edge features on lines long enough for shifts up to ``reach`` px."""
         off, gn = self._profiles_wide(obs, z, reach)
-        return off, edge_peaks(gn, self._threshold(obs))
+        return off, edge_peaks(gn, self.feature_threshold(obs))
 
     def loglik_local_grid(self, obs, states, offsets):
         """``log r`` at ``states`` translated by each of ``offsets (G, 2)``: ``(N, G)``.

@@ -103,7 +103,7 @@ def intersections(model, d, rng, chunk=2000):
     p0, idx, valid = _windows(model, l0 + move)
     out = np.full((len(d), model.n), np.nan)
     for a in range(0, len(d), chunk):
-        poly = model._place(d[a:a + chunk], p0)  # (S, K, 2)
+        poly = model.place_points(d[a:a + chunk], p0)  # (S, K, 2)
         rel = poly[:, idx] - q0[:, None]  # (S, n, Kw, 2)
         rel2 = poly[:, (idx + 1) % len(p0)] - q0[:, None]
         side = rel[..., 1] * n0[:, None, 0] - rel[..., 0] * n0[:, None, 1]
@@ -271,8 +271,8 @@ def nn_candidates(model, obs, z):
     l0 = model.search_length
     u = np.arange(-np.floor(l0), np.floor(l0) + 1)  # 1-px samples at scale 1
     scale = np.hypot(1 + z[:, 2], z[:, 3])
-    gn = model._profiles(obs, z, scale[:, None, None] * u, support=True)  # (N, n, L)
-    peaks = edge_peaks(gn, model._threshold(obs))
+    gn = model.edge_profiles(obs, z, scale[:, None, None] * u, support=True)  # (N, n, L)
+    peaks = edge_peaks(gn, model.feature_threshold(obs))
     best = np.argmax(np.where(peaks, gn, -1.0), axis=-1)
     nu = np.where(peaks.any(axis=-1), u[best], np.nan)
     return compose(z, net.predict(features(model, nu)))
