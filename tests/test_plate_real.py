@@ -76,3 +76,18 @@ def test_from_the_first_box_the_angle_holds_and_the_plate_model_beats_the_box_mo
     assert np.median(plate[:, 3] / gt[:len(plate), 3]) <= 1.06  # 1.12 with the template adapting
     auc = {k: success_auc(iou(np.nan_to_num(v), gt[:len(v)])) for k, v in out.items()}
     assert auc["plate"] >= auc["box"], auc  # 0.926 against 0.910 (docs/experiments.md)
+
+
+def test_same_seed_same_track_with_the_correlation_filter(dashcam):
+    """From the first box the plate model carries the correlation filter (its search, its adaptation and its
+    term in the line scans): the same seed still gives the same track, to the bit."""
+    import vistrack
+
+    frames, gt = dashcam
+    tracks = []
+    for _ in range(2):
+        trk = vistrack.Tracker(model="plate", algo="lis", particles=100, seed=3)
+        trk.init(frames[0], gt[0])
+        assert trk.model.cf is not None
+        tracks.append([trk.update(f)[1] for f in frames[1:20]])
+    np.testing.assert_array_equal(np.array(tracks[0], float), np.array(tracks[1], float))
