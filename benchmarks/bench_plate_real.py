@@ -13,6 +13,7 @@ Success AUC of the ``--results`` file against ``groundtruth_rect.txt`` (a frame 
 searched before the plate was found, counts IoU 0).
 
     python benchmarks/bench_plate_real.py [--seeds 1 2 3] [--work /tmp/vistrack_plate_clips]
+                                          [--entries "plate, no box" "plate from box"] [--clips dashcam ...]
 """
 
 import argparse
@@ -64,14 +65,19 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
     ap.add_argument("--work", default="/tmp/vistrack_plate_clips")
+    ap.add_argument("--entries", nargs="+", default=None, help="only these columns (default: all three)")
+    ap.add_argument("--clips", nargs="+", default=None, help="only these rows (default: every clip)")
     args = ap.parse_args()
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
     entries = {"plate, no box": [], "plate from box": ["--model", "plate", "--init-gt"],
                "box from box": ["--init-gt"]}
+    entries = {k: v for k, v in entries.items() if args.entries is None or k in args.entries}
     print("| clip | " + " | ".join(entries) + " |")
     print("|---|" + "---|" * len(entries))
     for name, clip in make_clips(work).items():
+        if args.clips is not None and name not in args.clips:
+            continue
         cells = []
         for entry, extra in entries.items():
             aucs = []

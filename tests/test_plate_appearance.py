@@ -69,9 +69,9 @@ def test_appearance_adds_to_the_plate_likelihood_and_can_be_turned_off():
     # each box's appearance term is read on a frame that covers it (the tracked region's, or one of its own)
     log_rc, log_rt, _ = with_app._app_terms(maps, states)
     extra = log_rc + log_rt
-    inside = maps.appearance_frames(with_app._app_boxes(states[:1]), np.zeros(1), 0.0)[0][0] is maps.appearance
+    inside = maps.appearance_frames(with_app.app_boxes(states[:1]), np.zeros(1), 0.0)[0][0] is maps.appearance
     assert inside  # the start pose's box lies in the tracked region
-    np.testing.assert_allclose(extra[0], with_app.app.loglik(maps.appearance, with_app._app_boxes(states[:1]))[0])
+    np.testing.assert_allclose(extra[0], with_app.app.loglik(maps.appearance, with_app.app_boxes(states[:1]))[0])
     np.testing.assert_allclose(with_app.loglik(maps, states), plain.loglik(maps, states) + extra, atol=1e-9)
     assert np.argmax(extra) == 0  # the appearance term peaks at the learned plate
 
@@ -126,3 +126,63 @@ def test_a_plate_lost_to_a_jump_is_found_again(detector):
     bx, by, bw, bh = boxes[-1]
     near = np.hypot(x + w / 2 - (bx + bw / 2), y + h / 2 - (by + bh / 2)) < 4
     assert bool(ok and near) is detector
+
+
+def test_the_correlation_filter_term_peaks_at_the_moved_plate():
+    """The box model's correlation filter, learned with the plate's appearance (``Plate.cf``): on the next
+    frame, with the plate moved by (6, -3) px, its response over the search region about the particles'
+    prediction peaks at the moved plate (within one of its cells, 2.3 px here), and ``log r`` has the term
+    ``λ_dcf y`` read at the state's centre and width (``Plate.dcf_states``)."""
+    from vistrack.particles import ParticleSet
+
+    f0, b0 = _rendered_plate_scene(200, 180)
+    f1, (x, y, w, h) = _rendered_plate_scene(206, 177)
+    moved = np.array([x + w / 2, y + h / 2])
+    model = model_from_box("plate", f0, b0, layout="single-row")
+    assert model.cf is not None and model.lambda_dcf == 20.0
+    start = np.tile(model.prior_mean, (4, 1))  # tracked at the first box, no velocity
+    obs = model.observe(FeatureMaps(f1), ParticleSet(start))
+    resp = obs.dcf
+    cell = resp.cell_origin()[1]
+    assert np.hypot(*(resp.peak_xy - moved)) <= cell, (resp.peak_xy, moved, cell)
+    d = np.arange(-8, 9, 1.0)
+    grid = np.tile(model.prior_mean, (len(d) ** 2, 1))
+    grid[:, 0] = moved[0] + np.repeat(d, len(d))
+    grid[:, 1] = moved[1] + np.tile(d, len(d))
+    y = resp.read(model.dcf_states(grid))
+    assert np.hypot(*(grid[np.argmax(y), :2] - moved)) <= cell
+    assert y.max() > 0.5 and y.min() < 0.5 * y.max()  # a peak, not a plateau
+    ll = model.loglik(obs, grid)
+    obs.dcf = None  # the same frame without the filter's term
+    np.testing.assert_allclose(ll - model.loglik(obs, grid), 20.0 * y, atol=1e-9)
+
+
+def test_the_line_scans_draw_with_the_correlation_filter_term():
+    """The LIS line scans' map (``PlateLISProposal.appearance_map``) holds the filter's term ``λ_dcf y`` of
+    ``log r`` beside the appearance's: the map with the response minus the map without it is ``λ_dcf`` times
+    the response read at the map pixels' frame positions."""
+    from vistrack.models.plate.proposal import PlateLISProposal, map_values
+    from vistrack.particles import ParticleSet
+
+    f0, b0 = _rendered_plate_scene(200, 180)
+    f1, _ = _rendered_plate_scene(206, 177)
+    model = model_from_box("plate", f0, b0, layout="single-row")
+    x = np.tile(model.prior_mean, (4, 1))
+    obs = model.observe(FeatureMaps(f1), ParticleSet(x))
+    prop = PlateLISProposal(model)
+    half = np.tile([12.0, 8.0], (4, 1))
+    with_dcf = prop.appearance_map(obs, x, x[:, :2], half)
+    resp, obs.dcf = obs.dcf, None
+    without = prop.appearance_map(obs, x, x[:, :2], half)
+    m, a = with_dcf
+    np.testing.assert_allclose(a, without[1])
+    j, i = np.meshgrid(np.arange(m.shape[1], dtype=float), np.arange(m.shape[0], dtype=float))
+    px, py = (j - a[1]) / a[0], (i - a[3]) / a[2]  # the map pixels' frame positions
+    at = np.stack([px.ravel(), py.ravel(), np.zeros(px.size)], axis=1)
+    y = resp.read(at).reshape(m.shape)
+    np.testing.assert_allclose(m - without[0], model.lambda_dcf * y, atol=1e-4)
+    assert y.max() > 0.5  # the plate is in the map's span: the term is not zero
+    # read as the scans read it: at a frame point between pixels, bilinear in both
+    np.testing.assert_allclose(map_values(with_dcf, 206.3, 177.6) - map_values(without, 206.3, 177.6),
+                               map_values((np.float32(model.lambda_dcf) * y.astype(np.float32), a), 206.3, 177.6),
+                               atol=1e-3)

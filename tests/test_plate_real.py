@@ -51,3 +51,43 @@ def test_likelihood_peaks_at_the_plate_from_the_detection(dashcam):
     model = model_from_box("plate", frames[0], det.box, layout=det.layout)
     errs = _peak_errors(model, frames, gt, det.box[2])
     assert np.mean(errs <= 3) >= 0.9, np.round(errs, 1)
+
+
+def test_from_the_first_box_the_angle_holds_and_the_plate_model_beats_the_box_model(dashcam):
+    """Issue 35: from the first ground-truth box (LIS-100, seed 1) the plate model's success AUC is at least
+    the box model's. The learned template reads the parallelogram's axis-aligned box; adapted to the
+    estimate, it learned the taller box of a tilted estimate and the angle drifted to about -2 degrees
+    (the reported box 12 % higher than the ground truth, AUC 0.88 against the box model's 0.91): the
+    plate model keeps its first view (``Plate.adapt_rate`` 0) and the correlation filter adapts."""
+    import vistrack
+    from vistrack.metrics import iou, success_auc
+
+    frames, gt = dashcam
+    out = {}
+    for name in ("plate", "box"):
+        trk = vistrack.Tracker(model=name, algo="lis", particles=100, seed=1)
+        trk.init(frames[0], gt[0])
+        boxes = [trk.box if trk.visible else (0, 0, 0, 0)]
+        for f in frames[1:len(gt)]:
+            ok, b = trk.update(f)
+            boxes.append(b if ok else (0, 0, 0, 0))
+        out[name] = np.array(boxes, float)
+    plate = out["plate"]
+    assert np.median(plate[:, 3] / gt[:len(plate), 3]) <= 1.06  # 1.12 with the template adapting
+    auc = {k: success_auc(iou(np.nan_to_num(v), gt[:len(v)])) for k, v in out.items()}
+    assert auc["plate"] >= auc["box"], auc  # 0.926 against 0.910 (docs/experiments.md)
+
+
+def test_same_seed_same_track_with_the_correlation_filter(dashcam):
+    """From the first box the plate model carries the correlation filter (its search, its adaptation and its
+    term in the line scans): the same seed still gives the same track, to the bit."""
+    import vistrack
+
+    frames, gt = dashcam
+    tracks = []
+    for _ in range(2):
+        trk = vistrack.Tracker(model="plate", algo="lis", particles=100, seed=3)
+        trk.init(frames[0], gt[0])
+        assert trk.model.cf is not None
+        tracks.append([trk.update(f)[1] for f in frames[1:20]])
+    np.testing.assert_array_equal(np.array(tracks[0], float), np.array(tracks[1], float))

@@ -9,6 +9,7 @@ import numpy as np
 from ...gaussian import diag_logpdf
 from ...proposals import Window
 from .likelihood import LEARNT_WEIGHTS, PlateLikelihood, PlateObservation, scale_band, thesis_weights
+from .appearance import PlateAppearance
 from .proposal import PlateLISProposal
 from ..protocol import VideoModelBase
 
@@ -16,7 +17,7 @@ __all__ = ["Plate", "PlateLikelihood", "PlateObservation", "PlateLISProposal", "
            "LEARNT_WEIGHTS"]
 
 
-class Plate(VideoModelBase):
+class Plate(PlateAppearance, VideoModelBase):
     """License-plate tracking model (thesis 001, §1.3.2, §4.5.2).
 
     State ``(u, w, θ, s, u', w', θ', s', a)``: centre, angle of the non-vertical
@@ -69,14 +70,25 @@ class Plate(VideoModelBase):
         weight, with a rough pose — were dropped at the next. On 10 clips × 10 runs (with the
         refined entering search), ages < 1 / 3 / 5 frames: acquired within 10 frames 99 / 99
         / 100 % of 300 appearances.
+    lambda_dcf : float
+        ``λ_dcf``: with a learned appearance (:meth:`learn_appearance`, real footage), the weight of the
+        box model's correlation filter's response (:class:`~vistrack.models.box.correlation.CorrelationFilter`
+        on the plate's box, about 1 at the plate) in ``log r``, read at the state's centre and width
+        (:meth:`dcf_states`; the angle is the plate likelihood's and the template's). 0: no filter.
+        20: on the 10 plate clips of ``benchmarks/bench_plate_real.py`` from the first box (with the
+        first view kept, :attr:`adapt_rate`) the mean AUC 0.911 -> 0.916, the 6-px shaken dashcam
+        0.846 -> 0.903; 60 lowered the shaken clips (docs/experiments.md, issue 35).
+    dcf_options : dict or None
+        Passed to :class:`~vistrack.models.box.correlation.CorrelationFilter` (the box model's defaults).
     """
 
     dim = 9
 
     def __init__(self, frame_size, layout="jp", *, enter_weight=0.1, damping=(0.8, 0.8, 0.5, 0.5), sigma=None,
                  enter_mean=None, enter_std=None, enter_sides=0.5, kappa=2.0, weights="learnt", sharpness=1.0,
-                 birth_reserve=0.05, reserve_age=5):
+                 birth_reserve=0.05, reserve_age=5, lambda_dcf=20.0, dcf_options=None):
         w, h = frame_size
+        self.lambda_dcf, self.dcf_options = float(lambda_dcf), dict(dcf_options or {})
         self.frame_size = (int(w), int(h))
         self.lik = PlateLikelihood(layout, kappa=kappa, weights=weights, sharpness=sharpness)
         #: the estimate is reported visible when ``log r`` at it exceeds this: with the learnt
@@ -113,7 +125,7 @@ class Plate(VideoModelBase):
         self.scale_range = (0.05 * w, 0.4 * w)
 
     # -- dynamics ----------------------------------------------------------------
-    def _enter(self, n, rng):
+    def sample_entering(self, n, rng):
         weights = np.array([p[0] for p in self._enter_parts])
         comp = rng.choice(len(weights), size=n, p=weights / weights.sum())
         means = np.array([p[1] for p in self._enter_parts])[comp]
@@ -134,7 +146,7 @@ class Plate(VideoModelBase):
         """``n`` states ``(n, 9)`` from ``p_0``: the entering-car mixture, or the ``--init`` Gaussian
         (:attr:`start`); zero velocity and age."""
         if self.start is None:
-            return self._enter(n, rng)
+            return self.sample_entering(n, rng)
         mean, std = self.start
         z = mean + std * rng.standard_normal((n, 4))
         return np.concatenate([z, z, np.zeros((n, 1))], axis=1)
@@ -161,7 +173,7 @@ class Plate(VideoModelBase):
         out[:, 3] = np.clip(out[:, 3], *self.scale_range)
         enter = rng.random(n) < self.enter_weight
         if enter.any():
-            out[enter] = self._enter(int(enter.sum()), rng)
+            out[enter] = self.sample_entering(int(enter.sum()), rng)
         return out
 
     @staticmethod
@@ -194,116 +206,6 @@ class Plate(VideoModelBase):
             (np.abs(x[:, 3] - best[3]) <= 0.25 * best[3])
         return (w[near] @ x[near]) / w[near].sum()
 
-    # -- appearance learned from an --init box (real footage) -------------------------
-    #: :class:`~vistrack.models.box.appearance.Appearance` of the plate in the first frame
-    #: (:meth:`learn_appearance`); ``None``: the plate likelihood alone
-    app = None
-
-    def learn_appearance(self, frame, box, **params):
-        """Add the box model's appearance term, learned from the plate at ``box (x, y, w, h)``
-        in the first ``frame``: ``log r = log r_plate + log r_app`` on the parallelogram's
-        bounding box. The plate likelihood was fitted to rendered plates; the learned colour
-        and template follow a plate of any colour and font (a yellow plate, a white plate on
-        a white car). Returns the :class:`~vistrack.models.box.appearance.Appearance`."""
-        from ..box.appearance import Appearance
-
-        self.app = Appearance(frame, box, **{"anchor_min_ncc": self.anchor_min_ncc, **params})
-        return self.app
-
-    #: the first view as anchor (:class:`~vistrack.models.box.appearance.Appearance`'s ``anchor_min_ncc``):
-    #: the learned appearance adapts only on frames whose estimate also matches the first frame's plate
-    anchor_min_ncc = 0.5
-
-    def observe(self, maps, particles):
-        """The frame's :class:`~vistrack.models.plate.likelihood.PlateObservation`: the feature maps,
-        the likelihood's 4-channel map and (when the model has an appearance) the appearance maps at
-        the appearance's working resolution over the region the tracked particles can reach — their
-        predicted boxes grown by 8 innovation stds (the start box and 4 of its stds on the first
-        frame); births elsewhere get small frames of their own when their term is needed
-        (:meth:`PlateObservation.appearance_frames`). All are cut from one resize of the whole
-        frame, so a box scores as it would on the whole frame's maps whichever region holds it."""
-        app = build = None
-        if self.app is not None:
-            frame = maps.frame
-            if particles is None:
-                states = self.prior_mean[None]
-                reach = 4 * float(np.max(self.start[1][:2])) if self.start is not None else 0.0
-            else:
-                tracked = ~self.entering(particles.states)
-                states = self.predict_mean(particles.states[tracked] if tracked.any() else particles.states)
-                reach = 8 * float(np.max(self.sigma[:2])) + 2 * float(self.sigma[3])
-            work = self.app.work_image(frame)  # one resampling for every region of this frame
-            app = self.app.frame(frame, self.app.roi(self._app_boxes(states), reach), work)
-
-            def build(roi):
-                return self.app.frame(frame, roi, work)
-        return PlateObservation(maps, self.lik.maps(maps), app, build)
-
-    def _app_terms(self, obs, states):
-        """The appearance's ``(log r_c, log r_t, ncc)`` of ``states``, each box read on a frame that
-        covers it (:meth:`PlateObservation.appearance_frames`)."""
-        b = self._app_boxes(states)
-        grow = self.app.ring * 0.5 * (b[:, 2] + b[:, 3])
-        out = np.empty((3, len(b)))
-        for frame, idx in obs.appearance_frames(b, grow, margin=float(np.median(b[:, 2]))):
-            out[:, idx] = self.app.terms(frame, b[idx])
-        return out
-
-    def _app_boxes(self, states):
-        x, y, w, h = self.box(states).T
-        return np.stack([x + w / 2, y + h / 2, w, h], axis=1)
-
-    def adapt(self, obs, estimate):
-        """Adapt the appearance on a confident frame (:meth:`Appearance.adapt`); with a :attr:`detector`,
-        set the next step's births (:meth:`redetect`)."""
-        if self.app is None:
-            return False
-        b = self._app_boxes(estimate)
-        frame = obs.appearance_frames(b, self.app.ring * 0.5 * (b[:, 2] + b[:, 3]), margin=float(b[0, 2]))[0][0]
-        adapted = self.app.adapt(frame, b[0])
-        if self.detector is not None:
-            self.redetect(obs, estimate)
-        return adapted
-
-    # -- re-detection while the plate is not reported (real footage) ---------------------------
-    #: a :class:`~vistrack.models.plate.detect.PlateDetector` (set for real footage, with a learned
-    #: appearance): while the estimate is not reported, the plate is searched for again (:meth:`redetect`)
-    detector = None
-    #: the weight of the births at a re-detected plate (the entering component's, for the next step)
-    redetect_weight = 0.2
-    _births = None  # the saved (enter_weight, entering parts) while the births sit at a detection
-
-    def redetect(self, obs, estimate):
-        """The births of the next step (the entering component of ``K``, chosen after this frame, so a
-        function of the frames so far): while the estimate is not reported (:meth:`visible`), a
-        Gaussian about the detection (:attr:`detector`) that matches the first frame's plate best
-        (template correlation at least :attr:`anchor_min_ncc`), with weight :attr:`redetect_weight`
-        and the ``--init`` spread; else the model's own entering component (none for a plate from a
-        box). A plate model started from a box has no births, so once lost (a shaking camera moved
-        the plate out of the dynamics' reach) it stayed lost. Returns whether births were set."""
-        s = np.asarray(estimate, float).reshape(1, -1)
-        pose = None
-        if not self.visible(obs, s[0]):
-            dets = self.detector.detect(obs.maps.frame)
-            if dets:
-                boxes = np.array([[d.box[0] + d.box[2] / 2, d.box[1] + d.box[3] / 2, d.box[2], d.box[3]] for d in dets])
-                grow = self.app.ring * 0.5 * (boxes[:, 2] + boxes[:, 3])
-                ncc = np.full(len(boxes), -np.inf)
-                for frame, idx in obs.appearance_frames(boxes, grow, margin=float(np.median(boxes[:, 2]))):
-                    ncc[idx] = [self.app.anchor_ncc(frame, b) for b in boxes[idx]]
-                k = int(np.argmax(ncc))
-                if ncc[k] >= (self.anchor_min_ncc if self.anchor_min_ncc is not None else -np.inf):
-                    pose = np.array([boxes[k, 0], boxes[k, 1], 0.0, boxes[k, 2]])
-        if self._births is None and pose is not None:
-            self._births = (self.enter_weight, self._enter_parts)
-        if pose is not None:
-            std = np.array([0.05 * pose[3], 0.05 * pose[3] / self.layout.aspect, 0.03, 0.05 * pose[3]])
-            self.enter_weight, self._enter_parts = self.redetect_weight, [(1.0, pose, std)]
-        elif self._births is not None:
-            (self.enter_weight, self._enter_parts), self._births = self._births, None
-        return pose is not None
-
-    # -- likelihood and output ------------------------------------------------------
     def loglik(self, obs, states):
         """``log r`` of ``states (N, 9)`` -> ``(N,)``: :class:`PlateLikelihood`, plus the learned appearance term
         when there is one."""
@@ -311,7 +213,16 @@ class Plate(VideoModelBase):
         if self.app is not None:
             log_rc, log_rt, _ = self._app_terms(obs, states)
             ll = ll + (log_rc + log_rt)
+        resp = obs.dcf if isinstance(obs, PlateObservation) else None
+        if resp is not None and self.lambda_dcf:
+            ll = ll + self.lambda_dcf * resp.read(self.dcf_states(states))
         return ll
+
+    def check_lost(self, obs, state):
+        """``(reason, detail)`` (:meth:`visible`), remembered for the correlation filter's adaptation."""
+        out = super().check_lost(obs, state)
+        self._reported = not out[0]
+        return out
 
     def vertices(self, states):
         """The parallelogram's four vertices ``(N, 4, 2)`` of ``states (N, 9)`` or ``(9,)``."""

@@ -24,7 +24,12 @@ class PlateObservation:
     build : callable or None
         ``build(roi) -> AppearanceFrame`` of this frame over ``roi (x0, y0, x1, y1)``: the frames of
         boxes outside :attr:`appearance`'s region (:meth:`appearance_frames`).
+    dcf : DCFResponse or None
+        The correlation filter's response about the tracked particles' prediction
+        (:attr:`Plate.cf <vistrack.models.plate.Plate.cf>`; none on the first frame or without a filter).
     """
+
+    dcf = None
 
     def __init__(self, maps, plate, appearance=None, build=None):
         self.maps, self.plate, self.appearance = maps, plate, appearance

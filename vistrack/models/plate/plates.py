@@ -133,7 +133,7 @@ class Plates(VideoModelBase):
 
     def _births(self, n, rng):
         """``n`` fresh slot states ``(n, 10)``: entering draws, age 0, present."""
-        return np.concatenate([self.plate._enter(n, rng), np.ones((n, 1))], axis=1)
+        return np.concatenate([self.plate.sample_entering(n, rng), np.ones((n, 1))], axis=1)
 
     # -- p_0 and K, per slot (the partitions of App. C) and joint -----------------------------
     def sample_prior_part(self, states, j, rng):
