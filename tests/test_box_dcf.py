@@ -228,3 +228,22 @@ def test_correlation_proposal_weights_match_a_brute_force_posterior():
     np.testing.assert_allclose(mean_is[:2], mean_grid[:2], atol=0.15)
     assert mean_is[2] == pytest.approx(mean_grid[2], abs=0.003)
     assert np.hypot(*(mean_grid[:2] - pose[:2])) > 1.0  # the posterior moved towards the object (2, -1)
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the numpy path casts the non-finite points
+def test_response_read_kernel_equals_the_numpy_path():
+    from kernel_helpers import both
+
+    rng = np.random.default_rng(11)
+    resp = _response(rng)
+    (ox, oy), a = resp.cell_origin()
+    n = 4000
+    states = np.stack([rng.uniform(ox - 4 * a, ox + 10 * a, n), rng.uniform(oy - 4 * a, oy + 8 * a, n),
+                       rng.uniform(-0.2, 0.2, n)], axis=1)
+    states[:5, 2] = [-0.1, 0.0, 0.1, -0.3, 0.3]  # on the scales and beyond the ends
+    states[5:10, :2] = [[ox, oy], [ox + a, oy], [1e30, oy], [-np.inf, oy], [ox, np.inf]]
+    a_np, a_k = both(lambda: resp.read(states))
+    np.testing.assert_array_equal(a_np, a_k)
+    one = DCFResponse(resp.maps[1:2], [0.05], resp.centre, resp.anchor, resp.px[1:2])
+    b_np, b_k = both(lambda: one.read(states))
+    np.testing.assert_array_equal(b_np, b_k)

@@ -91,6 +91,11 @@ class DCFResponse:
         zero outside the maps."""
         s = np.asarray(states, float)
         ls = self.log_scales
+        if kernels.use():
+            from ..kernels.dcf import response_read
+
+            return response_read(self.maps, ls, self.centre, self.anchor, self.px, np.ascontiguousarray(s),
+                                 np.empty(len(s)))
         if len(ls) == 1:
             k0 = np.zeros(len(s), np.intp)
             t = np.zeros(len(s))
@@ -115,6 +120,13 @@ class DCFResponse:
             m = self.maps[self.best].astype(float).ravel()
             e = np.exp(tempering * (m - m.max()))
             self._log_p[key] = np.log((1 - floor) * e / e.sum() + floor / e.size)
+        return self._log_p[key]
+
+    def cell_cumulative(self, tempering, floor):
+        """The cumulative sums ``(H W,)`` of ``exp`` of :meth:`cell_log_p` (the proposal's draws by inversion)."""
+        key = ("cumulative", float(tempering), float(floor))
+        if key not in self._log_p:
+            self._log_p[key] = np.cumsum(np.exp(self.cell_log_p(tempering, floor)))
         return self._log_p[key]
 
     def cell_origin(self):
