@@ -1,8 +1,11 @@
 """The box model's correlation-filter features (:mod:`~vistrack.models.correlation`), compiled.
 
-- :func:`orientation_bins` is :func:`~vistrack.models.correlation.dcf_features`'s soft binning of the
+- :func:`orientation_cells` is :func:`~vistrack.models.correlation.dcf_features`'s soft binning of the
   gradient magnitude by unsigned orientation, one pass over the pixels where numpy makes two masked
-  products per channel (the same float32 arithmetic: equal, ``tests/test_box_dcf.py``).
+  products per channel, into the channels side by side ``(H, W, n)``: one ``cv2.boxFilter`` call then
+  sums the cells of all of them (as it sums each alone), and :func:`normalised_cells` divides them by
+  the block energy back into ``(n + 1, H, W)`` (the same float32 arithmetic: equal,
+  ``tests/test_box_dcf.py``).
 - :func:`response_read` is :meth:`DCFResponse.read <vistrack.models.correlation.DCFResponse.read>`:
   ``np.interp`` of the log-scale, then the two nearest scale maps read bilinearly, per state in one
   pass where numpy makes some forty small calls (the same float64 arithmetic in the same order:
@@ -16,37 +19,57 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["orientation_bins", "response_read"]
+__all__ = ["orientation_cells", "normalised_cells", "response_read"]
 
 
 @njit(cache=True, nogil=True)
-def orientation_bins(mag, ang, n_orient, out):
-    """``out (n_orient + 1, H, W) float32``, channels ``1..n_orient``: the magnitude ``mag (H, W)`` split
-    between the two bins about ``(ang mod π) n_orient / π`` (``ang (H, W)`` radians in ``[0, 2π)``, float32) in
-    proportion to the distance, as ``dcf_features``' numpy path; channel 0 untouched."""
+def orientation_cells(mag, ang, n_orient, out, sq):
+    """The soft binning of the magnitude ``mag (H, W)`` between the two bins about
+    ``(ang mod π) n_orient / π`` (``ang (H, W)`` radians in ``[0, 2π)``, float32: ``a mod π`` is exact,
+    Sterbenz) in proportion to the distance, into ``out (H, W, n_orient)`` float32 (channel ``k`` at
+    ``[..., k]``), each channel written once per pixel (the magnitude's share or 0, as the numpy path's
+    sum of its two ``np.where``), and ``sq (H, W)`` = ``mag * mag`` (float32)."""
     h, w = mag.shape
     pi = np.float32(np.pi)
     scale = np.float32(n_orient / np.pi)
-    one = np.float32(1.0)
-    for k in range(1, n_orient + 1):
-        for i in range(h):
-            for j in range(w):
-                out[k, i, j] = 0.0
+    one, zero = np.float32(1.0), np.float32(0.0)
+    lo, hi = np.empty(w, np.int64), np.empty(w, np.int64)
+    wl, wh = np.empty(w, np.float32), np.empty(w, np.float32)
     for i in range(h):
         for j in range(w):
-            a = ang[i, j]  # in [0, 2 pi) from cv2.cartToPolar: a mod pi is exact (Sterbenz)
+            a = ang[i, j]
             if a >= pi:
                 a -= pi
             pos = a * scale
-            lo = np.int32(pos)
-            frac = pos - np.float32(lo)
-            lo = lo % n_orient
-            hi = (lo + 1) % n_orient
+            k = np.int32(pos)
+            frac = pos - np.float32(k)
+            if k >= n_orient or k < 0:
+                k = k % n_orient
+            lo[j] = k
+            hi[j] = k + 1 if k + 1 < n_orient else k + 1 - n_orient
             m = mag[i, j]
-            out[lo + 1, i, j] += m * (one - frac)
-            out[hi + 1, i, j] += m * frac
+            sq[i, j] = m * m
+            wl[j], wh[j] = m * (one - frac), m * frac
+        out[i] = zero
+        for j in range(w):
+            if lo[j] == hi[j]:  # one bin
+                out[i, j, lo[j]] = wl[j] + wh[j]
+            else:
+                out[i, j, lo[j]] = wl[j] + zero
+                out[i, j, hi[j]] = zero + wh[j]
     return out
 
+
+@njit(cache=True, nogil=True)
+def normalised_cells(cells, norm, out):
+    """``out[k + 1] = cells[..., k] * norm`` (float32; ``norm (H, W)`` the numpy path's
+    ``1 / sqrt(energy + 0.01)``); ``out[0]`` untouched."""
+    h, w, n = cells.shape
+    for i in range(h):
+        for k in range(n):
+            for j in range(w):
+                out[k + 1, i, j] = cells[i, j, k] * norm[i, j]
+    return out
 
 @njit(cache=True, nogil=True)
 def _interp_pos(x, xp):

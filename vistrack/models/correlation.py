@@ -35,9 +35,10 @@ from .. import kernels
 __all__ = ["CorrelationFilter", "DCFResponse", "dcf_features"]
 
 
-def dcf_features(patch, n_orient=6, cell=4, out=None):
+def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None):
     """Feature channels ``(n_orient + 1, H, W) float32`` of a grey ``patch (H, W) float32`` (module
-    docstring): brightness-normalised grey, then gradient orientation cells normalised per block."""
+    docstring): brightness-normalised grey, then gradient orientation cells normalised per block.
+    ``scratch``: a dict the compiled path keeps its work arrays in from call to call."""
     h, w = patch.shape
     if out is None:
         out = np.empty((n_orient + 1, h, w), np.float32)
@@ -46,20 +47,28 @@ def dcf_features(patch, n_orient=6, cell=4, out=None):
     gx = cv2.Sobel(patch, cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT)
     gy = cv2.Sobel(patch, cv2.CV_32F, 0, 1, ksize=1, borderType=cv2.BORDER_REFLECT)
     mag, ang = cv2.cartToPolar(gx, gy)
+    if kernels.use():  # the channels side by side (H, W, n): one box filter for all of them
+        from ..kernels.dcf import normalised_cells, orientation_cells
+
+        scratch = {} if scratch is None else scratch
+        key = (h, w, n_orient)
+        if key not in scratch:
+            scratch[key] = (np.empty((h, w, n_orient), np.float32), np.empty((h, w, n_orient), np.float32),
+                            np.empty((h, w), np.float32))
+        bins, cells, sq = scratch[key]
+        orientation_cells(mag, ang, n_orient, bins, sq)
+        energy = cv2.boxFilter(sq, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
+        cv2.boxFilter(bins, -1, (cell, cell), dst=cells, borderType=cv2.BORDER_REFLECT)
+        return normalised_cells(cells, np.float32(1.0) / np.sqrt(energy + np.float32(1e-2)), out)
     energy = cv2.boxFilter(mag * mag, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
     norm = np.float32(1.0) / np.sqrt(energy + np.float32(1e-2))
-    if kernels.use():
-        from ..kernels.dcf import orientation_bins
-
-        orientation_bins(mag, ang, n_orient, out)
-    else:
-        pos = (ang % np.float32(np.pi)) * np.float32(n_orient / np.pi)  # unsigned orientation in bins
-        lo = pos.astype(np.int32)
-        frac = pos - lo.astype(np.float32)
-        lo %= n_orient
-        hi = (lo + 1) % n_orient
-        for k in range(n_orient):
-            out[k + 1] = np.where(lo == k, mag * (1 - frac), 0) + np.where(hi == k, mag * frac, 0)
+    pos = (ang % np.float32(np.pi)) * np.float32(n_orient / np.pi)  # unsigned orientation in bins
+    lo = pos.astype(np.int32)
+    frac = pos - lo.astype(np.float32)
+    lo %= n_orient
+    hi = (lo + 1) % n_orient
+    for k in range(n_orient):
+        out[k + 1] = np.where(lo == k, mag * (1 - frac), 0) + np.where(hi == k, mag * frac, 0)
     for k in range(n_orient):
         cv2.boxFilter(out[k + 1], -1, (cell, cell), dst=out[k + 1], borderType=cv2.BORDER_REFLECT)
         out[k + 1] *= norm
@@ -204,6 +213,7 @@ class CorrelationFilter:
         self._last = None  # the last search's spectra, centre, log-scales and scale factors
         self._applied = None  # the filter applied (:meth:`filter`)
         self._feat = np.empty((self.n_orient + 1, ph, pw), np.float32)
+        self._scratch = {}  # dcf_features' work arrays
         a, b = self._learn(np.asarray(frame), np.array([x + w / 2, y + h / 2]), 0.0)
         self.A, self.B = a, b
         self.A0, self.B0 = a.copy(), b.copy()
@@ -222,7 +232,8 @@ class CorrelationFilter:
 
     def spectrum(self, frame, centre, log_scale):
         """The windowed features' DFT ``(C, ph, pw // 2 + 1)`` of the patch about ``centre``."""
-        feat = dcf_features(self.patch(frame, centre, log_scale), self.n_orient, out=self._feat)
+        feat = dcf_features(self.patch(frame, centre, log_scale), self.n_orient, out=self._feat,
+                            scratch=self._scratch)
         return sfft.rfft2(np.multiply(feat, self.hann, out=feat))
 
     def _learn(self, frame, centre, log_scale):
