@@ -247,3 +247,30 @@ def test_response_read_kernel_equals_the_numpy_path():
     one = DCFResponse(resp.maps[1:2], [0.05], resp.centre, resp.anchor, resp.px[1:2])
     b_np, b_k = both(lambda: one.read(states))
     np.testing.assert_array_equal(b_np, b_k)
+
+
+def test_compiled_detect_and_adapt_equal_the_numpy_path():
+    """``correlate`` and ``adapt_filter`` (complex products as numpy's fused multiply-adds): the same filter,
+    the same responses."""
+    import copy
+
+    from vistrack import kernels
+
+    rng = np.random.default_rng(12)
+    frames = [_textured(rng, (120, 160, 3)) for _ in range(4)]
+    cf = CorrelationFilter(frames[0], (60.0, 40.0, 24.0, 30.0), rate=0.3)
+    both_cf = {}
+    for name, on in (("numpy", True), ("kernels", False)):
+        c = copy.deepcopy(cf)
+        with kernels.numpy_paths(on):
+            maps = []
+            for k, f in enumerate(frames[1:]):
+                maps.append(c.detect(f, np.array([72.0 + k, 55.0]), 0.01 * k).maps)
+                c.adapt(f, np.array([73.0 + k, 54.5]), 0.02 * k)
+            maps.append(c.detect(frames[0], np.array([72.0, 55.0]), 0.0).maps)
+        both_cf[name] = (c, maps)
+    (a, ma), (b, mb) = both_cf["numpy"], both_cf["kernels"]
+    np.testing.assert_array_equal(a.A, b.A)
+    np.testing.assert_array_equal(a.B, b.B)
+    for x, y in zip(ma, mb):
+        np.testing.assert_array_equal(x, y)

@@ -10,6 +10,11 @@
   ``np.interp`` of the log-scale, then the two nearest scale maps read bilinearly, per state in one
   pass where numpy makes some forty small calls (the same float64 arithmetic in the same order:
   equal, ``tests/test_box_dcf.py``).
+- :func:`correlate` and :func:`adapt_filter` are ``CorrelationFilter.detect``'s ``Σ_k conj(A_k) Z_k / (B + λ)``
+  per scale and ``CorrelationFilter.adapt``'s learning, blending and applied filter, one pass each where
+  numpy makes a temporary per operation: numpy's complex products are fused multiply-adds on FMA CPUs
+  (``re = fma(a_r, b_r, -(a_i b_i))``, ``im = fma(a_r, b_i, a_i b_r)``), and so are these (equal on such a
+  CPU, ``tests/test_box_dcf.py``); a complex divided by a real is the product with its inverse there.
 """
 
 from __future__ import annotations
@@ -17,9 +22,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.extending import intrinsic
 
-__all__ = ["orientation_cells", "normalised_cells", "response_read"]
+from .sampling import fma as fma32
+
+__all__ = ["orientation_cells", "normalised_cells", "response_read", "correlate", "adapt_filter"]
 
 
 @njit(cache=True, nogil=True)
@@ -147,3 +155,72 @@ def response_read(maps, log_scales, centre, anchor, px, states, out):
             acc += wk * _bilinear_at(maps, k, u, v)
         out[n] = acc
     return out
+
+
+
+@intrinsic
+def _fma(typingctx, a, b, c):
+    """``a * b + c`` rounded once (float64; LLVM's ``llvm.fma``)."""
+    sig = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context, builder, signature, args):
+        return builder.fma(*args)
+
+    return sig, codegen
+
+
+@njit(cache=True, forceinline=True)
+def _cmul(ar, ai, br, bi):
+    """numpy's complex128 product ``(a_r + i a_i)(b_r + i b_i)`` on an FMA CPU."""
+    return _fma(ar, br, -(ai * bi)), _fma(ar, bi, ai * br)
+
+
+@njit(cache=True, nogil=True)
+def correlate(conj_a, z, den, out):
+    """``out (H, W') complex128 = Σ_k conj_a[k] z[k] / den``: ``conj_a (C, H, W') complex128``, the spectra
+    ``z (C, H, W') complex64`` (as numpy promotes them), summed over ``k`` in order, divided by ``den (H, W')
+    float32`` as numpy divides a complex by a real one (times ``1 / den``)."""
+    c_n, h, w = z.shape
+    for i in range(h):
+        for j in range(w):
+            sr, si = _cmul(conj_a[0, i, j].real, conj_a[0, i, j].imag, np.float64(z[0, i, j].real),
+                           np.float64(z[0, i, j].imag))
+            for c in range(1, c_n):
+                pr, pi = _cmul(conj_a[c, i, j].real, conj_a[c, i, j].imag, np.float64(z[c, i, j].real),
+                               np.float64(z[c, i, j].imag))
+                sr, si = sr + pr, si + pi
+            scl = 1.0 / np.float64(den[i, j])
+            out[i, j] = complex(sr * scl, si * scl)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def adapt_filter(f, conj_g, a, b, a0, b0, rate, anchor, lam, conj_applied, den):
+    """``CorrelationFilter.adapt`` on the spectra ``f (C, H, W') complex64`` of the new patch, in place:
+    ``a = (1 - η) a + η conj(G) f`` (complex128) and ``b = (1 - η) b + η Σ_k |f_k|²`` (float32, the
+    squares as numpy's complex64 product and summed over ``k`` in order); then the applied filter
+    ``(1 - γ) a + γ a0`` conjugated into ``conj_applied`` and ``(1 - γ) b + γ b0 + λ`` (float32) into ``den``
+    (what ``detect`` divides by)."""
+    c_n, h, w = f.shape
+    r1, r = 1.0 - rate, rate
+    g1, g = 1.0 - anchor, anchor
+    r1f, rf, g1f, gf, lamf = np.float32(r1), np.float32(r), np.float32(g1), np.float32(g), np.float32(lam)
+    for i in range(h):
+        for j in range(w):
+            gr, gi = conj_g[i, j].real, conj_g[i, j].imag
+            sq = np.float32(0.0)
+            for c in range(c_n):
+                fr, fi = f[c, i, j].real, f[c, i, j].imag
+                nr, ni = _cmul(gr, gi, np.float64(fr), np.float64(fi))
+                ar = r1 * a[c, i, j].real + r * nr
+                ai = r1 * a[c, i, j].imag + r * ni
+                a[c, i, j] = complex(ar, ai)
+                pr = g1 * ar + g * a0[c, i, j].real
+                pi = g1 * ai + g * a0[c, i, j].imag
+                conj_applied[c, i, j] = complex(pr, -pi)
+                e = fma32(fr, fr, fi * fi)  # (f conj(f)).real as numpy's complex64 product
+                sq = e if c == 0 else sq + e
+            bb = r1f * b[i, j] + rf * sq
+            b[i, j] = bb
+            den[i, j] = (g1f * bb + gf * b0[i, j]) + lamf
+    return a

@@ -208,10 +208,12 @@ class CorrelationFilter:
         yy, xx = np.mgrid[0:ph, 0:pw]
         label = np.exp(-0.5 * ((xx - pw // 2) ** 2 + (yy - ph // 2) ** 2) / sg**2)
         self.G = sfft.rfft2(label)
+        self._conj_g = np.conj(self.G)
         self._fy, self._fx = sfft.fftfreq(ph)[:, None], sfft.rfftfreq(pw)[None, :]
         self.reuse = bool(reuse)
         self._last = None  # the last search's spectra, centre, log-scales and scale factors
         self._applied = None  # the filter applied (:meth:`filter`)
+        self._terms = None  # detect's conj(A) and B + λ of the applied filter, where the compiled adapt made them
         self._feat = np.empty((self.n_orient + 1, ph, pw), np.float32)
         self._scratch = {}  # dcf_features' work arrays
         a, b = self._learn(np.asarray(frame), np.array([x + w / 2, y + h / 2]), 0.0)
@@ -238,7 +240,7 @@ class CorrelationFilter:
 
     def _learn(self, frame, centre, log_scale):
         F = self.spectrum(frame, centre, log_scale)
-        return np.conj(self.G) * F, np.sum((F * np.conj(F)).real, axis=0)
+        return self._conj_g * F, np.sum((F * np.conj(F)).real, axis=0)
 
     # -- detection and adaptation ------------------------------------------------------------------
     def filter(self):
@@ -251,13 +253,22 @@ class CorrelationFilter:
 
     def detect(self, frame, centre, log_scale):
         """The :class:`DCFResponse` of a search region about ``centre`` at the scales about ``log_scale``."""
-        A, B = self.filter()
-        den, conj_a = B + self.lam, np.conj(A)
+        if self._terms is not None:  # made by the compiled adapt
+            conj_a, den = self._terms
+        else:
+            A, B = self.filter()
+            den, conj_a = B + self.lam, np.conj(A)
         maps = np.empty((len(self.log_scales),) + self.shape, np.float32)
         spectra = []
+        compiled = kernels.use()
+        if compiled:
+            from ..kernels.dcf import correlate
+
+            acc = np.empty(den.shape, complex)
         for k, ds in enumerate(self.log_scales):
             Z = self.spectrum(frame, centre, log_scale + ds)
-            maps[k] = sfft.irfft2(np.sum(conj_a * Z, axis=0) / den, s=self.shape)
+            y = correlate(conj_a, Z, den, acc) if compiled else np.sum(conj_a * Z, axis=0) / den
+            maps[k] = sfft.irfft2(y, s=self.shape)
             spectra.append(Z)
         px = self.f * np.exp(-(log_scale + self.log_scales))
         self._last = (spectra, np.asarray(centre, float).copy(), log_scale + self.log_scales, px)
@@ -274,12 +285,22 @@ class CorrelationFilter:
             F = spectra[k]
             g = self.G * np.exp(-2j * np.pi * (self._fx * dx + self._fy * dy))
             a, b = np.conj(g) * F, np.sum((F * np.conj(F)).real, axis=0)
+        elif kernels.use():  # learn, blend and the applied filter's terms in one compiled pass
+            from ..kernels.dcf import adapt_filter
+
+            F = self.spectrum(frame, centre, log_scale)
+            if self._terms is None:
+                self._terms = (np.empty(self.A.shape, complex), np.empty(self.B.shape, np.float32))
+            adapt_filter(F, self._conj_g, self.A, self.B, self.A0, self.B0, self.rate, self.anchor, self.lam,
+                         *self._terms)
+            self._applied = None
+            return
         else:
             a, b = self._learn(frame, centre, log_scale)
         r = self.rate
         self.A = (1 - r) * self.A + r * a
         self.B = (1 - r) * self.B + r * b
-        self._applied = None
+        self._applied = self._terms = None
 
     def search(self, frame, log_scale, stride=2):
         """Whole-frame search at ``log_scale``: the applied filter's spatial taps correlated with the frame's
