@@ -274,3 +274,26 @@ def test_compiled_detect_and_adapt_equal_the_numpy_path():
     np.testing.assert_array_equal(a.B, b.B)
     for x, y in zip(ma, mb):
         np.testing.assert_array_equal(x, y)
+
+
+def test_compiled_correlation_draws_equal_the_numpy_path():
+    from types import SimpleNamespace
+
+    from kernel_helpers import both
+
+    class _K:
+        def logpdf(self, new, old):
+            return -0.5 * np.sum((new[:, :3] - old[:, :3]) ** 2, axis=1)
+
+    resp = _response(np.random.default_rng(13))
+    prop = CorrelationProposal(_Stub(), kernel=_K())
+    (ox, oy), a = resp.cell_origin()
+    rng = np.random.default_rng(14)
+    prev = np.column_stack([rng.uniform(ox - 3 * a, ox + 9 * a, 500), rng.uniform(oy - 3 * a, oy + 7 * a, 500),
+                            rng.normal(0, 0.1, 500), np.zeros((500, 3))])
+    x = prev + rng.normal(0, 1.0, prev.shape)
+    for beta in (0.0, 0.5, 1.0):
+        obs = SimpleNamespace(dcf=resp, dcf_share=beta)
+        got = both(lambda: prop._sample(x, obs, np.random.default_rng(15), prev))
+        for p, k in zip(*got):
+            np.testing.assert_array_equal(p, k)

@@ -15,6 +15,9 @@
   numpy makes a temporary per operation: numpy's complex products are fused multiply-adds on FMA CPUs
   (``re = fma(a_r, b_r, -(a_i b_i))``, ``im = fma(a_r, b_i, a_i b_r)``), and so are these (equal on such a
   CPU, ``tests/test_box_dcf.py``); a complex divided by a real is the product with its inverse there.
+- :func:`correlation_draws` is the correlation proposal's draws from the response and its density
+  there (``CorrelationProposal.draw`` and ``log_density``, :mod:`~vistrack.proposals.correlation`), per
+  particle in one pass (the same arithmetic: equal, ``tests/test_box_dcf.py``).
 """
 
 from __future__ import annotations
@@ -27,7 +30,8 @@ from numba.extending import intrinsic
 
 from .sampling import fma as fma32
 
-__all__ = ["orientation_cells", "normalised_cells", "response_read", "correlate", "adapt_filter"]
+__all__ = ["orientation_cells", "normalised_cells", "response_read", "correlate", "adapt_filter",
+           "correlation_draws"]
 
 
 @njit(cache=True, nogil=True)
@@ -224,3 +228,40 @@ def adapt_filter(f, conj_g, a, b, a0, b0, rate, anchor, lam, conj_applied, den):
             b[i, j] = bb
             den[i, j] = (g1f * bb + gf * b0[i, j]) + lamf
     return a
+
+
+@njit(cache=True, nogil=True)
+def correlation_draws(x, u, e, beta, cum, log_p, ox, oy, a, w, h, best, sd, two_log_a, log_sd, log_sqrt_2pi, z,
+                      log_qy):
+    """``CorrelationProposal``'s draws and density: ``z (N, d)`` = ``x`` with the rows where ``u[:, 0] < beta``
+    drawn from the response (the cell by inversion of ``cum`` at ``u[:, 1]``, the first cumulative sum above
+    it, as ``searchsorted(side="right")``; the point uniform in it from ``u[:, 2:4]``; the log-scale
+    ``best + sd e``), and ``log_qy (N,)`` = ``log q_Y(z)``: ``log_p`` of the cell of ``z`` (a ``w`` wide,
+    ``h`` high grid of side ``a`` with its cell ``(0, 0)`` centred at ``(ox, oy)``) minus ``2 log a``,
+    ``d² / 2`` (``d = (l - best) / sd``), ``log √(2π)`` and ``log sd`` in that order; ``-inf`` outside."""
+    n_c = cum.shape[0]
+    total = cum[n_c - 1]
+    for n in range(x.shape[0]):
+        for k in range(x.shape[1]):
+            z[n, k] = x[n, k]
+        if u[n, 0] < beta:
+            v = u[n, 1] * total
+            lo, hi = 0, n_c
+            while lo < hi:  # the first index whose cumulative sum is above v
+                mid = (lo + hi) // 2
+                if cum[mid] <= v:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            k = min(lo, n_c - 1)
+            z[n, 0] = ox + a * (np.float64(k % w) + u[n, 2] - 0.5)
+            z[n, 1] = oy + a * (np.float64(k // w) + u[n, 3] - 0.5)
+            z[n, 2] = best + sd * e[n]
+        fj = math.floor((z[n, 0] - ox) / a + 0.5)
+        fi = math.floor((z[n, 1] - oy) / a + 0.5)
+        if not (0.0 <= fj < w and 0.0 <= fi < h):
+            log_qy[n] = -np.inf
+            continue
+        d = (z[n, 2] - best) / sd
+        log_qy[n] = (((log_p[int(fi) * w + int(fj)] - two_log_a) - 0.5 * (d * d)) - log_sqrt_2pi) - log_sd
+    return z

@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import kernels
+
 __all__ = ["CorrelationProposal"]
 
 _LOG_SQRT_2PI = 0.5 * np.log(2 * np.pi)
@@ -98,11 +100,24 @@ class CorrelationProposal:
         n = len(x)
         u = rng.random((n, 4))
         e = rng.standard_normal(n)
-        z = np.array(x, float)
-        pick = u[:, 0] < beta
-        if pick.any():
-            z[pick, :3] = self.draw(resp, u[pick, 1:], e[pick])
-        log_qy = self.log_density(resp, z)
+        if kernels.use():  # draws and density in one compiled pass, the same arithmetic
+            from ..kernels.dcf import correlation_draws
+
+            t, s = self.model.dcf_tempering
+            (ox, oy), a = resp.cell_origin()
+            h, w = resp.maps.shape[1:]
+            sd = self.model.dcf_scale_std
+            z, log_qy = np.empty(np.shape(x)), np.empty(n)
+            correlation_draws(np.ascontiguousarray(x, float), u, e, beta, resp.cell_cumulative(t, s),
+                              resp.cell_log_p(t, s), float(ox), float(oy), float(a), w, h,
+                              float(resp.log_scales[resp.best]), float(sd), float(2 * np.log(a)), float(np.log(sd)),
+                              _LOG_SQRT_2PI, z, log_qy)
+        else:
+            z = np.array(x, float)
+            pick = u[:, 0] < beta
+            if pick.any():
+                z[pick, :3] = self.draw(resp, u[pick, 1:], e[pick])
+            log_qy = self.log_density(resp, z)
         log_kz = self.kernel.logpdf(z, prev)
         parts = [np.log(beta) + log_qy if beta > 0 else np.full(n, -np.inf),
                  np.log1p(-beta) + log_kz if beta < 1 else np.full(n, -np.inf)]
