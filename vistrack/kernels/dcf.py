@@ -13,8 +13,9 @@
 - :func:`correlate` and :func:`adapt_filter` are ``CorrelationFilter.detect``'s ``Σ_k conj(A_k) Z_k / (B + λ)``
   per scale and ``CorrelationFilter.adapt``'s learning, blending and applied filter, one pass each where
   numpy makes a temporary per operation: numpy's complex products are fused multiply-adds on FMA CPUs
-  (``re = fma(a_r, b_r, -(a_i b_i))``, ``im = fma(a_r, b_i, a_i b_r)``), and so are these (equal on such a
-  CPU, ``tests/test_box_dcf.py``); a complex divided by a real is the product with its inverse there.
+  (``re = fma(a_r, b_r, -(a_i b_i))``, ``im = fma(a_r, b_i, a_i b_r)``) and plain elsewhere; which, is
+  probed at import (:data:`EXACT`, :data:`NUMPY_FMA`) and these do the same (equal,
+  ``tests/test_box_dcf.py``); a complex divided by a real is the product with its inverse.
 - :func:`correlation_draws` is the correlation proposal's draws from the response and its density
   there (``CorrelationProposal.draw`` and ``log_density``, :mod:`~vistrack.proposals.correlation`), per
   particle in one pass (the same arithmetic: equal, ``tests/test_box_dcf.py``).
@@ -31,7 +32,7 @@ from numba.extending import intrinsic
 from .sampling import fma as fma32
 
 __all__ = ["orientation_cells", "normalised_cells", "response_read", "correlate", "adapt_filter",
-           "correlation_draws"]
+           "correlation_draws", "EXACT", "NUMPY_FMA", "NUMPY_FMA32"]
 
 
 @njit(cache=True, nogil=True)
@@ -173,10 +174,51 @@ def _fma(typingctx, a, b, c):
     return sig, codegen
 
 
+def _numpy_complex_fma(dtype):
+    """Whether numpy's complex product of ``dtype`` is ``(fma(a_r, b_r, -(a_i b_i)), fma(a_r, b_i, a_i b_r))``
+    on this CPU (its SIMD loops on FMA CPUs) rather than the plain products: probed on values where the
+    two differ (exact rational arithmetic gives the fused results)."""
+    from fractions import Fraction
+
+    real = np.float64 if dtype == np.complex128 else np.float32
+    rng = np.random.default_rng(0)
+    a = (rng.standard_normal(64) + 1j * rng.standard_normal(64)).astype(dtype)
+    b = (rng.standard_normal(64) + 1j * rng.standard_normal(64)).astype(dtype)
+    got = a * b
+
+    def fused(x, y, z):
+        return real(Fraction(float(x)) * Fraction(float(y)) + Fraction(float(z)))
+
+    same_fma = same_plain = True
+    for p, q, g in zip(a, b, got):
+        fma_r = fused(p.real, q.real, -(p.imag * q.imag))
+        fma_i = fused(p.real, q.imag, p.imag * q.real)
+        same_fma &= bool(g.real == fma_r and g.imag == fma_i)
+        same_plain &= bool(g.real == p.real * q.real - p.imag * q.imag and g.imag == p.real * q.imag + p.imag * q.real)
+    return True if same_fma else (False if same_plain else None)
+
+
+#: numpy's complex128 / complex64 products fused (True), plain (False) or neither (None: the models keep numpy)
+NUMPY_FMA, NUMPY_FMA32 = _numpy_complex_fma(np.complex128), _numpy_complex_fma(np.complex64)
+_FUSED, _FUSED32 = bool(NUMPY_FMA), bool(NUMPY_FMA32)
+#: whether :func:`correlate` and :func:`adapt_filter` compute numpy's products on this CPU
+EXACT = NUMPY_FMA is not None and NUMPY_FMA32 is not None
+
+
 @njit(cache=True, forceinline=True)
 def _cmul(ar, ai, br, bi):
-    """numpy's complex128 product ``(a_r + i a_i)(b_r + i b_i)`` on an FMA CPU."""
-    return _fma(ar, br, -(ai * bi)), _fma(ar, bi, ai * br)
+    """numpy's complex128 product ``(a_r + i a_i)(b_r + i b_i)`` on this CPU (:data:`NUMPY_FMA`)."""
+    if _FUSED:
+        return _fma(ar, br, -(ai * bi)), _fma(ar, bi, ai * br)
+    return ar * br - ai * bi, ar * bi + ai * br
+
+
+@njit(cache=True, forceinline=True)
+def _abs2_32(fr, fi):
+    """The real part of numpy's complex64 product ``f conj(f)`` on this CPU (:data:`NUMPY_FMA32`)."""
+    if _FUSED32:
+        return fma32(fr, fr, fi * fi)
+    return fr * fr + fi * fi
 
 
 @njit(cache=True, nogil=True)
@@ -222,7 +264,7 @@ def adapt_filter(f, conj_g, a, b, a0, b0, rate, anchor, lam, conj_applied, den):
                 pr = g1 * ar + g * a0[c, i, j].real
                 pi = g1 * ai + g * a0[c, i, j].imag
                 conj_applied[c, i, j] = complex(pr, -pi)
-                e = fma32(fr, fr, fi * fi)  # (f conj(f)).real as numpy's complex64 product
+                e = _abs2_32(fr, fi)  # (f conj(f)).real as numpy's complex64 product
                 sq = e if c == 0 else sq + e
             bb = r1f * b[i, j] + rf * sq
             b[i, j] = bb

@@ -260,7 +260,7 @@ class CorrelationFilter:
             den, conj_a = B + self.lam, np.conj(A)
         maps = np.empty((len(self.log_scales),) + self.shape, np.float32)
         spectra = []
-        compiled = kernels.use()
+        compiled = _exact_filter_kernels()
         if compiled:
             from ..kernels.dcf import correlate
 
@@ -285,7 +285,7 @@ class CorrelationFilter:
             F = spectra[k]
             g = self.G * np.exp(-2j * np.pi * (self._fx * dx + self._fy * dy))
             a, b = np.conj(g) * F, np.sum((F * np.conj(F)).real, axis=0)
-        elif kernels.use():  # learn, blend and the applied filter's terms in one compiled pass
+        elif _exact_filter_kernels():  # learn, blend and the applied filter's terms in one compiled pass
             from ..kernels.dcf import adapt_filter
 
             F = self.spectrum(frame, centre, log_scale)
@@ -322,6 +322,16 @@ class CorrelationFilter:
             total += cv2.filter2D(feat[c], -1, t, borderType=cv2.BORDER_CONSTANT)
         i, j = np.unravel_index(int(np.argmax(total)), total.shape)
         return (j + 0.5) / s, (i + 0.5) / s, float(total[i, j])
+
+
+def _exact_filter_kernels():
+    """Whether ``detect`` and ``adapt`` take the compiled path: the kernels are on and compute numpy's
+    complex products on this CPU (:data:`vistrack.kernels.dcf.EXACT`)."""
+    if not kernels.use():
+        return False
+    from ..kernels.dcf import EXACT
+
+    return EXACT
 
 
 def _grey(frame):
