@@ -65,6 +65,13 @@ def shrink(image, f, interpolation=cv2.INTER_AREA):
     (the dashcam plate, 15 working px high, sat about a frame pixel high: ``docs/experiments.md``)."""
     h, w = image.shape[:2]
     if round(w * f) >= 1 and round(h * f) >= 1:
+        if (interpolation == cv2.INTER_AREA and kernels.use() and image.ndim == 3 and image.shape[2] == 3
+                and image.dtype == np.uint8 and f < 1.0 and abs(1.0 / f - round(1.0 / f)) > 1e-9
+                and (round(h * f), round(w * f)) != (h, w)):  # OpenCV copies a same-size image
+            from ..kernels.box_frame import shrink_area  # OpenCV's area resize, its source rows passed once
+
+            return shrink_area(np.ascontiguousarray(image), float(f),
+                               np.empty((round(h * f), round(w * f), 3), np.uint8))
         return cv2.resize(image, None, fx=f, fy=f, interpolation=interpolation)
     return cv2.resize(image, (max(1, int(round(w * f))), max(1, int(round(h * f)))), interpolation=interpolation)
 
