@@ -93,3 +93,17 @@ def test_models_learn_the_blob_from_the_first_frame():
         make_filter("rb-ss-hs-sir", contour)
     contour.learn_blob(img)
     assert make_filter("sir", contour).proposal.image.cell == pytest.approx(3.0)
+
+
+def test_colour_fit_reads_the_mask_box_only_and_equals_the_whole_frame():
+    from vistrack.proposals.blob import colour_features
+
+    rng = np.random.default_rng(4)
+    frame = rng.integers(0, 255, (90, 120, 3)).astype(np.uint8)
+    mask = np.zeros((90, 120), np.uint8)
+    mask[20:41, 33:70] = 1
+    mask[25, 80] = 1
+    g = GaussianColour.fit(frame, mask)
+    f = colour_features(frame)[mask > 0].astype(float)
+    np.testing.assert_array_equal(g.mean, f.mean(axis=0))
+    np.testing.assert_array_equal(g.cov, np.cov(f, rowvar=False) + 1e-4 * np.eye(2))

@@ -270,3 +270,18 @@ def test_working_image_places_content_where_to_work_reads_it():
     rows, cols = np.mgrid[0:120, 0:120] + 0.5
     centroid = ((bright * cols).sum() / bright.sum(), (bright * rows).sum() / bright.sum())
     np.testing.assert_allclose(centroid, obs.to_work(285.0, 255.0), atol=0.02)
+
+
+def test_appearance_interpolation_option():
+    import cv2
+
+    from vistrack.models.box.appearance import Appearance
+
+    frames = clip_frames(1)
+    box = obj_box(*path(0))
+    app = Appearance(frames[0], box, work_size=16.0, interpolation="linear")
+    obs = app.frame(frames[0], (20, 30, 220, 190))
+    want = cv2.resize(frames[0][30:190, 20:220], None, fx=app.f, fy=app.f, interpolation=cv2.INTER_LINEAR)
+    np.testing.assert_array_equal(obs.image, want)
+    with pytest.raises(ValueError, match="interpolation"):
+        Appearance(frames[0], box, interpolation="cubic")

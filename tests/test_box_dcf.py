@@ -10,7 +10,7 @@ from scipy import stats
 import vistrack
 from cli_helpers import run
 from vistrack.models.box.correlation import CorrelationFilter, DCFResponse, dcf_features
-from vistrack.proposals.correlation import CorrelationProposal
+from vistrack.models.box.correlation_proposal import CorrelationProposal
 
 
 class _Stub:
@@ -228,3 +228,72 @@ def test_correlation_proposal_weights_match_a_brute_force_posterior():
     np.testing.assert_allclose(mean_is[:2], mean_grid[:2], atol=0.15)
     assert mean_is[2] == pytest.approx(mean_grid[2], abs=0.003)
     assert np.hypot(*(mean_grid[:2] - pose[:2])) > 1.0  # the posterior moved towards the object (2, -1)
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the numpy path casts the non-finite points
+def test_response_read_kernel_equals_the_numpy_path():
+    from kernel_helpers import both
+
+    rng = np.random.default_rng(11)
+    resp = _response(rng)
+    (ox, oy), a = resp.cell_origin()
+    n = 4000
+    states = np.stack([rng.uniform(ox - 4 * a, ox + 10 * a, n), rng.uniform(oy - 4 * a, oy + 8 * a, n),
+                       rng.uniform(-0.2, 0.2, n)], axis=1)
+    states[:5, 2] = [-0.1, 0.0, 0.1, -0.3, 0.3]  # on the scales and beyond the ends
+    states[5:10, :2] = [[ox, oy], [ox + a, oy], [1e30, oy], [-np.inf, oy], [ox, np.inf]]
+    a_np, a_k = both(lambda: resp.read(states))
+    np.testing.assert_array_equal(a_np, a_k)
+    one = DCFResponse(resp.maps[1:2], [0.05], resp.centre, resp.anchor, resp.px[1:2])
+    b_np, b_k = both(lambda: one.read(states))
+    np.testing.assert_array_equal(b_np, b_k)
+
+
+def test_compiled_detect_and_adapt_equal_the_numpy_path():
+    """``correlate`` and ``adapt_filter`` (complex products as numpy's fused multiply-adds): the same filter,
+    the same responses."""
+    import copy
+
+    from vistrack import kernels
+
+    rng = np.random.default_rng(12)
+    frames = [_textured(rng, (120, 160, 3)) for _ in range(4)]
+    cf = CorrelationFilter(frames[0], (60.0, 40.0, 24.0, 30.0), rate=0.3)
+    both_cf = {}
+    for name, on in (("numpy", True), ("kernels", False)):
+        c = copy.deepcopy(cf)
+        with kernels.numpy_paths(on):
+            maps = []
+            for k, f in enumerate(frames[1:]):
+                maps.append(c.detect(f, np.array([72.0 + k, 55.0]), 0.01 * k).maps)
+                c.adapt(f, np.array([73.0 + k, 54.5]), 0.02 * k)
+            maps.append(c.detect(frames[0], np.array([72.0, 55.0]), 0.0).maps)
+        both_cf[name] = (c, maps)
+    (a, ma), (b, mb) = both_cf["numpy"], both_cf["kernels"]
+    np.testing.assert_array_equal(a.A, b.A)
+    np.testing.assert_array_equal(a.B, b.B)
+    for x, y in zip(ma, mb):
+        np.testing.assert_array_equal(x, y)
+
+
+def test_compiled_correlation_draws_equal_the_numpy_path():
+    from types import SimpleNamespace
+
+    from kernel_helpers import both
+
+    class _K:
+        def logpdf(self, new, old):
+            return -0.5 * np.sum((new[:, :3] - old[:, :3]) ** 2, axis=1)
+
+    resp = _response(np.random.default_rng(13))
+    prop = CorrelationProposal(_Stub(), kernel=_K())
+    (ox, oy), a = resp.cell_origin()
+    rng = np.random.default_rng(14)
+    prev = np.column_stack([rng.uniform(ox - 3 * a, ox + 9 * a, 500), rng.uniform(oy - 3 * a, oy + 7 * a, 500),
+                            rng.normal(0, 0.1, 500), np.zeros((500, 3))])
+    x = prev + rng.normal(0, 1.0, prev.shape)
+    for beta in (0.0, 0.5, 1.0):
+        obs = SimpleNamespace(dcf=resp, dcf_share=beta)
+        got = both(lambda: prop._sample(x, obs, np.random.default_rng(15), prev))
+        for p, k in zip(*got):
+            np.testing.assert_array_equal(p, k)

@@ -179,3 +179,23 @@ def test_weights_are_computed_once_per_log_weights():
     np.testing.assert_allclose(w, [0.1, 0.2, 0.3, 0.4])
     p.log_weights = np.zeros(4)
     np.testing.assert_array_equal(p.weights, np.full(4, 0.25))
+
+
+def test_area_shrink_equals_opencv():
+    import cv2
+
+    from vistrack.models.box.appearance import shrink
+
+    rng = np.random.default_rng(21)
+    for _ in range(80):
+        h, w = rng.integers(1, 300, 2) if _ < 60 else rng.integers(1, 8, 2)
+        img = rng.integers(0, 256, (h, w, 3)).astype(np.uint8)
+        if rng.random() < 0.5:
+            img = cv2.GaussianBlur(img, (0, 0), 1.0)
+        f = float(rng.uniform(0.1, 0.99))
+        if round(h * f) < 1 or round(w * f) < 1:
+            continue
+        want = cv2.resize(img, None, fx=f, fy=f, interpolation=cv2.INTER_AREA)
+        a, b = both(lambda: shrink(img, f))
+        np.testing.assert_array_equal(a, want)
+        np.testing.assert_array_equal(b, want)

@@ -56,7 +56,12 @@ class GaussianColour:
     def fit(cls, frame, mask, reg=1e-4):
         """The mean and covariance (plus ``reg`` on the diagonal) of the features of
         ``frame``'s pixels where ``mask`` is non-zero."""
-        f = colour_features(frame)[np.asarray(mask) > 0].astype(float)
+        keep = np.asarray(mask) > 0
+        rows, cols = np.flatnonzero(keep.any(axis=1)), np.flatnonzero(keep.any(axis=0))
+        if len(rows):  # the features of the mask's bounding box only: the same pixels in the same order
+            box = np.s_[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1]
+            frame, keep = np.asarray(frame)[box], keep[box]
+        f = colour_features(frame)[keep].astype(float)
         if len(f) < 2:
             raise ValueError("the colour model needs at least 2 target pixels")
         return cls(f.mean(axis=0), np.cov(f, rowvar=False).reshape(f.shape[1], f.shape[1]) + reg * np.eye(f.shape[1]))

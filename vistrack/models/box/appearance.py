@@ -56,16 +56,24 @@ def _unit_rows(v):
     return v / np.maximum(norm, 1e-6)
 
 
-def shrink(image, f):
-    """``image`` shrunk by ``f < 1`` (``INTER_AREA``) to ``round(f W) x round(f H)`` pixels, its content
+def shrink(image, f, interpolation=cv2.INTER_AREA):
+    """``image`` shrunk by ``f < 1`` (``INTER_AREA`` unless ``interpolation``) to ``round(f W) x round(f H)``
+    pixels, its content
     placed by ``f`` itself: frame coordinate ``x`` at working ``x f`` on both axes, as
     :meth:`AppearanceFrame.to_work` reads it. Given the size, OpenCV scales by the rounded size's
     ratio instead, which put content up to half a working pixel off at the far side of the region
     (the dashcam plate, 15 working px high, sat about a frame pixel high: ``docs/experiments.md``)."""
     h, w = image.shape[:2]
     if round(w * f) >= 1 and round(h * f) >= 1:
-        return cv2.resize(image, None, fx=f, fy=f, interpolation=cv2.INTER_AREA)
-    return cv2.resize(image, (max(1, int(round(w * f))), max(1, int(round(h * f)))), interpolation=cv2.INTER_AREA)
+        if (interpolation == cv2.INTER_AREA and kernels.use() and image.ndim == 3 and image.shape[2] == 3
+                and image.dtype == np.uint8 and f < 1.0 and abs(1.0 / f - round(1.0 / f)) > 1e-9
+                and (round(h * f), round(w * f)) != (h, w)):  # OpenCV copies a same-size image
+            from .frame_kernels import shrink_area  # OpenCV's area resize, its source rows passed once
+
+            return shrink_area(np.ascontiguousarray(image), float(f),
+                               np.empty((round(h * f), round(w * f), 3), np.uint8))
+        return cv2.resize(image, None, fx=f, fy=f, interpolation=interpolation)
+    return cv2.resize(image, (max(1, int(round(w * f))), max(1, int(round(h * f)))), interpolation=interpolation)
 
 
 class AppearanceFrame:
@@ -85,9 +93,11 @@ class AppearanceFrame:
         cut from it (the working pixels that cover ``roi``) rather than resized on its own, so that
         regions of one frame share its resampling (their maps agree where they overlap, away from
         their borders).
+    interpolation : int
+        The OpenCV interpolation that shrinks the region (:func:`shrink`).
     """
 
-    def __init__(self, frame, roi, f, grey, work=None):
+    def __init__(self, frame, roi, f, grey, work=None, interpolation=cv2.INTER_AREA):
         x0, y0, x1, y1 = roi
         self.f = f
         if work is not None and f < 1.0:
@@ -100,7 +110,7 @@ class AppearanceFrame:
         else:
             crop = frame[y0:y1, x0:x1]
             if f < 1.0:
-                crop = shrink(crop, f)
+                crop = shrink(crop, f, interpolation)
         self.x0, self.y0 = x0, y0
         #: the region ``(x0, y0, x1, y1)`` in frame pixels
         self.roi = (x0, y0, x1, y1)
@@ -173,6 +183,10 @@ class Appearance:
         template that has drifted cannot keep adapting to what it drifted onto.
     grey : bool or None
         Force grey-level bins; ``None``: from :func:`~vistrack.features.is_grey`.
+    interpolation : {"area", "linear"}
+        How a region is shrunk to the working resolution (:func:`shrink`): ``cv2.INTER_AREA`` (averages every
+        frame pixel) or ``cv2.INTER_LINEAR`` (bilinear samples: 5-10x cheaper, 0.50 -> 0.05 ms a frame on
+        the 1280x720 ball1 clip; tried as the box model's default and not kept, ``docs/experiments.md``).
     """
 
     #: the template as a resized image for the proposal map, with what it was made from
@@ -181,11 +195,15 @@ class Appearance:
 
     def __init__(self, frame, box, *, work_size=32.0, lambda_colour=35.0, kappa=1.0, ring=0.3,
                  lambda_template=25.0, template_points=256, adapt_rate=0.1, adapt_min_ncc=0.6, grey=None,
-                 anchor_min_ncc=None):
+                 anchor_min_ncc=None, interpolation="area"):
         x, y, w, h = (float(v) for v in box)
         if not (w > 0 and h > 0 and np.isfinite([x, y, w, h]).all()):
             raise ValueError(f"the box needs a finite position and positive size, got {box}")
         self.grey = is_grey(frame) if grey is None else bool(grey)
+        modes = {"area": cv2.INTER_AREA, "linear": cv2.INTER_LINEAR}
+        if interpolation not in modes:
+            raise ValueError(f"interpolation must be one of {', '.join(modes)}, got {interpolation!r}")
+        self.interpolation = modes[interpolation]
         self.size = np.array([w, h])
         self.f = min(1.0, work_size / np.sqrt(w * h))
         self.lambda_colour, self.kappa, self.ring = lambda_colour, kappa, ring
@@ -230,11 +248,12 @@ class Appearance:
         x0, y0, x1, y1 = roi
         x0, x1 = min(max(x0, 0), w - 1), min(max(x1, 1), w)
         y0, y1 = min(max(y0, 0), h - 1), min(max(y1, 1), h)
-        return AppearanceFrame(frame, (x0, y0, max(x1, x0 + 1), max(y1, y0 + 1)), self.f, self.grey, work)
+        return AppearanceFrame(frame, (x0, y0, max(x1, x0 + 1), max(y1, y0 + 1)), self.f, self.grey, work,
+                               self.interpolation)
 
     def work_image(self, frame):
         """The whole ``frame`` at the working resolution (as :meth:`frame` over the whole frame resizes it)."""
-        return frame if self.f >= 1.0 else shrink(frame, self.f)
+        return frame if self.f >= 1.0 else shrink(frame, self.f, self.interpolation)
 
     # -- the likelihood ------------------------------------------------------------------
     def patches(self, obs, boxes):

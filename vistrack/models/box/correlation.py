@@ -35,9 +35,10 @@ from ... import kernels
 __all__ = ["CorrelationFilter", "DCFResponse", "dcf_features"]
 
 
-def dcf_features(patch, n_orient=6, cell=4, out=None):
+def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None):
     """Feature channels ``(n_orient + 1, H, W) float32`` of a grey ``patch (H, W) float32`` (module
-    docstring): brightness-normalised grey, then gradient orientation cells normalised per block."""
+    docstring): brightness-normalised grey, then gradient orientation cells normalised per block.
+    ``scratch``: a dict the compiled path keeps its work arrays in from call to call."""
     h, w = patch.shape
     if out is None:
         out = np.empty((n_orient + 1, h, w), np.float32)
@@ -46,20 +47,28 @@ def dcf_features(patch, n_orient=6, cell=4, out=None):
     gx = cv2.Sobel(patch, cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT)
     gy = cv2.Sobel(patch, cv2.CV_32F, 0, 1, ksize=1, borderType=cv2.BORDER_REFLECT)
     mag, ang = cv2.cartToPolar(gx, gy)
+    if kernels.use():  # the channels side by side (H, W, n): one box filter for all of them
+        from .dcf_kernels import normalised_cells, orientation_cells
+
+        scratch = {} if scratch is None else scratch
+        key = (h, w, n_orient)
+        if key not in scratch:
+            scratch[key] = (np.empty((h, w, n_orient), np.float32), np.empty((h, w, n_orient), np.float32),
+                            np.empty((h, w), np.float32))
+        bins, cells, sq = scratch[key]
+        orientation_cells(mag, ang, n_orient, bins, sq)
+        energy = cv2.boxFilter(sq, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
+        cv2.boxFilter(bins, -1, (cell, cell), dst=cells, borderType=cv2.BORDER_REFLECT)
+        return normalised_cells(cells, np.float32(1.0) / np.sqrt(energy + np.float32(1e-2)), out)
     energy = cv2.boxFilter(mag * mag, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
     norm = np.float32(1.0) / np.sqrt(energy + np.float32(1e-2))
-    if kernels.use():
-        from .dcf_kernels import orientation_bins
-
-        orientation_bins(mag, ang, n_orient, out)
-    else:
-        pos = (ang % np.float32(np.pi)) * np.float32(n_orient / np.pi)  # unsigned orientation in bins
-        lo = pos.astype(np.int32)
-        frac = pos - lo.astype(np.float32)
-        lo %= n_orient
-        hi = (lo + 1) % n_orient
-        for k in range(n_orient):
-            out[k + 1] = np.where(lo == k, mag * (1 - frac), 0) + np.where(hi == k, mag * frac, 0)
+    pos = (ang % np.float32(np.pi)) * np.float32(n_orient / np.pi)  # unsigned orientation in bins
+    lo = pos.astype(np.int32)
+    frac = pos - lo.astype(np.float32)
+    lo %= n_orient
+    hi = (lo + 1) % n_orient
+    for k in range(n_orient):
+        out[k + 1] = np.where(lo == k, mag * (1 - frac), 0) + np.where(hi == k, mag * frac, 0)
     for k in range(n_orient):
         cv2.boxFilter(out[k + 1], -1, (cell, cell), dst=out[k + 1], borderType=cv2.BORDER_REFLECT)
         out[k + 1] *= norm
@@ -91,6 +100,11 @@ class DCFResponse:
         zero outside the maps."""
         s = np.asarray(states, float)
         ls = self.log_scales
+        if kernels.use():
+            from .dcf_kernels import response_read
+
+            return response_read(self.maps, ls, self.centre, self.anchor, self.px, np.ascontiguousarray(s),
+                                 np.empty(len(s)))
         if len(ls) == 1:
             k0 = np.zeros(len(s), np.intp)
             t = np.zeros(len(s))
@@ -115,6 +129,13 @@ class DCFResponse:
             m = self.maps[self.best].astype(float).ravel()
             e = np.exp(tempering * (m - m.max()))
             self._log_p[key] = np.log((1 - floor) * e / e.sum() + floor / e.size)
+        return self._log_p[key]
+
+    def cell_cumulative(self, tempering, floor):
+        """The cumulative sums ``(H W,)`` of ``exp`` of :meth:`cell_log_p` (the proposal's draws by inversion)."""
+        key = ("cumulative", float(tempering), float(floor))
+        if key not in self._log_p:
+            self._log_p[key] = np.cumsum(np.exp(self.cell_log_p(tempering, floor)))
         return self._log_p[key]
 
     def cell_origin(self):
@@ -187,11 +208,14 @@ class CorrelationFilter:
         yy, xx = np.mgrid[0:ph, 0:pw]
         label = np.exp(-0.5 * ((xx - pw // 2) ** 2 + (yy - ph // 2) ** 2) / sg**2)
         self.G = sfft.rfft2(label)
+        self._conj_g = np.conj(self.G)
         self._fy, self._fx = sfft.fftfreq(ph)[:, None], sfft.rfftfreq(pw)[None, :]
         self.reuse = bool(reuse)
         self._last = None  # the last search's spectra, centre, log-scales and scale factors
         self._applied = None  # the filter applied (:meth:`filter`)
+        self._terms = None  # detect's conj(A) and B + λ of the applied filter, where the compiled adapt made them
         self._feat = np.empty((self.n_orient + 1, ph, pw), np.float32)
+        self._scratch = {}  # dcf_features' work arrays
         a, b = self._learn(np.asarray(frame), np.array([x + w / 2, y + h / 2]), 0.0)
         self.A, self.B = a, b
         self.A0, self.B0 = a.copy(), b.copy()
@@ -210,12 +234,13 @@ class CorrelationFilter:
 
     def spectrum(self, frame, centre, log_scale):
         """The windowed features' DFT ``(C, ph, pw // 2 + 1)`` of the patch about ``centre``."""
-        feat = dcf_features(self.patch(frame, centre, log_scale), self.n_orient, out=self._feat)
+        feat = dcf_features(self.patch(frame, centre, log_scale), self.n_orient, out=self._feat,
+                            scratch=self._scratch)
         return sfft.rfft2(np.multiply(feat, self.hann, out=feat))
 
     def _learn(self, frame, centre, log_scale):
         F = self.spectrum(frame, centre, log_scale)
-        return np.conj(self.G) * F, np.sum((F * np.conj(F)).real, axis=0)
+        return self._conj_g * F, np.sum((F * np.conj(F)).real, axis=0)
 
     # -- detection and adaptation ------------------------------------------------------------------
     def filter(self):
@@ -228,13 +253,22 @@ class CorrelationFilter:
 
     def detect(self, frame, centre, log_scale):
         """The :class:`DCFResponse` of a search region about ``centre`` at the scales about ``log_scale``."""
-        A, B = self.filter()
-        den, conj_a = B + self.lam, np.conj(A)
+        if self._terms is not None:  # made by the compiled adapt
+            conj_a, den = self._terms
+        else:
+            A, B = self.filter()
+            den, conj_a = B + self.lam, np.conj(A)
         maps = np.empty((len(self.log_scales),) + self.shape, np.float32)
         spectra = []
+        compiled = _exact_filter_kernels()
+        if compiled:
+            from .dcf_kernels import correlate
+
+            acc = np.empty(den.shape, complex)
         for k, ds in enumerate(self.log_scales):
             Z = self.spectrum(frame, centre, log_scale + ds)
-            maps[k] = sfft.irfft2(np.sum(conj_a * Z, axis=0) / den, s=self.shape)
+            y = correlate(conj_a, Z, den, acc) if compiled else np.sum(conj_a * Z, axis=0) / den
+            maps[k] = sfft.irfft2(y, s=self.shape)
             spectra.append(Z)
         px = self.f * np.exp(-(log_scale + self.log_scales))
         self._last = (spectra, np.asarray(centre, float).copy(), log_scale + self.log_scales, px)
@@ -251,12 +285,22 @@ class CorrelationFilter:
             F = spectra[k]
             g = self.G * np.exp(-2j * np.pi * (self._fx * dx + self._fy * dy))
             a, b = np.conj(g) * F, np.sum((F * np.conj(F)).real, axis=0)
+        elif _exact_filter_kernels():  # learn, blend and the applied filter's terms in one compiled pass
+            from .dcf_kernels import adapt_filter
+
+            F = self.spectrum(frame, centre, log_scale)
+            if self._terms is None:
+                self._terms = (np.empty(self.A.shape, complex), np.empty(self.B.shape, np.float32))
+            adapt_filter(F, self._conj_g, self.A, self.B, self.A0, self.B0, self.rate, self.anchor, self.lam,
+                         *self._terms)
+            self._applied = None
+            return
         else:
             a, b = self._learn(frame, centre, log_scale)
         r = self.rate
         self.A = (1 - r) * self.A + r * a
         self.B = (1 - r) * self.B + r * b
-        self._applied = None
+        self._applied = self._terms = None
 
     def search(self, frame, log_scale, stride=2):
         """Whole-frame search at ``log_scale``: the applied filter's spatial taps correlated with the frame's
@@ -278,6 +322,16 @@ class CorrelationFilter:
             total += cv2.filter2D(feat[c], -1, t, borderType=cv2.BORDER_CONSTANT)
         i, j = np.unravel_index(int(np.argmax(total)), total.shape)
         return (j + 0.5) / s, (i + 0.5) / s, float(total[i, j])
+
+
+def _exact_filter_kernels():
+    """Whether ``detect`` and ``adapt`` take the compiled path: the kernels are on and compute numpy's
+    complex products on this CPU (:data:`vistrack.models.box.dcf_kernels.EXACT`)."""
+    if not kernels.use():
+        return False
+    from .dcf_kernels import EXACT
+
+    return EXACT
 
 
 def _grey(frame):

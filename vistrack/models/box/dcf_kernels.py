@@ -1,42 +1,309 @@
 """The box model's correlation-filter features (:mod:`~vistrack.models.box.correlation`), compiled.
 
-- :func:`orientation_bins` is :func:`~vistrack.models.box.correlation.dcf_features`'s soft binning of the
+- :func:`orientation_cells` is :func:`~vistrack.models.box.correlation.dcf_features`'s soft binning of the
   gradient magnitude by unsigned orientation, one pass over the pixels where numpy makes two masked
-  products per channel (the same float32 arithmetic: equal, ``tests/test_box_dcf.py``).
+  products per channel, into the channels side by side ``(H, W, n)``: one ``cv2.boxFilter`` call then
+  sums the cells of all of them (as it sums each alone), and :func:`normalised_cells` divides them by
+  the block energy back into ``(n + 1, H, W)`` (the same float32 arithmetic: equal,
+  ``tests/test_box_dcf.py``).
+- :func:`response_read` is :meth:`DCFResponse.read <vistrack.models.box.correlation.DCFResponse.read>`:
+  ``np.interp`` of the log-scale, then the two nearest scale maps read bilinearly, per state in one
+  pass where numpy makes some forty small calls (the same float64 arithmetic in the same order:
+  equal, ``tests/test_box_dcf.py``).
+- :func:`correlate` and :func:`adapt_filter` are ``CorrelationFilter.detect``'s ``Σ_k conj(A_k) Z_k / (B + λ)``
+  per scale and ``CorrelationFilter.adapt``'s learning, blending and applied filter, one pass each where
+  numpy makes a temporary per operation: numpy's complex products are fused multiply-adds on FMA CPUs
+  (``re = fma(a_r, b_r, -(a_i b_i))``, ``im = fma(a_r, b_i, a_i b_r)``) and plain elsewhere; which, is
+  probed at import (:data:`EXACT`, :data:`NUMPY_FMA`) and these do the same (equal,
+  ``tests/test_box_dcf.py``); a complex divided by a real is the product with its inverse.
+- :func:`correlation_draws` is the correlation proposal's draws from the response and its density
+  there (``CorrelationProposal.draw`` and ``log_density``, :mod:`~vistrack.models.box.correlation_proposal`), per
+  particle in one pass (the same arithmetic: equal, ``tests/test_box_dcf.py``).
 """
 
 from __future__ import annotations
 
-import numpy as np
-from numba import njit
+import math
 
-__all__ = ["orientation_bins"]
+import numpy as np
+from numba import njit, types
+from numba.extending import intrinsic
+
+from ...kernels.sampling import fma as fma32
+
+__all__ = ["orientation_cells", "normalised_cells", "response_read", "correlate", "adapt_filter",
+           "correlation_draws", "EXACT", "NUMPY_FMA", "NUMPY_FMA32"]
 
 
 @njit(cache=True, nogil=True)
-def orientation_bins(mag, ang, n_orient, out):
-    """``out (n_orient + 1, H, W) float32``, channels ``1..n_orient``: the magnitude ``mag (H, W)`` split
-    between the two bins about ``(ang mod π) n_orient / π`` (``ang (H, W)`` radians in ``[0, 2π)``, float32) in
-    proportion to the distance, as ``dcf_features``' numpy path; channel 0 untouched."""
+def orientation_cells(mag, ang, n_orient, out, sq):
+    """The soft binning of the magnitude ``mag (H, W)`` between the two bins about
+    ``(ang mod π) n_orient / π`` (``ang (H, W)`` radians in ``[0, 2π)``, float32: ``a mod π`` is exact,
+    Sterbenz) in proportion to the distance, into ``out (H, W, n_orient)`` float32 (channel ``k`` at
+    ``[..., k]``), each channel written once per pixel (the magnitude's share or 0, as the numpy path's
+    sum of its two ``np.where``), and ``sq (H, W)`` = ``mag * mag`` (float32)."""
     h, w = mag.shape
     pi = np.float32(np.pi)
     scale = np.float32(n_orient / np.pi)
-    one = np.float32(1.0)
-    for k in range(1, n_orient + 1):
-        for i in range(h):
-            for j in range(w):
-                out[k, i, j] = 0.0
+    one, zero = np.float32(1.0), np.float32(0.0)
+    lo, hi = np.empty(w, np.int64), np.empty(w, np.int64)
+    wl, wh = np.empty(w, np.float32), np.empty(w, np.float32)
     for i in range(h):
         for j in range(w):
-            a = ang[i, j]  # in [0, 2 pi) from cv2.cartToPolar: a mod pi is exact (Sterbenz)
+            a = ang[i, j]
             if a >= pi:
                 a -= pi
             pos = a * scale
-            lo = np.int32(pos)
-            frac = pos - np.float32(lo)
-            lo = lo % n_orient
-            hi = (lo + 1) % n_orient
+            k = np.int32(pos)
+            frac = pos - np.float32(k)
+            if k >= n_orient or k < 0:
+                k = k % n_orient
+            lo[j] = k
+            hi[j] = k + 1 if k + 1 < n_orient else k + 1 - n_orient
             m = mag[i, j]
-            out[lo + 1, i, j] += m * (one - frac)
-            out[hi + 1, i, j] += m * frac
+            sq[i, j] = m * m
+            wl[j], wh[j] = m * (one - frac), m * frac
+        out[i] = zero
+        for j in range(w):
+            if lo[j] == hi[j]:  # one bin
+                out[i, j, lo[j]] = wl[j] + wh[j]
+            else:
+                out[i, j, lo[j]] = wl[j] + zero
+                out[i, j, hi[j]] = zero + wh[j]
     return out
+
+
+@njit(cache=True, nogil=True)
+def normalised_cells(cells, norm, out):
+    """``out[k + 1] = cells[..., k] * norm`` (float32; ``norm (H, W)`` the numpy path's
+    ``1 / sqrt(energy + 0.01)``); ``out[0]`` untouched."""
+    h, w, n = cells.shape
+    for i in range(h):
+        for k in range(n):
+            for j in range(w):
+                out[k + 1, i, j] = cells[i, j, k] * norm[i, j]
+    return out
+
+@njit(cache=True, nogil=True)
+def _interp_pos(x, xp):
+    """``np.interp(x, xp, arange(len(xp)))`` for one ``x`` (``xp`` ascending, at least 2 long): numpy's
+    arithmetic (``arr_interp``: the slope times the offset plus the left value, the end values held)."""
+    n = xp.shape[0]
+    if x != x:
+        return x
+    if x < xp[0]:
+        return 0.0
+    if x >= xp[n - 1]:
+        return float(n - 1)
+    j = 0
+    while x >= xp[j + 1]:
+        j += 1
+    if xp[j] == x:
+        return float(j)
+    slope = (float(j + 1) - float(j)) / (xp[j + 1] - xp[j])
+    return slope * (x - xp[j]) + float(j)
+
+
+@njit(cache=True, nogil=True)
+def _bilinear_at(maps, k, u, v):
+    """``_bilinear`` of :mod:`~vistrack.models.box.correlation` for one point: map ``k`` at ``(u, v)``, the four
+    corners added in its order to a zero start (``0.0`` for a corner outside)."""
+    h, w = maps.shape[1], maps.shape[2]
+    fu, fv = math.floor(u), math.floor(v)
+    a, b = u - fu, v - fv
+    out = 0.0
+    if not (abs(fu) < 2.0**62 and abs(fv) < 2.0**62):  # non-finite or far: numpy's index is outside too
+        return out + 0.0 + 0.0 + 0.0 + 0.0
+    u0, v0 = int(fu), int(fv)
+    for c in range(4):
+        du, dv = c & 1, c >> 1
+        if c == 0:
+            wt = (1 - a) * (1 - b)
+        elif c == 1:
+            wt = a * (1 - b)
+        elif c == 2:
+            wt = (1 - a) * b
+        else:
+            wt = a * b
+        uu, vv = u0 + du, v0 + dv
+        if 0 <= uu < w and 0 <= vv < h:
+            out += wt * np.float64(maps[k, vv, uu])
+        else:
+            out += 0.0
+    return out
+
+
+@njit(cache=True, nogil=True)
+def response_read(maps, log_scales, centre, anchor, px, states, out):
+    """``DCFResponse.read``: ``out (N,)``, the responses ``maps (S, H, W)`` float32 at the centres
+    ``states[:, :2]`` (bilinear) and linear in ``states[:, 2]`` between the two nearest of the ascending
+    ``log_scales (S,)`` (held beyond the ends); map pixel ``(i, j)`` of scale ``k`` at
+    ``centre + ((j, i) - anchor) / px[k]``; 0 outside the maps."""
+    s = log_scales.shape[0]
+    for n in range(states.shape[0]):
+        if s == 1:
+            k0, t = 0, 0.0
+        else:
+            pos = _interp_pos(states[n, 2], log_scales)
+            pos = min(max(pos, 0.0), float(s - 1))
+            if pos != pos:
+                out[n] = np.nan
+                continue
+            k0 = min(int(pos), s - 2)
+            t = pos - k0
+        acc = 0.0
+        for side in range(2):
+            k = min(k0 + side, s - 1)
+            wk = 1 - t if side == 0 else t
+            u = (states[n, 0] - centre[0]) * px[k] + anchor[0]
+            v = (states[n, 1] - centre[1]) * px[k] + anchor[1]
+            acc += wk * _bilinear_at(maps, k, u, v)
+        out[n] = acc
+    return out
+
+
+
+@intrinsic
+def _fma(typingctx, a, b, c):
+    """``a * b + c`` rounded once (float64; LLVM's ``llvm.fma``)."""
+    sig = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context, builder, signature, args):
+        return builder.fma(*args)
+
+    return sig, codegen
+
+
+def _numpy_complex_fma(dtype):
+    """Whether numpy's complex product of ``dtype`` is ``(fma(a_r, b_r, -(a_i b_i)), fma(a_r, b_i, a_i b_r))``
+    on this CPU (its SIMD loops on FMA CPUs) rather than the plain products: probed on values where the
+    two differ (exact rational arithmetic gives the fused results)."""
+    from fractions import Fraction
+
+    real = np.float64 if dtype == np.complex128 else np.float32
+    rng = np.random.default_rng(0)
+    a = (rng.standard_normal(64) + 1j * rng.standard_normal(64)).astype(dtype)
+    b = (rng.standard_normal(64) + 1j * rng.standard_normal(64)).astype(dtype)
+    got = a * b
+
+    def fused(x, y, z):
+        return real(Fraction(float(x)) * Fraction(float(y)) + Fraction(float(z)))
+
+    same_fma = same_plain = True
+    for p, q, g in zip(a, b, got):
+        fma_r = fused(p.real, q.real, -(p.imag * q.imag))
+        fma_i = fused(p.real, q.imag, p.imag * q.real)
+        same_fma &= bool(g.real == fma_r and g.imag == fma_i)
+        same_plain &= bool(g.real == p.real * q.real - p.imag * q.imag and g.imag == p.real * q.imag + p.imag * q.real)
+    return True if same_fma else (False if same_plain else None)
+
+
+#: numpy's complex128 / complex64 products fused (True), plain (False) or neither (None: the models keep numpy)
+NUMPY_FMA, NUMPY_FMA32 = _numpy_complex_fma(np.complex128), _numpy_complex_fma(np.complex64)
+_FUSED, _FUSED32 = bool(NUMPY_FMA), bool(NUMPY_FMA32)
+#: whether :func:`correlate` and :func:`adapt_filter` compute numpy's products on this CPU
+EXACT = NUMPY_FMA is not None and NUMPY_FMA32 is not None
+
+
+@njit(cache=True, forceinline=True)
+def _cmul(ar, ai, br, bi):
+    """numpy's complex128 product ``(a_r + i a_i)(b_r + i b_i)`` on this CPU (:data:`NUMPY_FMA`)."""
+    if _FUSED:
+        return _fma(ar, br, -(ai * bi)), _fma(ar, bi, ai * br)
+    return ar * br - ai * bi, ar * bi + ai * br
+
+
+@njit(cache=True, forceinline=True)
+def _abs2_32(fr, fi):
+    """The real part of numpy's complex64 product ``f conj(f)`` on this CPU (:data:`NUMPY_FMA32`)."""
+    if _FUSED32:
+        return fma32(fr, fr, fi * fi)
+    return fr * fr + fi * fi
+
+
+@njit(cache=True, nogil=True)
+def correlate(conj_a, z, den, out):
+    """``out (H, W') complex128 = Σ_k conj_a[k] z[k] / den``: ``conj_a (C, H, W') complex128``, the spectra
+    ``z (C, H, W') complex64`` (as numpy promotes them), summed over ``k`` in order, divided by ``den (H, W')
+    float32`` as numpy divides a complex by a real one (times ``1 / den``)."""
+    c_n, h, w = z.shape
+    for i in range(h):
+        for j in range(w):
+            sr, si = _cmul(conj_a[0, i, j].real, conj_a[0, i, j].imag, np.float64(z[0, i, j].real),
+                           np.float64(z[0, i, j].imag))
+            for c in range(1, c_n):
+                pr, pi = _cmul(conj_a[c, i, j].real, conj_a[c, i, j].imag, np.float64(z[c, i, j].real),
+                               np.float64(z[c, i, j].imag))
+                sr, si = sr + pr, si + pi
+            scl = 1.0 / np.float64(den[i, j])
+            out[i, j] = complex(sr * scl, si * scl)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def adapt_filter(f, conj_g, a, b, a0, b0, rate, anchor, lam, conj_applied, den):
+    """``CorrelationFilter.adapt`` on the spectra ``f (C, H, W') complex64`` of the new patch, in place:
+    ``a = (1 - η) a + η conj(G) f`` (complex128) and ``b = (1 - η) b + η Σ_k |f_k|²`` (float32, the
+    squares as numpy's complex64 product and summed over ``k`` in order); then the applied filter
+    ``(1 - γ) a + γ a0`` conjugated into ``conj_applied`` and ``(1 - γ) b + γ b0 + λ`` (float32) into ``den``
+    (what ``detect`` divides by)."""
+    c_n, h, w = f.shape
+    r1, r = 1.0 - rate, rate
+    g1, g = 1.0 - anchor, anchor
+    r1f, rf, g1f, gf, lamf = np.float32(r1), np.float32(r), np.float32(g1), np.float32(g), np.float32(lam)
+    for i in range(h):
+        for j in range(w):
+            gr, gi = conj_g[i, j].real, conj_g[i, j].imag
+            sq = np.float32(0.0)
+            for c in range(c_n):
+                fr, fi = f[c, i, j].real, f[c, i, j].imag
+                nr, ni = _cmul(gr, gi, np.float64(fr), np.float64(fi))
+                ar = r1 * a[c, i, j].real + r * nr
+                ai = r1 * a[c, i, j].imag + r * ni
+                a[c, i, j] = complex(ar, ai)
+                pr = g1 * ar + g * a0[c, i, j].real
+                pi = g1 * ai + g * a0[c, i, j].imag
+                conj_applied[c, i, j] = complex(pr, -pi)
+                e = _abs2_32(fr, fi)  # (f conj(f)).real as numpy's complex64 product
+                sq = e if c == 0 else sq + e
+            bb = r1f * b[i, j] + rf * sq
+            b[i, j] = bb
+            den[i, j] = (g1f * bb + gf * b0[i, j]) + lamf
+    return a
+
+
+@njit(cache=True, nogil=True)
+def correlation_draws(x, u, e, beta, cum, log_p, ox, oy, a, w, h, best, sd, two_log_a, log_sd, log_sqrt_2pi, z,
+                      log_qy):
+    """``CorrelationProposal``'s draws and density: ``z (N, d)`` = ``x`` with the rows where ``u[:, 0] < beta``
+    drawn from the response (the cell by inversion of ``cum`` at ``u[:, 1]``, the first cumulative sum above
+    it, as ``searchsorted(side="right")``; the point uniform in it from ``u[:, 2:4]``; the log-scale
+    ``best + sd e``), and ``log_qy (N,)`` = ``log q_Y(z)``: ``log_p`` of the cell of ``z`` (a ``w`` wide,
+    ``h`` high grid of side ``a`` with its cell ``(0, 0)`` centred at ``(ox, oy)``) minus ``2 log a``,
+    ``d² / 2`` (``d = (l - best) / sd``), ``log √(2π)`` and ``log sd`` in that order; ``-inf`` outside."""
+    n_c = cum.shape[0]
+    total = cum[n_c - 1]
+    for n in range(x.shape[0]):
+        for k in range(x.shape[1]):
+            z[n, k] = x[n, k]
+        if u[n, 0] < beta:
+            v = u[n, 1] * total
+            lo, hi = 0, n_c
+            while lo < hi:  # the first index whose cumulative sum is above v
+                mid = (lo + hi) // 2
+                if cum[mid] <= v:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            k = min(lo, n_c - 1)
+            z[n, 0] = ox + a * (np.float64(k % w) + u[n, 2] - 0.5)
+            z[n, 1] = oy + a * (np.float64(k // w) + u[n, 3] - 0.5)
+            z[n, 2] = best + sd * e[n]
+        fj = math.floor((z[n, 0] - ox) / a + 0.5)
+        fi = math.floor((z[n, 1] - oy) / a + 0.5)
+        if not (0.0 <= fj < w and 0.0 <= fi < h):
+            log_qy[n] = -np.inf
+            continue
+        d = (z[n, 2] - best) / sd
+        log_qy[n] = (((log_p[int(fi) * w + int(fj)] - two_log_a) - 0.5 * (d * d)) - log_sqrt_2pi) - log_sd
+    return z

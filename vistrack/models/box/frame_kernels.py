@@ -13,6 +13,10 @@ where numpy makes a dozen small ones.
   sampling), its correlation with the template, the new template and the box's bin counts
   (sums in sample order where numpy's BLAS sums in another: 1e-12 relative,
   ``tests/test_kernels_box.py``).
+- :func:`shrink_area` is ``cv2.resize(image, None, fx=f, fy=f, interpolation=cv2.INTER_AREA)`` of a BGR
+  image for a non-integer ``1 / f`` (``Appearance``'s regions): OpenCV's ``resizeArea_`` (its tap tables,
+  float sums in its order, rounding to nearest even), with each source row's horizontal pass made once
+  where OpenCV makes it once per output row it touches (equal, ``tests/test_kernels_box.py``).
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ from numba import njit
 from ...kernels.appearance import _box_count, bin_integrals, colour_labels
 from ...kernels.sampling import NONFINITE, corner_float, fma_lerp, inside, lerp_fma, pairwise_sum
 
-__all__ = ["predicted_roi", "adapt_template", "frame_features"]
+__all__ = ["predicted_roi", "adapt_template", "frame_features", "shrink_area"]
 
 
 @njit(cache=True, nogil=True)
@@ -145,3 +149,73 @@ def frame_features(grey, hsv, n_bins, texture, labels):
             texture[y, x, 2] = np.float32(dy)
     colour_labels(hsv, labels)
     return bin_integrals(labels, n_bins)
+
+
+@njit(cache=True, nogil=True)
+def _area_taps(ssize, dsize, scale, di, si, al):
+    """OpenCV's ``computeResizeAreaTab`` (``cn = 1``): the taps ``(destination, source, weight)`` of an
+    area resize by ``scale`` source pixels per destination pixel; returns their number."""
+    k = 0
+    for dx in range(dsize):
+        fsx1 = dx * scale
+        fsx2 = fsx1 + scale
+        cell = min(scale, ssize - fsx1)
+        sx1, sx2 = math.ceil(fsx1), math.floor(fsx2)
+        sx2 = min(sx2, ssize - 1)
+        sx1 = min(sx1, sx2)
+        if sx1 - fsx1 > 1e-3:
+            di[k], si[k], al[k] = dx, sx1 - 1, np.float32((sx1 - fsx1) / cell)
+            k += 1
+        for sx in range(sx1, sx2):
+            di[k], si[k], al[k] = dx, sx, np.float32(1.0 / cell)
+            k += 1
+        if fsx2 - sx2 > 1e-3:
+            di[k], si[k], al[k] = dx, sx2, np.float32(min(min(fsx2 - sx2, 1.0), cell) / cell)
+            k += 1
+    return k
+
+
+@njit(cache=True, forceinline=True)
+def _round_u8(v):
+    """``saturate_cast<uchar>(float)``: to nearest, ties to even, clipped to [0, 255]."""
+    r = np.rint(v)
+    return np.uint8(0) if r < 0 else (np.uint8(255) if r > 255 else np.uint8(r))
+
+
+@njit(cache=True, nogil=True)
+def shrink_area(src, f, dst):
+    """``dst (round(f H), round(f W), 3)`` uint8 = ``src (H, W, 3)`` uint8 shrunk by ``f`` as OpenCV's
+    ``INTER_AREA`` does for a non-integer ``1 / f`` (module docstring)."""
+    h, w = src.shape[0], src.shape[1]
+    dh, dw = dst.shape[0], dst.shape[1]
+    scale = 1.0 / f
+    xdi, xsi, xal = np.empty(2 * w, np.int64), np.empty(2 * w, np.int64), np.empty(2 * w, np.float32)
+    ydi, ysi, yal = np.empty(2 * h, np.int64), np.empty(2 * h, np.int64), np.empty(2 * h, np.float32)
+    nx = _area_taps(w, dw, scale, xdi, xsi, xal)
+    ny = _area_taps(h, dh, scale, ydi, ysi, yal)
+    buf = np.zeros((dw, 3), np.float32)
+    acc = np.zeros((dw, 3), np.float32)
+    last_sy, prev_dy = -1, ydi[0]
+    for j in range(ny):
+        beta, dy, sy = yal[j], ydi[j], ysi[j]
+        if sy != last_sy:  # the row's horizontal pass, once per source row
+            buf[:, :] = 0
+            for k in range(nx):
+                dxn, sxn, alpha = xdi[k], xsi[k], xal[k]
+                for c in range(3):
+                    buf[dxn, c] = buf[dxn, c] + np.float32(src[sy, sxn, c]) * alpha
+            last_sy = sy
+        if dy != prev_dy:
+            for dx in range(dw):
+                for c in range(3):
+                    dst[prev_dy, dx, c] = _round_u8(acc[dx, c])
+                    acc[dx, c] = beta * buf[dx, c]
+            prev_dy = dy
+        else:
+            for dx in range(dw):
+                for c in range(3):
+                    acc[dx, c] += beta * buf[dx, c]
+    for dx in range(dw):
+        for c in range(3):
+            dst[prev_dy, dx, c] = _round_u8(acc[dx, c])
+    return dst

@@ -26,7 +26,7 @@ Local moves (thesis 001, §4.3–4.5)
     :meth:`lis_step`).
     ``lls``: the exact ``r`` on a grid of the window (:class:`~vistrack.proposals.Window`).
     With the correlation filter, ``lis``'s proposal is its response mixed with ``K``
-    (:class:`~vistrack.proposals.correlation.CorrelationProposal`, exact density, proper weights).
+    (:class:`~vistrack.models.box.correlation_proposal.CorrelationProposal`, exact density, proper weights).
 Lost
     ``visible=0`` where ``log r`` at the estimate falls far below its running level, the
     scale below a floor or the centre leaves the frame (:mod:`~vistrack.models.collapse`).
@@ -42,7 +42,7 @@ from ... import kernels
 from ...features import remap_points
 from ...gaussian import diag_logpdf
 from ...proposals import MapProposal, Window
-from ...proposals.correlation import CorrelationProposal
+from .correlation_proposal import CorrelationProposal
 from ...proposals.translation import TranslationMoves
 from .appearance import Appearance
 from ..collapse import CollapseCheck
@@ -83,7 +83,7 @@ class Box(CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
         0.819 -> 0.813): 1 by default (``docs/experiments.md``, speed, third pass).
     dcf : bool
         Learn a correlation filter (:class:`~vistrack.models.box.correlation.CorrelationFilter`) whose
-        response is LIS's proposal (:class:`~vistrack.proposals.correlation.CorrelationProposal`) and a
+        response is LIS's proposal (:class:`~vistrack.models.box.correlation_proposal.CorrelationProposal`) and a
         term ``λ_dcf y`` of ``log r``; ``False``: the colour/template map proposal alone (before issue 34).
     lambda_dcf : float
         ``λ_dcf``, the weight of the response ``y`` (about 1 at the object) in ``log r``.

@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ... import kernels
+
 __all__ = ["CorrelationProposal"]
 
 _LOG_SQRT_2PI = 0.5 * np.log(2 * np.pi)
@@ -62,10 +64,8 @@ class CorrelationProposal:
     def draw(self, resp, u, e):
         """Poses ``(N, 3)`` drawn from ``q_Y`` with uniforms ``u (N, 3)`` (cell, position in it) and normals
         ``e (N,)`` (log-scale)."""
-        t, s = self.model.dcf_tempering
-        p = np.exp(resp.cell_log_p(t, s))
-        c = np.cumsum(p)
-        k = np.minimum(np.searchsorted(c, u[:, 0] * c[-1], side="right"), len(p) - 1)
+        c = resp.cell_cumulative(*self.model.dcf_tempering)
+        k = np.minimum(np.searchsorted(c, u[:, 0] * c[-1], side="right"), len(c) - 1)
         w = resp.maps.shape[2]
         (ox, oy), a = resp.cell_origin()
         x = ox + a * (k % w + u[:, 1] - 0.5)
@@ -74,20 +74,51 @@ class CorrelationProposal:
 
     def sample(self, x, obs, rng, prev):
         """``(z, log α, log q)`` for LIS (module docstring) about the predictions ``x (N, 6)`` from ``prev``."""
+        z, log_kx, log_q, _ = self._sample(x, obs, rng, prev)
+        return z, log_kx, log_q
+
+    def propose(self, prev, obs, rng, kernel):
+        """LIS's whole step (:meth:`LIS.propose <vistrack.filters.lis.LIS.propose>`, the same draws and
+        arithmetic) with ``log K`` of the prediction and of the draw computed once each: LIS's
+        ``log α + log r - log q + log K(z) - log K(x)`` with ``log α = log K(x)``. ``None`` for a
+        ``kernel`` other than this proposal's (the filter then calls the parts)."""
+        if kernel is not self.kernel:
+            return None
+        x = kernel.predict(prev, rng)
+        z, log_kx, log_q, log_kz = self._sample(x, obs, rng, prev)
+        ll = self.model.loglik(obs, z)
+        log_incr = log_kx + ll - log_q + log_kz - log_kx
+        return z, np.where(np.isfinite(log_kx), log_incr, -np.inf), x, ll
+
+    def _sample(self, x, obs, rng, prev):
+        """:meth:`sample`'s ``(z, log α, log q)`` and ``log K(z | prev)``."""
         resp = getattr(obs, "dcf", None)
         log_kx = self.kernel.logpdf(x, prev)
         if resp is None:
-            return x, log_kx, log_kx
+            return x, log_kx, log_kx, log_kx
         beta = float(getattr(obs, "dcf_share", self.model.dcf_share))
         n = len(x)
         u = rng.random((n, 4))
         e = rng.standard_normal(n)
-        z = np.array(x, float)
-        pick = u[:, 0] < beta
-        if pick.any():
-            z[pick, :3] = self.draw(resp, u[pick, 1:], e[pick])
-        log_qy = self.log_density(resp, z)
+        if kernels.use():  # draws and density in one compiled pass, the same arithmetic
+            from .dcf_kernels import correlation_draws
+
+            t, s = self.model.dcf_tempering
+            (ox, oy), a = resp.cell_origin()
+            h, w = resp.maps.shape[1:]
+            sd = self.model.dcf_scale_std
+            z, log_qy = np.empty(np.shape(x)), np.empty(n)
+            correlation_draws(np.ascontiguousarray(x, float), u, e, beta, resp.cell_cumulative(t, s),
+                              resp.cell_log_p(t, s), float(ox), float(oy), float(a), w, h,
+                              float(resp.log_scales[resp.best]), float(sd), float(2 * np.log(a)), float(np.log(sd)),
+                              _LOG_SQRT_2PI, z, log_qy)
+        else:
+            z = np.array(x, float)
+            pick = u[:, 0] < beta
+            if pick.any():
+                z[pick, :3] = self.draw(resp, u[pick, 1:], e[pick])
+            log_qy = self.log_density(resp, z)
         log_kz = self.kernel.logpdf(z, prev)
         parts = [np.log(beta) + log_qy if beta > 0 else np.full(n, -np.inf),
                  np.log1p(-beta) + log_kz if beta < 1 else np.full(n, -np.inf)]
-        return z, log_kx, np.logaddexp(*parts)
+        return z, log_kx, np.logaddexp(*parts), log_kz
