@@ -78,6 +78,9 @@ class ProposalMap(Protocol):
 @runtime_checkable
 class Redetects(Protocol):
     """A model that searches the frame again for a lost object (the box model: the track CSV's
-    ``redetected`` column); ``redetect`` is its acceptance level, ``None`` when it is off."""
+    ``redetected`` column); ``redetect`` is its acceptance level (``None``: off) and
+    ``redetected(obs)`` whether the frame observed as ``obs`` found it again."""
 
     redetect: float
+
+    def redetected(self, obs): ...

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .features import FeatureMaps
-from .models.protocol import VideoModel, offers, require
+from .models.protocol import Redetects, VideoModel, offers, require
 from .particles import ParticleSet
 
 __all__ = ["FrameResult", "FrameStepper", "track", "top_particles", "warm_up"]
@@ -116,7 +116,7 @@ class FrameStepper:
             states = self.model.targets(obs, est)
             targets = (self.identities.assign(index, self.model.target_box(states)), states)
         ms = (time.perf_counter() - t0) * 1e3
-        redetected = bool(getattr(obs, "redetected", False)) and not reason
+        redetected = offers(self.model, Redetects) and self.model.redetected(obs) and not reason
         return FrameResult(index, frame, self.particles, est, ms, maps, obs, reason, detail, targets, redetected)
 
 

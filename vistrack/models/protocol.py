@@ -386,6 +386,10 @@ class VideoModelBase:
         """Whether the object is reported at ``state`` (here: always)."""
         return True
 
+    def redetected(self, obs):
+        """Whether the frame observed as ``obs`` found a lost object again (here: never)."""
+        return False
+
     def check_lost(self, obs, state):
         """``(reason, detail)`` for the frame's estimate ``state``: ``("", "")`` when
         :meth:`visible`, else ``("not found", ...)``."""

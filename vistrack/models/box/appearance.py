@@ -97,6 +97,10 @@ class AppearanceFrame:
         The OpenCV interpolation that shrinks the region (:func:`shrink`).
     """
 
+    #: set by ``Box.observe``: the correlation filter's response and share ``β``, a re-detection?, the frame
+    dcf = dcf_share = frame_image = None
+    redetected = False
+
     def __init__(self, frame, roi, f, grey, work=None, interpolation=cv2.INTER_AREA):
         x0, y0, x1, y1 = roi
         self.f = f
@@ -299,7 +303,7 @@ class Appearance:
 
             c = self.colour
             log_rc = colour_loglik(obs.ii, float(obs.x0), float(obs.y0), float(obs.f), np.ascontiguousarray(b),
-                                   float(self.ring), c.bg_weight, c.q, c._bp, float(c.lambda_colour), float(c.kappa),
+                                   float(self.ring), c.bg_weight, c.q, c.bp, float(c.lambda_colour), float(c.kappa),
                                    np.empty(len(b)))
         else:
             grow = self.ring * 0.5 * (b[:, 2] + b[:, 3])
@@ -321,7 +325,7 @@ class Appearance:
 
         c = self.colour
         return box_loglik(states, size0, obs.ii, obs.texture, float(obs.x0), float(obs.y0), float(obs.f),
-                          float(self.ring), c.bg_weight, c.q, c._bp, float(c.lambda_colour), float(c.kappa),
+                          float(self.ring), c.bg_weight, c.q, c.bp, float(c.lambda_colour), float(c.kappa),
                           *self.grid_axes, self.template, float(self.lambda_template), np.empty(len(states)))
 
     def adapt(self, obs, box):

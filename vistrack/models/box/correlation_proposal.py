@@ -92,11 +92,11 @@ class CorrelationProposal:
 
     def _sample(self, x, obs, rng, prev):
         """:meth:`sample`'s ``(z, log α, log q)`` and ``log K(z | prev)``."""
-        resp = getattr(obs, "dcf", None)
+        resp = obs.dcf
         log_kx = self.kernel.logpdf(x, prev)
         if resp is None:
             return x, log_kx, log_kx, log_kx
-        beta = float(getattr(obs, "dcf_share", self.model.dcf_share))
+        beta = float(obs.dcf_share)
         n = len(x)
         u = rng.random((n, 4))
         e = rng.standard_normal(n)

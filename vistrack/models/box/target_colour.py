@@ -39,7 +39,7 @@ class TargetColour:
         q_raw = inner / max(inner.sum(), 1)
         b_raw = b / max(b.sum(), 1)
         self.backprojection = (q_raw / (q_raw + b_raw + 1e-3)).astype(np.float32)
-        self._bp = self.backprojection.astype(float)
+        self.bp = self.backprojection.astype(float)  # float64: what the compiled colour terms read
 
     def normalise(self, counts):
         """Background-weighted, normalised histograms of bin counts ``(..., B)``."""
@@ -57,7 +57,7 @@ class TargetColour:
         inner = np.asarray(inner, float)
         ring = np.asarray(ring, float)
         d = self.d2(inner) + self.kappa * (1.0 - self.d2(ring))
-        contrast = (inner @ self._bp) / np.maximum(inner.sum(-1), 1) - (ring @ self._bp) / np.maximum(ring.sum(-1), 1)
+        contrast = (inner @ self.bp) / np.maximum(inner.sum(-1), 1) - (ring @ self.bp) / np.maximum(ring.sum(-1), 1)
         return self.lambda_colour * (contrast - d)
 
     def adapt(self, counts, rate):

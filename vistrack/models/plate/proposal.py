@@ -172,7 +172,7 @@ class PlateLISProposal:
         mp, u0, v0, stride = pm
         f = app.f / stride
         a = np.array([f, -(app.x0 * app.f + u0) / stride, f, -(app.y0 * app.f + v0) / stride])
-        resp = getattr(obs, "dcf", None)
+        resp = obs.dcf
         if resp is not None and m.lambda_dcf:  # the correlation filter's term of log r, at the poses' median scale
             hh, ww = mp.shape
             jj, ii = np.meshgrid(np.arange(ww, dtype=float), np.arange(hh, dtype=float))
