@@ -177,7 +177,8 @@ class CorrelationFilter:
     lam : float
         ``λ``, the regulariser.
     rate : float
-        ``η``, the adaptation rate.
+        ``η``, the adaptation rate (0.004; 0.0025 before the box model's collapse ``drop`` went to 28:
+        ``docs/experiments.md``, issue 34).
     anchor : float
         ``γ``, the first frame's share of the filter applied.
     n_scales, scale_step : int, float
@@ -190,7 +191,7 @@ class CorrelationFilter:
         extraction and DFT fewer per frame).
     """
 
-    def __init__(self, frame, box, *, cell_size=24.0, padding=1.0, sigma=0.1, lam=1e-2, rate=0.0025, anchor=0.2,
+    def __init__(self, frame, box, *, cell_size=24.0, padding=1.0, sigma=0.1, lam=1e-2, rate=0.004, anchor=0.2,
                  n_scales=3, scale_step=1.04, n_orient=6, reuse=False):
         x, y, w, h = (float(v) for v in box)
         self.size0 = np.array([w, h])
