@@ -76,8 +76,11 @@ def lerp4(img, ix, iy, ax, ay, c, border, nonfinite):
 
 @intrinsic
 def fma(typingctx, a, b, c):
-    """``a * b + c`` rounded once (float32; LLVM's ``llvm.fma``, one instruction on FMA CPUs)."""
-    sig = types.float32(types.float32, types.float32, types.float32)
+    """``a * b + c`` rounded once (float32 or float64, all three of one type; LLVM's ``llvm.fma``, one
+    instruction on FMA CPUs)."""
+    if not (a == b == c and a in (types.float32, types.float64)):
+        return None
+    sig = a(a, b, c)
 
     def codegen(context, builder, signature, args):
         return builder.fma(*args)

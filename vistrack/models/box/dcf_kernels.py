@@ -26,10 +26,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, types
-from numba.extending import intrinsic
+from numba import njit
 
-from ...kernels.sampling import fma as fma32
+from ...kernels.sampling import fma
 
 __all__ = ["orientation_cells", "normalised_cells", "response_read", "correlate", "adapt_filter",
            "correlation_draws", "EXACT", "NUMPY_FMA", "NUMPY_FMA32"]
@@ -163,17 +162,6 @@ def response_read(maps, log_scales, centre, anchor, px, states, out):
 
 
 
-@intrinsic
-def _fma(typingctx, a, b, c):
-    """``a * b + c`` rounded once (float64; LLVM's ``llvm.fma``)."""
-    sig = types.float64(types.float64, types.float64, types.float64)
-
-    def codegen(context, builder, signature, args):
-        return builder.fma(*args)
-
-    return sig, codegen
-
-
 def _numpy_complex_fma(dtype):
     """Whether numpy's complex product of ``dtype`` is ``(fma(a_r, b_r, -(a_i b_i)), fma(a_r, b_i, a_i b_r))``
     on this CPU (its SIMD loops on FMA CPUs) rather than the plain products: probed on values where the
@@ -209,7 +197,7 @@ EXACT = NUMPY_FMA is not None and NUMPY_FMA32 is not None
 def _cmul(ar, ai, br, bi):
     """numpy's complex128 product ``(a_r + i a_i)(b_r + i b_i)`` on this CPU (:data:`NUMPY_FMA`)."""
     if _FUSED:
-        return _fma(ar, br, -(ai * bi)), _fma(ar, bi, ai * br)
+        return fma(ar, br, -(ai * bi)), fma(ar, bi, ai * br)
     return ar * br - ai * bi, ar * bi + ai * br
 
 
@@ -217,7 +205,7 @@ def _cmul(ar, ai, br, bi):
 def _abs2_32(fr, fi):
     """The real part of numpy's complex64 product ``f conj(f)`` on this CPU (:data:`NUMPY_FMA32`)."""
     if _FUSED32:
-        return fma32(fr, fr, fi * fi)
+        return fma(fr, fr, fi * fi)
     return fr * fr + fi * fi
 
 
