@@ -199,3 +199,74 @@ def test_area_shrink_equals_opencv():
         a, b = both(lambda: shrink(img, f))
         np.testing.assert_array_equal(a, want)
         np.testing.assert_array_equal(b, want)
+
+
+def test_area_shrink_of_a_window_equals_that_part_of_the_whole():
+    from vistrack.models.box.frame_kernels import shrink_area
+
+    rng = np.random.default_rng(22)
+    frame = cv2.GaussianBlur(rng.integers(0, 256, (200, 260, 3)).astype(np.uint8), (0, 0), 1.5)
+    for _ in range(40):
+        y0, x0 = rng.integers(0, 60, 2)
+        src = frame[y0:y0 + rng.integers(20, 140), x0:x0 + rng.integers(20, 200)]  # a view, as a region is
+        f = float(rng.uniform(0.2, 0.95))
+        dh, dw = round(src.shape[0] * f), round(src.shape[1] * f)
+        if abs(1 / f - round(1 / f)) < 1e-6 or min(dh, dw) < 1:
+            continue
+        want = cv2.resize(np.ascontiguousarray(src), None, fx=f, fy=f, interpolation=cv2.INTER_AREA)
+        r0, c0 = rng.integers(0, dh), rng.integers(0, dw)
+        r1, c1 = rng.integers(r0, dh + 1), rng.integers(c0, dw + 1)
+        out = np.full((dh, dw, 3), 7, np.uint8)
+        shrink_area(src, f, out, r0, r1, c0, c1)
+        np.testing.assert_array_equal(out[r0:r1, c0:c1], want[r0:r1, c0:c1])
+        outside = np.ones((dh, dw), bool)
+        outside[r0:r1, c0:c1] = False
+        assert (out[outside] == 7).all()  # the rest left as it was
+
+
+def test_maps_made_over_a_window_equal_the_whole_regions():
+    """The compiled maps made only where boxes read them (``AppearanceFrame.maps``): inside the window the
+    texture and labels are the whole region's, every box inside counts what it counts there, and the
+    likelihood of particles (some over the region's edge) is the same bit for bit."""
+    from vistrack.features import box_sums
+
+    frames, box = moving_box_frames(2)
+    app = vistrack.models.box.appearance.Appearance(frames[0], box, work_size=20.0)  # f < 1: a shrunk region
+    roi = (10, 8, 150, 112)
+    whole = app.frame(frames[1], roi)
+    whole.texture  # noqa: B018 - made whole at once
+    rng = np.random.default_rng(3)
+    for _ in range(25):
+        part = app.frame(frames[1], roi)
+        hh, ww = part.shape
+        r0, c0 = rng.integers(0, hh - 1), rng.integers(0, ww - 1)
+        r1, c1 = rng.integers(r0 + 1, hh + 1), rng.integers(c0 + 1, ww + 1)
+        texture, ii = part.maps((r0, r1, c0, c1))
+        np.testing.assert_array_equal(texture[r0:r1, c0:c1], whole.texture[r0:r1, c0:c1])
+        xs, ys = np.sort(rng.integers(c0, c1 + 1, (20, 2)), axis=1), np.sort(rng.integers(r0, r1 + 1, (20, 2)), axis=1)
+        np.testing.assert_array_equal(box_sums(ii, xs[:, 0], ys[:, 0], xs[:, 1], ys[:, 1]),
+                                      box_sums(whole.ii, xs[:, 0], ys[:, 0], xs[:, 1], ys[:, 1]))
+    states = np.column_stack([rng.uniform(0, 160, 50), rng.uniform(0, 120, 50), rng.normal(0, 0.3, 50)])
+    want = app.loglik_states(whole, states, app.size)
+    lazy = app.frame(frames[1], roi)
+    np.testing.assert_array_equal(app.loglik_states(lazy, states[:5], app.size), want[:5])  # a small window
+    np.testing.assert_array_equal(app.loglik_states(lazy, states, app.size), want)  # grown to cover them all
+    assert lazy.maps((0, 1, 0, 1))[1].shape == whole.ii.shape
+
+
+def test_lent_maps_are_remade_after_the_next_frame_takes_them():
+    """Two frames of one appearance share its map buffers (``MapBuffers``): the second frame's maps take them
+    from the first, whose likelihood is then made afresh, not read from the second frame's maps."""
+    frames, box = moving_box_frames(3)
+    app = vistrack.models.box.appearance.Appearance(frames[0], box, work_size=20.0)
+    states = np.array([[60.0, 40.0, 0.0], [66.0, 44.0, 0.1]])
+    want = [app.loglik_states(app.frame(f, (0, 0, 160, 120)), states, app.size) for f in frames[1:]]
+    a = app.frame(frames[1], (0, 0, 160, 120))
+    b = app.frame(frames[2], (0, 0, 160, 120))
+    np.testing.assert_array_equal(app.loglik_states(a, states, app.size), want[0])
+    np.testing.assert_array_equal(app.loglik_states(b, states, app.size), want[1])  # b takes a's buffers
+    np.testing.assert_array_equal(app.loglik_states(a, states, app.size), want[0])  # a remakes its own
+    kept = b.texture  # read whole: b keeps its arrays, the next frame gets new ones
+    c = app.frame(frames[1], (0, 0, 160, 120))
+    np.testing.assert_array_equal(app.loglik_states(c, states, app.size), want[0])
+    assert not np.shares_memory(c.maps()[0], kept)

@@ -43,7 +43,8 @@ import cv2
 import numpy as np
 
 from ... import kernels
-from ...features import bin_integrals, box_sums, colour_bins, is_grey, n_colour_bins, remap_points
+from ...features import box_sums, is_grey
+from .frame_maps import AppearanceFrame, MapBuffers, shrink
 from .target_colour import TargetColour
 
 __all__ = ["Appearance", "AppearanceFrame", "TargetColour"]
@@ -54,112 +55,6 @@ def _unit_rows(v):
     v = v - v.mean(axis=-1, keepdims=True)
     norm = np.sqrt(np.einsum("...i,...i->...", v, v))[..., None]
     return v / np.maximum(norm, 1e-6)
-
-
-def shrink(image, f, interpolation=cv2.INTER_AREA):
-    """``image`` shrunk by ``f < 1`` (``INTER_AREA`` unless ``interpolation``) to ``round(f W) x round(f H)``
-    pixels, its content
-    placed by ``f`` itself: frame coordinate ``x`` at working ``x f`` on both axes, as
-    :meth:`AppearanceFrame.to_work` reads it. Given the size, OpenCV scales by the rounded size's
-    ratio instead, which put content up to half a working pixel off at the far side of the region
-    (the dashcam plate, 15 working px high, sat about a frame pixel high: ``docs/experiments.md``)."""
-    h, w = image.shape[:2]
-    if round(w * f) >= 1 and round(h * f) >= 1:
-        if (interpolation == cv2.INTER_AREA and kernels.use() and image.ndim == 3 and image.shape[2] == 3
-                and image.dtype == np.uint8 and f < 1.0 and abs(1.0 / f - round(1.0 / f)) > 1e-9
-                and (round(h * f), round(w * f)) != (h, w)):  # OpenCV copies a same-size image
-            from .frame_kernels import shrink_area  # OpenCV's area resize, its source rows passed once
-
-            return shrink_area(np.ascontiguousarray(image), float(f),
-                               np.empty((round(h * f), round(w * f), 3), np.uint8))
-        return cv2.resize(image, None, fx=f, fy=f, interpolation=interpolation)
-    return cv2.resize(image, (max(1, int(round(w * f))), max(1, int(round(h * f)))), interpolation=interpolation)
-
-
-class AppearanceFrame:
-    """One frame's maps over a region of interest at the working resolution.
-
-    Parameters
-    ----------
-    frame : ndarray of shape (H, W, 3) uint8 BGR, or (H, W)
-    roi : tuple of int
-        ``(x0, y0, x1, y1)`` in frame pixels.
-    f : float
-        Working scale (``<= 1``: the region is shrunk by ``f``).
-    grey : bool
-        Grey-level bins instead of colour.
-    work : ndarray or None
-        The whole frame at the working resolution (:meth:`Appearance.work_image`): the region is
-        cut from it (the working pixels that cover ``roi``) rather than resized on its own, so that
-        regions of one frame share its resampling (their maps agree where they overlap, away from
-        their borders).
-    interpolation : int
-        The OpenCV interpolation that shrinks the region (:func:`shrink`).
-    """
-
-    #: set by ``Box.observe``: the correlation filter's response and share ``β``, a re-detection?, the frame
-    dcf = dcf_share = frame_image = None
-    redetected = False
-
-    def __init__(self, frame, roi, f, grey, work=None, interpolation=cv2.INTER_AREA):
-        x0, y0, x1, y1 = roi
-        self.f = f
-        if work is not None and f < 1.0:
-            (h, w), (wh, ww) = frame.shape[:2], work.shape[:2]
-            c0, r0 = min(int(np.floor(x0 * f)), ww - 1), min(int(np.floor(y0 * f)), wh - 1)
-            c1, r1 = max(min(int(np.ceil(x1 * f)), ww), c0 + 1), max(min(int(np.ceil(y1 * f)), wh), r0 + 1)
-            crop = work[r0:r1, c0:c1]
-            x0, y0 = c0 / f, r0 / f
-            x1, y1 = (w if c1 == ww else c1 / f), (h if r1 == wh else r1 / f)
-        else:
-            crop = frame[y0:y1, x0:x1]
-            if f < 1.0:
-                crop = shrink(crop, f, interpolation)
-        self.x0, self.y0 = x0, y0
-        #: the region ``(x0, y0, x1, y1)`` in frame pixels
-        self.roi = (x0, y0, x1, y1)
-        self.image = crop
-        #: the LIS proposal map of this frame (:meth:`Appearance.proposal_map`, ``()`` where there is
-        #: none), set by the box model on first use
-        self.proposal = None
-        self.grey = crop if crop.ndim == 2 else cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY)
-        self.n_bins = n_colour_bins(grey)
-        if kernels.use() and not grey and crop.ndim == 3:
-            from .frame_kernels import frame_features
-
-            self.texture, self.labels = np.empty(crop.shape, np.float32), np.empty(crop.shape[:2], np.uint8)
-            self.ii = frame_features(self.grey, cv2.cvtColor(crop, cv2.COLOR_BGR2HSV), self.n_bins, self.texture,
-                                     self.labels)
-            return
-        grey_f = self.grey.astype(np.float32)
-        gx = cv2.Sobel(grey_f, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT)
-        gy = cv2.Sobel(grey_f, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REFLECT)
-        self.texture = cv2.merge([grey_f, gx, gy])  # grey level and its gradient, for the template
-        self.labels = colour_bins(crop, grey)
-        self.ii = bin_integrals(self.labels, self.n_bins)
-
-    def to_work(self, x, y):
-        """Frame pixel coordinates to working coordinates (same continuous convention)."""
-        return (np.asarray(x) - self.x0) * self.f, (np.asarray(y) - self.y0) * self.f
-
-    def histograms(self, cx, cy, w, h, grow=None):
-        """Bin counts ``(..., B)`` of boxes centred at ``(cx, cy)`` with sides ``(w, h)``
-        (frame px), and of the ring of width ``grow`` px around them (``None``: no ring)."""
-        u, v = self.to_work(cx, cy)
-        hw, hh = 0.5 * self.f * np.asarray(w), 0.5 * self.f * np.asarray(h)
-        inner = box_sums(self.ii, *(np.rint(a).astype(np.intp) for a in (u - hw, v - hh, u + hw, v + hh)))
-        if grow is None:
-            return inner, None
-        g = self.f * np.asarray(grow)
-        outer = box_sums(self.ii, *(np.rint(a).astype(np.intp)
-                                    for a in (u - hw - g, v - hh - g, u + hw + g, v + hh + g)))
-        return inner, outer - inner
-
-    def sample_texture(self, x, y):
-        """Bilinear grey level and gradient ``(..., 3)`` at frame coordinates ``x, y`` (pixel
-        centres at ``k + 0.5``); zero outside the frame."""
-        u, v = self.to_work(x, y)
-        return remap_points(self.texture, u - 0.5, v - 0.5)
 
 
 class Appearance:
@@ -208,6 +103,7 @@ class Appearance:
         if interpolation not in modes:
             raise ValueError(f"interpolation must be one of {', '.join(modes)}, got {interpolation!r}")
         self.interpolation = modes[interpolation]
+        self._buffers = MapBuffers()  # the maps' memory, from frame to frame
         self.size = np.array([w, h])
         self.f = min(1.0, work_size / np.sqrt(w * h))
         self.lambda_colour, self.kappa, self.ring = lambda_colour, kappa, ring
@@ -253,7 +149,7 @@ class Appearance:
         x0, x1 = min(max(x0, 0), w - 1), min(max(x1, 1), w)
         y0, y1 = min(max(y0, 0), h - 1), min(max(y1, 1), h)
         return AppearanceFrame(frame, (x0, y0, max(x1, x0 + 1), max(y1, y0 + 1)), self.f, self.grey, work,
-                               self.interpolation)
+                               self.interpolation, self._buffers)
 
     def work_image(self, frame):
         """The whole ``frame`` at the working resolution (as :meth:`frame` over the whole frame resizes it)."""
@@ -282,7 +178,8 @@ class Appearance:
         if kernels.use():
             from ...kernels.appearance import ncc
 
-            return ncc(obs.texture, np.ascontiguousarray(b), *self.grid_axes, float(obs.x0), float(obs.y0),
+            texture, _ = obs.maps(obs.window(b))
+            return ncc(texture, np.ascontiguousarray(b), *self.grid_axes, float(obs.x0), float(obs.y0),
                        float(obs.f), self.template, np.empty(len(b)))
         x = b[:, None, 0] + self.grid[None, :, 0] * b[:, None, 2]
         y = b[:, None, 1] + self.grid[None, :, 1] * b[:, None, 3]
@@ -302,7 +199,8 @@ class Appearance:
             from ...kernels.appearance import colour_loglik
 
             c = self.colour
-            log_rc = colour_loglik(obs.ii, float(obs.x0), float(obs.y0), float(obs.f), np.ascontiguousarray(b),
+            _, ii = obs.maps(obs.window(b, self.ring))
+            log_rc = colour_loglik(ii, float(obs.x0), float(obs.y0), float(obs.f), np.ascontiguousarray(b),
                                    float(self.ring), c.bg_weight, c.q, c.bp, float(c.lambda_colour), float(c.kappa),
                                    np.empty(len(b)))
         else:
@@ -324,7 +222,8 @@ class Appearance:
         from .kernels import box_loglik
 
         c = self.colour
-        return box_loglik(states, size0, obs.ii, obs.texture, float(obs.x0), float(obs.y0), float(obs.f),
+        texture, ii = obs.maps(obs.states_window(states, size0, self.ring))
+        return box_loglik(states, size0, ii, texture, float(obs.x0), float(obs.y0), float(obs.f),
                           float(self.ring), c.bg_weight, c.q, c.bp, float(c.lambda_colour), float(c.kappa),
                           *self.grid_axes, self.template, float(self.lambda_template), np.empty(len(states)))
 
@@ -362,7 +261,8 @@ class Appearance:
         from .frame_kernels import adapt_template
 
         new, counts = np.empty_like(self.template), np.empty(obs.n_bins)
-        ncc = adapt_template(obs.texture, obs.ii, box, *self.grid_axes, float(obs.x0), float(obs.y0), float(obs.f),
+        texture, ii = obs.maps(obs.window(box))
+        ncc = adapt_template(texture, ii, box, *self.grid_axes, float(obs.x0), float(obs.y0), float(obs.f),
                              self.template, float(self.adapt_rate), float(self.adapt_min_ncc), new, counts)
         if not ncc >= self.adapt_min_ncc:
             return False

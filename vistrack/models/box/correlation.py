@@ -35,15 +35,16 @@ from ... import kernels
 __all__ = ["CorrelationFilter", "DCFResponse", "dcf_features"]
 
 
-def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None):
+def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None, window=None):
     """Feature channels ``(n_orient + 1, H, W) float32`` of a grey ``patch (H, W) float32`` (module
-    docstring): brightness-normalised grey, then gradient orientation cells normalised per block.
+    docstring): brightness-normalised grey, then gradient orientation cells normalised per block; each
+    channel times ``window (H, W) float32`` if given (the filter's Hann window).
     ``scratch``: a dict the compiled path keeps its work arrays in from call to call."""
     h, w = patch.shape
     if out is None:
         out = np.empty((n_orient + 1, h, w), np.float32)
     m, s = cv2.meanStdDev(patch)
-    np.multiply(patch - np.float32(m[0, 0]), np.float32(1.0 / max(float(s[0, 0]), 1.0)), out=out[0])
+    m, inv_s = np.float32(m[0, 0]), np.float32(1.0 / max(float(s[0, 0]), 1.0))
     gx = cv2.Sobel(patch, cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT)
     gy = cv2.Sobel(patch, cv2.CV_32F, 0, 1, ksize=1, borderType=cv2.BORDER_REFLECT)
     mag, ang = cv2.cartToPolar(gx, gy)
@@ -54,12 +55,14 @@ def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None):
         key = (h, w, n_orient)
         if key not in scratch:
             scratch[key] = (np.empty((h, w, n_orient), np.float32), np.empty((h, w, n_orient), np.float32),
-                            np.empty((h, w), np.float32))
-        bins, cells, sq = scratch[key]
+                            np.empty((h, w), np.float32), np.ones((h, w), np.float32))
+        bins, cells, sq, ones = scratch[key]
         orientation_cells(mag, ang, n_orient, bins, sq)
         energy = cv2.boxFilter(sq, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
         cv2.boxFilter(bins, -1, (cell, cell), dst=cells, borderType=cv2.BORDER_REFLECT)
-        return normalised_cells(cells, np.float32(1.0) / np.sqrt(energy + np.float32(1e-2)), out)
+        return normalised_cells(patch, m, inv_s, cells, np.float32(1.0) / np.sqrt(energy + np.float32(1e-2)),
+                                ones if window is None else window, window is not None, out)
+    np.multiply(patch - m, inv_s, out=out[0])
     energy = cv2.boxFilter(mag * mag, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
     norm = np.float32(1.0) / np.sqrt(energy + np.float32(1e-2))
     pos = (ang % np.float32(np.pi)) * np.float32(n_orient / np.pi)  # unsigned orientation in bins
@@ -72,6 +75,8 @@ def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None):
     for k in range(n_orient):
         cv2.boxFilter(out[k + 1], -1, (cell, cell), dst=out[k + 1], borderType=cv2.BORDER_REFLECT)
         out[k + 1] *= norm
+    if window is not None:
+        np.multiply(out, window, out=out)
     return out
 
 
@@ -215,7 +220,7 @@ class CorrelationFilter:
         self._last = None  # the last search's spectra, centre, log-scales and scale factors
         self._applied = None  # the filter applied (:meth:`filter`)
         self._terms = None  # detect's conj(A) and B + λ of the applied filter, where the compiled adapt made them
-        self._feat = np.empty((self.n_orient + 1, ph, pw), np.float32)
+        self._feat = {}  # the features of 1 or S patches, by their number
         self._scratch = {}  # dcf_features' work arrays
         a, b = self._learn(np.asarray(frame), np.array([x + w / 2, y + h / 2]), 0.0)
         self.A, self.B = a, b
@@ -233,11 +238,19 @@ class CorrelationFilter:
                            borderMode=cv2.BORDER_REPLICATE)
         return _grey(p)
 
-    def spectrum(self, frame, centre, log_scale):
-        """The windowed features' DFT ``(C, ph, pw // 2 + 1)`` of the patch about ``centre``."""
-        feat = dcf_features(self.patch(frame, centre, log_scale), self.n_orient, out=self._feat,
-                            scratch=self._scratch)
-        return sfft.rfft2(np.multiply(feat, self.hann, out=feat))
+    def spectrum(self, frame, centre, log_scales):
+        """The windowed features' DFT ``(C, ph, pw // 2 + 1)`` of the patch about ``centre`` at ``log_scales``
+        (a float), or ``(S, C, ph, pw // 2 + 1)`` of the patches at each of ``log_scales (S,)`` (one
+        batched transform: each the same as on its own)."""
+        scales = np.atleast_1d(log_scales)
+        if len(scales) not in self._feat:
+            self._feat[len(scales)] = np.empty((len(scales), self.n_orient + 1) + self.shape, np.float32)
+        feat = self._feat[len(scales)]
+        for k, ls in enumerate(scales):
+            dcf_features(self.patch(frame, centre, ls), self.n_orient, out=feat[k], scratch=self._scratch,
+                         window=self.hann)
+        out = sfft.rfft2(feat)
+        return out if np.ndim(log_scales) else out[0]
 
     def _learn(self, frame, centre, log_scale):
         F = self.spectrum(frame, centre, log_scale)
@@ -259,18 +272,16 @@ class CorrelationFilter:
         else:
             A, B = self.filter()
             den, conj_a = B + self.lam, np.conj(A)
-        maps = np.empty((len(self.log_scales),) + self.shape, np.float32)
-        spectra = []
-        compiled = _exact_filter_kernels()
-        if compiled:
+        spectra = self.spectrum(frame, centre, log_scale + self.log_scales)
+        if _exact_filter_kernels():
             from .dcf_kernels import correlate
 
-            acc = np.empty(den.shape, complex)
-        for k, ds in enumerate(self.log_scales):
-            Z = self.spectrum(frame, centre, log_scale + ds)
-            y = correlate(conj_a, Z, den, acc) if compiled else np.sum(conj_a * Z, axis=0) / den
-            maps[k] = sfft.irfft2(y, s=self.shape)
-            spectra.append(Z)
+            y = np.empty((len(spectra),) + den.shape, complex)
+            for k, Z in enumerate(spectra):
+                correlate(conj_a, Z, den, y[k])
+        else:
+            y = np.stack([np.sum(conj_a * Z, axis=0) / den for Z in spectra])
+        maps = sfft.irfft2(y, s=self.shape).astype(np.float32)
         px = self.f * np.exp(-(log_scale + self.log_scales))
         self._last = (spectra, np.asarray(centre, float).copy(), log_scale + self.log_scales, px)
         return DCFResponse(maps, log_scale + self.log_scales, centre, self.anchor_px, px)

@@ -73,14 +73,19 @@ def orientation_cells(mag, ang, n_orient, out, sq):
 
 
 @njit(cache=True, nogil=True)
-def normalised_cells(cells, norm, out):
-    """``out[k + 1] = cells[..., k] * norm`` (float32; ``norm (H, W)`` the numpy path's
-    ``1 / sqrt(energy + 0.01)``); ``out[0]`` untouched."""
+def normalised_cells(patch, mean, inv_std, cells, norm, window, windowed, out):
+    """``out[0] = (patch - mean) inv_std`` and ``out[k + 1] = cells[..., k] * norm`` (float32; ``norm (H, W)``
+    the numpy path's ``1 / sqrt(energy + 0.01)``), each then times ``window (H, W)`` if ``windowed``: the
+    numpy path's products in its order."""
     h, w, n = cells.shape
     for i in range(h):
+        for j in range(w):
+            v = (patch[i, j] - mean) * inv_std
+            out[0, i, j] = v * window[i, j] if windowed else v
         for k in range(n):
             for j in range(w):
-                out[k + 1, i, j] = cells[i, j, k] * norm[i, j]
+                v = cells[i, j, k] * norm[i, j]
+                out[k + 1, i, j] = v * window[i, j] if windowed else v
     return out
 
 @njit(cache=True, nogil=True)

@@ -5,9 +5,9 @@ where numpy makes a dozen small ones.
   ``Box.predict_mean`` of the particles, grown by the reach (the same arithmetic in the same
   order; ``math.exp`` where numpy may use its own SIMD ``exp``: the integers agree unless a
   bound falls within an ulp of an integer).
-- :func:`frame_features` is ``AppearanceFrame``'s maps after the grey and HSV conversions: the
-  texture (grey level and its 3x3 Sobel gradient, ``BORDER_REFLECT``: sums of integers, equal to
-  OpenCV's), the colour labels and their bin integrals (equal) in one call.
+- :func:`window_features` is ``AppearanceFrame``'s maps after the grey and HSV conversions, over a
+  window of the region: the texture (grey level and its 3x3 Sobel gradient, ``BORDER_REFLECT``: sums
+  of integers, equal to OpenCV's), the colour labels and their bin integrals (equal) in one call.
 - :func:`adapt_template` is ``Appearance.adapt`` up to the colour histogram's update: the patch
   of the estimate sampled as ``cv2.remap`` samples it (:func:`~vistrack.kernels.appearance.ncc`'s
   sampling), its correlation with the template, the new template and the box's bin counts
@@ -16,7 +16,8 @@ where numpy makes a dozen small ones.
 - :func:`shrink_area` is ``cv2.resize(image, None, fx=f, fy=f, interpolation=cv2.INTER_AREA)`` of a BGR
   image for a non-integer ``1 / f`` (``Appearance``'s regions): OpenCV's ``resizeArea_`` (its tap tables,
   float sums in its order, rounding to nearest even), with each source row's horizontal pass made once
-  where OpenCV makes it once per output row it touches (equal, ``tests/test_kernels_box.py``).
+  where OpenCV makes it once per output row it touches (equal, ``tests/test_kernels_box.py``), over a
+  window of the output if asked (each pixel's sum in the same order: equal to that part of the whole).
 """
 
 from __future__ import annotations
@@ -26,10 +27,10 @@ import math
 import numpy as np
 from numba import njit
 
-from ...kernels.appearance import _box_count, bin_integrals, colour_labels
+from ...kernels.appearance import _box_count, colour_labels
 from ...kernels.sampling import NONFINITE, corner_float, fma_lerp, inside, lerp_fma, pairwise_sum
 
-__all__ = ["predicted_roi", "adapt_template", "frame_features", "shrink_area"]
+__all__ = ["predicted_roi", "adapt_template", "window_features", "shrink_area"]
 
 
 @njit(cache=True, nogil=True)
@@ -131,24 +132,40 @@ def _reflect(i, n):
 
 
 @njit(cache=True, nogil=True)
-def frame_features(grey, hsv, n_bins, texture, labels):
-    """``texture (H, W, 3)`` float32 = (grey, Sobel x, Sobel y) of ``grey (H, W)`` uint8 (3x3,
-    ``BORDER_REFLECT``), ``labels (H, W)`` the colour bins of ``hsv`` (:func:`colour_labels`);
-    returns their bin integrals (:func:`bin_integrals`)."""
-    h, w = grey.shape
-    for y in range(h):
-        ya, yb = _reflect(y - 1, h), _reflect(y + 1, h)
-        for x in range(w):
-            xa, xb = _reflect(x - 1, w), _reflect(x + 1, w)
-            dx = (2 * (int(grey[y, xb]) - int(grey[y, xa])) + int(grey[ya, xb]) - int(grey[ya, xa])
+def window_features(grey, hsv, a0, b0, r0, r1, c0, c1, texture, labels, ii):
+    """The maps of rows ``[r0, r1)`` and columns ``[c0, c1)`` of a region ``(H, W)`` (``texture``'s
+    shape): ``texture (H, W, 3)`` float32 = (grey, Sobel x, Sobel y) of the grey levels (3x3,
+    ``BORDER_REFLECT`` at the region's edges: sums of integers, equal to OpenCV's), ``labels (H, W)``
+    the colour bins of the HSV pixels (:func:`colour_labels`) and ``ii (H + 1, W + 1, n_bins)`` their
+    bin integrals from the window's corner (:func:`bin_integrals` of the window's labels, written at
+    ``ii[r0:r1 + 1, c0:c1 + 1]``: a box inside the window counts what it counts in the whole region's).
+    ``grey (h, w)`` uint8 and ``hsv (h, w, 3)`` uint8 hold the region's rows ``a0..`` and columns
+    ``b0..``: the window and the pixels about it that its gradient reads."""
+    h, w = texture.shape[0], texture.shape[1]
+    n_bins = ii.shape[2]
+    for y in range(r0, r1):
+        ya, yb = _reflect(y - 1, h) - a0, _reflect(y + 1, h) - a0
+        yy = y - a0
+        for x in range(c0, c1):
+            xa, xb, xx = _reflect(x - 1, w) - b0, _reflect(x + 1, w) - b0, x - b0
+            dx = (2 * (int(grey[yy, xb]) - int(grey[yy, xa])) + int(grey[ya, xb]) - int(grey[ya, xa])
                   + int(grey[yb, xb]) - int(grey[yb, xa]))
-            dy = (2 * (int(grey[yb, x]) - int(grey[ya, x])) + int(grey[yb, xa]) - int(grey[ya, xa])
+            dy = (2 * (int(grey[yb, xx]) - int(grey[ya, xx])) + int(grey[yb, xa]) - int(grey[ya, xa])
                   + int(grey[yb, xb]) - int(grey[ya, xb]))
-            texture[y, x, 0] = np.float32(grey[y, x])
+            texture[y, x, 0] = np.float32(grey[yy, xx])
             texture[y, x, 1] = np.float32(dx)
             texture[y, x, 2] = np.float32(dy)
-    colour_labels(hsv, labels)
-    return bin_integrals(labels, n_bins)
+    colour_labels(hsv[r0 - a0:r1 - a0, c0 - b0:c1 - b0], labels[r0:r1, c0:c1])
+    row = np.zeros(n_bins, np.int32)
+    ii[r0, c0:c1 + 1, :] = 0
+    for y in range(r0, r1):
+        row[:] = 0
+        ii[y + 1, c0, :] = 0
+        for x in range(c0, c1):
+            row[labels[y, x]] += 1
+            for b in range(n_bins):
+                ii[y + 1, x + 1, b] = ii[y, x + 1, b] + row[b]
+    return ii
 
 
 @njit(cache=True, nogil=True)
@@ -183,9 +200,11 @@ def _round_u8(v):
 
 
 @njit(cache=True, nogil=True)
-def shrink_area(src, f, dst):
-    """``dst (round(f H), round(f W), 3)`` uint8 = ``src (H, W, 3)`` uint8 shrunk by ``f`` as OpenCV's
-    ``INTER_AREA`` does for a non-integer ``1 / f`` (module docstring)."""
+def shrink_area(src, f, dst, r0, r1, c0, c1):
+    """Rows ``[r0, r1)`` and columns ``[c0, c1)`` of ``dst (round(f H), round(f W), 3)`` uint8 = ``src (H, W,
+    3)`` uint8 shrunk by ``f`` as OpenCV's ``INTER_AREA`` does for a non-integer ``1 / f`` (module docstring);
+    the rest of ``dst`` is left as it was. Each destination pixel sums its taps in the order the whole
+    image's resize sums them, so a window equals that part of the whole."""
     h, w = src.shape[0], src.shape[1]
     dh, dw = dst.shape[0], dst.shape[1]
     scale = 1.0 / f
@@ -193,29 +212,64 @@ def shrink_area(src, f, dst):
     ydi, ysi, yal = np.empty(2 * h, np.int64), np.empty(2 * h, np.int64), np.empty(2 * h, np.float32)
     nx = _area_taps(w, dw, scale, xdi, xsi, xal)
     ny = _area_taps(h, dh, scale, ydi, ysi, yal)
+    k0, k1 = np.searchsorted(xdi[:nx], c0), np.searchsorted(xdi[:nx], c1)  # the taps of the window's columns
+    j0, j1 = np.searchsorted(ydi[:ny], r0), np.searchsorted(ydi[:ny], r1)
+    if k0 >= k1 or j0 >= j1:
+        return dst
     buf = np.zeros((dw, 3), np.float32)
     acc = np.zeros((dw, 3), np.float32)
-    last_sy, prev_dy = -1, ydi[0]
-    for j in range(ny):
+    last_sy, prev_dy = -1, ydi[j0]
+    for j in range(j0, j1):
         beta, dy, sy = yal[j], ydi[j], ysi[j]
         if sy != last_sy:  # the row's horizontal pass, once per source row
-            buf[:, :] = 0
-            for k in range(nx):
+            buf[c0:c1, :] = 0
+            for k in range(k0, k1):
                 dxn, sxn, alpha = xdi[k], xsi[k], xal[k]
                 for c in range(3):
                     buf[dxn, c] = buf[dxn, c] + np.float32(src[sy, sxn, c]) * alpha
             last_sy = sy
         if dy != prev_dy:
-            for dx in range(dw):
+            for dx in range(c0, c1):
                 for c in range(3):
                     dst[prev_dy, dx, c] = _round_u8(acc[dx, c])
                     acc[dx, c] = beta * buf[dx, c]
             prev_dy = dy
         else:
-            for dx in range(dw):
+            for dx in range(c0, c1):
                 for c in range(3):
                     acc[dx, c] += beta * buf[dx, c]
-    for dx in range(dw):
+    for dx in range(c0, c1):
         for c in range(3):
             dst[prev_dy, dx, c] = _round_u8(acc[dx, c])
     return dst
+
+
+@njit(cache=True, nogil=True)
+def boxes_window(boxes, ring, x0, y0, f, hh, ww):
+    """``AppearanceFrame.window`` of ``boxes (N, 4)`` (cx, cy, w, h; frame px) grown by ``ring (w + h) / 2``:
+    ``(r0, r1, c0, c1)``, the working rows and columns their histograms and template samples read with two
+    pixels to spare, or ``(0, hh, 0, ww)`` (the whole region) if a box is not finite."""
+    lo_u = lo_v = np.inf
+    hi_u = hi_v = -np.inf
+    for n in range(boxes.shape[0]):
+        u, v = (boxes[n, 0] - x0) * f, (boxes[n, 1] - y0) * f
+        g = f * ring * 0.5 * (boxes[n, 2] + boxes[n, 3])
+        hw, hh2 = 0.5 * f * boxes[n, 2] + g, 0.5 * f * boxes[n, 3] + g
+        lo_u, hi_u = min(lo_u, u - hw), max(hi_u, u + hw)
+        lo_v, hi_v = min(lo_v, v - hh2), max(hi_v, v + hh2)
+        if not (math.isfinite(u) and math.isfinite(v) and math.isfinite(hw) and math.isfinite(hh2)):
+            return 0, hh, 0, ww
+    if boxes.shape[0] == 0:
+        return 0, 0, 0, 0
+    return (int(max(math.floor(lo_v) - 2, -1)), int(min(math.ceil(hi_v) + 2, hh + 1)),
+            int(max(math.floor(lo_u) - 2, -1)), int(min(math.ceil(hi_u) + 2, ww + 1)))
+
+
+@njit(cache=True, nogil=True)
+def states_window(states, size0, ring, x0, y0, f, hh, ww):
+    """:func:`boxes_window` of the boxes ``(cx, cy, w_0 e^l, h_0 e^l)`` of ``states (N, >=3)``."""
+    boxes = np.empty((states.shape[0], 4))
+    for n in range(states.shape[0]):
+        e = math.exp(states[n, 2])
+        boxes[n, 0], boxes[n, 1], boxes[n, 2], boxes[n, 3] = states[n, 0], states[n, 1], size0[0] * e, size0[1] * e
+    return boxes_window(boxes, ring, x0, y0, f, hh, ww)
