@@ -24,7 +24,7 @@ __all__ = ["colour_labels", "bin_integrals", "ncc", "colour_loglik"]
 _HUE, _SAT, _VALUE, _MIN_S, _MIN_V = 8, 3, 4, 48, 40
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def colour_labels(hsv, out):
     """Colour bins ``out (H, W)`` uint8 of an OpenCV HSV image ``hsv (H, W, 3)`` uint8 (hue 0..179)."""
     for y in range(hsv.shape[0]):
@@ -37,7 +37,7 @@ def colour_labels(hsv, out):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def bin_integrals(labels, n_bins):
     """``ii (H + 1, W + 1, n_bins)`` int32: ``ii[y, x, b]`` counts the pixels of bin ``b`` in
     ``[0, x) x [0, y)`` (each row the one above plus the row's running counts, over flat rows)."""
@@ -57,7 +57,7 @@ def bin_integrals(labels, n_bins):
     return ii
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def ncc(texture, boxes, gx, gy, x0, y0, f, template, out):
     """Template correlation ``out (N,)`` of ``boxes (N, 4)`` (cx, cy, w, h; frame px) on the working
     texture ``(H, W, 3)`` float32 (grey level, gx, gy) of a region at ``(x0, y0)``, scale ``f``:
@@ -111,7 +111,7 @@ def ncc(texture, boxes, gx, gy, x0, y0, f, template, out):
     return out
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def _box_count(ii, x0, y0, x1, y1, b):
     """Bin ``b``'s count in the box ``[x0, x1) x [y0, y1)`` (rounded corners) clipped to the map
     (:func:`~vistrack.features.box_sums`)."""
@@ -121,7 +121,7 @@ def _box_count(ii, x0, y0, x1, y1, b):
     return ii[y1, x1, b] - ii[y0, x1, b] - ii[y1, x0, b] + ii[y0, x0, b]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _d2(counts, bg_weight, q, scratch):
     """``1 - Σ sqrt(normalise(counts) q)`` (``TargetColour.d2``), the sums in numpy's order."""
     n = counts.shape[0]
@@ -134,7 +134,7 @@ def _d2(counts, bg_weight, q, scratch):
     return 1.0 - pairwise_sum(scratch, 0, n)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def colour_loglik(ii, x0, y0, f, boxes, ring, bg_weight, q, bp, lam, kappa, out):
     """The colour term ``log r_c (N,)`` of ``boxes (N, 4)`` (cx, cy, w, h; frame px) from the per-bin
     integral image ``ii`` of a region at ``(x0, y0)``, scale ``f`` (``AppearanceFrame.histograms``

@@ -23,7 +23,7 @@ __all__ = ["grid_points", "map_sample"]
 _LOG2PI = float(np.log(2.0 * np.pi))  # as vistrack.gaussian and vistrack.proposals.grid
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def grid_points(states, sig, offsets, x0, y0, f, uw, vw, span):
     """The grid points ``c + σ o_j`` of each state's centre in working pixels ``uw, vw (N, G)``
     (``(x - x0) f``) and their span ``(u_min, u_max, v_min, v_max)`` into ``span (4,)``."""
@@ -35,7 +35,7 @@ def grid_points(states, sig, offsets, x0, y0, f, uw, vw, span):
     return span
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def _nanmax(top, x):
     """The running maximum as ``np.max`` keeps it: NaN once a NaN was met."""
     if x != x or x > top:
@@ -43,7 +43,7 @@ def _nanmax(top, x):
     return top
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _q_rows(qmap, u0, v0, step, border, uw, vw, keep, floor, out):
     """The box's ``proposal_log_q`` before its ``log``, into ``out (N, G)``: the map ``qmap (H, W, 1)``
     float32 (``exp`` of the tempered scores) read at ``((uw - u0) / step, (vw - v0) / step)`` as
@@ -70,7 +70,7 @@ def _q_rows(qmap, u0, v0, step, border, uw, vw, keep, floor, out):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def map_sample(states, sig, offsets, g_unit, log_g_unit, cell, uw, vw, qmap, u0, v0, step, border, keep, floor,
                draws, z_u, log_alpha, log_q):
     """:meth:`MapProposal.sample <vistrack.proposals.grid.MapProposal.sample>` with the box's map

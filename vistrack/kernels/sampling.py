@@ -28,7 +28,7 @@ _F32 = np.float32
 NONFINITE = -(1 << 40)
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def corner(x, y):
     """``(ix, iy, ax, ay)``: the top-left pixel of float32 map point ``(x, y)`` and the 1/32-px
     fractions (float32) that ``cv2.remap`` uses."""
@@ -39,7 +39,7 @@ def corner(x, y):
     return xi >> 5, yi >> 5, _F32(xi & 31) * _F32(0.03125), _F32(yi & 31) * _F32(0.03125)
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def _pixels(img, ix, iy, c, border):
     """``(any inside, p00, p01, p10, p11)``: channel ``c`` of the 2×2 pixels of ``img (H, W, C)``
     at the corner ``ix, iy``, ``border`` for those outside the image."""
@@ -60,7 +60,7 @@ def _pixels(img, ix, iy, c, border):
     return True, p00, p01, p10, p11
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def lerp4(img, ix, iy, ax, ay, c, border, nonfinite):
     """Channel ``c`` of ``img (H, W, C)`` float32 interpolated at the corner ``ix, iy`` with the
     fractions ``ax, ay`` (:func:`corner`); ``border`` outside, ``nonfinite`` at :data:`NONFINITE`."""
@@ -88,7 +88,7 @@ def fma(typingctx, a, b, c):
     return sig, codegen
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def corner_float(x, y):
     """``(ix, iy, a, b)``: the top-left pixel of float32 point ``(x, y)`` and the exact fractions
     ``x - floor(x)``, ``y - floor(y)`` (float32), as ``cv2.remap`` takes them for 1-, 3- and
@@ -99,7 +99,7 @@ def corner_float(x, y):
     return int(fx), int(fy), x - fx, y - fy
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def lerp_fma(img, ix, iy, a, b, c, border, nonfinite):
     """Channel ``c`` of ``img (H, W, C)`` float32 at the corner ``ix, iy`` with the fractions
     ``a, b`` (:func:`corner_float`) as ``cv2.remap`` computes it for 1-, 3- and 4-channel images:
@@ -113,7 +113,7 @@ def lerp_fma(img, ix, iy, a, b, c, border, nonfinite):
     return fma_lerp(p00, p01, p10, p11, a, b)
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def fma_lerp(p00, p01, p10, p11, a, b):
     """``cv2.remap``'s interpolation of four float32 pixels for 1-, 3- and 4-channel images:
     ``t0 = fma(a, p01 - p00, p00)``, ``t1 = fma(a, p11 - p10, p10)``, ``fma(b, t1 - t0, t0)``
@@ -123,7 +123,7 @@ def fma_lerp(p00, p01, p10, p11, a, b):
     return fma(b, t1 - t0, t0)
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def inside(ix, iy, w, h):
     """Whether the four pixels at corner ``ix, iy`` lie in a ``w x h`` image (the unchecked path;
     numba counts references on every call that passes an array, so hot loops read pixels inline
@@ -131,7 +131,7 @@ def inside(ix, iy, w, h):
     return 0 <= ix < w - 1 and 0 <= iy < h - 1
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def sample(img, x, y, border):
     """All channels of ``img (H, W, C)`` float32 at float32 points ``x, y (P,)``: ``(P, C)`` float32,
     equal to ``cv2.remap`` (``BORDER_CONSTANT`` with ``border (C,)`` float32, one value per channel)."""
@@ -148,7 +148,7 @@ def sample(img, x, y, border):
     return out
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def _block_sum(a, lo, n):
     """numpy's pairwise sum of ``a[lo:lo + n]`` for ``1 <= n <= 128`` (no split)."""
     if n < 8:
@@ -176,7 +176,7 @@ def _block_sum(a, lo, n):
     return res
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def pairwise_sum(a, lo, n):
     """``np.sum(a[lo:lo + n])`` of a 1-D array, ``n >= 1``, summed in numpy's order (module
     docstring): blocks of at most 128 summed by :func:`_block_sum`, halves (at multiples of 8)

@@ -60,8 +60,8 @@ def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None, window=None)
         orientation_cells(mag, ang, n_orient, bins, sq)
         energy = cv2.boxFilter(sq, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
         cv2.boxFilter(bins, -1, (cell, cell), dst=cells, borderType=cv2.BORDER_REFLECT)
-        return normalised_cells(patch, m, inv_s, cells, np.float32(1.0) / np.sqrt(energy + np.float32(1e-2)),
-                                ones if window is None else window, window is not None, out)
+        return normalised_cells(patch, m, inv_s, cells, energy, ones if window is None else window, window is not None,
+                                out)
     np.multiply(patch - m, inv_s, out=out[0])
     energy = cv2.boxFilter(mag * mag, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
     norm = np.float32(1.0) / np.sqrt(energy + np.float32(1e-2))

@@ -34,7 +34,7 @@ __all__ = ["orientation_cells", "normalised_cells", "response_read", "correlate"
            "correlation_draws", "EXACT", "NUMPY_FMA", "NUMPY_FMA32"]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def orientation_cells(mag, ang, n_orient, out, sq):
     """The soft binning of the magnitude ``mag (H, W)`` between the two bins about
     ``(ang mod π) n_orient / π`` (``ang (H, W)`` radians in ``[0, 2π)``, float32: ``a mod π`` is exact,
@@ -72,23 +72,26 @@ def orientation_cells(mag, ang, n_orient, out, sq):
     return out
 
 
-@njit(cache=True, nogil=True)
-def normalised_cells(patch, mean, inv_std, cells, norm, window, windowed, out):
-    """``out[0] = (patch - mean) inv_std`` and ``out[k + 1] = cells[..., k] * norm`` (float32; ``norm (H, W)``
-    the numpy path's ``1 / sqrt(energy + 0.01)``), each then times ``window (H, W)`` if ``windowed``: the
-    numpy path's products in its order."""
+@njit(cache=True, nogil=True, error_model="numpy")
+def normalised_cells(patch, mean, inv_std, cells, energy, window, windowed, out):
+    """``out[0] = (patch - mean) inv_std`` and ``out[k + 1] = cells[..., k] * norm`` with ``norm = 1 / sqrt(energy
+    + 0.01)`` (float32, ``energy (H, W)``: correctly rounded square root and division, as numpy's), each then
+    times ``window (H, W)`` if ``windowed``: the numpy path's products in its order."""
     h, w, n = cells.shape
+    one, eps = np.float32(1.0), np.float32(1e-2)
+    norm = np.empty(w, np.float32)
     for i in range(h):
         for j in range(w):
             v = (patch[i, j] - mean) * inv_std
             out[0, i, j] = v * window[i, j] if windowed else v
+            norm[j] = one / np.sqrt(energy[i, j] + eps)
         for k in range(n):
             for j in range(w):
-                v = cells[i, j, k] * norm[i, j]
+                v = cells[i, j, k] * norm[j]
                 out[k + 1, i, j] = v * window[i, j] if windowed else v
     return out
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _interp_pos(x, xp):
     """``np.interp(x, xp, arange(len(xp)))`` for one ``x`` (``xp`` ascending, at least 2 long): numpy's
     arithmetic (``arr_interp``: the slope times the offset plus the left value, the end values held)."""
@@ -108,7 +111,7 @@ def _interp_pos(x, xp):
     return slope * (x - xp[j]) + float(j)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _bilinear_at(maps, k, u, v):
     """``_bilinear`` of :mod:`~vistrack.models.box.correlation` for one point: map ``k`` at ``(u, v)``, the four
     corners added in its order to a zero start (``0.0`` for a corner outside)."""
@@ -137,7 +140,7 @@ def _bilinear_at(maps, k, u, v):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def response_read(maps, log_scales, centre, anchor, px, states, out):
     """``DCFResponse.read``: ``out (N,)``, the responses ``maps (S, H, W)`` float32 at the centres
     ``states[:, :2]`` (bilinear) and linear in ``states[:, 2]`` between the two nearest of the ascending
@@ -198,7 +201,7 @@ _FUSED, _FUSED32 = bool(NUMPY_FMA), bool(NUMPY_FMA32)
 EXACT = NUMPY_FMA is not None and NUMPY_FMA32 is not None
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def _cmul(ar, ai, br, bi):
     """numpy's complex128 product ``(a_r + i a_i)(b_r + i b_i)`` on this CPU (:data:`NUMPY_FMA`)."""
     if _FUSED:
@@ -206,7 +209,7 @@ def _cmul(ar, ai, br, bi):
     return ar * br - ai * bi, ar * bi + ai * br
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def _abs2_32(fr, fi):
     """The real part of numpy's complex64 product ``f conj(f)`` on this CPU (:data:`NUMPY_FMA32`)."""
     if _FUSED32:
@@ -214,7 +217,7 @@ def _abs2_32(fr, fi):
     return fr * fr + fi * fi
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def correlate(conj_a, z, den, out):
     """``out (H, W') complex128 = Σ_k conj_a[k] z[k] / den``: ``conj_a (C, H, W') complex128``, the spectra
     ``z (C, H, W') complex64`` (as numpy promotes them), summed over ``k`` in order, divided by ``den (H, W')
@@ -233,7 +236,7 @@ def correlate(conj_a, z, den, out):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def adapt_filter(f, conj_g, a, b, a0, b0, rate, anchor, lam, conj_applied, den):
     """``CorrelationFilter.adapt`` on the spectra ``f (C, H, W') complex64`` of the new patch, in place:
     ``a = (1 - η) a + η conj(G) f`` (complex128) and ``b = (1 - η) b + η Σ_k |f_k|²`` (float32, the
@@ -265,7 +268,7 @@ def adapt_filter(f, conj_g, a, b, a0, b0, rate, anchor, lam, conj_applied, den):
     return a
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def correlation_draws(x, u, e, beta, cum, log_p, ox, oy, a, w, h, best, sd, two_log_a, log_sd, log_sqrt_2pi, z,
                       log_qy):
     """``CorrelationProposal``'s draws and density: ``z (N, d)`` = ``x`` with the rows where ``u[:, 0] < beta``

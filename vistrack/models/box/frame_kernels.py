@@ -33,7 +33,7 @@ from ...kernels.sampling import NONFINITE, corner_float, fma_lerp, inside, lerp_
 __all__ = ["predicted_roi", "adapt_template", "window_features", "shrink_area"]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def predicted_roi(states, damping, size0, reach_sd, reach_factor, ring, out):
     """``out (4,)`` int64: ``(x0, y0, x1, y1)``, the bounding box of the boxes ``(cx, cy, w_0 e^l,
     h_0 e^l)`` of the predicted means ``z + d (z - z')`` of ``states (N, 6)``, grown by
@@ -55,7 +55,7 @@ def predicted_roi(states, damping, size0, reach_sd, reach_factor, ring, out):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _patch(texture, box, gx, gy, x0, y0, f, out):
     """The raw samples of ``Appearance.patches`` for one ``box (4,)``: grey levels ``out[:M]`` and the
     gradient ``(gx, gy)`` interleaved in ``out[M:]``, row-major over the grid."""
@@ -81,7 +81,7 @@ def _patch(texture, box, gx, gy, x0, y0, f, out):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _unit(v, lo, hi, centre):
     """``v[lo:hi]`` made zero-mean (``centre``) and unit-norm in place (``_unit_rows``; norm floor 1e-6)."""
     if centre:
@@ -96,7 +96,7 @@ def _unit(v, lo, hi, centre):
         v[i] = v[i] / norm
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def adapt_template(texture, ii, box, gx, gy, x0, y0, f, template, rate, min_ncc, new_template, counts):
     """``Appearance.adapt`` of ``box (4,)`` (cx, cy, w, h; frame px): returns the estimate's ``ncc``
     with ``template``; where it is at least ``min_ncc`` writes ``unit((1 - rate) T + rate v)`` into
@@ -125,13 +125,13 @@ def adapt_template(texture, ii, box, gx, gy, x0, y0, f, template, rate, min_ncc,
     return ncc
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def _reflect(i, n):
     """``BORDER_REFLECT`` of an index one step outside ``[0, n)``."""
     return 0 if i < 0 else (n - 1 if i >= n else i)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def window_features(grey, hsv, a0, b0, r0, r1, c0, c1, texture, labels, ii):
     """The maps of rows ``[r0, r1)`` and columns ``[c0, c1)`` of a region ``(H, W)`` (``texture``'s
     shape): ``texture (H, W, 3)`` float32 = (grey, Sobel x, Sobel y) of the grey levels (3x3,
@@ -168,7 +168,7 @@ def window_features(grey, hsv, a0, b0, r0, r1, c0, c1, texture, labels, ii):
     return ii
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _area_taps(ssize, dsize, scale, di, si, al):
     """OpenCV's ``computeResizeAreaTab`` (``cn = 1``): the taps ``(destination, source, weight)`` of an
     area resize by ``scale`` source pixels per destination pixel; returns their number."""
@@ -192,14 +192,14 @@ def _area_taps(ssize, dsize, scale, di, si, al):
     return k
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, error_model="numpy")
 def _round_u8(v):
     """``saturate_cast<uchar>(float)``: to nearest, ties to even, clipped to [0, 255]."""
     r = np.rint(v)
     return np.uint8(0) if r < 0 else (np.uint8(255) if r > 255 else np.uint8(r))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def shrink_area(src, f, dst, r0, r1, c0, c1):
     """Rows ``[r0, r1)`` and columns ``[c0, c1)`` of ``dst (round(f H), round(f W), 3)`` uint8 = ``src (H, W,
     3)`` uint8 shrunk by ``f`` as OpenCV's ``INTER_AREA`` does for a non-integer ``1 / f`` (module docstring);
@@ -244,7 +244,7 @@ def shrink_area(src, f, dst, r0, r1, c0, c1):
     return dst
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def boxes_window(boxes, ring, x0, y0, f, hh, ww):
     """``AppearanceFrame.window`` of ``boxes (N, 4)`` (cx, cy, w, h; frame px) grown by ``ring (w + h) / 2``:
     ``(r0, r1, c0, c1)``, the working rows and columns their histograms and template samples read with two
@@ -265,7 +265,7 @@ def boxes_window(boxes, ring, x0, y0, f, hh, ww):
             int(max(math.floor(lo_u) - 2, -1)), int(min(math.ceil(hi_u) + 2, ww + 1)))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def states_window(states, size0, ring, x0, y0, f, hh, ww):
     """:func:`boxes_window` of the boxes ``(cx, cy, w_0 e^l, h_0 e^l)`` of ``states (N, >=3)``."""
     boxes = np.empty((states.shape[0], 4))

@@ -29,7 +29,7 @@ __all__ = ["ar2_predict", "ar2_logpdf", "box_loglik", "map_scores", "lis_predict
 _LOG2PI = float(np.log(2.0 * np.pi))  # as vistrack.gaussian and vistrack.proposals.grid
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def ar2_predict(states, damping, sigma, noise, out):
     """``Box.predict``: ``out (N, 6)`` = ``(z + d (z - z') + σ e^{l} ε, z)`` with the centre's std
     scaled by ``e^{l}`` of the old state and ``noise (N, 3)`` the normal draws."""
@@ -43,7 +43,7 @@ def ar2_predict(states, damping, sigma, noise, out):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def ar2_logpdf(new, old, damping, sigma, out):
     """``Box.transition_logpdf``: ``log K(new|old) (N,)``, Gaussian in the current values about
     ``z + d (z - z')`` with std ``σ e^{l}`` (centre) and ``σ_l``."""
@@ -63,7 +63,7 @@ def ar2_logpdf(new, old, damping, sigma, out):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def box_loglik(states, size0, ii, texture, x0, y0, f, ring, bg_weight, q, bp, lam_c, kappa, gx, gy, template,
                lam_t, out):
     """``Box.loglik``: ``log r (N,)`` of ``states (N, >=3)`` whose boxes are ``(cx, cy, w_0 e^l, h_0 e^l)``:
@@ -82,7 +82,7 @@ def box_loglik(states, size0, ii, texture, x0, y0, f, ring, bg_weight, q, bp, la
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def map_scores(ncc, s_in, s_out, g, area_in, area_ring, lam_t, lam_c, out):
     """The end of ``Appearance.proposal_map`` in float32, as numpy computes it with Python-float
     scalars: ``λ_t (nan_to_num(ncc) - 1) + λ_c (s_in / area_in - (s_out shifted by g - s_in) / area_ring)``
@@ -102,7 +102,7 @@ def map_scores(ncc, s_in, s_out, g, area_in, area_ring, lam_t, lam_c, out):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def lis_predict(prev, damping, sigma, noise, window_sd, offsets, x0, y0, f, x, sig, uw, vw, span):
     """The first half of the box's LIS proposal step (``LIS.propose`` with :class:`MapProposal
     <vistrack.proposals.grid.MapProposal>`): the prediction ``x (N, 6)`` (:func:`ar2_predict`),
@@ -114,7 +114,7 @@ def lis_predict(prev, damping, sigma, noise, window_sd, offsets, x0, y0, f, x, s
     return grid_points(x, sig, offsets, x0, y0, f, uw, vw, span)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def lis_weigh(prev, x, sig, offsets, g_unit, log_g_unit, cell, uw, vw, qmap, u0, v0, step, border, keep, floor,
               draws, damping, sigma, size0, ii, texture, x0, y0, f, ring, bg_weight, q, bp, lam_c, kappa, gx, gy,
               template, lam_t, z, log_incr, ll):
