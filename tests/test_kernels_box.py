@@ -270,3 +270,24 @@ def test_lent_maps_are_remade_after_the_next_frame_takes_them():
     c = app.frame(frames[1], (0, 0, 160, 120))
     np.testing.assert_array_equal(app.loglik_states(c, states, app.size), want[0])
     assert not np.shares_memory(c.maps()[0], kept)
+
+
+def test_window_of_boxes_known_answers():
+    """``AppearanceFrame.window``: a box's working rows and columns (with its ring and two pixels to spare),
+    the union of several, and the whole region for a box that is not finite."""
+    frames, box = moving_box_frames(1)
+    app = vistrack.models.box.appearance.Appearance(frames[0], box, work_size=20.0)
+    obs = app.frame(frames[0], (10, 20, 150, 110))
+    f, (hh, ww) = obs.f, obs.shape
+    cx, cy, w, h = 60.0, 50.0, 20.0, 10.0
+    u0, u1 = (cx - w / 2 - 10 - 3 * 4.5) * f, (cx + w / 2 - 10 + 3 * 4.5) * f  # ring 0.3: 4.5 px a side
+    v0, v1 = (cy - h / 2 - 20 - 3 * 4.5) * f, (cy + h / 2 - 20 + 3 * 4.5) * f
+    want = (int(np.floor(v0)) - 2, int(np.ceil(v1)) + 2, int(np.floor(u0)) - 2, int(np.ceil(u1)) + 2)
+    boxes = np.array([[cx, cy, w, h]])
+    assert obs.window(boxes, 0.3 * 3) == want  # grown by 0.9 (w + h) / 2 = 13.5 = 3 x 4.5 px
+    right = int(np.ceil((cx + 30 + w / 2 - 10 + 3 * 4.5) * f)) + 2  # the union's right edge: the second box's
+    assert obs.window(np.array([[cx, cy, w, h], [cx + 30, cy, w, h]]), 0.9) == want[:3] + (right,)
+    assert obs.window(np.array([[np.nan, cy, w, h]])) == (0, hh, 0, ww)
+    assert obs.window(np.array([[-500.0, cy, w, h]]))[2] == -1  # left of the region: clipped there
+    states = np.array([[cx, cy, 0.0]])
+    assert obs.states_window(states, (w, h), 0.9) == want
