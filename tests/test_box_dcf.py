@@ -297,3 +297,31 @@ def test_compiled_correlation_draws_equal_the_numpy_path():
         got = both(lambda: prop._sample(x, obs, np.random.default_rng(15), prev))
         for p, k in zip(*got):
             np.testing.assert_array_equal(p, k)
+
+
+def test_gradient_kernel_equals_opencv():
+    """``gradient_cells`` (the Sobel gradient, ``cartToPolar`` and the binning in one pass) gives what OpenCV's
+    calls and ``orientation_cells`` give, on every integer gradient a grey patch can have and on fractional
+    patches of odd sizes (where the CPU's OpenCV computes as the kernel does: ``POLAR_EXACT``)."""
+    from vistrack.models.box import dcf_kernels as dk
+
+    if not dk.POLAR_EXACT:
+        pytest.skip("OpenCV's cartToPolar here is not the fused-multiply-add polynomial")
+    v = np.arange(-255, 256, dtype=np.float32)
+    gx, gy = (a.reshape(511, 511).copy() for a in np.meshgrid(v, v))
+    mag, ang = np.empty_like(gx), np.empty_like(gx)
+    dk.polar(gx, gy, mag, ang)
+    want_mag, want_ang = cv2.cartToPolar(gx, gy)
+    np.testing.assert_array_equal(mag, want_mag)
+    np.testing.assert_array_equal(ang, want_ang)
+    rng = np.random.default_rng(8)
+    for shape in ((72, 75), (37, 52), (5, 3), (1, 9), (9, 1)):
+        for patch in (rng.integers(0, 256, shape).astype(np.float32), (rng.random(shape) * 255).astype(np.float32)):
+            bins, sq = np.empty(shape + (6,), np.float32), np.empty(shape, np.float32)
+            dk.gradient_cells(patch, 6, bins, sq)
+            gx = cv2.Sobel(patch, cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT)
+            gy = cv2.Sobel(patch, cv2.CV_32F, 0, 1, ksize=1, borderType=cv2.BORDER_REFLECT)
+            want_bins, want_sq = np.empty_like(bins), np.empty_like(sq)
+            dk.orientation_cells(*cv2.cartToPolar(gx, gy), 6, want_bins, want_sq)
+            np.testing.assert_array_equal(bins, want_bins)
+            np.testing.assert_array_equal(sq, want_sq)

@@ -45,11 +45,8 @@ def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None, window=None)
         out = np.empty((n_orient + 1, h, w), np.float32)
     m, s = cv2.meanStdDev(patch)
     m, inv_s = np.float32(m[0, 0]), np.float32(1.0 / max(float(s[0, 0]), 1.0))
-    gx = cv2.Sobel(patch, cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT)
-    gy = cv2.Sobel(patch, cv2.CV_32F, 0, 1, ksize=1, borderType=cv2.BORDER_REFLECT)
-    mag, ang = cv2.cartToPolar(gx, gy)
     if kernels.use():  # the channels side by side (H, W, n): one box filter for all of them
-        from .dcf_kernels import normalised_cells, orientation_cells
+        from .dcf_kernels import POLAR_EXACT, gradient_cells, normalised_cells, orientation_cells
 
         scratch = {} if scratch is None else scratch
         key = (h, w, n_orient)
@@ -57,12 +54,16 @@ def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None, window=None)
             scratch[key] = (np.empty((h, w, n_orient), np.float32), np.empty((h, w, n_orient), np.float32),
                             np.empty((h, w), np.float32), np.ones((h, w), np.float32))
         bins, cells, sq, ones = scratch[key]
-        orientation_cells(mag, ang, n_orient, bins, sq)
+        if POLAR_EXACT:  # the gradient, its polar form and the binning in one pass
+            gradient_cells(patch, n_orient, bins, sq)
+        else:
+            orientation_cells(*_polar_gradient(patch), n_orient, bins, sq)
         energy = cv2.boxFilter(sq, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
         cv2.boxFilter(bins, -1, (cell, cell), dst=cells, borderType=cv2.BORDER_REFLECT)
         return normalised_cells(patch, m, inv_s, cells, energy, ones if window is None else window, window is not None,
                                 out)
     np.multiply(patch - m, inv_s, out=out[0])
+    mag, ang = _polar_gradient(patch)
     energy = cv2.boxFilter(mag * mag, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
     norm = np.float32(1.0) / np.sqrt(energy + np.float32(1e-2))
     pos = (ang % np.float32(np.pi)) * np.float32(n_orient / np.pi)  # unsigned orientation in bins
@@ -78,6 +79,13 @@ def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None, window=None)
     if window is not None:
         np.multiply(out, window, out=out)
     return out
+
+
+def _polar_gradient(patch):
+    """``cv2.cartToPolar`` (magnitude, angle in radians) of the ``ksize=1`` Sobel gradient of ``patch``."""
+    gx = cv2.Sobel(patch, cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT)
+    gy = cv2.Sobel(patch, cv2.CV_32F, 0, 1, ksize=1, borderType=cv2.BORDER_REFLECT)
+    return cv2.cartToPolar(gx, gy)
 
 
 class DCFResponse:
