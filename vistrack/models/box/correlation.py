@@ -26,6 +26,8 @@ Scale
 
 from __future__ import annotations
 
+import functools
+
 import cv2
 import numpy as np
 import scipy.fft as sfft
@@ -46,22 +48,21 @@ def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None, window=None)
     m, s = cv2.meanStdDev(patch)
     m, inv_s = np.float32(m[0, 0]), np.float32(1.0 / max(float(s[0, 0]), 1.0))
     if kernels.use():  # the channels side by side (H, W, n): one box filter for all of them
-        from .dcf_kernels import POLAR_EXACT, gradient_cells, normalised_cells, orientation_cells
-
+        dk = _compiled()
         scratch = {} if scratch is None else scratch
         key = (h, w, n_orient)
         if key not in scratch:
             scratch[key] = (np.empty((h, w, n_orient), np.float32), np.empty((h, w, n_orient), np.float32),
                             np.empty((h, w), np.float32), np.ones((h, w), np.float32))
         bins, cells, sq, ones = scratch[key]
-        if POLAR_EXACT:  # the gradient, its polar form and the binning in one pass
-            gradient_cells(patch, n_orient, bins, sq)
+        if dk.POLAR_EXACT:  # the gradient, its polar form and the binning in one pass
+            dk.gradient_cells(patch, n_orient, bins, sq)
         else:
-            orientation_cells(*_polar_gradient(patch), n_orient, bins, sq)
+            dk.orientation_cells(*_polar_gradient(patch), n_orient, bins, sq)
         energy = cv2.boxFilter(sq, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
         cv2.boxFilter(bins, -1, (cell, cell), dst=cells, borderType=cv2.BORDER_REFLECT)
-        return normalised_cells(patch, m, inv_s, cells, energy, ones if window is None else window, window is not None,
-                                out)
+        return dk.normalised_cells(patch, m, inv_s, cells, energy, ones if window is None else window,
+                                   window is not None, out)
     np.multiply(patch - m, inv_s, out=out[0])
     mag, ang = _polar_gradient(patch)
     energy = cv2.boxFilter(mag * mag, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
@@ -79,6 +80,15 @@ def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None, window=None)
     if window is not None:
         np.multiply(out, window, out=out)
     return out
+
+
+@functools.cache
+def _compiled():
+    """The compiled kernels (:mod:`~vistrack.models.box.dcf_kernels`), imported on first use (their probes of
+    numpy's and OpenCV's arithmetic run then, not when vistrack is imported)."""
+    from . import dcf_kernels
+
+    return dcf_kernels
 
 
 def _polar_gradient(patch):
@@ -114,9 +124,7 @@ class DCFResponse:
         s = np.asarray(states, float)
         ls = self.log_scales
         if kernels.use():
-            from .dcf_kernels import response_read
-
-            return response_read(self.maps, ls, self.centre, self.anchor, self.px, np.ascontiguousarray(s),
+            return _compiled().response_read(self.maps, ls, self.centre, self.anchor, self.px, np.ascontiguousarray(s),
                                  np.empty(len(s)))
         if len(ls) == 1:
             k0 = np.zeros(len(s), np.intp)
@@ -282,11 +290,9 @@ class CorrelationFilter:
             den, conj_a = B + self.lam, np.conj(A)
         spectra = self.spectrum(frame, centre, log_scale + self.log_scales)
         if _exact_filter_kernels():
-            from .dcf_kernels import correlate
-
             y = np.empty((len(spectra),) + den.shape, complex)
             for k, Z in enumerate(spectra):
-                correlate(conj_a, Z, den, y[k])
+                _compiled().correlate(conj_a, Z, den, y[k])
         else:
             y = np.stack([np.sum(conj_a * Z, axis=0) / den for Z in spectra])
         maps = sfft.irfft2(y, s=self.shape).astype(np.float32)
@@ -306,13 +312,11 @@ class CorrelationFilter:
             g = self.G * np.exp(-2j * np.pi * (self._fx * dx + self._fy * dy))
             a, b = np.conj(g) * F, np.sum((F * np.conj(F)).real, axis=0)
         elif _exact_filter_kernels():  # learn, blend and the applied filter's terms in one compiled pass
-            from .dcf_kernels import adapt_filter
-
             F = self.spectrum(frame, centre, log_scale)
             if self._terms is None:
                 self._terms = (np.empty(self.A.shape, complex), np.empty(self.B.shape, np.float32))
-            adapt_filter(F, self._conj_g, self.A, self.B, self.A0, self.B0, self.rate, self.anchor, self.lam,
-                         *self._terms)
+            _compiled().adapt_filter(F, self._conj_g, self.A, self.B, self.A0, self.B0, self.rate, self.anchor,
+                                     self.lam, *self._terms)
             self._applied = None
             return
         else:
@@ -349,9 +353,7 @@ def _exact_filter_kernels():
     complex products on this CPU (:data:`vistrack.models.box.dcf_kernels.EXACT`)."""
     if not kernels.use():
         return False
-    from .dcf_kernels import EXACT
-
-    return EXACT
+    return _compiled().EXACT
 
 
 def _grey(frame):

@@ -5,6 +5,7 @@ observation (:mod:`~vistrack.models.box.appearance` documents the maps and the l
 
 from __future__ import annotations
 
+import functools
 import weakref
 
 import cv2
@@ -40,6 +41,14 @@ def _compiled_shrink(image, f, interpolation):
     return (interpolation == cv2.INTER_AREA and kernels.use() and image.ndim == 3 and image.shape[2] == 3
             and image.dtype == np.uint8 and 0 < f < 1.0 and abs(1.0 / f - round(1.0 / f)) > 1e-9
             and (round(h * f), round(w * f)) != (h, w) and round(h * f) >= 1 and round(w * f) >= 1)
+
+
+@functools.cache
+def _compiled():
+    """The compiled kernels (:mod:`~vistrack.models.box.frame_kernels`), imported on first use."""
+    from . import frame_kernels
+
+    return frame_kernels
 
 
 class MapBuffers:
@@ -215,8 +224,7 @@ class AppearanceFrame:
             r0, r1, c0, c1 = min(r0, done[0]), max(r1, done[1]), min(c0, done[2]), max(c1, done[3])
         if r0 >= r1 or c0 >= c1:
             return self
-        from .frame_kernels import shrink_area, window_features
-
+        fk = _compiled()
         a0, a1, b0, b1 = max(r0 - 1, 0), min(r1 + 1, hh), max(c0 - 1, 0), min(c1 + 1, ww)  # the gradient's reach
         if self._window is None:
             shapes = [((hh, ww, 3), np.float32), ((hh, ww), np.uint8), ((hh + 1, ww + 1, self.n_bins), np.int32),
@@ -227,8 +235,8 @@ class AppearanceFrame:
         if self._image is not None:
             img = self._image[a0:a1, b0:b1]
         else:
-            img = shrink_area(self._src, float(self.f), self._work, a0, a1, b0, b1)[a0:a1, b0:b1]
-        window_features(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), cv2.cvtColor(img, cv2.COLOR_BGR2HSV), a0, b0,
+            img = fk.shrink_area(self._src, float(self.f), self._work, a0, a1, b0, b1)[a0:a1, b0:b1]
+        fk.window_features(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), cv2.cvtColor(img, cv2.COLOR_BGR2HSV), a0, b0,
                         r0, r1, c0, c1, self._texture, self._labels, self._ii)
         self._window = (r0, r1, c0, c1)
         return self
@@ -237,17 +245,13 @@ class AppearanceFrame:
         """The working rows and columns ``(r0, r1, c0, c1)`` that ``boxes (N, 4)`` (cx, cy, w, h; frame px)
         grown by ``ring (w + h) / 2`` px read: their histograms' corners and their template's samples, with
         two pixels to spare (the whole region if a box is not finite)."""
-        from .frame_kernels import boxes_window
-
-        return boxes_window(np.ascontiguousarray(boxes, float).reshape(-1, 4), float(ring), float(self.x0),
+        return _compiled().boxes_window(np.ascontiguousarray(boxes, float).reshape(-1, 4), float(ring), float(self.x0),
                             float(self.y0), float(self.f), *self.shape)
 
     def states_window(self, states, size0, ring=0.0):
         """:meth:`window` of the boxes ``(cx, cy, w_0 e^l, h_0 e^l)`` of ``states (N, >=3)``
         (``size0 = (w_0, h_0)``)."""
-        from .frame_kernels import states_window
-
-        return states_window(states, np.asarray(size0, float), float(ring), float(self.x0), float(self.y0),
+        return _compiled().states_window(states, np.asarray(size0, float), float(ring), float(self.x0), float(self.y0),
                              float(self.f), *self.shape)
 
     def to_work(self, x, y):
