@@ -325,3 +325,28 @@ def test_gradient_kernel_equals_opencv():
             dk.orientation_cells(*cv2.cartToPolar(gx, gy), 6, want_bins, want_sq)
             np.testing.assert_array_equal(bins, want_bins)
             np.testing.assert_array_equal(sq, want_sq)
+
+
+def test_grey_patch_kernel_equals_opencv():
+    """``grey_gradient_cells`` makes the grey patch as ``cv2.cvtColor`` does (on every colour) and its sums give
+    ``cv2.meanStdDev``'s mean and deviation; the features of a BGR patch are those of its grey float patch."""
+    from vistrack.models.box import dcf_kernels as dk
+
+    v = np.arange(256)
+    grey, sq = np.empty((256, 256), np.float32), np.empty((256, 256), np.float32)
+    bins = np.empty((256, 256, 6), np.float32)
+    for b in range(256):  # every colour: blue b, green and red over the image
+        colours = np.stack([np.full((256, 256), b), *np.meshgrid(v, v, indexing="ij")], -1).astype(np.uint8)
+        dk.grey_gradient_cells(colours, 6, grey, bins, sq)
+        np.testing.assert_array_equal(grey, cv2.cvtColor(colours, cv2.COLOR_BGR2GRAY).astype(np.float32))
+    rng = np.random.default_rng(9)
+    for shape in ((72, 75, 3), (13, 29, 3), (1, 1, 3)):
+        bgr = rng.integers(0, 256, shape).astype(np.uint8)
+        g = np.empty(shape[:2], np.float32)
+        total, squares = dk.grey_gradient_cells(bgr, 6, g, np.empty(shape[:2] + (6,), np.float32),
+                                                np.empty(shape[:2], np.float32))
+        m, s = cv2.meanStdDev(g)
+        n = g.size
+        assert total * (1.0 / n) == m[0, 0]
+        assert np.sqrt(max(squares * (1.0 / n) - (total / n) ** 2, 0.0)) == pytest.approx(s[0, 0], rel=1e-15)
+        np.testing.assert_array_equal(dcf_features(bgr), dcf_features(g))

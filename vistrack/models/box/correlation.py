@@ -27,6 +27,7 @@ Scale
 from __future__ import annotations
 
 import functools
+import math
 
 import cv2
 import numpy as np
@@ -38,31 +39,41 @@ __all__ = ["CorrelationFilter", "DCFResponse", "dcf_features"]
 
 
 def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None, window=None):
-    """Feature channels ``(n_orient + 1, H, W) float32`` of a grey ``patch (H, W) float32`` (module
-    docstring): brightness-normalised grey, then gradient orientation cells normalised per block; each
-    channel times ``window (H, W) float32`` if given (the filter's Hann window).
-    ``scratch``: a dict the compiled path keeps its work arrays in from call to call."""
-    h, w = patch.shape
+    """Feature channels ``(n_orient + 1, H, W) float32`` of a grey ``patch (H, W) float32`` (or a BGR or grey
+    uint8 one, made grey as :func:`_grey` makes it) (module docstring): brightness-normalised grey, then
+    gradient orientation cells normalised per block; each channel times ``window (H, W) float32`` if given
+    (the filter's Hann window). ``scratch``: a dict the compiled path keeps its work arrays in from call to call."""
+    h, w = patch.shape[:2]
     if out is None:
         out = np.empty((n_orient + 1, h, w), np.float32)
-    m, s = cv2.meanStdDev(patch)
-    m, inv_s = np.float32(m[0, 0]), np.float32(1.0 / max(float(s[0, 0]), 1.0))
-    if kernels.use():  # the channels side by side (H, W, n): one box filter for all of them
-        dk = _compiled()
+    dk = _compiled() if kernels.use() else None
+    if dk is not None:  # the channels side by side (H, W, n): one box filter for all of them
         scratch = {} if scratch is None else scratch
         key = (h, w, n_orient)
         if key not in scratch:
             scratch[key] = (np.empty((h, w, n_orient), np.float32), np.empty((h, w, n_orient), np.float32),
-                            np.empty((h, w), np.float32), np.ones((h, w), np.float32))
-        bins, cells, sq, ones = scratch[key]
-        if dk.POLAR_EXACT:  # the gradient, its polar form and the binning in one pass
-            dk.gradient_cells(patch, n_orient, bins, sq)
+                            np.empty((h, w), np.float32), np.ones((h, w), np.float32), np.empty((h, w), np.float32))
+        bins, cells, sq, ones, grey = scratch[key]
+        if dk.POLAR_EXACT and patch.dtype == np.uint8 and patch.ndim == 3:  # grey, gradient, bins: one pass
+            total, squares = dk.grey_gradient_cells(patch, n_orient, grey, bins, sq)
+            mean = total * (1.0 / (h * w))  # cv2.meanStdDev's arithmetic (its sums of integers are exact too)
+            m, s = mean, math.sqrt(max(squares * (1.0 / (h * w)) - mean * mean, 0.0))
+            patch = grey
         else:
-            dk.orientation_cells(*_polar_gradient(patch), n_orient, bins, sq)
+            patch = _grey(patch) if patch.ndim == 3 or patch.dtype != np.float32 else patch
+            m, s = (v[0, 0] for v in cv2.meanStdDev(patch))
+            if dk.POLAR_EXACT:  # the gradient, its polar form and the binning in one pass
+                dk.gradient_cells(patch, n_orient, bins, sq)
+            else:
+                dk.orientation_cells(*_polar_gradient(patch), n_orient, bins, sq)
+        m, inv_s = np.float32(m), np.float32(1.0 / max(float(s), 1.0))
         energy = cv2.boxFilter(sq, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
         cv2.boxFilter(bins, -1, (cell, cell), dst=cells, borderType=cv2.BORDER_REFLECT)
         return dk.normalised_cells(patch, m, inv_s, cells, energy, ones if window is None else window,
                                    window is not None, out)
+    patch = _grey(patch) if patch.ndim == 3 or patch.dtype != np.float32 else patch
+    m, s = cv2.meanStdDev(patch)
+    m, inv_s = np.float32(m[0, 0]), np.float32(1.0 / max(float(s[0, 0]), 1.0))
     np.multiply(patch - m, inv_s, out=out[0])
     mag, ang = _polar_gradient(patch)
     energy = cv2.boxFilter(mag * mag, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
@@ -246,13 +257,16 @@ class CorrelationFilter:
     def patch(self, frame, centre, log_scale):
         """The grey patch ``(ph, pw) float32`` of ``frame`` (BGR or grey) about ``centre`` (frame px) at
         ``log_scale``: map pixel ``(i, j)`` at frame point ``centre + ((j, i) - anchor) / (f e^l)``."""
+        return _grey(self.warp(frame, centre, log_scale))
+
+    def warp(self, frame, centre, log_scale):
+        """:meth:`patch` before it is made grey: the frame's pixels there ``(ph, pw[, 3])`` uint8 (or its dtype)."""
         s = self.f * np.exp(-log_scale)
         ph, pw = self.shape
         m = np.array([[1 / s, 0, centre[0] - self.anchor_px[0] / s],
                       [0, 1 / s, centre[1] - self.anchor_px[1] / s]], np.float64)
-        p = cv2.warpAffine(frame, m, (pw, ph), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                           borderMode=cv2.BORDER_REPLICATE)
-        return _grey(p)
+        return cv2.warpAffine(frame, m, (pw, ph), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                              borderMode=cv2.BORDER_REPLICATE)
 
     def spectrum(self, frame, centre, log_scales):
         """The windowed features' DFT ``(C, ph, pw // 2 + 1)`` of the patch about ``centre`` at ``log_scales``
@@ -263,7 +277,7 @@ class CorrelationFilter:
             self._feat[len(scales)] = np.empty((len(scales), self.n_orient + 1) + self.shape, np.float32)
         feat = self._feat[len(scales)]
         for k, ls in enumerate(scales):
-            dcf_features(self.patch(frame, centre, ls), self.n_orient, out=feat[k], scratch=self._scratch,
+            dcf_features(self.warp(frame, centre, ls), self.n_orient, out=feat[k], scratch=self._scratch,
                          window=self.hann)
         out = sfft.rfft2(feat)
         return out if np.ndim(log_scales) else out[0]
