@@ -195,8 +195,51 @@ def _area_taps(ssize, dsize, scale, di, si, al):
 @njit(cache=True, forceinline=True, error_model="numpy")
 def _round_u8(v):
     """``saturate_cast<uchar>(float)``: to nearest, ties to even, clipped to [0, 255]."""
-    r = np.rint(v)
-    return np.uint8(0) if r < 0 else (np.uint8(255) if r > 255 else np.uint8(r))
+    return np.uint8(min(max(np.rint(v), np.float32(0.0)), np.float32(255.0)))  # selects: the loops vectorise
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _row_passes(src, sy0, sy1, xdi, xsi, xal, k0, k1, c0, c1):
+    """The horizontal pass of :func:`shrink_area` over source rows ``[sy0, sy1)`` and destination columns
+    ``[c0, c1)`` (taps ``k0..k1``): ``(sy1 - sy0, c1 - c0, 3)`` float32, each column's taps summed in their
+    order from 0, as OpenCV sums them. Every column gets as many taps as the most any has, the extra ones of
+    weight 0 (adding ``+0`` changes no sum of these non-negative terms), and two rows go at once: the sums
+    are in registers, with no branch on the number of taps."""
+    nc = c1 - c0
+    nt = 0
+    k = k0
+    while k < k1:
+        e = k
+        while e < k1 and xdi[e] == xdi[k]:
+            e += 1
+        nt, k = max(nt, e - k), e
+    tap, wt = np.empty((nc, nt), np.int64), np.zeros((nc, nt), np.float32)
+    k = k0
+    while k < k1:
+        d, e = xdi[k] - c0, k
+        while e < k1 and xdi[e] == xdi[k]:
+            tap[d, e - k], wt[d, e - k] = xsi[e], xal[e]
+            e += 1
+        tap[d, e - k:] = xsi[e - 1]
+        k = e
+    out = np.empty((sy1 - sy0, nc, 3), np.float32)
+    zero = np.float32(0.0)
+    for r in range(0, sy1 - sy0, 2):
+        ra, rb = src[sy0 + r], src[min(sy0 + r + 1, sy1 - 1)]  # the last row of an odd count twice
+        oa, ob = out[r], out[min(r + 1, sy1 - sy0 - 1)]
+        for d in range(nc):
+            a0 = a1 = a2 = b0 = b1 = b2 = zero
+            for t in range(nt):
+                x, al = tap[d, t], wt[d, t]
+                a0 = a0 + np.float32(ra[x, 0]) * al
+                a1 = a1 + np.float32(ra[x, 1]) * al
+                a2 = a2 + np.float32(ra[x, 2]) * al
+                b0 = b0 + np.float32(rb[x, 0]) * al
+                b1 = b1 + np.float32(rb[x, 1]) * al
+                b2 = b2 + np.float32(rb[x, 2]) * al
+            oa[d, 0], oa[d, 1], oa[d, 2] = a0, a1, a2
+            ob[d, 0], ob[d, 1], ob[d, 2] = b0, b1, b2
+    return out
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -216,31 +259,26 @@ def shrink_area(src, f, dst, r0, r1, c0, c1):
     j0, j1 = np.searchsorted(ydi[:ny], r0), np.searchsorted(ydi[:ny], r1)
     if k0 >= k1 or j0 >= j1:
         return dst
-    buf = np.zeros((dw, 3), np.float32)
-    acc = np.zeros((dw, 3), np.float32)
-    last_sy, prev_dy = -1, ydi[j0]
-    for j in range(j0, j1):
-        beta, dy, sy = yal[j], ydi[j], ysi[j]
-        if sy != last_sy:  # the row's horizontal pass, once per source row
-            buf[c0:c1, :] = 0
-            for k in range(k0, k1):
-                dxn, sxn, alpha = xdi[k], xsi[k], xal[k]
-                for c in range(3):
-                    buf[dxn, c] = buf[dxn, c] + np.float32(src[sy, sxn, c]) * alpha
-            last_sy = sy
+    sy0 = ysi[j0]
+    rows = _row_passes(src, sy0, ysi[j1 - 1] + 1, xdi, xsi, xal, k0, k1, c0, c1)
+    nc = c1 - c0
+    acc = np.zeros((nc, 3), np.float32)
+    prev_dy = ydi[j0]
+    for j in range(j0, j1):  # the vertical pass: each destination row's taps in order
+        beta, dy, row = yal[j], ydi[j], rows[ysi[j] - sy0]
         if dy != prev_dy:
-            for dx in range(c0, c1):
+            for d in range(nc):
                 for c in range(3):
-                    dst[prev_dy, dx, c] = _round_u8(acc[dx, c])
-                    acc[dx, c] = beta * buf[dx, c]
+                    dst[prev_dy, c0 + d, c] = _round_u8(acc[d, c])
+                    acc[d, c] = beta * row[d, c]
             prev_dy = dy
         else:
-            for dx in range(c0, c1):
+            for d in range(nc):
                 for c in range(3):
-                    acc[dx, c] += beta * buf[dx, c]
-    for dx in range(c0, c1):
+                    acc[d, c] += beta * row[d, c]
+    for d in range(nc):
         for c in range(3):
-            dst[prev_dy, dx, c] = _round_u8(acc[dx, c])
+            dst[prev_dy, c0 + d, c] = _round_u8(acc[d, c])
     return dst
 
 
