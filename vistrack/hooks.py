@@ -5,20 +5,23 @@ models."""
 
 from __future__ import annotations
 
+import functools
 from typing import Protocol, runtime_checkable
 
 __all__ = ["offers", "require", "missing_parts", "LookAhead", "FusedPropose", "FusedLISStep", "ProposalMap",
            "Redetects"]
 
 
+@functools.cache
 def _members(protocol):
-    return sorted(n for n in vars(protocol) if not n.startswith("_") and n not in ("mro",)) + \
-        sorted(getattr(protocol, "__annotations__", {}))
+    """The names ``protocol`` asks for, each once (a protocol class does not change: kept)."""
+    return tuple(dict.fromkeys(sorted(n for n in vars(protocol) if not n.startswith("_") and n not in ("mro",))
+                               + sorted(getattr(protocol, "__annotations__", {}))))
 
 
 def missing_parts(model, protocol):
     """The parts of ``protocol`` that ``model`` lacks (empty when it offers them all)."""
-    return [n for n in dict.fromkeys(_members(protocol)) if getattr(model, n, None) is None]
+    return [n for n in _members(protocol) if getattr(model, n, None) is None]
 
 
 def offers(model, protocol):
