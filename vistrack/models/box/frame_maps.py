@@ -263,16 +263,28 @@ class AppearanceFrame:
         (frame px), and of the ring of width ``grow`` px around them (``None``: no ring)."""
         u, v = self.to_work(cx, cy)
         hw, hh = 0.5 * self.f * np.asarray(w), 0.5 * self.f * np.asarray(h)
-        inner = box_sums(self.ii, *(np.rint(a).astype(np.intp) for a in (u - hw, v - hh, u + hw, v + hh)))
+        g = 0.0 if grow is None else self.f * np.asarray(grow)
+        _, ii = self.maps(_span(u - hw - g, u + hw + g, v - hh - g, v + hh + g))
+        inner = box_sums(ii, *(np.rint(a).astype(np.intp) for a in (u - hw, v - hh, u + hw, v + hh)))
         if grow is None:
             return inner, None
-        g = self.f * np.asarray(grow)
-        outer = box_sums(self.ii, *(np.rint(a).astype(np.intp)
-                                    for a in (u - hw - g, v - hh - g, u + hw + g, v + hh + g)))
+        outer = box_sums(ii, *(np.rint(a).astype(np.intp) for a in (u - hw - g, v - hh - g, u + hw + g, v + hh + g)))
         return inner, outer - inner
 
     def sample_texture(self, x, y):
         """Bilinear grey level and gradient ``(..., 3)`` at frame coordinates ``x, y`` (pixel
         centres at ``k + 0.5``); zero outside the frame."""
         u, v = self.to_work(x, y)
-        return remap_points(self.texture, u - 0.5, v - 0.5)
+        texture, _ = self.maps(_span(u, u, v, v))
+        return remap_points(texture, u - 0.5, v - 0.5)
+
+
+def _span(lo_u, hi_u, lo_v, hi_v):
+    """The working rows and columns ``(r0, r1, c0, c1)`` about the extents ``lo_u.. hi_u``, ``lo_v.. hi_v``
+    (arrays: their least and greatest) with two pixels to spare (``None``: one is not finite, the whole region)."""
+    if np.size(lo_u) == 0:
+        return 0, 0, 0, 0
+    b = np.array([np.min(lo_u), np.max(hi_u), np.min(lo_v), np.max(hi_v)], float)
+    if not np.isfinite(b).all():
+        return None
+    return int(np.floor(b[2])) - 2, int(np.ceil(b[3])) + 2, int(np.floor(b[0])) - 2, int(np.ceil(b[1])) + 2
