@@ -222,16 +222,16 @@ class AppearanceFrame:
             if done[0] <= r0 and r1 <= done[1] and done[2] <= c0 and c1 <= done[3]:
                 return self
             r0, r1, c0, c1 = min(r0, done[0]), max(r1, done[1]), min(c0, done[2]), max(c1, done[3])
-        if r0 >= r1 or c0 >= c1:
-            return self
-        fk = _compiled()
-        a0, a1, b0, b1 = max(r0 - 1, 0), min(r1 + 1, hh), max(c0 - 1, 0), min(c1 + 1, ww)  # the gradient's reach
-        if self._window is None:
+        if self._texture is None:
             shapes = [((hh, ww, 3), np.float32), ((hh, ww), np.uint8), ((hh + 1, ww + 1, self.n_bins), np.int32),
                       ((hh, ww, 3), np.uint8)]
             lend = self._buffers.lend if self._buffers is not None else None
             self._texture, self._labels, self._ii, self._work = (
                 lend(self, shapes) if lend else [np.empty(shape, dtype) for shape, dtype in shapes])
+        if r0 >= r1 or c0 >= c1:  # nothing to make (the arrays are there for a caller that reads none of them)
+            return self
+        fk = _compiled()
+        a0, a1, b0, b1 = max(r0 - 1, 0), min(r1 + 1, hh), max(c0 - 1, 0), min(c1 + 1, ww)  # the gradient's reach
         if self._image is not None:
             img = self._image[a0:a1, b0:b1]
         else:
