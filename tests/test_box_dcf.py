@@ -350,3 +350,12 @@ def test_grey_patch_kernel_equals_opencv():
         assert total * (1.0 / n) == m[0, 0]
         assert np.sqrt(max(squares * (1.0 / n) - (total / n) ** 2, 0.0)) == pytest.approx(s[0, 0], rel=1e-15)
         np.testing.assert_array_equal(dcf_features(bgr), dcf_features(g))
+
+
+def test_cumulative_kernel_equals_numpy_cumsum():
+    from vistrack.models.box.dcf_kernels import cumulative
+
+    rng = np.random.default_rng(10)
+    for n in (0, 1, 2, 99, 5400):
+        for x in (rng.random(n), np.exp(rng.uniform(-700, 0, n)), rng.standard_normal(n)):
+            np.testing.assert_array_equal(cumulative(x, np.empty(n)), np.cumsum(x))

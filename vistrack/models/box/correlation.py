@@ -167,7 +167,8 @@ class DCFResponse:
         """The cumulative sums ``(H W,)`` of ``exp`` of :meth:`cell_log_p` (the proposal's draws by inversion)."""
         key = ("cumulative", float(tempering), float(floor))
         if key not in self._log_p:
-            self._log_p[key] = np.cumsum(np.exp(self.cell_log_p(tempering, floor)))
+            e = np.exp(self.cell_log_p(tempering, floor))
+            self._log_p[key] = _compiled().cumulative(e, np.empty_like(e)) if kernels.use() else np.cumsum(e)
         return self._log_p[key]
 
     def cell_origin(self):
