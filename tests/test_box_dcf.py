@@ -359,3 +359,20 @@ def test_cumulative_kernel_equals_numpy_cumsum():
     for n in (0, 1, 2, 99, 5400):
         for x in (rng.random(n), np.exp(rng.uniform(-700, 0, n)), rng.standard_normal(n)):
             np.testing.assert_array_equal(cumulative(x, np.empty(n)), np.cumsum(x))
+
+
+def test_cell_probabilities_equal_the_numpy_path():
+    """``DCFResponse.cell_log_p`` and ``cell_cumulative`` with the compiled arithmetic about numpy's exp and
+    log (``cell_scores``, ``cell_probabilities``, ``cumulative``) against the numpy path, bit for bit."""
+    from vistrack import kernels
+    from vistrack.models.box.correlation import DCFResponse
+
+    rng = np.random.default_rng(11)
+    maps = rng.standard_normal((3, 72, 75)).astype(np.float32)
+    out = {}
+    for on in (True, False):
+        with kernels.numpy_paths(on):
+            r = DCFResponse(maps, np.array([-0.04, 0.0, 0.04]), (50.0, 60.0), (37.0, 36.0), np.full(3, 0.5))
+            out[on] = (r.cell_log_p(8.0, 0.05).copy(), r.cell_cumulative(8.0, 0.05).copy())
+    for a, b in zip(out[True], out[False]):
+        np.testing.assert_array_equal(a, b)

@@ -158,9 +158,14 @@ class DCFResponse:
         ``e = exp(t (y - max y))`` (``t, s = tempering, floor``)."""
         key = (float(tempering), float(floor))
         if key not in self._log_p:  # kept: the proposal's draws and its density read it on the same frame
-            m = self.maps[self.best].astype(float).ravel()
-            e = np.exp(tempering * (m - m.max()))
-            self._log_p[key] = np.log((1 - floor) * e / e.sum() + floor / e.size)
+            if kernels.use():  # the arithmetic about numpy's exp and log in two compiled passes (equal)
+                dk = _compiled()
+                e = np.exp(dk.cell_scores(self.maps[self.best], float(tempering), np.empty(self.maps[0].size)))
+                self._log_p[key] = np.log(dk.cell_probabilities(e, float(floor), e))
+            else:
+                m = self.maps[self.best].astype(float).ravel()
+                e = np.exp(tempering * (m - m.max()))
+                self._log_p[key] = np.log((1 - floor) * e / e.sum() + floor / e.size)
         return self._log_p[key]
 
     def cell_cumulative(self, tempering, floor):

@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ...kernels.sampling import fma
+from ...kernels.sampling import fma, pairwise_sum
 from .feature_kernels import (
     POLAR_EXACT,
     gradient_cells,
@@ -35,7 +35,7 @@ from .feature_kernels import (
 )
 
 __all__ = ["orientation_cells", "gradient_cells", "grey_gradient_cells", "polar", "POLAR_EXACT", "normalised_cells",
-           "response_read", "cumulative", "correlate", "adapt_filter",
+           "response_read", "cell_scores", "cell_probabilities", "cumulative", "correlate", "adapt_filter",
            "correlation_draws", "EXACT", "NUMPY_FMA", "NUMPY_FMA32"]
 
 
@@ -116,6 +116,32 @@ def response_read(maps, log_scales, centre, anchor, px, states, out):
         out[n] = acc
     return out
 
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def cell_scores(m, tempering, out):
+    """``tempering * (y - y.max())`` of the map ``m (H, W)`` float32 as float64, flat into ``out (H W,)``
+    (``DCFResponse.cell_log_p``'s numpy arithmetic: equal)."""
+    h, w = m.shape
+    top = -np.inf
+    for i in range(h):
+        for j in range(w):
+            top = max(top, np.float64(m[i, j]))
+    for i in range(h):
+        for j in range(w):
+            out[i * w + j] = tempering * (np.float64(m[i, j]) - top)
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def cell_probabilities(e, floor, out):
+    """``(1 - floor) * e / e.sum() + floor / e.size`` (numpy's pairwise sum, its order of operations: equal)."""
+    n = e.shape[0]
+    total = pairwise_sum(e, 0, n)
+    keep, spread = 1.0 - floor, floor / n
+    for i in range(n):
+        out[i] = keep * e[i] / total + spread
+    return out
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
