@@ -178,7 +178,7 @@ class Appearance:
         if kernels.use():
             from ...kernels.appearance import ncc
 
-            texture, _ = obs.maps(obs.window(b))
+            texture, _ = obs.maps((0, 0, 0, 0), obs.window(b))
             return ncc(texture, np.ascontiguousarray(b), *self.grid_axes, float(obs.x0), float(obs.y0),
                        float(obs.f), self.template, np.empty(len(b)))
         x = b[:, None, 0] + self.grid[None, :, 0] * b[:, None, 2]
@@ -222,7 +222,7 @@ class Appearance:
         from .kernels import box_loglik
 
         c = self.colour
-        texture, ii = obs.maps(obs.states_window(states, size0, self.ring))
+        texture, ii = obs.maps(obs.states_window(states, size0, self.ring), obs.states_window(states, size0))
         return box_loglik(states, size0, ii, texture, float(obs.x0), float(obs.y0), float(obs.f),
                           float(self.ring), c.bg_weight, c.q, c.bp, float(c.lambda_colour), float(c.kappa),
                           *self.grid_axes, self.template, float(self.lambda_template), np.empty(len(states)))

@@ -5,9 +5,10 @@ where numpy makes a dozen small ones.
   ``Box.predict_mean`` of the particles, grown by the reach (the same arithmetic in the same
   order; ``math.exp`` where numpy may use its own SIMD ``exp``: the integers agree unless a
   bound falls within an ulp of an integer).
-- :func:`window_features` is ``AppearanceFrame``'s maps after the grey and HSV conversions, over a
-  window of the region: the texture (grey level and its 3x3 Sobel gradient, ``BORDER_REFLECT``: sums
-  of integers, equal to OpenCV's), the colour labels and their bin integrals (equal) in one call.
+- :func:`window_texture` and :func:`window_labels` are ``AppearanceFrame``'s maps after the grey and HSV
+  conversions, over a window of the region each: the texture (grey level and its 3x3 Sobel gradient,
+  ``BORDER_REFLECT``: sums of integers, equal to OpenCV's), and the colour labels and their bin integrals
+  (equal).
 - :func:`adapt_template` is ``Appearance.adapt`` up to the colour histogram's update: the patch
   of the estimate sampled as ``cv2.remap`` samples it (:func:`~vistrack.kernels.appearance.ncc`'s
   sampling), its correlation with the template, the new template and the box's bin counts
@@ -30,7 +31,8 @@ from numba import njit
 from ...kernels.appearance import _box_count, colour_labels
 from ...kernels.sampling import NONFINITE, corner_float, fma_lerp, inside, lerp_fma, pairwise_sum
 
-__all__ = ["predicted_roi", "adapt_template", "window_features", "shrink_area"]
+__all__ = ["predicted_roi", "adapt_template", "window_texture", "window_labels", "shrink_area", "boxes_window",
+           "states_window"]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -132,17 +134,12 @@ def _reflect(i, n):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def window_features(grey, hsv, a0, b0, r0, r1, c0, c1, texture, labels, ii):
-    """The maps of rows ``[r0, r1)`` and columns ``[c0, c1)`` of a region ``(H, W)`` (``texture``'s
-    shape): ``texture (H, W, 3)`` float32 = (grey, Sobel x, Sobel y) of the grey levels (3x3,
-    ``BORDER_REFLECT`` at the region's edges: sums of integers, equal to OpenCV's), ``labels (H, W)``
-    the colour bins of the HSV pixels (:func:`colour_labels`) and ``ii (H + 1, W + 1, n_bins)`` their
-    bin integrals from the window's corner (:func:`bin_integrals` of the window's labels, written at
-    ``ii[r0:r1 + 1, c0:c1 + 1]``: a box inside the window counts what it counts in the whole region's).
-    ``grey (h, w)`` uint8 and ``hsv (h, w, 3)`` uint8 hold the region's rows ``a0..`` and columns
-    ``b0..``: the window and the pixels about it that its gradient reads."""
+def window_texture(grey, a0, b0, r0, r1, c0, c1, texture):
+    """Rows ``[r0, r1)`` and columns ``[c0, c1)`` of a region's ``texture (H, W, 3)`` float32 = (grey, Sobel x,
+    Sobel y) of the grey levels (3x3, ``BORDER_REFLECT`` at the region's edges: sums of integers, equal to
+    OpenCV's). ``grey (h, w)`` uint8 holds the region's rows ``a0..`` and columns ``b0..``: the window and the
+    pixels about it that the gradient reads."""
     h, w = texture.shape[0], texture.shape[1]
-    n_bins = ii.shape[2]
     for y in range(r0, r1):
         ya, yb = _reflect(y - 1, h) - a0, _reflect(y + 1, h) - a0
         yy = y - a0
@@ -155,6 +152,17 @@ def window_features(grey, hsv, a0, b0, r0, r1, c0, c1, texture, labels, ii):
             texture[y, x, 0] = np.float32(grey[yy, xx])
             texture[y, x, 1] = np.float32(dx)
             texture[y, x, 2] = np.float32(dy)
+    return texture
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def window_labels(hsv, a0, b0, r0, r1, c0, c1, labels, ii):
+    """Rows ``[r0, r1)`` and columns ``[c0, c1)`` of a region's colour bins ``labels (H, W)`` of the HSV pixels
+    (:func:`colour_labels`) and ``ii (H + 1, W + 1, n_bins)`` their bin integrals from the window's corner
+    (:func:`bin_integrals` of the window's labels, written at ``ii[r0:r1 + 1, c0:c1 + 1]``: a box inside the
+    window counts what it counts in the whole region's). ``hsv (h, w, 3)`` uint8 holds the region's rows
+    ``a0..`` and columns ``b0..``."""
+    n_bins = ii.shape[2]
     colour_labels(hsv[r0 - a0:r1 - a0, c0 - b0:c1 - b0], labels[r0:r1, c0:c1])
     row = np.zeros(n_bins, np.int32)
     ii[r0, c0:c1 + 1, :] = 0

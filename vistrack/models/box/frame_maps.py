@@ -145,7 +145,8 @@ class AppearanceFrame:
         self._src, self._image, self._grey, self._buffers = src, crop, None, buffers
         #: the region's size ``(H, W)`` at the working resolution
         self.shape = (crop.shape[:2] if src is None else (round(src.shape[0] * f), round(src.shape[1] * f)))
-        self._window = None  # the rows and columns ``(r0, r1, c0, c1)`` whose maps are made
+        # the rows and columns ``(r0, r1, c0, c1)`` whose labels and bin integrals, texture and working image are made
+        self._window = self._twindow = self._swindow = None
         if not (kernels.use() and not grey and (src is not None or crop.ndim == 3)):  # the numpy path: all at once
             grey_f = self.grey.astype(np.float32)
             gx = cv2.Sobel(grey_f, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT)
@@ -153,7 +154,7 @@ class AppearanceFrame:
             self._texture = cv2.merge([grey_f, gx, gy])  # grey level and its gradient, for the template
             self._labels = colour_bins(self.image, grey)
             self._ii = bin_integrals(self._labels, self.n_bins)
-            self._window = (0, self.shape[0], 0, self.shape[1])
+            self._window = self._twindow = (0, self.shape[0], 0, self.shape[1])
 
     # -- the maps, made where they are read ------------------------------------------------------
     @property
@@ -187,58 +188,76 @@ class AppearanceFrame:
         (:func:`~vistrack.features.bin_integrals`)."""
         return self._whole()._ii
 
-    def maps(self, window=None):
-        """``(texture, ii)``, right inside ``window = (r0, r1, c0, c1)`` (working rows and columns,
-        clipped to the region; ``None``: all of it).
+    def maps(self, window=None, texture_window=None):
+        """``(texture, ii)``: the bin integrals right inside ``window = (r0, r1, c0, c1)`` (working rows and
+        columns, clipped to the region; ``None``: all of it), the texture inside ``texture_window`` (by default
+        ``window``; the template's samples read no ring).
 
         The compiled path makes the maps only where they are read: the particles' boxes cover about a
         third of a region that holds every place they can reach (:meth:`window`). Until the whole region
         is made, the arrays are region-sized and right inside the windows asked for so far only (the bin
         integrals count from the window's corner, so a box inside it sums as in the whole region's);
         the properties above make the whole region."""
-        self._cover(window)
+        self._cover(window, window if texture_window is None else texture_window)
         return self._texture, self._ii
 
     def forget(self):
         """Drop the maps made so far (their arrays are lent to another frame): they are made again, in
         arrays of this frame's own, where they are read next."""
-        self._window = self._texture = self._labels = self._ii = self._work = self._buffers = None
+        self._window = self._twindow = self._swindow = None
+        self._texture = self._labels = self._ii = self._work = self._buffers = None
 
     def _whole(self):
         """The maps over the whole region, the frame's own from now on (:meth:`MapBuffers.give_up`)."""
         if self._buffers is not None:
             self._buffers.give_up(self)
             self._buffers = None
-        return self._cover(None)
+        return self._cover(None, None)
 
-    def _cover(self, window):
-        """Make the maps over ``window`` if they are not made there yet; returns ``self``."""
+    def _grown(self, window, done):
+        """``window`` clipped to the region, joined to ``done`` (a window made already, or ``None``); ``None``
+        where ``done`` holds it."""
         hh, ww = self.shape
         r0, r1, c0, c1 = (0, hh, 0, ww) if window is None else window
         r0, c0 = min(max(r0, 0), hh), min(max(c0, 0), ww)
         r1, c1 = min(max(r1, r0), hh), min(max(c1, c0), ww)
-        done = self._window
         if done is not None:
             if done[0] <= r0 and r1 <= done[1] and done[2] <= c0 and c1 <= done[3]:
-                return self
+                return None
             r0, r1, c0, c1 = min(r0, done[0]), max(r1, done[1]), min(c0, done[2]), max(c1, done[3])
+        return (r0, r1, c0, c1) if r0 < r1 and c0 < c1 else None
+
+    def _cover(self, window, texture_window):
+        """Make the labels and bin integrals over ``window`` and the texture over ``texture_window`` where they
+        are not made yet, from the working image over both (and the pixel about the texture's window that its
+        gradient reads); returns ``self``."""
+        hh, ww = self.shape
         if self._texture is None:
             shapes = [((hh, ww, 3), np.float32), ((hh, ww), np.uint8), ((hh + 1, ww + 1, self.n_bins), np.int32),
                       ((hh, ww, 3), np.uint8)]
             lend = self._buffers.lend if self._buffers is not None else None
             self._texture, self._labels, self._ii, self._work = (
                 lend(self, shapes) if lend else [np.empty(shape, dtype) for shape, dtype in shapes])
-        if r0 >= r1 or c0 >= c1:  # nothing to make (the arrays are there for a caller that reads none of them)
+        lab, tex = self._grown(window, self._window), self._grown(texture_window, self._twindow)
+        if lab is None and tex is None:  # made already (or nothing to make)
             return self
         fk = _compiled()
-        a0, a1, b0, b1 = max(r0 - 1, 0), min(r1 + 1, hh), max(c0 - 1, 0), min(c1 + 1, ww)  # the gradient's reach
-        if self._image is not None:
-            img = self._image[a0:a1, b0:b1]
-        else:
-            img = fk.shrink_area(self._src, float(self.f), self._work, a0, a1, b0, b1)[a0:a1, b0:b1]
-        fk.window_features(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), cv2.cvtColor(img, cv2.COLOR_BGR2HSV), a0, b0,
-                        r0, r1, c0, c1, self._texture, self._labels, self._ii)
-        self._window = (r0, r1, c0, c1)
+        reach = None if tex is None else self._grown((tex[0] - 1, tex[1] + 1, tex[2] - 1, tex[3] + 1), None)
+        if self._image is None:  # the working image over both
+            need = _union(lab, reach)
+            grown = self._grown(need, self._swindow)
+            if grown is not None:
+                self._swindow = grown
+                fk.shrink_area(self._src, float(self.f), self._work, *grown)
+        img = self._work if self._image is None else self._image
+        if tex is not None:
+            a0, a1, b0, b1 = reach
+            fk.window_texture(cv2.cvtColor(img[a0:a1, b0:b1], cv2.COLOR_BGR2GRAY), a0, b0, *tex, self._texture)
+            self._twindow = tex
+        if lab is not None:
+            r0, r1, c0, c1 = lab
+            fk.window_labels(cv2.cvtColor(img[r0:r1, c0:c1], cv2.COLOR_BGR2HSV), r0, c0, *lab, self._labels, self._ii)
+            self._window = lab
         return self
 
     def window(self, boxes, ring=0.0):
@@ -275,7 +294,7 @@ class AppearanceFrame:
         """Bilinear grey level and gradient ``(..., 3)`` at frame coordinates ``x, y`` (pixel
         centres at ``k + 0.5``); zero outside the frame."""
         u, v = self.to_work(x, y)
-        texture, _ = self.maps(_span(u, u, v, v))
+        texture, _ = self.maps((0, 0, 0, 0), _span(u, u, v, v))
         return remap_points(texture, u - 0.5, v - 0.5)
 
 
@@ -288,3 +307,10 @@ def _span(lo_u, hi_u, lo_v, hi_v):
     if not np.isfinite(b).all():
         return None
     return int(np.floor(b[2])) - 2, int(np.ceil(b[3])) + 2, int(np.floor(b[0])) - 2, int(np.ceil(b[1])) + 2
+
+
+def _union(a, b):
+    """The least window ``(r0, r1, c0, c1)`` holding windows ``a`` and ``b`` (either may be ``None``)."""
+    if a is None or b is None:
+        return a if b is None else b
+    return min(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), max(a[3], b[3])
