@@ -210,16 +210,20 @@ def correlate(conj_a, z, den, out):
     ``z (C, H, W') complex64`` (as numpy promotes them), summed over ``k`` in order, divided by ``den (H, W')
     float32`` as numpy divides a complex by a real one (times ``1 / den``)."""
     c_n, h, w = z.shape
-    for i in range(h):
+    sr, si = np.empty(w), np.empty(w)
+    for i in range(h):  # a row at a time, channel by channel: each element's sum in channel order, vectorised
+        a0, z0 = conj_a[0, i], z[0, i]
         for j in range(w):
-            sr, si = _cmul(conj_a[0, i, j].real, conj_a[0, i, j].imag, np.float64(z[0, i, j].real),
-                           np.float64(z[0, i, j].imag))
-            for c in range(1, c_n):
-                pr, pi = _cmul(conj_a[c, i, j].real, conj_a[c, i, j].imag, np.float64(z[c, i, j].real),
-                               np.float64(z[c, i, j].imag))
-                sr, si = sr + pr, si + pi
+            sr[j], si[j] = _cmul(a0[j].real, a0[j].imag, np.float64(z0[j].real), np.float64(z0[j].imag))
+        for c in range(1, c_n):
+            ac, zc = conj_a[c, i], z[c, i]
+            for j in range(w):
+                pr, pi = _cmul(ac[j].real, ac[j].imag, np.float64(zc[j].real), np.float64(zc[j].imag))
+                sr[j] += pr
+                si[j] += pi
+        for j in range(w):
             scl = 1.0 / np.float64(den[i, j])
-            out[i, j] = complex(sr * scl, si * scl)
+            out[i, j] = complex(sr[j] * scl, si[j] * scl)
     return out
 
 
@@ -234,22 +238,23 @@ def adapt_filter(f, conj_g, a, b, a0, b0, rate, anchor, lam, conj_applied, den):
     r1, r = 1.0 - rate, rate
     g1, g = 1.0 - anchor, anchor
     r1f, rf, g1f, gf, lamf = np.float32(r1), np.float32(r), np.float32(g1), np.float32(g), np.float32(lam)
-    for i in range(h):
-        for j in range(w):
-            gr, gi = conj_g[i, j].real, conj_g[i, j].imag
-            sq = np.float32(0.0)
-            for c in range(c_n):
-                fr, fi = f[c, i, j].real, f[c, i, j].imag
-                nr, ni = _cmul(gr, gi, np.float64(fr), np.float64(fi))
-                ar = r1 * a[c, i, j].real + r * nr
-                ai = r1 * a[c, i, j].imag + r * ni
-                a[c, i, j] = complex(ar, ai)
-                pr = g1 * ar + g * a0[c, i, j].real
-                pi = g1 * ai + g * a0[c, i, j].imag
-                conj_applied[c, i, j] = complex(pr, -pi)
+    sq = np.empty(w, np.float32)
+    for i in range(h):  # a row at a time, channel by channel (each element's squares summed in channel order)
+        for c in range(c_n):
+            fc, ac, a0c, out = f[c, i], a[c, i], a0[c, i], conj_applied[c, i]
+            for j in range(w):
+                fr, fi = fc[j].real, fc[j].imag
+                nr, ni = _cmul(conj_g[i, j].real, conj_g[i, j].imag, np.float64(fr), np.float64(fi))
+                ar = r1 * ac[j].real + r * nr
+                ai = r1 * ac[j].imag + r * ni
+                ac[j] = complex(ar, ai)
+                pr = g1 * ar + g * a0c[j].real
+                pi = g1 * ai + g * a0c[j].imag
+                out[j] = complex(pr, -pi)
                 e = _abs2_32(fr, fi)  # (f conj(f)).real as numpy's complex64 product
-                sq = e if c == 0 else sq + e
-            bb = r1f * b[i, j] + rf * sq
+                sq[j] = e if c == 0 else sq[j] + e
+        for j in range(w):
+            bb = r1f * b[i, j] + rf * sq[j]
             b[i, j] = bb
             den[i, j] = (g1f * bb + gf * b0[i, j]) + lamf
     return a
