@@ -264,14 +264,14 @@ class AppearanceFrame:
         """The working rows and columns ``(r0, r1, c0, c1)`` that ``boxes (N, 4)`` (cx, cy, w, h; frame px)
         grown by ``ring (w + h) / 2`` px read: their histograms' corners and their template's samples, with
         two pixels to spare (the whole region if a box is not finite)."""
-        return _compiled().boxes_window(np.ascontiguousarray(boxes, float).reshape(-1, 4), float(ring), float(self.x0),
-                            float(self.y0), float(self.f), *self.shape)
+        return _compiled().boxes_window(np.ascontiguousarray(boxes, float).reshape(-1, 4), float(ring),
+                                        float(self.x0), float(self.y0), float(self.f), *self.shape)
 
     def states_window(self, states, size0, ring=0.0):
         """:meth:`window` of the boxes ``(cx, cy, w_0 e^l, h_0 e^l)`` of ``states (N, >=3)``
         (``size0 = (w_0, h_0)``)."""
-        return _compiled().states_window(states, np.asarray(size0, float), float(ring), float(self.x0), float(self.y0),
-                             float(self.f), *self.shape)
+        return _compiled().states_window(states, np.asarray(size0, float), float(ring), float(self.x0),
+                                         float(self.y0), float(self.f), *self.shape)
 
     def to_work(self, x, y):
         """Frame pixel coordinates to working coordinates (same continuous convention)."""
