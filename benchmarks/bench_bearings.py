@@ -13,11 +13,11 @@ import time
 
 import numpy as np
 
+from vistrack.core.particles import ParticleSet
+from vistrack.core.runtime import keep_freed_memory
 from vistrack.data_synth.bearings import simulate
 from vistrack.filters import filter_steps, make_filter
 from vistrack.models import Bearings
-from vistrack.particles import ParticleSet
-from vistrack.runtime import keep_freed_memory
 
 
 def main():

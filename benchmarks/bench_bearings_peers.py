@@ -29,11 +29,11 @@ import warnings
 
 import numpy as np
 
+from vistrack.core.gaussian import diag_logpdf
+from vistrack.core.transition import PriorKernel
 from vistrack.filters import filter_steps, make_filter
-from vistrack.gaussian import diag_logpdf
 from vistrack.models.bearings.model import Bearings, simulate, wrapped_cauchy_logpdf
 from vistrack.models.bearings.xi import XiProposal
-from vistrack.models.kernel import PriorKernel
 
 try:
     import particles

@@ -8,8 +8,8 @@ import time
 
 import numpy as np
 
-from vistrack.features import FeatureMaps
-from vistrack.runtime import keep_freed_memory
+from vistrack.core.features import FeatureMaps
+from vistrack.core.runtime import keep_freed_memory
 
 
 def main():

@@ -16,14 +16,14 @@ import warnings
 
 import numpy as np
 
-from vistrack.builders import build_model
-from vistrack.clips import load_clip
+from vistrack.core.features import FeatureMaps
+from vistrack.core.particles import ParticleSet
+from vistrack.core.runtime import keep_freed_memory
 from vistrack.data_synth.landmarks import make_landmark_clip, simulate
-from vistrack.features import FeatureMaps
 from vistrack.filters import make_filter
-from vistrack.particles import ParticleSet
+from vistrack.io.clips import load_clip
+from vistrack.models.builders import build_model
 from vistrack.reproduce.landmarks import LandmarksConfig
-from vistrack.runtime import keep_freed_memory
 
 
 def sim_part(rounds):

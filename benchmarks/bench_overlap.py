@@ -1,5 +1,5 @@
 """Does decoding overlap with tracking? The decode rate of ``vistrack run``'s prefetch thread
-(:func:`vistrack.video.prefetch`) alone and while another thread tracks (contour LS-N-IPS-30 on a
+(:func:`vistrack.io.video.prefetch`) alone and while another thread tracks (contour LS-N-IPS-30 on a
 320x240 clip, frames in memory, over and over), in interleaved rounds.
 
 A compiled kernel that holds the GIL stalls the decoding thread each time it needs the GIL (to
@@ -18,12 +18,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from vistrack.builders import build_model
-from vistrack.clips import load_clip
 from vistrack.data_synth.contour import make_contour_clip
 from vistrack.filters import make_filter
-from vistrack.tracking import FrameStepper, warm_up
-from vistrack.video import open_video, prefetch
+from vistrack.io.clips import load_clip
+from vistrack.io.video import open_video, prefetch
+from vistrack.models.builders import build_model
+from vistrack.track.loop import FrameStepper, warm_up
 
 
 def decode_rate(clip, busy):

@@ -37,10 +37,10 @@ import time
 
 import numpy as np
 
+from vistrack.core.particles import logsumexp
 from vistrack.filters import BranchedPartitioned, filter_steps, make_filter
-from vistrack.filters.partitioning import PartitionedBase
+from vistrack.filters.partition_step import PartitionedBase
 from vistrack.models import Bearings
-from vistrack.particles import logsumexp
 from vistrack.reproduce.bearings import BearingsConfig, _sequence
 
 

@@ -18,7 +18,7 @@ KCF and CSRT (KCF and CSRT need opencv-contrib-python-headless; missing ones are
 note) run once (they are deterministic), single-threaded like vistrack. Frames are decoded once
 and held in memory: "frames/s" is tracking only (``init`` + ``update``), "e2e" adds the clip's
 decoding time per frame (``--clock process``: CPU time of this process instead of wall time, for a
-machine shared with other jobs). Scores (``vistrack.metrics.box_scores``): success AUC (IoU thresholds
+machine shared with other jobs). Scores (``vistrack.core.metrics.box_scores``): success AUC (IoU thresholds
 0, 0.05, .., 1), precision at 20 px, mean centre error, over frames with a true box.
 
 Printed: a row per clip, stress and tracker (mean AUC over seeds, the worst seed's AUC, P@20, error,
@@ -40,10 +40,10 @@ import numpy as np
 from tqdm import tqdm
 
 import vistrack
+from vistrack.core.metrics import box_scores
+from vistrack.core.runtime import keep_freed_memory
 from vistrack.data_synth.perturb import STRESS_PRESETS, perturb_clip
-from vistrack.metrics import box_scores
-from vistrack.runtime import keep_freed_memory
-from vistrack.video import find_groundtruth, groundtruth_origin, open_video, read_rects
+from vistrack.io.video import find_groundtruth, groundtruth_origin, open_video, read_rects
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 CACHE = Path.home() / ".cache" / "vistrack" / "bench_real"

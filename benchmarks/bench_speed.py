@@ -2,7 +2,7 @@
 so that machine noise hits them alike).
 
 1. Decode-only rate of each clip (``open_video``, frames read and dropped) beside the ``vistrack
-   run``-equivalent end-to-end rate (:func:`vistrack.session.track_video` on the prefetched frames,
+   run``-equivalent end-to-end rate (:func:`vistrack.track.run.track_video` on the prefetched frames,
    the stage timers on, decode included; model building and the kernels' loading excluded, as start-up)
    of the three paths: contour
    LS-N-IPS-30 at 320x240, plate LIS-100 at 640x480 (synthetic; and the real dashcam clip with its
@@ -36,15 +36,15 @@ import cv2
 import numpy as np
 
 import vistrack
-from vistrack.builders import build_model
-from vistrack.clips import load_clip
+from vistrack.core.runtime import keep_freed_memory
 from vistrack.data_synth.contour import make_contour_clip
 from vistrack.data_synth.plate import make_plate_clip
 from vistrack.filters import make_filter
-from vistrack.runtime import keep_freed_memory
-from vistrack.session import track_video
-from vistrack.tracking import FrameStepper, warm_up
-from vistrack.video import groundtruth_origin, open_video, prefetch, read_rects
+from vistrack.io.clips import load_clip
+from vistrack.io.video import groundtruth_origin, open_video, prefetch, read_rects
+from vistrack.models.builders import build_model
+from vistrack.track.loop import FrameStepper, warm_up
+from vistrack.track.run import track_video
 
 from bench_real import opencv_tracker  # noqa: E402 (run from benchmarks/)
 

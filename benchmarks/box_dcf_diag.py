@@ -21,8 +21,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import vistrack  # noqa: E402
-from vistrack.metrics import box_scores as scores  # noqa: E402
-from vistrack.runtime import keep_freed_memory  # noqa: E402
+from vistrack.core.metrics import box_scores as scores  # noqa: E402
+from vistrack.core.runtime import keep_freed_memory  # noqa: E402
 
 from bench_real import DATA, load, opencv_tracker, run_opencv  # noqa: E402
 

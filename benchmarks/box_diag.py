@@ -15,7 +15,7 @@ import argparse
 import numpy as np
 
 import vistrack
-from vistrack.metrics import iou
+from vistrack.core.metrics import iou
 from vistrack.models.box.model import Box
 
 from bench_real import load, scores

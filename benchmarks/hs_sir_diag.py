@@ -17,14 +17,14 @@ import argparse
 
 import numpy as np
 
-from vistrack.builders import build_model
-from vistrack.clips import load_clip
-from vistrack.features import FeatureMaps
+from vistrack.core.features import FeatureMaps
+from vistrack.core.particles import ParticleSet
 from vistrack.filters import make_filter
+from vistrack.io.clips import load_clip
+from vistrack.models.builders import build_model
 from vistrack.models.contour.spline import edge_peaks, pose_from
-from vistrack.particles import ParticleSet
 from vistrack.reproduce.hs_sir import likelihood_params
-from vistrack.tracking import track
+from vistrack.track.loop import track
 
 
 def true_pose(t, i):

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from vistrack.video import VideoWriter
+from vistrack.io.video import VideoWriter
 
 
 def square_clip(folder, frames=8, name=None, codec="mp4v"):

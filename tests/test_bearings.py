@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from scipy import integrate
 
+from vistrack.core.particles import ParticleSet
 from vistrack.data_synth.bearings import simulate
 from vistrack.filters import filter_steps, make_filter
 from vistrack.models.bearings.model import Bearings, gaussian_fit_to_cauchy, wrapped_cauchy_logpdf
-from vistrack.particles import ParticleSet
 
 
 def naive_logpdf(d, rho):

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import vistrack
-from vistrack.features import bin_integrals, box_sums, colour_bins, is_grey, n_colour_bins
+from vistrack.core.features import bin_integrals, box_sums, colour_bins, is_grey, n_colour_bins
+from vistrack.core.particles import logsumexp
 from vistrack.models.box.appearance import Appearance
 from vistrack.models.box.model import Box
-from vistrack.particles import logsumexp
 
 H, W = 240, 320
 OBJ = (44, 32)  # object width, height
@@ -137,7 +137,7 @@ def test_box_lis_weights_match_a_brute_force_posterior():
     pose = np.array([150.0, 110.0, 0.0])
     n = 6000
     prev = np.tile(np.concatenate([pose, pose]), (n, 1))
-    obs = model.observe(vistrack.features.FeatureMaps(frame), vistrack.ParticleSet(prev))
+    obs = model.observe(vistrack.core.features.FeatureMaps(frame), vistrack.ParticleSet(prev))
     rng = np.random.default_rng(0)
     x = model.predict(prev, rng)
     z, log_alpha, log_q = model.lis_proposal().sample(x, obs, rng, prev)
@@ -213,8 +213,8 @@ def write_video(path, frames):
 
 def test_run_defaults_to_box_with_init_and_equals_the_python_api(tmp_path, capsys):
     from vistrack.cli import main
-    from vistrack.clips import read_groundtruth_csv
-    from vistrack.video import open_video
+    from vistrack.io.clips import read_groundtruth_csv
+    from vistrack.io.video import open_video
 
     video = tmp_path / "clip.avi"
     write_video(video, clip_frames(20))

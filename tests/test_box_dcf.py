@@ -186,10 +186,10 @@ def test_correlation_proposal_weights_match_a_brute_force_posterior():
     """Proper weighting: one LIS step with the correlation proposal from particles at rest; the mean
     weight is the evidence ∫ r K and the weighted mean pose the posterior mean, both also by brute
     force on a grid of centres and log-scales."""
-    from vistrack.features import FeatureMaps
+    from vistrack.core.features import FeatureMaps
+    from vistrack.core.particles import ParticleSet, logsumexp
     from vistrack.filters import make_filter
     from vistrack.models.box.model import Box
-    from vistrack.particles import ParticleSet, logsumexp
 
     rng = np.random.default_rng(6)
     bg = cv2.GaussianBlur(rng.integers(70, 180, (120, 160, 3)).astype(np.uint8), (0, 0), 3)

@@ -95,9 +95,9 @@ def test_json_may_go_into_the_plots_folder(tmp_path, capsys):
 
 
 def test_reproduce_tables_align_every_column_and_mark_missing_measures():
-    """``reproduce``'s tables (vistrack.reproduce.report): one fixed width per column, and a
+    """``reproduce``'s tables (vistrack.reproduce.tables): one fixed width per column, and a
     measure with nothing to average (None, e.g. no plate frame) printed as '-' in its column."""
-    from vistrack.reproduce.report import format_table
+    from vistrack.reproduce.tables import format_table
 
     row = dict(algo="lis", particles=100, p_lost=0.25, mean_vertex_error=None, false_reports=2,
                acquired_within=None, never_acquired=0, mean_acquisition_delay=1.5, ms_per_frame=7.3,

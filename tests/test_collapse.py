@@ -8,9 +8,9 @@ import pytest
 
 import vistrack
 from cli_helpers import run
-from vistrack.builders import model_from_box
-from vistrack.clips import read_groundtruth_csv
-from vistrack.features import FeatureMaps
+from vistrack.core.features import FeatureMaps
+from vistrack.io.clips import read_groundtruth_csv
+from vistrack.models.builders import model_from_box
 from vistrack.models.collapse import REASONS, CollapseWatch
 
 GONE = 20  # the object vanishes from this frame on

@@ -4,13 +4,13 @@ import cv2
 import numpy as np
 import pytest
 
-from vistrack.builders import build_model
-from vistrack.clips import load_clip
-from vistrack.features import FeatureMaps
+from vistrack.core.features import FeatureMaps
+from vistrack.core.metrics import center_error
 from vistrack.filters import make_filter
-from vistrack.metrics import center_error
+from vistrack.io.clips import load_clip
+from vistrack.models.builders import build_model
 from vistrack.models.contour.model import BSpline, Contour, ellipse_template, pose_from, pose_params
-from vistrack.tracking import track
+from vistrack.track.loop import track
 
 
 def test_spline_interpolates_support_points_and_norm(rng):

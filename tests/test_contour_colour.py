@@ -6,8 +6,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from vistrack.builders import model_from_box
-from vistrack.features import FeatureMaps, colour_bins
+from vistrack.core.features import FeatureMaps, colour_bins
+from vistrack.models.builders import model_from_box
 
 H, W = 200, 260
 CX, CY, RX, RY = 130.0, 100.0, 30.0, 22.0
@@ -91,8 +91,8 @@ def test_run_no_colour_gives_the_edges_only_track_and_is_refused_for_the_box(tmp
     ``colour=False``); by default the colour term is on; ``--no-colour`` makes no sense on a box."""
     import vistrack
     from cli_helpers import run
-    from vistrack.clips import read_groundtruth_csv
-    from vistrack.video import open_video
+    from vistrack.io.clips import read_groundtruth_csv
+    from vistrack.io.video import open_video
 
     video = tmp_path / "clip.avi"
     wr = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 25, (W, H))

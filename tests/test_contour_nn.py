@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 import pytest
 
-from vistrack.features import FeatureMaps
+from vistrack.core.features import FeatureMaps
 from vistrack.filters import make_filter
 from vistrack.models.contour import nn
 from vistrack.models.contour.model import Contour, ellipse_template, pose_from
@@ -96,9 +96,9 @@ def small_clip(synth_clip):
 
 
 def test_same_seed_same_network_and_track(small_clip):
-    from vistrack.builders import build_model
-    from vistrack.clips import load_clip
-    from vistrack.tracking import track
+    from vistrack.io.clips import load_clip
+    from vistrack.models.builders import build_model
+    from vistrack.track.loop import track
 
     cfg = nn.NNSearchConfig(samples=400, epochs=5)
     clip = load_clip(small_clip)

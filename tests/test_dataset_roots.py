@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
-from vistrack.evaluation import find_clips
-from vistrack.video import read_rects
+from vistrack.engine.evaluation import find_clips
+from vistrack.io.video import read_rects
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 N = 30

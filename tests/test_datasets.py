@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
-from vistrack.clips import load_clip
-from vistrack.video import VideoError, open_video, read_rects
+from vistrack.io.clips import load_clip
+from vistrack.io.video import VideoError, open_video, read_rects
 
 H, W = 64, 96
 
@@ -82,7 +82,7 @@ def test_results_file_is_the_otb_format_and_matches_the_track(tmp_path, capsys):
     code, out, err = run(["run", str(tmp_path / "seq"), "--init", "20,20,21,17", "--track", str(tmp_path / "t.csv"),
                           "--results", str(tmp_path / "r.txt")], capsys)
     assert code == 0, err
-    from vistrack.clips import read_groundtruth_csv
+    from vistrack.io.clips import read_groundtruth_csv
 
     t = read_groundtruth_csv(tmp_path / "t.csv")
     r = np.loadtxt(tmp_path / "r.txt", delimiter=",")
@@ -105,7 +105,7 @@ def test_run_summary_centre_error_is_the_mean_over_all_ground_truth_frames(tmp_p
     code, out, err = run(["run", str(REAL / "girl_otb"), "--init-gt", "--max-frames", "60", "--track",
                           str(tmp_path / "t.csv")], capsys)
     assert code == 0, err
-    from vistrack.clips import read_groundtruth_csv
+    from vistrack.io.clips import read_groundtruth_csv
 
     t = read_groundtruth_csv(tmp_path / "t.csv")
     gt = np.loadtxt(REAL / "girl_otb" / "groundtruth_rect.txt", delimiter=",")[:60]
@@ -144,7 +144,7 @@ def test_result_files_round_trip_through_eval(tmp_path, capsys):
 @pytest.mark.parametrize("rows, message", [(3, "3 rows for 4 frames; frames past its end are not scored"),
                                            (6, "6 rows for 4 frames; its extra rows are ignored")])
 def test_ground_truth_of_another_length_is_a_warning_with_the_counts(tmp_path, rows, message):
-    from vistrack.clips import GroundTruthWarning
+    from vistrack.io.clips import GroundTruthWarning
 
     images(tmp_path / "img")
     (tmp_path / "groundtruth_rect.txt").write_text("21,21,21,17\n" * rows)

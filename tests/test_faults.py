@@ -103,7 +103,7 @@ class _no_warnings:
 
 
 def test_particle_memory_check_known_answer():
-    from vistrack.runtime import check_particle_memory
+    from vistrack.core.runtime import check_particle_memory
 
     assert check_particle_memory(1000, 32_000, "lis", available=2**30) == 32_000_000
     with pytest.raises(ValueError, match="use at most 2097"):  # half of 1 GiB / (32 KB x 8 for LLS)
@@ -112,7 +112,7 @@ def test_particle_memory_check_known_answer():
 
 def test_track_csv_is_whole_after_a_write_error(tmp_path):
     """A write error mid-run (disk full) leaves the rows written so far, renamed into place."""
-    from vistrack.session import TrackCSV
+    from vistrack.track.run import TrackCSV
 
     t = TrackCSV(tmp_path / "t.csv")
     t.write({"frame": 0, "cx": 1.0})
@@ -139,7 +139,7 @@ def test_truncated_and_empty_videos_are_clear_errors(tmp_path, capsys):
 def test_one_experiment_per_out_folder(tmp_path):
     """A second eval into a folder that a live process holds refuses with one line; a lock left by
     a dead process is taken over; the lock is gone after."""
-    from vistrack.evaluation import OutLocked, lock_out
+    from vistrack.engine.evaluation import OutLocked, lock_out
 
     holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
     try:
@@ -159,7 +159,7 @@ def test_one_experiment_per_out_folder(tmp_path):
 
 
 def test_write_atomic_leaves_the_old_file_on_failure(tmp_path):
-    from vistrack.evaluation import write_atomic
+    from vistrack.engine.evaluation import write_atomic
 
     p = tmp_path / "results.json"
     write_atomic(p, "old")
@@ -176,7 +176,7 @@ def test_write_atomic_leaves_the_old_file_on_failure(tmp_path):
 def test_prefetch_gives_the_same_frames_and_stops_cleanly(tmp_path):
     import threading
 
-    from vistrack.video import open_video, prefetch
+    from vistrack.io.video import open_video, prefetch
 
     video = tmp_path / "v.avi"
     write_video(video, 30)
@@ -208,7 +208,7 @@ def test_an_undecodable_image_is_skipped_and_counted(tmp_path, capsys):
     the stream's), and the warning says how many failed."""
     import warnings
 
-    from vistrack.video import VideoDecodeWarning, open_video
+    from vistrack.io.video import VideoDecodeWarning, open_video
 
     (tmp_path / "img").mkdir()
     for i in range(8):
@@ -351,7 +351,7 @@ class _FakeClient:
 def test_workers_must_see_out_and_the_clips(tmp_path):
     """With a scheduler elsewhere, workers write into --out and read the clips at the tasks' paths:
     checked before the grid, one line naming what a worker cannot see; the probe file is removed."""
-    from vistrack.tasks import TaskFailed, check_shared
+    from vistrack.engine.tasks import TaskFailed, check_shared
 
     clip = tmp_path / "clip"
     clip.mkdir()
@@ -395,7 +395,7 @@ def test_a_failed_synth_leaves_the_old_clip_whole(tmp_path, monkeypatch):
     """The writer fails mid-clip (disk full) while a clip is overwritten: the old clip is intact,
     no partial folder is left, the user's own files in the folder survive a successful overwrite."""
     import vistrack.data_synth.contour as contour
-    from vistrack.evaluation import find_clips
+    from vistrack.engine.evaluation import find_clips
 
     clip = tmp_path / "suite" / "c1"
     kw = dict(frames=4, size=(96, 72), clutter="low", distractor=False)
@@ -428,7 +428,7 @@ def test_synth_killed_mid_clip_leaves_the_old_clip_and_no_clip_eval_takes(tmp_pa
     """kill -9 of ``vistrack synth`` overwriting a clip: the old video and ground truth are there, as
     they were; the partial render is a hidden folder that eval does not take for a clip, and the next
     synth into that folder removes it."""
-    from vistrack.evaluation import find_clips
+    from vistrack.engine.evaluation import find_clips
 
     clip = tmp_path / "c1"
     synth = ["synth", "contour", "--size", "96x72", "--clutter", "low", "--no-distractor", "-q"]
@@ -482,8 +482,8 @@ def test_clip_files_are_inputs_too(tmp_path, capsys):
 def test_devices_are_written_directly_never_replaced(tmp_path):
     """``--track /dev/stdout`` and the like: the rows go to the device; the part-file-and-rename of a
     regular file would replace the device node (here a link to it stands for it)."""
-    from vistrack.session import TrackCSV
-    from vistrack.tasks import write_atomic
+    from vistrack.engine.tasks import write_atomic
+    from vistrack.track.run import TrackCSV
 
     for name in ("t.csv", "results.json"):
         (tmp_path / name).symlink_to("/dev/null")
@@ -652,7 +652,7 @@ def test_eval_refuses_a_folder_in_use_and_keeps_task_files_when_the_scheduler_is
 @pytest.mark.parametrize("text", ["{}", "[]", '{"clip": "c', "\xff\xfe", ""])
 def test_a_damaged_task_file_is_run_again(tmp_path, text):
     """``--resume`` reuses a task file only when it parses and carries this task's fingerprint."""
-    from vistrack.tasks import stale_tasks, task_done
+    from vistrack.engine.tasks import stale_tasks, task_done
 
     task = {"name": "t", "algo": "lis", "particles": 10, "run": 0}
     (tmp_path / "tasks").mkdir()
@@ -663,7 +663,7 @@ def test_a_damaged_task_file_is_run_again(tmp_path, text):
 def test_a_task_file_written_by_other_code_is_run_again(tmp_path, monkeypatch):
     """The fingerprint covers vistrack's source: a result written before a change of the code (a
     report rule, a default; the version string unchanged) is not reused by ``--resume``."""
-    from vistrack import tasks
+    from vistrack.engine import tasks
 
     task = {"name": "t", "algo": "lis", "particles": 10, "run": 0}
     tasks.write_task_result(tmp_path / "tasks" / "t.json", {"error": 1.0}, task)
@@ -705,7 +705,7 @@ def test_local_workers_leave_ctrl_c_to_the_client():
     (the whole path: benchmarks/soak.py, 'eval Ctrl-C on the process group')."""
     import logging
 
-    from vistrack.evaluation import dask_setup
+    from vistrack.engine.evaluation import dask_setup
 
     saved, level = signal.getsignal(signal.SIGINT), logging.getLogger("distributed").level
     try:

@@ -86,7 +86,7 @@ def test_1_template_and_init_gt_files_are_inputs_too(tmp_path, capsys):
 
 
 def test_2_an_output_another_live_run_holds_is_refused(tmp_path, capsys):
-    from vistrack.outputs import OutputLock
+    from vistrack.io.outputs import OutputLock
 
     image_folder(tmp_path / "c", 3)
     track = tmp_path / "t.csv"
@@ -104,8 +104,8 @@ def test_2_an_output_another_live_run_holds_is_refused(tmp_path, capsys):
 def test_2_temporary_names_are_never_shared(tmp_path):
     """A part file already there (a killed run's rows) is neither written nor removed: the new
     writer takes a name of its own and renames it over the output."""
-    from vistrack.outputs import temporary_name
-    from vistrack.session import TrackCSV
+    from vistrack.io.outputs import temporary_name
+    from vistrack.track.run import TrackCSV
 
     (tmp_path / "t.csv.part").write_text("frame\n0\n")
     t = TrackCSV(tmp_path / "t.csv")
@@ -201,7 +201,7 @@ def test_7_short_result_files_are_said_and_scored_as_not_reported(tmp_path, caps
     image_folder(tmp_path / "c", 10)
     (tmp_path / "mt").mkdir()
     (tmp_path / "mt" / "c.txt").write_text("".join(f"{40 + 2 * i},50,25,19\n" for i in range(6)))
-    from vistrack.evaluation import ResultsLengthWarning
+    from vistrack.engine.evaluation import ResultsLengthWarning
 
     with pytest.warns(ResultsLengthWarning, match="has 6 lines for the 10 ground-truth frames.*scored as not reported"):
         code, _, err = run(["eval", str(tmp_path / "c"), "--algos", "", "--results-dir", str(tmp_path / "mt"),
@@ -230,7 +230,7 @@ def test_9_init_gt_starts_at_the_first_frame_with_a_box(tmp_path, capsys):
 
 
 def test_10_image_folders_are_read_in_natural_order(tmp_path):
-    from vistrack.video import FrameOrderWarning, open_video
+    from vistrack.io.video import FrameOrderWarning, open_video
 
     image_folder(tmp_path / "c", names=[f"frame{i}.png" for i in range(1, 13)])
     with warnings.catch_warnings():
@@ -431,10 +431,10 @@ def test_8_a_signal_between_the_track_row_and_the_video_frame(tmp_path, names, r
     video all hold frames 0-3."""
     import signal
 
-    from vistrack.builders import build_model
-    from vistrack.clips import load_clip
     from vistrack.filters import make_filter
-    from vistrack.session import stop_on_signals, track_video
+    from vistrack.io.clips import load_clip
+    from vistrack.models.builders import build_model
+    from vistrack.track.run import stop_on_signals, track_video
 
     image_folder(tmp_path / "c", 10)
     clip = load_clip(tmp_path / "c")
@@ -464,10 +464,10 @@ def test_8_a_second_signal_while_the_outputs_close_is_waited_for(tmp_path):
     closed whole all the same (before: the video was left unclosed, about 40 frames short)."""
     import signal
 
-    from vistrack.builders import build_model
-    from vistrack.clips import load_clip
     from vistrack.filters import make_filter
-    from vistrack.session import TrackCSV, track_video
+    from vistrack.io.clips import load_clip
+    from vistrack.models.builders import build_model
+    from vistrack.track.run import TrackCSV, track_video
 
     image_folder(tmp_path / "c", 6)
     clip = load_clip(tmp_path / "c")

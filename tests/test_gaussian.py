@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from vistrack.gaussian import gaussian_product, gm_logpdf, mvn_logpdf
+from vistrack.core.gaussian import gaussian_product, gm_logpdf, mvn_logpdf
 
 
 def test_mvn_logpdf_matches_scipy(rng):
@@ -61,7 +61,7 @@ def test_gm_logpdf_is_log_of_weighted_sum():
 
 @pytest.mark.parametrize("m", [1, 2, 3])
 def test_small_matrix_fast_paths_match_numpy(m, rng):
-    from vistrack.gaussian import _cholesky, _inv_spd
+    from vistrack.core.gaussian import _cholesky, _inv_spd
 
     a = rng.standard_normal((5, m, m))
     s = a @ np.swapaxes(a, -1, -2) + 0.1 * np.eye(m)
@@ -72,7 +72,7 @@ def test_small_matrix_fast_paths_match_numpy(m, rng):
 def test_diag_logpdf_matches_scipy_per_coordinate_and_per_row_std():
     from scipy import stats
 
-    from vistrack.gaussian import diag_logpdf
+    from vistrack.core.gaussian import diag_logpdf
 
     rng = np.random.default_rng(0)
     x, mean = rng.normal(size=(5, 3)), rng.normal(size=3)

@@ -11,10 +11,10 @@ import pytest
 from scipy import stats
 from weighting_helpers import one_step_runs
 
+from vistrack.core.particles import ParticleSet
 from vistrack.filters import ALGORITHMS, RBHSSIR, make_filter
 from vistrack.filters.history import draw_rows
 from vistrack.models import AR2Toy, GaussMixtureToy
-from vistrack.particles import ParticleSet
 
 FAMILY = ("basic-sir", "hs-sir", "rb-hs-sir", "rb-ss-hs-sir")
 N, COPIES, REPS = 120, 3, 150
@@ -121,7 +121,7 @@ def test_history_index_law_of_fig_3_5():
 @pytest.mark.parametrize("scheme", ["multinomial", "stratified", "systematic", "residual"])
 def test_each_row_draw_has_its_rows_law(scheme):
     """draw_rows: the k-th draw follows row k's law whatever the coupling across rows."""
-    from vistrack.resampling import get_scheme
+    from vistrack.core.resampling import get_scheme
 
     p = np.array([[0.7, 0.2, 0.1], [0.1, 0.1, 0.8], [1 / 3, 1 / 3, 1 / 3], [0.0, 0.5, 0.5]])
     rng = np.random.default_rng(3)
@@ -156,8 +156,8 @@ def test_model_without_split_is_one_clear_line(algo):
 
 def test_blocks_do_not_change_the_draws():
     """associate evaluates the (N, C) law in blocks of rows: same draws, same sums, any block size."""
+    from vistrack.core.resampling import systematic
     from vistrack.filters.history import associate
-    from vistrack.resampling import systematic
 
     log_p = np.random.default_rng(1).normal(0, 2, (50, 7))
     runs = [associate(lambda rows: log_p[rows], 50, 7, np.random.default_rng(4), systematic, budget=b)

@@ -103,7 +103,7 @@ def test_likelihood_params_parse_and_reject():
 
 
 def test_likelihood_reaches_every_task_model(colour_clip, monkeypatch, tmp_path):
-    import vistrack.evaluation as ev
+    import vistrack.engine.evaluation as ev
     from vistrack.reproduce.hs_sir import HSConfig, hs_tasks
 
     assert all("model_params" not in t for t in hs_tasks(HSConfig(clips=[colour_clip], runs=1)))

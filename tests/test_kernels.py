@@ -17,11 +17,11 @@ import pytest
 
 from kernel_helpers import both
 from vistrack import kernels
-from vistrack.builders import build_model
-from vistrack.clips import load_clip
-from vistrack.features import FeatureMaps, bin_integrals, colour_bins, remap_points
+from vistrack.core.features import FeatureMaps, bin_integrals, colour_bins, remap_points
 from vistrack.filters import make_filter
-from vistrack.tracking import FrameStepper, warm_up
+from vistrack.io.clips import load_clip
+from vistrack.models.builders import build_model
+from vistrack.track.loop import FrameStepper, warm_up
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 

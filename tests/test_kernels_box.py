@@ -18,9 +18,9 @@ import vistrack
 import vistrack.models.box.appearance
 from kernel_helpers import both
 from vistrack import kernels
-from vistrack.features import FeatureMaps
+from vistrack.core.features import FeatureMaps
+from vistrack.core.particles import ParticleSet
 from vistrack.models.collapse import CollapseWatch
-from vistrack.particles import ParticleSet
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 
@@ -228,7 +228,7 @@ def test_maps_made_over_a_window_equal_the_whole_regions():
     """The compiled maps made only where boxes read them (``AppearanceFrame.maps``): inside the window the
     texture and labels are the whole region's, every box inside counts what it counts there, and the
     likelihood of particles (some over the region's edge) is the same bit for bit."""
-    from vistrack.features import box_sums
+    from vistrack.core.features import box_sums
 
     frames, box = moving_box_frames(2)
     app = vistrack.models.box.appearance.Appearance(frames[0], box, work_size=20.0)  # f < 1: a shrunk region

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from vistrack import kernels
-from vistrack.builders import build_model
-from vistrack.clips import load_clip
-from vistrack.features import FeatureMaps
+from vistrack.core.features import FeatureMaps
 from vistrack.filters import make_filter
-from vistrack.tracking import FrameStepper
+from vistrack.io.clips import load_clip
+from vistrack.models.builders import build_model
+from vistrack.track.loop import FrameStepper
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 

@@ -13,9 +13,9 @@ import pytest
 
 from kernel_helpers import both
 from vistrack import kernels
-from vistrack.builders import build_model
-from vistrack.clips import load_clip
-from vistrack.features import FeatureMaps
+from vistrack.core.features import FeatureMaps
+from vistrack.io.clips import load_clip
+from vistrack.models.builders import build_model
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 

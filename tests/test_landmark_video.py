@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
-from vistrack.clips import load_clip, read_groundtruth_csv
+from vistrack.core.features import FeatureMaps, blob_peaks
+from vistrack.core.metrics import landmark_error
 from vistrack.data_synth.landmarks import draw_blob, make_landmark_clip
-from vistrack.features import FeatureMaps, blob_peaks
-from vistrack.metrics import landmark_error
-from vistrack.video import open_video
+from vistrack.io.clips import load_clip, read_groundtruth_csv
+from vistrack.io.video import open_video
 
 
 @pytest.fixture(scope="module")
@@ -77,7 +77,7 @@ def test_run_landmarks_bad_input(clip_dir, capsys, args, message):
 
 def test_landmarks_without_a_start_is_a_clear_error(tmp_path, capsys):
     from vistrack.data_synth.render import write_clip_files  # noqa: F401
-    from vistrack.video import VideoWriter
+    from vistrack.io.video import VideoWriter
 
     with VideoWriter(tmp_path / "v.mp4", 30, (160, 120)) as w:
         for _ in range(3):

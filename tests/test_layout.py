@@ -22,10 +22,10 @@ def test_no_function_over_60_lines():
 
 
 def test_no_probes_for_optional_parts():
-    """Optional parts are protocols checked with ``offers`` (vistrack/hooks.py, the one place that
+    """Optional parts are protocols checked with ``offers`` (vistrack/core/hooks.py, the one place that
     looks); nothing else asks ``hasattr`` or ``getattr(x, name, default)`` of a model, a filter, a
-    proposal or an observation (vistrack/evaluation.py looks for OpenCV's trackers in ``cv2``)."""
-    allowed = {"hooks.py", "evaluation.py"}
+    proposal or an observation (vistrack/engine/evaluation.py looks for OpenCV's trackers in ``cv2``)."""
+    allowed = {"core/hooks.py", "engine/evaluation.py"}
     probes = []
     for p in ROOT.rglob("*.py"):
         if str(p.relative_to(ROOT)) in allowed:

@@ -136,7 +136,7 @@ def _write_clip(folder, fr):
 
 
 def test_run_and_eval_take_the_registered_model(point_model, tmp_path, capsys):
-    from vistrack.clips import read_groundtruth_csv
+    from vistrack.io.clips import read_groundtruth_csv
 
     clip = tmp_path / "clip"
     _write_clip(clip, frames())

@@ -20,7 +20,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from vistrack.cli.options import Box, FloatList, IntList, Size, StrList
-from vistrack.video import VideoError
+from vistrack.io.video import VideoError
 
 FAST = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
@@ -124,7 +124,7 @@ GT_TEXT = st.one_of(
 
 
 def _load(path_text_pairs, folder):
-    from vistrack.clips import load_clip
+    from vistrack.io.clips import load_clip
 
     for name, data in path_text_pairs:
         (folder / name).write_bytes(data if isinstance(data, bytes) else data.encode("utf-8", "surrogatepass"))
@@ -161,7 +161,7 @@ def test_ground_truth_files_give_finite_boxes_or_one_line_naming_the_file(layout
 
 
 def test_ground_truth_errors_name_the_file_and_line():
-    from vistrack.video import read_rects
+    from vistrack.io.video import read_rects
 
     p = ROOT / "named.txt"
     for text, words in (("1,2,3,4\n1,2,x,4\n", "line 2"), ("1,2,3\n", "line 1"), ("1e300,2,3,4\n", "line 1"),
@@ -181,7 +181,7 @@ META = st.one_of(JSON, st.fixed_dictionaries({"model": JSON}, optional={"templat
 @FAST
 @given(st.one_of(META.map(json.dumps), st.binary(max_size=40).map(lambda b: b.decode("latin-1"))))
 def test_meta_json_is_an_object_or_one_line(text):
-    from vistrack.clips import read_meta
+    from vistrack.io.clips import read_meta
 
     p = ROOT / "meta.json"
     p.write_bytes(text.encode("utf-8", "surrogatepass"))
@@ -199,7 +199,7 @@ def test_meta_json_is_an_object_or_one_line(text):
                  st.lists(st.tuples(NUMBER, NUMBER), max_size=6).map(lambda ps: "\n".join(f"{a} {b}" for a, b in ps))),
        st.sampled_from([".txt", ".json"]))
 def test_template_files_are_finite_points_or_one_line(text, suffix):
-    from vistrack.builders import read_support_points
+    from vistrack.models.builders import read_support_points
 
     p = ROOT / f"template{suffix}"
     p.write_text(text)

@@ -111,8 +111,8 @@ def _spread_set(rng, n=64):
 def test_avpf_step_is_the_auxiliary_first_stage_then_k():
     """AVPF (Fig. B.1) as the shared step's first stage: ancestors drawn ∝ w r(Y|mu), offspring
     X ~ K(.|X_{t-1}) weighted r(Y|X) / r(Y|mu) — the same draws as writing Fig. B.1 out."""
+    from vistrack.core.resampling import systematic
     from vistrack.filters import AVPF
-    from vistrack.resampling import systematic
 
     model = GaussMixtureToy()
     p = _spread_set(np.random.default_rng(1))
@@ -147,9 +147,9 @@ def test_avpf_honours_the_ess_threshold():
 
 def test_the_first_step_predicts_with_the_prior_kernel(rng):
     """The first step is the ordinary step with p_0 in the place of K
-    (:class:`~vistrack.models.kernel.PriorKernel`), the LIS window built for p_0's spread."""
+    (:class:`~vistrack.core.transition.PriorKernel`), the LIS window built for p_0's spread."""
+    from vistrack.core.transition import PriorKernel
     from vistrack.filters import LIS
-    from vistrack.models.kernel import PriorKernel
 
     model = GaussMixtureToy(prior_mean=3.0, prior_var=0.25)
     filt = LIS(model)

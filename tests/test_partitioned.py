@@ -13,11 +13,11 @@ from weighting_helpers import one_step_runs
 
 import vistrack
 from cli_helpers import run
+from vistrack.core.particles import ParticleSet
 from vistrack.filters import ALGORITHMS, BranchedPartitioned, make_filter
 from vistrack.filters.branched_partitioned import cyclic_orderings
 from vistrack.models import Bearings, GaussMixtureToy
 from vistrack.models.partitions import IndependentTargets
-from vistrack.particles import ParticleSet
 
 X_PREV = np.array([0.2, -0.1])
 Q = 1.0
@@ -243,7 +243,7 @@ def test_every_group_at_once_draws_each_particles_ordering_in_one_call_per_stage
 
 
 def test_grouped_resampling_stays_in_each_group_with_the_schemes_counts():
-    from vistrack.resampling import Groups, grouped, residual, stratified, systematic
+    from vistrack.core.resampling import Groups, grouped, residual, stratified, systematic
 
     rng = np.random.default_rng(3)
     sizes = np.array([5, 1, 8, 3])
@@ -262,7 +262,7 @@ def test_grouped_resampling_stays_in_each_group_with_the_schemes_counts():
 
 
 def test_each_group_keeps_its_total_weight_and_its_own_ess_test():
-    from vistrack.resampling import Groups
+    from vistrack.core.resampling import Groups
 
     filt = BranchedPartitioned(Bearings(2), ess_threshold=0.5)
     log_w = np.log(np.array([1.0, 1.0, 1.0, 1.0, 4.0, 0.001, 0.001, 0.001]))

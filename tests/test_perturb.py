@@ -9,7 +9,7 @@ from click.testing import CliRunner
 
 from vistrack.cli import cli as main
 from vistrack.data_synth.perturb import Perturbation, perturb_frames
-from vistrack.video import VideoWriter, open_video, read_rects
+from vistrack.io.video import VideoWriter, open_video, read_rects
 
 W, H, BG, FG = 160, 120, 30.0, 150.0
 T = 24

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import vistrack
-from vistrack.builders import model_from_box
-from vistrack.features import FeatureMaps
+from vistrack.core.features import FeatureMaps
+from vistrack.models.builders import model_from_box
 
 H, W = 240, 320
 PW, PH = 64, 14  # a single-row plate: aspect about 4.6
@@ -133,7 +133,7 @@ def test_the_correlation_filter_term_peaks_at_the_moved_plate():
     frame, with the plate moved by (6, -3) px, its response over the search region about the particles'
     prediction peaks at the moved plate (within one of its cells, 2.3 px here), and ``log r`` has the term
     ``λ_dcf y`` read at the state's centre and width (``Plate.dcf_states``)."""
-    from vistrack.particles import ParticleSet
+    from vistrack.core.particles import ParticleSet
 
     f0, b0 = _rendered_plate_scene(200, 180)
     f1, (x, y, w, h) = _rendered_plate_scene(206, 177)
@@ -161,8 +161,8 @@ def test_the_line_scans_draw_with_the_correlation_filter_term():
     """The LIS line scans' map (``PlateLISProposal.appearance_map``) holds the filter's term ``λ_dcf y`` of
     ``log r`` beside the appearance's: the map with the response minus the map without it is ``λ_dcf`` times
     the response read at the map pixels' frame positions."""
+    from vistrack.core.particles import ParticleSet
     from vistrack.models.plate.proposal import PlateLISProposal, map_values
-    from vistrack.particles import ParticleSet
 
     f0, b0 = _rendered_plate_scene(200, 180)
     f1, _ = _rendered_plate_scene(206, 177)

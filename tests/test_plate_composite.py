@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from vistrack.data_synth.plate_composite import composite_frame, composite_plate_clip, plate_boxes
-from vistrack.video import open_video
+from vistrack.io.video import open_video
 
 CAR4 = Path(__file__).resolve().parents[2] / "shared" / "data" / "real" / "car4_otb_first100"
 

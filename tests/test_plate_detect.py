@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
+from vistrack.core.metrics import iou
 from vistrack.data_synth.plate import detection_frames
-from vistrack.metrics import iou
 from vistrack.models.plate.detect import Detection, PlateDetector, _split_touching, acquire, plate_from_row
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"

@@ -6,10 +6,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vistrack.builders import model_from_box
-from vistrack.features import FeatureMaps
+from vistrack.core.features import FeatureMaps
+from vistrack.io.video import open_video, read_rects
+from vistrack.models.builders import model_from_box
 from vistrack.models.plate.detect import PlateDetector
-from vistrack.video import open_video, read_rects
 
 CLIP = Path(__file__).resolve().parents[2] / "shared" / "data" / "real" / "plate_in_polo_dashcam"
 
@@ -60,7 +60,7 @@ def test_from_the_first_box_the_angle_holds_and_the_plate_model_beats_the_box_mo
     (the reported box 12 % higher than the ground truth, AUC 0.88 against the box model's 0.91): the
     plate model keeps its first view (``Plate.adapt_rate`` 0) and the correlation filter adapts."""
     import vistrack
-    from vistrack.metrics import iou, success_auc
+    from vistrack.core.metrics import iou, success_auc
 
     frames, gt = dashcam
     out = {}

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from vistrack.cli import main
-from vistrack.clips import load_clip
+from vistrack.io.clips import load_clip
 from vistrack.models.plate.layout import LAYOUTS, plate_vertices
 
 
@@ -46,7 +46,7 @@ def test_synth_plate_bad_size(tmp_path, capsys):
 def test_plate_likelihood_has_a_narrow_dominant_peak_at_the_plate(road):
     """Fig. 1.6: over a (u, w) grid at the true angle and scale, the maximum of r is at the
     true plate, and poses 15 % of the plate width away are far less likely."""
-    from vistrack.features import FeatureMaps
+    from vistrack.core.features import FeatureMaps
     from vistrack.models.plate.model import PlateLikelihood
 
     clip = load_clip(road)
@@ -70,7 +70,7 @@ def test_plate_line_scans_read_the_terms_the_weight_uses(road):
     """The LIS scans of ``r^h`` and ``r^v`` (§4.5.2) sum the same features as ``terms`` — the
     extra pixel sets of a term included — so with the scans' point density equal to the full
     one they agree exactly; every feature is in exactly one term."""
-    from vistrack.features import FeatureMaps
+    from vistrack.core.features import FeatureMaps
     from vistrack.models.plate.model import PlateLikelihood
 
     clip = load_clip(road)
@@ -94,7 +94,7 @@ def test_plate_scale_banded_weights_interpolate_in_log_s(road):
     ``s_0``, with ``w_1`` above ``s_1`` and the log-s mix of the two between — and it is the
     regression score of :func:`~vistrack.models.plate.fit.design` with the fitted vector split by
     :func:`~vistrack.models.plate.fit.split_weights`, so the fit and the filters agree."""
-    from vistrack.features import FeatureMaps
+    from vistrack.core.features import FeatureMaps
     from vistrack.models.plate.fit import design, feature_likelihood, split_weights
     from vistrack.models.plate.model import PlateLikelihood
 
@@ -147,7 +147,7 @@ def test_plate_log_odds_separate_plates_from_clutter(road640):
     2.0–3.1, so the report threshold of 2.5 — chosen on the training clips, where a sign scores
     up to 2.5 — misses some of its frames; the suite's plates score below 2.5 in under 1 % of
     their frames.)"""
-    from vistrack.features import FeatureMaps
+    from vistrack.core.features import FeatureMaps
     from vistrack.models.plate.fit import scan_poses
     from vistrack.models.plate.model import Plate
 
@@ -189,7 +189,7 @@ def test_plate_lis_proposal_is_a_proper_density_on_the_window(entering):
     estimate's variance small.)"""
     import cv2
 
-    from vistrack.features import FeatureMaps
+    from vistrack.core.features import FeatureMaps
     from vistrack.models.plate.model import Plate
 
     g = np.random.default_rng(1)
@@ -240,7 +240,7 @@ def test_plate_dynamics_entering_branch(rng):
     moved = model.with_local(new, new[:, :2] + 5.0)
     np.testing.assert_array_equal(model.entering(moved), born)
     # the resampling reserve keeps the lineages younger than reserve_age frames
-    from vistrack.particles import ParticleSet
+    from vistrack.core.particles import ParticleSet
 
     np.testing.assert_array_equal(model.reserved(ParticleSet(new)), new[:, 8] < model.reserve_age)
     assert model.reserved(ParticleSet(new)).any() and not model.reserved(ParticleSet(new)).all()
@@ -252,7 +252,7 @@ def test_plate_entering_search_lands_births_on_the_plate(road640):
     the translation-and-coarse-scale search alone: births drawn about a plate (25 px, 12 px,
     0.1 rad, 20 % off) end within a third of the plate height (the 'not lost' tolerance) at
     least 1.5 times as often, and are never outside their window."""
-    from vistrack.features import FeatureMaps
+    from vistrack.core.features import FeatureMaps
     from vistrack.models.plate.model import Plate, PlateLISProposal
 
     clip = load_clip(road640)
@@ -290,10 +290,10 @@ def test_plate_lls_grid_finds_the_plate_and_lls_tracks_it(road):
     cars cross a 320-px frame in 15 frames, so its 35-px plates are motion-blurred and score
     log-odds 0.4–1.2, below the report threshold: births on road clutter scoring as much take
     the lead now and then — in 1 of 8 seeds with N = 100, 5 of 8 with N = 50.)"""
-    from vistrack.features import FeatureMaps
+    from vistrack.core.features import FeatureMaps
     from vistrack.filters import make_filter
     from vistrack.models.plate.model import Plate
-    from vistrack.tracking import track
+    from vistrack.track.loop import track
 
     clip = load_clip(road)
     t = clip.truth
@@ -332,7 +332,7 @@ def test_plate_lls_grid_finds_the_plate_and_lls_tracks_it(road):
 def test_plate_sharpness_scales_log_r_but_not_the_report(road):
     """``sharpness`` multiplies ``log r`` (the learnt log-odds) everywhere the filters read it —
     full, sparse and line-scan evaluations — while ``visible`` still thresholds the log-odds."""
-    from vistrack.features import FeatureMaps
+    from vistrack.core.features import FeatureMaps
     from vistrack.models.plate.model import Plate
 
     clip = load_clip(road)
@@ -355,8 +355,8 @@ def test_plate_sharpness_scales_log_r_but_not_the_report(road):
 def test_plate_estimate_is_the_main_mode_not_the_mean_of_two(rng):
     """A posterior split between a plate and a plate-like sign: the estimate is the weighted
     mean of the heavier cluster (within half a plate of the best particle), not a point between."""
+    from vistrack.core.particles import ParticleSet
     from vistrack.models.plate.model import Plate
-    from vistrack.particles import ParticleSet
 
     model = Plate((640, 480))
     plate = np.array([300.0, 320.0, 0.0, 80.0])
@@ -393,9 +393,9 @@ def test_plate_lis_weights_match_a_brute_force_posterior(road):
     window twice the plate size, plus the search over log s) from a Gaussian prior on (u, w, s)
     about the plate, the angle known. The mean weight estimates the evidence ∫ r p0 and the
     weighted mean of (u, w, s) the posterior mean — both also computed by brute force on a grid."""
-    from vistrack.features import FeatureMaps
+    from vistrack.core.features import FeatureMaps
+    from vistrack.core.particles import logsumexp
     from vistrack.models.plate.model import Plate
-    from vistrack.particles import logsumexp
 
     clip = load_clip(road)
     t = clip.truth
@@ -448,9 +448,9 @@ def test_plate_lis_dynamics_window_weights_match_a_brute_force_posterior(road):
     factors about the predicted mean): one LIS step from a particle that follows the plate, with
     the angle and scale known. The mean weight is the evidence ∫ r N_uw and the weighted mean of
     (u, w) the posterior mean, both also by brute force on a grid; the box window agrees too."""
-    from vistrack.features import FeatureMaps
+    from vistrack.core.features import FeatureMaps
+    from vistrack.core.particles import logsumexp
     from vistrack.models.plate.model import Plate, PlateLISProposal
-    from vistrack.particles import logsumexp
 
     clip = load_clip(road)
     t = clip.truth

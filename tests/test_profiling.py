@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from test_box import clip_frames, obj_box, path
-from vistrack.builders import model_from_box
 from vistrack.filters import make_filter
-from vistrack.profiling import Timer
-from vistrack.session import track_video
+from vistrack.models.builders import model_from_box
+from vistrack.track.profiling import Timer
+from vistrack.track.run import track_video
 
 
 def test_timer_counts_nested_calls_once():

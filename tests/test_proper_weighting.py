@@ -11,9 +11,9 @@ import pytest
 from scipy import stats
 from weighting_helpers import one_step_runs
 
+from vistrack.core.particles import ParticleSet
 from vistrack.filters import AVPF, LIS, LLS, SIR, Bootstrap, GaussMixtureProposal, Window
 from vistrack.models import GaussMixtureToy
-from vistrack.particles import ParticleSet
 
 X_PREV = 0.3
 N = 1000

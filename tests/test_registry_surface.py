@@ -7,7 +7,7 @@ from clip_helpers import square_clip
 from vistrack.cli.eval import eval_cmd
 from vistrack.cli.run import RUN_ALGOS
 from vistrack.data_synth.contour import make_contour_clip
-from vistrack.evaluation import check_algos
+from vistrack.engine.evaluation import check_algos
 from vistrack.models.registry import DEFAULT_MODEL, MODELS, all_algos
 
 

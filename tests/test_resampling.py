@@ -5,10 +5,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from vistrack.core.particles import ParticleSet
+from vistrack.core.resampling import SCHEMES, get_scheme, needs_resampling
 from vistrack.filters import ParticleFilter
 from vistrack.filters.resampler import BirthReserve, Resampler, make_resampler
-from vistrack.particles import ParticleSet
-from vistrack.resampling import SCHEMES, get_scheme, needs_resampling
 
 ALL = sorted(SCHEMES)
 LOW_VARIANCE = ["residual", "stratified", "systematic"]

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
-from vistrack.results_format import format_line, read_result_file
+from vistrack.io.results_format import format_line, read_result_file
 
 
 def otb_clip(folder, n=8):

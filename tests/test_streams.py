@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
-from vistrack.clips import read_groundtruth_csv
-from vistrack.video import VideoWriter, is_stream
+from vistrack.io.clips import read_groundtruth_csv
+from vistrack.io.video import VideoWriter, is_stream
 
 
 def test_what_is_a_stream():

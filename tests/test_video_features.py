@@ -7,8 +7,8 @@ import cv2
 import numpy as np
 import pytest
 
-from vistrack.features import FeatureMaps, box_dog
-from vistrack.video import VideoDecodeWarning, VideoError, VideoWriter, find_groundtruth, open_video, read_rects
+from vistrack.core.features import FeatureMaps, box_dog
+from vistrack.io.video import VideoDecodeWarning, VideoError, VideoWriter, find_groundtruth, open_video, read_rects
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 
@@ -190,7 +190,7 @@ def test_real_otb_folder_and_video():
 def test_annotated_video_is_h264_with_every_frame(tmp_path, size):
     """The ``auto`` writer: H.264 (browsers, Jupyter) with the clip's frame count, readable by cv2;
     odd sizes padded by a pixel. Skipped where PyAV cannot encode H.264."""
-    from vistrack.video import VideoWriter
+    from vistrack.io.video import VideoWriter
 
     pytest.importorskip("av")
     w = VideoWriter(tmp_path / "a.mp4", 25, size, codec="auto")
@@ -209,7 +209,7 @@ def test_annotated_video_is_h264_with_every_frame(tmp_path, size):
 def test_annotated_video_falls_back_to_mp4v_with_a_note(tmp_path, monkeypatch):
     import builtins
 
-    from vistrack.video import VideoWriter
+    from vistrack.io.video import VideoWriter
 
     real = builtins.__import__
 

@@ -7,7 +7,7 @@ import numpy as np
 def one_step_runs(filt, prev, reps, stat, first=None):
     """``np.array([stat(p_r) for r in range(reps)])`` where ``p_r`` is ``filt.step(prev, None,
     default_rng(r))`` (``first=N``: ``filt.first_step(None, N, default_rng(r))`` instead); ``stat``
-    maps a :class:`~vistrack.particles.ParticleSet` to a number, a list or a dict (dicts give a dict
+    maps a :class:`~vistrack.core.particles.ParticleSet` to a number, a list or a dict (dicts give a dict
     of arrays)."""
     runs = []
     for r in range(reps):

@@ -5,8 +5,8 @@ The library never prints, parses argv or draws progress bars; see ``vistrack.cli
 
 from importlib.metadata import PackageNotFoundError, version
 
-from .particles import DegenerateWeightsWarning, ParticleSet, ess, logsumexp, normalized_weights
-from .tracker import Tracker
+from .core.particles import DegenerateWeightsWarning, ParticleSet, ess, logsumexp, normalized_weights
+from .track.tracker import Tracker
 
 try:
     __version__ = version("vistrack")

@@ -13,8 +13,8 @@ from contextlib import contextmanager
 import click
 
 from vistrack import __version__
-from vistrack.runtime import keep_freed_memory
-from vistrack.session import Terminated, stop_on_signals
+from vistrack.core.runtime import keep_freed_memory
+from vistrack.track.run import Terminated, stop_on_signals
 
 from .demo import demo
 from .eval import eval_cmd
@@ -102,7 +102,7 @@ def _one_line_warnings():
 
 
 def _stopped(e):
-    """Exit on Ctrl-C (130) or SIGTERM (143; :class:`~vistrack.session.Terminated`), which click
+    """Exit on Ctrl-C (130) or SIGTERM (143; :class:`~vistrack.track.run.Terminated`), which click
     may have wrapped in ``Abort``."""
     term = any(isinstance(x, Terminated) for x in (e, e.__cause__, e.__context__))
     click.echo("Terminated." if term else "Aborted.", err=True)

@@ -7,12 +7,12 @@ from pathlib import Path
 
 import click
 
-from vistrack.clips import excerpt_clip
 from vistrack.data_synth.contour import make_contour_clip
-from vistrack.evaluation import EvalConfig, load_task_results, summarize, task_list
+from vistrack.engine.evaluation import EvalConfig, load_task_results, summarize, task_list
+from vistrack.engine.report import write_eval_outputs
+from vistrack.io.clips import excerpt_clip
+from vistrack.io.video import VideoError
 from vistrack.models.registry import DEFAULT_MODEL, get_model_spec
-from vistrack.report import write_eval_outputs
-from vistrack.video import VideoError
 
 from .grid import run_tasks
 from .options import SEED

@@ -8,16 +8,16 @@ from pathlib import Path
 import click
 import numpy as np
 
-from vistrack.evaluation import (OPENCV_TRACKERS, EvalConfig, check_algos, find_clips,
+from vistrack.engine.evaluation import (OPENCV_TRACKERS, EvalConfig, check_algos, find_clips,
                                  load_task_results, result_files, score_result_file, summarize, task_list)
-from vistrack.report import write_eval_outputs
-from vistrack.builders import MODELS as MODEL_NAMES
-from vistrack.clips import load_clip
-from vistrack.results_format import FORMATS
+from vistrack.engine.report import write_eval_outputs
+from vistrack.models.builders import MODELS as MODEL_NAMES
+from vistrack.io.clips import load_clip
+from vistrack.io.results_format import FORMATS
 from vistrack.models.registry import DEFAULT_MODEL, all_algos, clip_model, get_model_spec
-from vistrack.metrics import equal_time_n
-from vistrack.runtime import check_particle_memory
-from vistrack.video import VideoError
+from vistrack.core.metrics import equal_time_n
+from vistrack.core.runtime import check_particle_memory
+from vistrack.io.video import VideoError
 
 from .grid import _locked, run_tasks
 from .options import SEED, IntList, StrList
@@ -28,13 +28,13 @@ def _equal_time(cfg, clips, frames=30):
     """N per algorithm for the time per frame of the first algorithm at the first N (thesis Tables 4.1, 4.3)."""
     import time
 
-    from vistrack.builders import build_model
-    from vistrack.clips import load_clip
+    from vistrack.models.builders import build_model
+    from vistrack.io.clips import load_clip
     from vistrack.filters import make_filter
-    from vistrack.tracking import track
+    from vistrack.track.loop import track
 
-    from vistrack.builders import start_frame
-    from vistrack.runtime import check_particle_memory
+    from vistrack.models.builders import start_frame
+    from vistrack.core.runtime import check_particle_memory
 
     clip = load_clip(clips[0])
     start = start_frame(clip, None, "")
@@ -74,10 +74,10 @@ def _equal_time(cfg, clips, frames=30):
 
 
 def _eval_targets(cfg, targets, equal_time, results_dirs, out, engine):
-    """``eval --targets K``: several plates at once, scored by MOTA and IDF1 (:mod:`vistrack.mot_report`)."""
-    from vistrack.builders import PLATES_ALGOS
-    from vistrack.mot_report import write_mot_outputs
-    from vistrack.reproduce.plates import plates_equal_time, run_plates_task, score_plates_tasks
+    """``eval --targets K``: several plates at once, scored by MOTA and IDF1 (:mod:`vistrack.engine.mot_report`)."""
+    from vistrack.models.builders import PLATES_ALGOS
+    from vistrack.engine.mot_report import write_mot_outputs
+    from vistrack.reproduce.multi_plate import plates_equal_time, run_plates_task, score_plates_tasks
 
     from .reproduce_plates import _require_scorer
 

@@ -1,4 +1,4 @@
-"""The command line's side of the batch engine (:mod:`vistrack.engine`): a progress bar, its notes on
+"""The command line's side of the batch engine (:mod:`vistrack.engine.grid`): a progress bar, its notes on
 stderr and its refusals as one error line, for ``eval``, ``reproduce`` and ``demo``."""
 
 from __future__ import annotations
@@ -8,15 +8,15 @@ from contextlib import contextmanager
 import click
 from tqdm import tqdm
 
-from vistrack.engine import EngineError, run_grid
-from vistrack.evaluation import OutLocked, TaskFailed, lock_out
+from vistrack.engine.evaluation import OutLocked, TaskFailed, lock_out
+from vistrack.engine.grid import EngineError, run_grid
 
 __all__ = ["run_tasks"]
 
 
 @contextmanager
 def _locked(out):
-    """:func:`vistrack.tasks.lock_out` with its refusal as one error line."""
+    """:func:`vistrack.engine.tasks.lock_out` with its refusal as one error line."""
     try:
         with lock_out(out):
             yield
@@ -26,7 +26,7 @@ def _locked(out):
 
 def run_tasks(tasks, out, *, scheduler=None, workers=0, timeout=10, in_process=False, resume=False, quiet=False,
               desc="tasks", runner=None):
-    """:func:`vistrack.engine.run_grid` with a progress bar, its refusals and failures as one error line
+    """:func:`vistrack.engine.grid.run_grid` with a progress bar, its refusals and failures as one error line
     and its notes on stderr (even with ``quiet``)."""
     bar = []  # the progress bar, shown once the workers are there
 

@@ -156,10 +156,10 @@ def check_outputs(outputs, video, inputs=()):
     """Raise ``click.ClickException`` when two of ``outputs`` (``{option: path or None}``) are one
     file, or one would overwrite what ``video`` reads: the video file itself, or a clip folder's
     video, ground truth, meta.json or frames, or one of ``inputs`` (a template, an ``--init-gt``
-    file). Files are compared by identity (:func:`vistrack.outputs.file_id`: a hard or symbolic
+    file). Files are compared by identity (:func:`vistrack.io.outputs.file_id`: a hard or symbolic
     link of an input is that input), names that do not exist yet by their real path. Devices such
     as ``/dev/null`` may be shared."""
-    from vistrack.outputs import file_id, input_files
+    from vistrack.io.outputs import file_id, input_files
 
     read = {file_id(p): p for p in input_files(video, inputs)}
     video = os.path.realpath(video)

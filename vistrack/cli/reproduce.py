@@ -10,7 +10,7 @@ from vistrack.reproduce.bearings import (DEFAULT_ALGOS, BearingsConfig, bearing_
 from vistrack.reproduce.landmarks import (LANDMARK_ALGOS, LandmarksConfig, landmark_results, landmark_tasks,
                                           run_landmark_task)
 from vistrack.reproduce.plate import PlateConfig, plate_results, plate_tasks, run_plate_task
-from vistrack.evaluation import entries_config
+from vistrack.engine.evaluation import entries_config
 from vistrack.reproduce.contour import ContourConfig, contour_results, contour_tasks
 
 from .options import SEED, Fraction, IntList, StrList, check_writable

@@ -10,8 +10,8 @@ import os
 import click
 from tqdm import tqdm
 
-from vistrack.evaluation import write_atomic
-from vistrack.reproduce.report import format_table, write_plots
+from vistrack.engine.evaluation import write_atomic
+from vistrack.reproduce.tables import format_table, write_plots
 
 from .options import SEED, check_writable
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from vistrack.evaluation import entries_config
+from vistrack.engine.evaluation import entries_config
 from vistrack.reproduce.hs_sir import HSConfig, equal_time_entries, hs_results, hs_tasks, likelihood_params
 
 from .options import check_writable

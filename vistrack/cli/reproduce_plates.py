@@ -1,10 +1,10 @@
-"""``vistrack reproduce plate --overlap``: several plates at once (:mod:`vistrack.reproduce.plates`)."""
+"""``vistrack reproduce plate --overlap``: several plates at once (:mod:`vistrack.reproduce.multi_plate`)."""
 
 from __future__ import annotations
 
 import click
 
-from vistrack.evaluation import entries_config
+from vistrack.engine.evaluation import entries_config
 
 from .options import check_writable
 from .reproduce_common import _check_entries, _clip_suite, _report, _run
@@ -14,7 +14,7 @@ __all__ = ["overlap"]
 
 def _require_scorer():
     """One error line, before any tracking, when the MOT scorer is missing."""
-    from vistrack.mot import require_motmetrics
+    from vistrack.core.mot import require_motmetrics
 
     try:
         require_motmetrics()
@@ -24,9 +24,10 @@ def _require_scorer():
 
 def overlap(clips_dir, make, frames, size, entries, runs, seed, targets, equal_time, quiet, json_path, engine,
             out_dir):
-    """``reproduce plate --overlap``: several plates at once (:mod:`vistrack.reproduce.plates`)."""
+    """``reproduce plate --overlap``: several plates at once (:mod:`vistrack.reproduce.multi_plate`)."""
     from vistrack.data_synth.plate import make_plate_clip
-    from vistrack.reproduce.plates import PlatesConfig, plates_equal_time, plates_results, plates_tasks, run_plates_task
+    from vistrack.reproduce.multi_plate import (PlatesConfig, plates_equal_time, plates_results, plates_tasks,
+                                                run_plates_task)
 
     _check_entries(entries)
     check_writable(json_path, "--json file")

@@ -11,19 +11,19 @@ import click
 import numpy as np
 from tqdm import tqdm
 
-from vistrack.builders import MODELS, PLATES_ALGOS, build_model, read_support_points, start_frame
-from vistrack.clips import load_clip
+from vistrack.models.builders import MODELS, PLATES_ALGOS, build_model, read_support_points, start_frame
+from vistrack.io.clips import load_clip
 from vistrack.filters import make_filter
 from vistrack.models.registry import MODELS as MODEL_REGISTRY
 from vistrack.models.contour.nn import network_for
 from vistrack.models.plate.detect import PlateSearch
-from vistrack.evaluation import sequence_name
-from vistrack.results_format import FORMATS, result_paths
+from vistrack.engine.evaluation import sequence_name
+from vistrack.io.results_format import FORMATS, result_paths
 from vistrack.models.registry import DEFAULT_MODEL, all_algos, get_model_spec
-from vistrack.runtime import check_particle_memory
-from vistrack.session import stop_on_signals, summary_lines, track_video
-from vistrack.outputs import OutputBusy
-from vistrack.video import is_stream, VideoDecodeWarning, VideoError, prefetch
+from vistrack.core.runtime import check_particle_memory
+from vistrack.track.run import stop_on_signals, summary_lines, track_video
+from vistrack.io.outputs import OutputBusy
+from vistrack.io.video import is_stream, VideoDecodeWarning, VideoError, prefetch
 
 from .options import SEED, Box, Fraction, check_outputs, check_writable
 
@@ -70,7 +70,7 @@ def model_options(name, *, layout, no_colour, template, targets=None):
 
 
 def lost_notice(most=5):
-    """``notify(index, reason, detail)`` for :func:`~vistrack.session.track_video`: a line on stderr
+    """``notify(index, reason, detail)`` for :func:`~vistrack.track.run.track_video`: a line on stderr
     (above the progress bar) for each of the first ``most`` frames where the object is lost."""
     said = []
 
@@ -274,7 +274,7 @@ def _frames(src, max_frames):
 
 
 def _start(clip, init, init_gt, max_frames):
-    """The start frame (:func:`~vistrack.builders.start_frame`), said on stderr when it is not 0."""
+    """The start frame (:func:`~vistrack.models.builders.start_frame`), said on stderr when it is not 0."""
     try:
         start = start_frame(clip, init, init_gt)
     except (VideoError, ValueError) as e:
@@ -291,7 +291,7 @@ def _start(clip, init, init_gt, max_frames):
 
 def _track(clip, frames, model, filt, particles, seed, max_frames, show_particles, quiet, label, outputs, lead=(),
            start=0):
-    """:func:`~vistrack.session.track_video` over ``frames`` from ``start`` with a progress bar (``lead``:
+    """:func:`~vistrack.track.run.track_video` over ``frames`` from ``start`` with a progress bar (``lead``:
     the frames searched before them); stops cleanly on SIGINT/SIGTERM after the frame in hand (the
     outputs so far kept, holding the same frames)."""
     src = clip.source

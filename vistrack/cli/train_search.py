@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import click
 
-from vistrack.builders import read_support_points
+from vistrack.io.video import VideoError
+from vistrack.models.builders import read_support_points
 from vistrack.models.contour.model import Contour
 from vistrack.models.contour.nn import NNSearchConfig, load_or_train
-from vistrack.video import VideoError
 
 from .options import SEED, Size
 

@@ -29,7 +29,7 @@ def trax(model, algo, particles, seed):
       protocol = trax
       command = vistrack trax --seed 0
     """
-    from vistrack.trax import serve
+    from vistrack.track.trax import serve
 
     try:
         serve(model, algo, particles, seed)

@@ -28,8 +28,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from vistrack.io.video import VideoWriter
 from vistrack.models.contour.model import BSpline
-from vistrack.video import VideoWriter
 
 from .render import add_noise, atomic_clip, clutter_background, lighting, motion_blur, smooth_noise, write_clip_files
 

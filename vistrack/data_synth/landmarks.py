@@ -6,9 +6,9 @@ from pathlib import Path
 
 import numpy as np
 
+from vistrack.io.video import VideoWriter
 from vistrack.models.landmarks.model import VIDEO_DYNAMICS, Landmarks, simulate
 from vistrack.models.landmarks.model import sample_observations as observe
-from vistrack.video import VideoWriter
 
 from .render import add_noise, atomic_clip, clutter_background, lighting, smooth_noise, write_clip_files
 

@@ -36,7 +36,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from vistrack.video import VideoWriter, find_groundtruth, groundtruth_origin, open_video, read_rects
+from vistrack.io.video import VideoWriter, find_groundtruth, groundtruth_origin, open_video, read_rects
 
 from .render import atomic_clip, motion_blur
 

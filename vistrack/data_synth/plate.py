@@ -38,9 +38,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from vistrack.clips import write_track_csv
+from vistrack.io.clips import write_track_csv
+from vistrack.io.video import VideoWriter
 from vistrack.models.plate.layout import LAYOUTS, plate_vertices
-from vistrack.video import VideoWriter
 
 from .render import add_noise, atomic_clip, lighting, motion_blur, smooth_noise, write_clip_files
 

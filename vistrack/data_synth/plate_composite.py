@@ -26,8 +26,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from vistrack.io.video import VideoWriter
 from vistrack.models.plate.layout import LAYOUTS
-from vistrack.video import VideoWriter
 
 from .perturb import read_clip
 from .plate import render_plate

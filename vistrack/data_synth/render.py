@@ -11,7 +11,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from vistrack.clips import write_track_csv
+from vistrack.io.clips import write_track_csv
 
 __all__ = ["smooth_noise", "clutter_background", "motion_blur", "lighting", "add_noise", "write_clip_files",
            "atomic_clip", "is_synth_clip", "prepare_suite", "check_video_size"]

@@ -10,10 +10,10 @@ same for all algorithms of the thesis:
    (:mod:`~vistrack.filters.resampler`: the ESS threshold, the scheme, the
    birth reserve of models with births);
 3. ``propose``: draw new states with the step's kernel (``K``, or ``p_0`` on
-   the first step: :mod:`vistrack.models.kernel`) and compute the log weight
+   the first step: :mod:`vistrack.core.transition`) and compute the log weight
    increment — the one part that differs between algorithms;
 4. add the increment to the log-weights; a step in which every weight is zero
-   or NaN is reported (:class:`~vistrack.particles.DegenerateWeightsWarning`)
+   or NaN is reported (:class:`~vistrack.core.particles.DegenerateWeightsWarning`)
    and recovered from by keeping the equally weighted prediction.
 """
 
@@ -23,9 +23,9 @@ from operator import methodcaller
 
 import numpy as np
 
+from ..core.particles import ParticleSet, checked_weights
+from ..core.transition import PriorKernel, Transition
 from ..models.protocol import offers, require
-from ..particles import ParticleSet, checked_weights
-from ..transition import PriorKernel, Transition
 from .resampler import make_resampler
 
 __all__ = ["ParticleFilter", "filter_steps"]
@@ -77,7 +77,7 @@ class ParticleFilter:
 
     @property
     def resample_scheme(self):
-        """The resampler's scheme, ``scheme(w, n, rng) -> idx`` (:mod:`vistrack.resampling`)."""
+        """The resampler's scheme, ``scheme(w, n, rng) -> idx`` (:mod:`vistrack.core.resampling`)."""
         return self.resampler.scheme
 
     def _set_part(self, attr, value):
@@ -103,7 +103,7 @@ class ParticleFilter:
 
     def first_step(self, obs, n, rng):
         """``n`` particles ``X_1 ~ p_0`` updated with the first observation ``Y_1``: the
-        ordinary step with ``p_0`` in the place of ``K`` (:class:`~vistrack.models.kernel.PriorKernel`)."""
+        ordinary step with ``p_0`` in the place of ``K`` (:class:`~vistrack.core.transition.PriorKernel`)."""
         if n < 1:
             raise ValueError(f"number of particles must be positive, got {n}")
         prior = ParticleSet(np.zeros((n, self.model.dim)))

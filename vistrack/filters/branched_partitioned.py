@@ -6,7 +6,7 @@ different orderings ``σ`` of the partitions, so that every partition is drawn l
 of them: after the step's resampling each particle draws an ordering, the particles with
 the same ordering (``H_σ``) sample the partitions in that order, the weighted resampling
 between stages runs over all ``N`` particles (an offspring keeps its parent's ordering) and
-the orderings are joined at the weight normalisation (:mod:`~vistrack.filters.partitioning`).
+the orderings are joined at the weight normalisation (:mod:`~vistrack.filters.partition_step`).
 
 The orderings are the ``τ`` cyclic shifts ``(s, s+1, ..., τ-1, 0, ..., s-1)`` of the model's
 order unless given (e.g. only those that respect an occlusion order, App. C); each must
@@ -19,7 +19,7 @@ about ``N/S`` particles.
 All groups at once. Where the model draws and weighs one partition per particle in one call
 (:class:`~vistrack.models.partitions.StackedPartitions`, e.g. bearings) and no local proposal
 is used, stage ``k`` of a step draws partition ``σ_i(k)`` of every particle ``i`` in one model
-call and resamples every group within itself in one call (:func:`~vistrack.resampling.grouped`,
+call and resamples every group within itself in one call (:func:`~vistrack.core.resampling.grouped`,
 each group with its own ESS test and total weight): the same draws, in distribution, as the
 groups one after the other, at the cost of partitioned sampling (``τ`` model calls and ``τ - 1``
 resamplings per step, not ``S τ`` and ``S (τ - 1)``). The particles come back sorted by group.
@@ -29,9 +29,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.resampling import Groups, grouped, needs_resampling
 from ..models.partitions import StackedPartitions
-from ..resampling import Groups, grouped, needs_resampling
-from .partitioning import PartitionedBase, PartitionedLISMixin
+from .partition_step import PartitionedBase, PartitionedLISMixin
 from .resampler import BirthReserve
 
 __all__ = ["BranchedPartitioned", "BranchedPartitionedLIS", "cyclic_orderings"]
@@ -98,10 +98,10 @@ class BranchedPartitioned(PartitionedBase):
         return x, log_w, lam
 
     def _resample_groups(self, x, log_w, groups, rng):
-        """Ancestors ``(n,)`` and offspring log-weights ``(n,)`` of the :class:`~vistrack.resampling.Groups`
+        """Ancestors ``(n,)`` and offspring log-weights ``(n,)`` of the :class:`~vistrack.core.resampling.Groups`
         of ``x (n, d)``, each resampled within itself as :meth:`_resample` would (its ESS test;
         the offspring share the group's total weight), in one call where the scheme has a
-        grouped form (:func:`~vistrack.resampling.grouped`)."""
+        grouped form (:func:`~vistrack.core.resampling.grouped`)."""
         starts, of, sizes = groups.starts, groups.of, groups.sizes
         top = np.maximum.reduceat(log_w, starts)
         live = np.isfinite(top)

@@ -13,7 +13,7 @@ innovation is joined to and how it is weighted. Every algorithm here:
    operation over the ``(N, C)`` pairs, in log space;
 2. draws innovations from the model's ``innovation_proposal`` and joins them to histories;
 3. weights them; the first step is the same step with ``p_0`` in the place of ``K``
-   (one history, :mod:`vistrack.models.kernel`).
+   (one history, :mod:`vistrack.core.transition`).
 
 Weights keep the convention of the other filters: after a step, ``Σ_k w_k h(X_k)`` is an
 unbiased estimate of ``∫ h r K p(X_{t-1} | Y_{0:t-1})`` times the previous weights' sum.
@@ -32,9 +32,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.particles import ParticleSet, checked_weights, logsumexp
+from ..core.resampling import multinomial, systematic
 from ..models.protocol import InnovationSplit, StateSpaceModel
-from ..particles import ParticleSet, checked_weights, logsumexp
-from ..resampling import multinomial, systematic
 from .base import ParticleFilter
 
 __all__ = ["HistorySampling", "Histories", "associate", "draw_rows", "row_uniforms"]

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..particles import logsumexp
+from ..core.particles import logsumexp
 from .history import HistorySampling
 
 __all__ = ["HSSIR"]

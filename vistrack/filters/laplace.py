@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..gaussian import mvn_logpdf, mvn_sample
-from ..particles import ParticleSet
+from ..core.gaussian import mvn_logpdf, mvn_sample
+from ..core.particles import ParticleSet
 from .base import ParticleFilter
 
 __all__ = ["LaplaceFilter", "laplace_covariance", "sample_laplace"]
@@ -39,7 +39,7 @@ class LaplaceFilter(ParticleFilter):
     def first_step(self, obs, n, rng):
         """``n`` copies of the known ``X_0`` (``model.sample_prior``), weighted by ``log p(Y_1|X_0)``.
 
-        Returns a :class:`~vistrack.particles.ParticleSet` of ``n`` states ``(n, d)``.
+        Returns a :class:`~vistrack.core.particles.ParticleSet` of ``n`` states ``(n, d)``.
         """
         if n < 1:
             raise ValueError(f"number of particles must be positive, got {n}")

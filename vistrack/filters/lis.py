@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..hooks import FusedPropose, LookAhead, offers
+from ..core.hooks import FusedPropose, LookAhead, offers
 from ..models.protocol import LISModel, StateSpaceModel
 from ..proposals import GaussMixtureProposal
 from .base import ParticleFilter

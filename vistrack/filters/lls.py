@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.particles import logsumexp
 from ..models.protocol import GridLikelihood, LLSModel, LocalMoves, StateSpaceModel, offers
-from ..particles import logsumexp
 from ..proposals import Window, categorical_rows
 from .base import ParticleFilter
 

@@ -5,7 +5,7 @@ the model's order ``1..τ``: partition ``j`` from ``K_j``, weighted by its impor
 ``π_j`` (for independent targets, target ``j``'s likelihood factor), and the particles are
 resampled by these weights before partition ``j + 1`` is drawn, so that the later
 partitions are drawn from particles whose earlier partitions fit ``Y_t``. The weights and
-the resampling are those of :mod:`~vistrack.filters.partitioning`. The partitions drawn
+the resampling are those of :mod:`~vistrack.filters.partition_step`. The partitions drawn
 first go through the most resamplings and lose their diversity (App. C's impoverishment);
 :mod:`~vistrack.filters.branched_partitioned` varies the order between particles.
 ``partitioned-lis`` moves each partition by its LIS proposal (App. C's closing remark).
@@ -13,7 +13,7 @@ first go through the most resamplings and lose their diversity (App. C's impover
 
 from __future__ import annotations
 
-from .partitioning import PartitionedBase, PartitionedLISMixin
+from .partition_step import PartitionedBase, PartitionedLISMixin
 
 __all__ = ["Partitioned", "PartitionedLIS"]
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..gaussian import mvn_logpdf, mvn_sample
+from ..core.gaussian import mvn_logpdf, mvn_sample
 from .laplace import laplace_covariance
 from .pf_eis import PFEIS
 

@@ -1,7 +1,7 @@
 """When and how a filter resamples (thesis 001, §2.5), and the birth reserve (§4.5.3).
 
 :class:`Resampler` is the policy (resample every step, or when ``ESS < threshold · N``)
-with a scheme of :mod:`vistrack.resampling`, drawing ancestors ``∝ π = w``.
+with a scheme of :mod:`vistrack.core.resampling`, drawing ancestors ``∝ π = w``.
 :class:`BirthReserve` is a resampler whose ``π`` keeps a share ``ε`` of the draws for
 the newest births; models with births (:class:`~vistrack.models.protocol.Births`,
 :class:`~vistrack.models.protocol.ReservedLineages`) opt into it through their
@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.particles import logsumexp
+from ..core.resampling import get_scheme, needs_resampling
 from ..models.protocol import Births, ReservedLineages, offers
-from ..particles import logsumexp
-from ..resampling import get_scheme, needs_resampling
 
 __all__ = ["Resampler", "BirthReserve", "make_resampler"]
 

@@ -21,7 +21,7 @@ Each model family keeps its own kernels in its package (:mod:`vistrack.models.bo
 
 Every entry point releases the GIL (``nogil``): the decoding thread of ``vistrack run`` runs beside
 them. Kernels are compiled on first use and cached on disk (``cache=True``; loading them takes 0.1–1 s,
-which :func:`vistrack.tracking.warm_up` does before a run's clock starts). Hot loops pass only
+which :func:`vistrack.track.loop.warm_up` does before a run's clock starts). Hot loops pass only
 scalars to helper functions: numba counts references on every call that passes an array, which
 cost more than the sampling itself. :func:`use` says whether
 the models call them: numba importable and the environment variable ``VISTRACK_NUMBA`` not ``0``;

@@ -1,8 +1,8 @@
 """The box model's appearance (:mod:`~vistrack.models.box.appearance`), compiled.
 
-- :func:`colour_labels` is :func:`~vistrack.features.colour_bins` of an HSV image (integer
+- :func:`colour_labels` is :func:`~vistrack.core.features.colour_bins` of an HSV image (integer
   arithmetic: equal).
-- :func:`bin_integrals` is :func:`~vistrack.features.bin_integrals` without the one-hot array
+- :func:`bin_integrals` is :func:`~vistrack.core.features.bin_integrals` without the one-hot array
   (integer counts: equal).
 - :func:`ncc` is :meth:`Appearance.ncc <vistrack.models.box.appearance.Appearance.ncc>`: the texture
   sampled as ``cv2.remap`` samples it (bit for bit) and the dot products and norms summed in
@@ -20,7 +20,7 @@ from .sampling import NONFINITE, corner_float, fma_lerp, inside, lerp_fma, pairw
 
 __all__ = ["colour_labels", "bin_integrals", "ncc", "colour_loglik"]
 
-#: as :mod:`vistrack.features`: hue x saturation bins, value bins, and the chroma thresholds
+#: as :mod:`vistrack.core.features`: hue x saturation bins, value bins, and the chroma thresholds
 _HUE, _SAT, _VALUE, _MIN_S, _MIN_V = 8, 3, 4, 48, 40
 
 
@@ -114,7 +114,7 @@ def ncc(texture, boxes, gx, gy, x0, y0, f, template, out):
 @njit(cache=True, forceinline=True, error_model="numpy")
 def _box_count(ii, x0, y0, x1, y1, b):
     """Bin ``b``'s count in the box ``[x0, x1) x [y0, y1)`` (rounded corners) clipped to the map
-    (:func:`~vistrack.features.box_sums`)."""
+    (:func:`~vistrack.core.features.box_sums`)."""
     h, w = ii.shape[0] - 1, ii.shape[1] - 1
     x0, x1 = min(max(x0, 0), w), min(max(x1, 0), w)
     y0, y1 = min(max(y0, 0), h), min(max(y1, 0), h)

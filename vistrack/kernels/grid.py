@@ -20,7 +20,7 @@ from .sampling import corner_float, fma_lerp, lerp_fma
 
 __all__ = ["grid_points", "map_sample"]
 
-_LOG2PI = float(np.log(2.0 * np.pi))  # as vistrack.gaussian and vistrack.proposals.grid
+_LOG2PI = float(np.log(2.0 * np.pi))  # as vistrack.core.gaussian and vistrack.proposals.grid
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

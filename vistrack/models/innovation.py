@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..gaussian import diag_logpdf
+from ..core.gaussian import diag_logpdf
+from ..core.transition import Transition
 from ..proposals.blob import BlobProposal, GaussianColour, SubspaceProposal
-from .kernel import Transition
 
 __all__ = ["ARInnovation"]
 

@@ -22,7 +22,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from .kernel import PriorKernel, Transition, is_prior
+from ..core.transition import PriorKernel, Transition, is_prior
 
 __all__ = ["IndependentTargets", "StackedPartitions", "TargetProposal"]
 

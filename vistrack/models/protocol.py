@@ -33,7 +33,7 @@ from typing import Protocol, runtime_checkable
 
 # the checks and the optional hooks live in the core (proposals and filters use them without
 # importing the models); re-exported here, with every protocol of the models
-from ..hooks import FusedLISStep, FusedPropose, LookAhead, ProposalMap, Redetects, missing_parts, offers, require  # noqa: F401
+from ..core.hooks import FusedLISStep, FusedPropose, LookAhead, ProposalMap, Redetects, missing_parts, offers, require  # noqa: F401
 
 __all__ = ["StateSpaceModel", "PredictMean", "LocalSearch", "LearnedSearch", "LocalMoves", "LLSModel", "GridLikelihood",
            "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "InnovationSplit",
@@ -129,7 +129,7 @@ class LLSModel(Protocol):
     def lls_window(self, kernel=None):
         """The :class:`~vistrack.proposals.Window` over the ``m`` local coordinates for a step
         with ``kernel`` (``g`` matched to its spread, §4.4.1; ``None``: ``K``;
-        :mod:`~vistrack.models.kernel`)."""
+        :mod:`~vistrack.core.transition`)."""
 
 
 @runtime_checkable
@@ -148,7 +148,7 @@ class LISModel(Protocol):
 
     def lis_proposal(self, kernel=None):
         """The local proposal for a step with ``kernel`` (``K``, or ``p_0`` on the first step;
-        ``None``: ``K``; :mod:`~vistrack.models.kernel`).
+        ``None``: ``K``; :mod:`~vistrack.core.transition`).
 
         Returns an object with ``sample(x (N, d), obs, rng, prev (N, d)) -> (z (N, d),
         log_alpha (N,), log_q (N,))``: ``z`` drawn from ``q g(x - .) / α`` about the predictions
@@ -190,7 +190,7 @@ class ReservedLineages(Protocol):
     """The births the reserve keeps, chosen on the particle set (e.g. young lineages)."""
 
     def reserved(self, particles):
-        """Which particles of the :class:`~vistrack.particles.ParticleSet` the birth reserve
+        """Which particles of the :class:`~vistrack.core.particles.ParticleSet` the birth reserve
         keeps: bool ``(N,)``."""
 
 
@@ -336,15 +336,15 @@ class VideoModel(Protocol):
 
     def observe(self, maps, particles):
         """The frame's observation ``Y_t`` (what :meth:`StateSpaceModel.loglik` reads) from its
-        :class:`~vistrack.features.FeatureMaps`; ``particles``: the previous frame's
-        :class:`~vistrack.particles.ParticleSet` (``None`` on the first frame)."""
+        :class:`~vistrack.core.features.FeatureMaps`; ``particles``: the previous frame's
+        :class:`~vistrack.core.particles.ParticleSet` (``None`` on the first frame)."""
 
     def adapt(self, obs, estimate):
         """Learn from the frame's ``estimate (d,)`` (e.g. update an appearance template);
         returns whether anything changed."""
 
     def estimate(self, particles):
-        """The frame's point estimate ``(d,)`` from its :class:`~vistrack.particles.ParticleSet`."""
+        """The frame's point estimate ``(d,)`` from its :class:`~vistrack.core.particles.ParticleSet`."""
 
     def visible(self, obs, state):
         """Whether the object is reported at ``state (d,)`` in the frame observed as ``obs``."""

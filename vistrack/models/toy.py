@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..gaussian import diag_logpdf, gaussian_product
+from ..core.gaussian import diag_logpdf, gaussian_product
 from ..proposals import GaussMixtureProposal, Window
 from .innovation import ARInnovation
 

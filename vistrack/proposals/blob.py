@@ -157,7 +157,7 @@ class SubspaceProposal:
     image : BlobProposal or similar
         ``sample(n, obs, rng)`` and ``logpdf(x1a, obs)``.
     kernel : Transition or PriorKernel
-        The step's kernel (:mod:`vistrack.models.kernel`), with the model's split.
+        The step's kernel (:mod:`vistrack.core.transition`), with the model's split.
     subspace_dim, innovation_dim : int
     """
 

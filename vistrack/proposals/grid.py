@@ -27,9 +27,9 @@ from __future__ import annotations
 import numpy as np
 
 from .. import kernels
-from ..hooks import FusedLISStep, ProposalMap, offers
-from ..particles import logsumexp
-from ..transition import Transition
+from ..core.hooks import FusedLISStep, ProposalMap, offers
+from ..core.particles import logsumexp
+from ..core.transition import Transition
 
 __all__ = ["MapProposal", "categorical_rows", "inverse_cdf_rows"]
 
@@ -63,7 +63,7 @@ class MapProposal:
     truncate : float
         The grid spans ``± truncate`` window stds.
     kernel : Transition or None
-        The step's kernel (:mod:`vistrack.models.kernel`): its ``with_local`` moves the
+        The step's kernel (:mod:`vistrack.core.transition`): its ``with_local`` moves the
         particles and the window follows its spread; ``None``: the model's ``K``.
     """
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..gaussian import gaussian_product, gm_logpdf, mvn_sample
-from ..particles import logsumexp
+from ..core.gaussian import gaussian_product, gm_logpdf, mvn_sample
+from ..core.particles import logsumexp
 
 __all__ = ["GaussMixtureProposal"]
 
@@ -29,7 +29,7 @@ class GaussMixtureProposal:
     window_cov : array_like of shape (k, k) or (B, k, k)
         Covariance ``Σ_g`` of the Gaussian window on one factor (or per factor).
     kernel : Transition or None
-        The step's kernel (:mod:`vistrack.models.kernel`), whose ``with_local`` moves the
+        The step's kernel (:mod:`vistrack.core.transition`), whose ``with_local`` moves the
         particles; ``None``: the model's ``K``.
     """
 

@@ -7,7 +7,7 @@ import itertools
 
 import numpy as np
 
-from ..gaussian import diag_logpdf
+from ..core.gaussian import diag_logpdf
 
 __all__ = ["Window"]
 

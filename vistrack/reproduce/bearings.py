@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.metrics import equal_time_search
+from ..core.particles import DegenerateWeightsWarning
 from ..filters import ALGORITHMS, filter_steps, make_filter
-from ..metrics import equal_time_search
 from ..models.bearings.model import LIS_PROPOSALS, Bearings, simulate
-from ..particles import DegenerateWeightsWarning
 
 __all__ = ["BearingsConfig", "run_bearings", "bearing_tasks", "run_bearing_task", "bearing_results", "DEFAULT_ALGOS",
            "equal_time_pairs", "format_ship_table"]
@@ -125,7 +125,7 @@ def equal_time_pairs(cfg, runs=3, repeats=3, steps=4):
     ``cfg.particles``, the first algorithm at N and every other at the N whose time per run
     is closest to it. Times are the best of ``repeats`` timings, in CPU time, of ``runs`` runs
     on the first sequence in this process; the N tried are
-    :func:`~vistrack.metrics.equal_time_search`'s. Returns ``(pairs, {"algo:N": ms per run})``, the
+    :func:`~vistrack.core.metrics.equal_time_search`'s. Returns ``(pairs, {"algo:N": ms per run})``, the
     times at the answers."""
     model = Bearings(cfg.ships, proposal=cfg.proposal)
     _, obs, seeds = _sequence(cfg, model, 0)
@@ -156,7 +156,7 @@ def bearing_tasks(cfg):
 
 def run_bearing_task(task, out_dir):
     """Engine runner: sequence ``task["sequence"]``, written to ``out_dir/tasks/<name>.json``."""
-    from ..evaluation import prepare_worker, write_task_result
+    from ..engine.evaluation import prepare_worker, write_task_result
 
     prepare_worker()
 

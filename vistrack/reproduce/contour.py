@@ -1,6 +1,6 @@
 """Contour tracking experiment (thesis 001, §4.3.2, Table 4.1) on synthetic clips.
 
-Runs through the evaluation engine (:mod:`vistrack.evaluation`): every
+Runs through the evaluation engine (:mod:`vistrack.engine.evaluation`): every
 (clip, algorithm, N, run) is one task that writes its own file, so the
 experiment resumes after an interruption and runs on any Dask cluster. Run
 ``r`` on clip ``c`` uses ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]``
@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..evaluation import entry_tasks, load_task_results, pooled_summary
+from ..engine.evaluation import entry_tasks, load_task_results, pooled_summary
 
 __all__ = ["ContourConfig", "contour_tasks", "contour_results"]
 
@@ -37,7 +37,7 @@ class ContourConfig:
 
 
 def contour_tasks(cfg):
-    """The experiment's tasks (see :func:`vistrack.evaluation.task_list`)."""
+    """The experiment's tasks (see :func:`vistrack.engine.evaluation.task_list`)."""
     return entry_tasks(cfg, "contour")
 
 

@@ -5,7 +5,7 @@ A contour with the thesis's edge likelihood is tracked on clips whose object has
 colour and an identical distractor lies in the scene (``make_contour_clip(color=True,
 distractor=True)``), so the colour-blob proposal keeps drawing fake positions that must be
 filtered out. Every (clip, algorithm, N, run) is a task of the evaluation engine
-(:mod:`vistrack.evaluation`), as the contour experiment's; lost is the centre error above 50 px
+(:mod:`vistrack.engine.evaluation`), as the contour experiment's; lost is the centre error above 50 px
 at 240-px width, scaled (Fig. 3.10), and the mean error is over runs not lost (Fig. 3.9).
 Table 3.1 ran Basic-SIR with 3000 particles against RB-SS-HS-SIR with 400, at equal time;
 :func:`equal_time_entries` finds such particle counts on this machine. ``HSConfig.likelihood``
@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..metrics import equal_time_n
+from ..core.metrics import equal_time_n
 from .contour import ContourConfig, contour_results, contour_tasks
 
 __all__ = ["HSConfig", "DEFAULT_ENTRIES", "LIKELIHOOD_KEYS", "hs_tasks", "hs_results", "equal_time_entries",
@@ -80,7 +80,7 @@ hs_results = contour_results
 def _ms_per_frame(frames, model, algo, n, repeats=2):
     """The best of ``repeats`` runs' filter time per frame (ms) over ``frames``."""
     from ..filters import make_filter
-    from ..tracking import track
+    from ..track.loop import track
 
     best = np.inf
     for _ in range(repeats):
@@ -96,8 +96,8 @@ def equal_time_entries(clip_path, entries, frames=20, likelihood=None):
     entry's (time taken on the first ``frames`` frames of ``clip_path``, the model built with
     ``likelihood``; linear in N between N and 2N), as Table 3.1's counts were chosen. Returns
     ``(entries, {algo: ms per frame})``."""
-    from ..builders import build_model
-    from ..clips import load_clip
+    from ..io.clips import load_clip
+    from ..models.builders import build_model
 
     clip = load_clip(clip_path)
     fr = []

@@ -23,9 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.particles import DegenerateWeightsWarning, ParticleSet
 from ..filters import make_filter
 from ..models.landmarks.model import Landmarks, simulate
-from ..particles import DegenerateWeightsWarning, ParticleSet
 
 __all__ = ["LandmarksConfig", "PAPER", "run_landmarks", "landmarks_run", "landmark_tasks", "run_landmark_task",
            "landmark_results"]
@@ -129,7 +129,7 @@ def landmark_tasks(cfg):
 
 def run_landmark_task(task, out_dir):
     """Engine runner: one run, written to ``out_dir/tasks/<name>.json``."""
-    from ..evaluation import prepare_worker, write_task_result
+    from ..engine.evaluation import prepare_worker, write_task_result
 
     prepare_worker()
 

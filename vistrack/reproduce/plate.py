@@ -1,7 +1,7 @@
 """License-plate tracking experiment (thesis 001, §4.5.3, Figs. 4.15–4.16) on synthetic road clips.
 
 Every (clip, algorithm, N, run) is one task of the evaluation engine
-(:mod:`vistrack.evaluation`): the tracker starts with no box — plates are
+(:mod:`vistrack.engine.evaluation`): the tracker starts with no box — plates are
 acquired through the entering-car component — and the task records per
 frame whether a plate is reported (``Plate.visible``), the reported
 vertices and the time spent. Run ``r`` on clip ``c`` uses
@@ -25,13 +25,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..builders import build_model
-from ..clips import load_clip
-from ..evaluation import entry_tasks, prepare_worker, write_task_result
+from ..core.metrics import plate_frame_measures
+from ..core.particles import DegenerateWeightsWarning
+from ..engine.evaluation import entry_tasks, prepare_worker, write_task_result
 from ..filters import make_filter
-from ..metrics import plate_frame_measures
-from ..particles import DegenerateWeightsWarning
-from ..tracking import track
+from ..io.clips import load_clip
+from ..models.builders import build_model
+from ..track.loop import track
 from .contour import ContourConfig
 
 __all__ = ["PlateConfig", "plate_tasks", "run_plate_task", "plate_results"]
@@ -49,7 +49,7 @@ class PlateConfig(ContourConfig):
 
 
 def plate_tasks(cfg):
-    """The experiment's tasks (see :func:`vistrack.evaluation.task_list`)."""
+    """The experiment's tasks (see :func:`vistrack.engine.evaluation.task_list`)."""
     return entry_tasks(cfg, "plate")
 
 

@@ -23,9 +23,9 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize, special
 
-from ...gaussian import diag_logpdf
+from ...core.gaussian import diag_logpdf
+from ...core.transition import is_prior
 from ...proposals import GaussMixtureProposal, Window
-from ..kernel import is_prior
 from ..partitions import IndependentTargets
 from .xi import XiProposal
 

@@ -39,8 +39,8 @@ import numpy as np
 from scipy import special
 
 from ... import kernels
+from ...core.transition import is_prior
 from ...kernels.laplace import laplace_parts  # noqa: F401  (its home: numba compiles it there)
-from ..kernel import is_prior
 
 __all__ = ["XiProposal"]
 

@@ -6,7 +6,7 @@ Working resolution
     (:class:`AppearanceFrame`). A box ``(cx, cy, w, h)`` in frame pixels maps to
     ``((cx - x0) f, (cy - y0) f, w f, h f)`` there.
 Colour term (Pérez, Hue, Vermaak and Gangnet 2002)
-    Histograms over :func:`~vistrack.features.colour_bins` (hue x saturation, value for
+    Histograms over :func:`~vistrack.core.features.colour_bins` (hue x saturation, value for
     achromatic pixels; grey levels for grey video), from per-bin integral images. The
     target's histogram ``q`` and every candidate's are weighted by Comaniciu's background
     weights ``v_u = min(1, b* / b_u)`` (``b``: the histogram of the ring around the first
@@ -43,7 +43,7 @@ import cv2
 import numpy as np
 
 from ... import kernels
-from ...features import box_sums, is_grey
+from ...core.features import box_sums, is_grey
 from .frame_maps import AppearanceFrame, MapBuffers, shrink
 from .target_colour import TargetColour
 
@@ -81,7 +81,7 @@ class Appearance:
         at least this much with the first frame's template (``None``: no such test), so that a
         template that has drifted cannot keep adapting to what it drifted onto.
     grey : bool or None
-        Force grey-level bins; ``None``: from :func:`~vistrack.features.is_grey`.
+        Force grey-level bins; ``None``: from :func:`~vistrack.core.features.is_grey`.
     interpolation : {"area", "linear"}
         How a region is shrunk to the working resolution (:func:`shrink`): ``cv2.INTER_AREA`` (averages every
         frame pixel) or ``cv2.INTER_LINEAR`` (bilinear samples: 5-10x cheaper, 0.50 -> 0.05 ms a frame on

@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 
 from ... import kernels
-from ...features import bin_integrals, box_sums, colour_bins, n_colour_bins, remap_points
+from ...core.features import bin_integrals, box_sums, colour_bins, n_colour_bins, remap_points
 
 __all__ = ["AppearanceFrame", "MapBuffers", "shrink"]
 
@@ -179,13 +179,13 @@ class AppearanceFrame:
 
     @property
     def labels(self):
-        """Colour bins ``(H, W)`` uint8 over the whole region (:func:`~vistrack.features.colour_bins`)."""
+        """Colour bins ``(H, W)`` uint8 over the whole region (:func:`~vistrack.core.features.colour_bins`)."""
         return self._whole()._labels
 
     @property
     def ii(self):
         """Their bin integrals ``(H + 1, W + 1, B)`` over the whole region
-        (:func:`~vistrack.features.bin_integrals`)."""
+        (:func:`~vistrack.core.features.bin_integrals`)."""
         return self._whole()._ii
 
     def maps(self, window=None, texture_window=None):

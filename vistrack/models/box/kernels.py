@@ -26,7 +26,7 @@ from ...kernels.grid import grid_points, map_sample
 
 __all__ = ["ar2_predict", "ar2_logpdf", "box_loglik", "map_scores", "lis_predict", "lis_weigh"]
 
-_LOG2PI = float(np.log(2.0 * np.pi))  # as vistrack.gaussian and vistrack.proposals.grid
+_LOG2PI = float(np.log(2.0 * np.pi))  # as vistrack.core.gaussian and vistrack.proposals.grid
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

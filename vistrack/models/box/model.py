@@ -40,7 +40,7 @@ from __future__ import annotations
 import numpy as np
 
 from ... import kernels
-from ...gaussian import diag_logpdf
+from ...core.gaussian import diag_logpdf
 from ...proposals import MapProposal
 from .correlation_proposal import CorrelationProposal
 from .moves import BoxMoves
@@ -49,7 +49,7 @@ from .appearance import Appearance
 from ..collapse import CollapseCheck
 from .correlation import CorrelationFilter
 from ..innovation import ARInnovation
-from ..kernel import is_prior
+from ...core.transition import is_prior
 from ..protocol import VideoModelBase
 
 __all__ = ["Box"]

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...features import remap_points
+from ...core.features import remap_points
+from ...core.transition import is_prior
 from ...proposals import Window
-from ..kernel import is_prior
 
 __all__ = ["BoxMoves"]
 
@@ -20,7 +20,7 @@ class BoxMoves:
 
     def window_std(self, states=None, kernel=None):
         """Window std on the centre (px): ``window`` innovation stds of ``kernel`` (``p_0`` on
-        the first step, :mod:`~vistrack.models.kernel`), per particle ``(N,)`` with ``states``,
+        the first step, :mod:`~vistrack.core.transition`), per particle ``(N,)`` with ``states``,
         else the scalar at scale 1."""
         base = self.window * (self.prior_std[0] if is_prior(kernel) else self.sigma[0])
         return base if states is None else base * np.exp(states[:, 2])

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...features import FeatureMaps, is_grey
-from ...starts import first_frame, initial_truth, start_frame
-from ...video import VideoError
+from ...core.features import FeatureMaps, is_grey
+from ...io.starts import first_frame, initial_truth, start_frame
+from ...io.video import VideoError
 from ..spec import HISTORY_ALGOS, THESIS_ALGOS, ModelSpec
 from .model import Contour
 

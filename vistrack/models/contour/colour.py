@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...features import is_grey
+from ...core.features import is_grey
 from ..box.appearance import TargetColour
 
 __all__ = ["ContourColour"]
@@ -40,7 +40,7 @@ class ContourColour:
         band : tuple of float
             Offsets of the outside sample points along the normals, as shares of the size.
         grey : bool or None
-            Grey-level bins; ``None``: :func:`~vistrack.features.is_grey` of the frame.
+            Grey-level bins; ``None``: :func:`~vistrack.core.features.is_grey` of the frame.
 
         Returns
         -------
@@ -48,7 +48,7 @@ class ContourColour:
         """
         import cv2
 
-        from ...features import colour_bins, n_colour_bins
+        from ...core.features import colour_bins, n_colour_bins
 
         self.colour_grey = is_grey(frame) if grey is None else bool(grey)
         self.n_bins = n_colour_bins(self.colour_grey)

@@ -57,8 +57,8 @@ from __future__ import annotations
 import numpy as np
 
 from ... import kernels
-from ...features import remap_points
-from ...gaussian import diag_logpdf
+from ...core.features import remap_points
+from ...core.gaussian import diag_logpdf
 from ...proposals.translation import TranslationMoves
 from ..collapse import CollapseCheck
 from ..innovation import ARInnovation

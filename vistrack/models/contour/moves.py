@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from ... import kernels
+from ...core.transition import is_prior
 from ...proposals import GaussMixtureProposal, Window
-from ..kernel import is_prior
 from .nn import nn_candidates
 from .spline import edge_peaks, pose_params
 
@@ -194,7 +194,7 @@ class ContourMoves:
     # -- local moves on translation (LLS / LIS, §4.4.3) ---------------------------
     def window_std(self, kernel=None):
         """Window std on translation: the spread of ``kernel`` (``K``, or ``p_0`` on the first
-        step: :mod:`~vistrack.models.kernel`)."""
+        step: :mod:`~vistrack.core.transition`)."""
         return self.prior_std[:2] if is_prior(kernel) else self.sigma[:2]
 
     def _profiles_wide(self, obs, z, reach, lines=None):

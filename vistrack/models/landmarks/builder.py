@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...starts import initial_truth
-from ...video import VideoError
+from ...io.starts import initial_truth
+from ...io.video import VideoError
 from ..spec import ModelSpec
 
 __all__ = ["SPEC"]
@@ -21,7 +21,7 @@ def _landmarks(clip, size, init_gt, template, params):
     """Landmark model started from the first frame's landmarks: ``--template FILE`` (x y per
     line), ``--init-gt`` (lx0.., ly0.. columns), or the clip's meta.json; the clip's centre,
     scale and dynamics when meta.json has them."""
-    from ..landmarks.video import LandmarkVideo
+    from .video import LandmarkVideo
 
     meta = clip.meta or {}
     if template is not None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...features import blob_peaks
+from ...core.features import blob_peaks
 from ..protocol import VideoModelBase
 from .model import VIDEO_DYNAMICS, Landmarks
 
@@ -17,7 +17,7 @@ class LandmarkVideo(Landmarks, VideoModelBase):
 
     A configuration ``h`` lies at pixels ``centre + scale_px · (Re h, Im h)``.
     Observations (:meth:`observe`): bright blobs are the peaks of the small
-    box-filter DoG above ``blob_threshold`` (:func:`~vistrack.features.blob_peaks`);
+    box-filter DoG above ``blob_threshold`` (:func:`~vistrack.core.features.blob_peaks`);
     landmark ``k`` observes the candidate nearest to its predicted position
     (the weighted mean of every particle's mean prediction), or nothing (NaN,
     no likelihood term) when no candidate is within ``gate_px``. Wrong

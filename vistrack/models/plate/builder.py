@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...starts import first_frame, initial_truth, start_frame
-from ...video import VideoError
+from ...io.starts import first_frame, initial_truth, start_frame
+from ...io.video import VideoError
 from ..spec import ModelSpec
 
 __all__ = ["SPEC", "PLATES_ALGOS"]
@@ -21,7 +21,7 @@ def _plate_from_clip(clip, *, init, init_gt, template, targets=None, **params):
     if targets is not None:  # several plates at once: acquired by the slots' births
         if init is not None or init_gt is not None:
             raise VideoError("--targets finds the plates by itself: give no --init or --init-gt")
-        from ..plate.plates import Plates
+        from .plates import Plates
 
         params.pop("appearance", None)
         layout = _layout(params) or (clip.meta or {}).get("layout") or "jp"
@@ -44,7 +44,7 @@ def _plate(clip, size, init, init_gt, params):
     if appearance == "auto":  # a rendered clip: the plate likelihood alone, as the thesis experiments
         appearance = not (clip.meta or {}).get("model")
     if box is None and appearance:  # real footage without a box: find the plate first (PlateSearch)
-        from ..plate.detect import PlateSearch
+        from .detect import PlateSearch
 
         def build(frame, det):
             # the angle's random walk 0.003 rad/frame, not 0.01: started from a detection, the angle
@@ -71,10 +71,10 @@ def _plate_from_box(size, box, layout, params, frame=None, angle_sigma=None):
     the appearance of the plate in the box is learned too (:meth:`Plate.learn_appearance`) and the
     detector kept for :meth:`Plate.redetect`; ``angle_sigma``: the angle's random walk (rad/frame)
     instead of the model's, unless ``sigma`` is given."""
-    from ..plate.model import Plate
+    from .model import Plate
 
     if layout is None and box is not None:  # the layout whose aspect ratio is nearest the box's
-        from ..plate.layout import LAYOUTS
+        from .layout import LAYOUTS
 
         r = float(box[2]) / max(float(box[3]), 1e-9)
         layout = min(LAYOUTS, key=lambda k: abs(np.log(LAYOUTS[k].aspect / r)))
@@ -90,7 +90,7 @@ def _plate_from_box(size, box, layout, params, frame=None, angle_sigma=None):
         model.prior_mean = np.concatenate([pose, pose, [0.0]])
         model.start = (pose, np.array([0.05 * w, 0.05 * h, 0.03, 0.05 * w]))
         if frame is not None:
-            from ..plate.detect import PlateDetector
+            from .detect import PlateDetector
 
             model.learn_appearance(frame, (x, y, w, h))
             model.detector = PlateDetector()  # the plate searched for again while it is not reported

@@ -30,8 +30,8 @@ from pathlib import Path
 import numpy as np
 from scipy import optimize
 
-from ...clips import load_clip
-from ...features import FeatureMaps
+from ...io.clips import load_clip
+from ...core.features import FeatureMaps
 from .model import PlateLikelihood, scale_band
 from .layout import LAYOUTS
 

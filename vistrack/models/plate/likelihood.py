@@ -22,7 +22,7 @@ import cv2
 import numpy as np
 
 from ... import kernels
-from ...features import remap_points
+from ...core.features import remap_points
 from .layout import LAYOUTS, plate_points
 from .observation import PlateObservation
 
@@ -36,7 +36,7 @@ BORDER = np.array(_BORDER, np.float32)
 
 def plate_map(maps):
     """The 4-channel map ``(|∇_x I|, |∇_y I|, |G_s I|, |G_l I|)`` of a frame's
-    :class:`~vistrack.features.FeatureMaps`, each channel over its frame mean (float32 ``(H, W, 4)``).
+    :class:`~vistrack.core.features.FeatureMaps`, each channel over its frame mean (float32 ``(H, W, 4)``).
     Compiled where numba is (:func:`vistrack.models.plate.kernels.plate_map`, equal), into the maps'
     buffer pool."""
     if kernels.use():
@@ -234,7 +234,7 @@ class PlateLikelihood:
 
     def maps(self, obs):
         """The 4-channel map ``(|∇_x I|, |∇_y I|, |G_s I|, |G_l I|)``, each over its frame mean: a
-        :class:`PlateObservation`'s, else computed from the :class:`~vistrack.features.FeatureMaps`
+        :class:`PlateObservation`'s, else computed from the :class:`~vistrack.core.features.FeatureMaps`
         (:func:`plate_map`)."""
         return obs.plate if isinstance(obs, PlateObservation) else plate_map(obs)
 

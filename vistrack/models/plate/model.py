@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...gaussian import diag_logpdf
+from ...core.gaussian import diag_logpdf
 from ...proposals import Window
 from .likelihood import LEARNT_WEIGHTS, PlateLikelihood, PlateObservation, scale_band, thesis_weights
 from .appearance import PlateAppearance

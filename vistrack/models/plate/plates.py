@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...gaussian import diag_logpdf
+from ...core.gaussian import diag_logpdf
 from .model import Plate
 from ..protocol import VideoModelBase
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernel import PriorKernel, Transition, is_prior
+from ...core.transition import PriorKernel, Transition, is_prior
 from .proposal import PlateLISProposal
 
 __all__ = ["SlotLISProposal", "JointLISProposal"]

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from ... import kernels
-from ...gaussian import diag_logpdf
-from ..kernel import Transition
+from ...core.gaussian import diag_logpdf
+from ...core.transition import Transition
 from .likelihood import BORDER
 from .observation import PlateObservation
 
@@ -66,7 +66,7 @@ class PlateLISProposal:
         if window not in ("dynamics", "box"):
             raise ValueError(f"window must be 'dynamics' or 'box', got {window!r}")
         self.model = model
-        #: the step's kernel (:mod:`~vistrack.models.kernel`): the dynamics window is centred
+        #: the step's kernel (:mod:`~vistrack.core.transition`): the dynamics window is centred
         #: on its mean (``p_0``'s on the first step); ``None``: the model's ``K``
         self.kernel = Transition(model) if kernel is None else kernel
         #: entering particles also search the scale: ``scale_cells`` cells of ``log s`` over
@@ -90,7 +90,7 @@ class PlateLISProposal:
 
     def _conditional(self, log_vals, rng, beta=1.0):
         """Draw a cell per row ∝ exp(log_vals) and return (index, log prob of the cell)."""
-        from ...particles import logsumexp
+        from ...core.particles import logsumexp
 
         if kernels.use():
             from .scan_kernels import draw_cells

@@ -75,7 +75,7 @@ def task_fingerprint(task):
     ``--resume``."""
     import hashlib
 
-    from . import __version__
+    from .. import __version__
 
     body = {"task": _jsonable(task), "version": __version__, "code": code_signature()}
     if "clip" in task:

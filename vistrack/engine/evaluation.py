@@ -26,24 +26,24 @@ from pathlib import Path
 
 import numpy as np
 
-from .builders import build_model, start_frame
-from .clips import GroundTruthWarning, find_clips, load_clip, sequence_name  # noqa: F401  (find_clips: re-exported)
-from .results_format import find_result_file, read_result_file
-from .filters import ALGORITHMS, make_filter
-from .metrics import (PRECISION_THRESHOLDS, center_error, iou, lost_frames, pooled_summary, precision,  # noqa: F401
+from ..models.builders import build_model, start_frame
+from ..io.clips import GroundTruthWarning, find_clips, load_clip, sequence_name  # noqa: F401  (find_clips: re-exported)
+from ..io.results_format import find_result_file, read_result_file
+from ..filters import ALGORITHMS, make_filter
+from ..core.metrics import (PRECISION_THRESHOLDS, center_error, iou, lost_frames, pooled_summary, precision,  # noqa: F401
                       precision_curve, success_auc, success_curve)
-from .metrics import summarize as metrics_summarize
-from .models.registry import get_model_spec
-from .runtime import keep_freed_memory
+from ..core.metrics import summarize as metrics_summarize
+from ..models.registry import get_model_spec
+from ..core.runtime import keep_freed_memory
 from .tasks import (OutLocked, TaskFailed, check_shared, load_task_results, lock_out, stale_tasks, task_done,
                     task_fingerprint, write_atomic, write_task_result)
-from .tracking import track
-from .video import VideoError
+from ..track.loop import track
+from ..io.video import VideoError
 
 __all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_config", "run_task", "summarize",
            "pooled_summary", "OPENCV_TRACKERS", "check_algos", "sequence_name",
            "score_boxes", "score_result_file", "result_files",
-           # the engine's task files (vistrack.tasks), re-exported
+           # the engine's task files (vistrack.engine.tasks), re-exported
            "task_fingerprint", "task_done", "stale_tasks", "write_task_result", "write_atomic", "OutLocked",
            "lock_out", "load_task_results", "TaskFailed", "check_shared", "dask_setup"]
 
@@ -189,7 +189,7 @@ def prepare_worker():
 
 
 def dask_setup(worker):
-    """Dask preload hook of the LocalCluster's worker processes (``preload=["vistrack.evaluation"]``).
+    """Dask preload hook of the LocalCluster's worker processes (``preload=["vistrack.engine.evaluation"]``).
 
     Ctrl-C reaches the whole process group; it is the client's to handle (it closes the cluster,
     which ends the workers), so a worker ignores SIGINT rather than print a traceback, and keeps
@@ -249,7 +249,7 @@ def run_task(task, out_dir):
 def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=None):
     """Per-frame measures of ``boxes (frames, 4)`` (``x, y, w, h``; NaN where there is no
     estimate) against ``clip``'s ground truth: ``frames``, ``visible``, ``error`` (centre, px;
-    ``None`` without an estimate), ``lost`` (by ``rule``, :func:`~vistrack.metrics.lost_frames`)
+    ``None`` without an estimate), ``lost`` (by ``rule``, :func:`~vistrack.core.metrics.lost_frames`)
     and ``iou``."""
     t = clip.truth
     m = min(len(boxes), len(t["cx"]))
@@ -272,7 +272,7 @@ def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=No
 
 def result_files(dirs, clips, fmt="otb"):
     """``(tracker name, clip, result file)`` for every result folder and clip: ``DIR/<clip name>.txt``
-    (OTB) or ``DIR/<clip>/<clip>_001.txt`` (GOT-10k, VOT; :func:`~vistrack.results_format.find_result_file`,
+    (OTB) or ``DIR/<clip>/<clip>_001.txt`` (GOT-10k, VOT; :func:`~vistrack.io.results_format.find_result_file`,
     case-insensitive), the tracker named after ``DIR``. A missing file is a ``ValueError``; so are
     two folders of one name (they would be merged into one tracker) and a folder named like one
     of vistrack's algorithms or OpenCV trackers (it would be listed as that algorithm)."""
@@ -298,7 +298,7 @@ def result_files(dirs, clips, fmt="otb"):
 
 def score_result_file(clip_path, path, name, fmt="otb"):
     """A task result, as :func:`run_task` writes, from another tracker's result file ``path``
-    (``x,y,w,h`` per frame in format ``fmt``, :mod:`~vistrack.results_format`: OTB's 1-based, GOT-10k's
+    (``x,y,w,h`` per frame in format ``fmt``, :mod:`~vistrack.io.results_format`: OTB's 1-based, GOT-10k's
     and VOT's 0-based; ``0,0,0,0`` or NaN where it reports nothing — what ``vistrack run --results``
     writes), scored against the clip's ground truth under algorithm ``name``. Its frame rate is
     unknown (``ms`` empty)."""
@@ -322,7 +322,7 @@ def score_result_file(clip_path, path, name, fmt="otb"):
 
 
 def summarize(results):
-    """Per clip × algo × N summaries of task results (:func:`vistrack.metrics.summarize`; OpenCV's
+    """Per clip × algo × N summaries of task results (:func:`vistrack.core.metrics.summarize`; OpenCV's
     trackers marked as no particle filter)."""
     return metrics_summarize(results, not_filters=OPENCV_TRACKERS)
 

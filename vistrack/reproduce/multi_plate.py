@@ -1,12 +1,12 @@
 """Several plates at once (thesis 001 §4.5.3 with App. C's partitioned sampling) on synthetic road
 clips with up to three plates in view (``make_plate_clip(overlap=True)``).
 
-Every (clip, algorithm, N, run) is one task of the evaluation engine (:mod:`vistrack.evaluation`):
+Every (clip, algorithm, N, run) is one task of the evaluation engine (:mod:`vistrack.engine.evaluation`):
 the multi-plate model (:class:`~vistrack.models.plate.plates.Plates`, ``targets`` slots) tracks the clip
 with no initial box — plates are acquired by the slots' births — and the task records per frame
-the reported plates with their ids (:class:`~vistrack.mot.Identities`), the time spent and the
+the reported plates with their ids (:class:`~vistrack.core.mot.Identities`), the time spent and the
 ESS. Run ``r`` on clip ``c`` uses ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]`` for every
-algorithm. Scores per run against the clip's ``objects.csv`` (:func:`vistrack.mot.clear_mot`):
+algorithm. Scores per run against the clip's ``objects.csv`` (:func:`vistrack.core.mot.clear_mot`):
 MOTA, IDF1, identity switches, false positives, misses, and the plates reported in frames
 without any plate in view.
 """
@@ -20,17 +20,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ..builders import build_model
-from ..clips import load_clip
-from ..evaluation import entry_tasks, prepare_worker, write_task_result
+from ..core.metrics import equal_time_n
+from ..core.mot import FrameObjects, clear_mot, objects_by_frame, pool_scores
+from ..core.particles import DegenerateWeightsWarning
+from ..engine.evaluation import entry_tasks, prepare_worker, write_task_result
 from ..filters import make_filter
-from ..metrics import equal_time_n
-from ..mot import FrameObjects, clear_mot, objects_by_frame
-from ..particles import DegenerateWeightsWarning
-from ..tracking import track
+from ..io.clips import load_clip
+from ..models.builders import build_model
+from ..track.loop import track
 from .contour import ContourConfig
 
-__all__ = ["PlatesConfig", "plates_tasks", "run_plates_task", "score_plates_tasks", "pool_scores", "plates_results",
+__all__ = ["PlatesConfig", "plates_tasks", "run_plates_task", "score_plates_tasks", "plates_results",
            "plates_equal_time"]
 
 
@@ -45,7 +45,7 @@ class PlatesConfig(ContourConfig):
 
 
 def plates_tasks(cfg):
-    """The experiment's tasks (:func:`vistrack.evaluation.entry_tasks`, each with ``targets``)."""
+    """The experiment's tasks (:func:`vistrack.engine.evaluation.entry_tasks`, each with ``targets``)."""
     tasks = entry_tasks(cfg, "plate")
     for t in tasks:
         t["targets"] = int(cfg.targets)
@@ -84,13 +84,13 @@ def run_plates_task(task, out_dir):
 
 
 def record_objects(result):
-    """The reported plates of a task record as :class:`~vistrack.mot.FrameObjects`, one per frame."""
+    """The reported plates of a task record as :class:`~vistrack.core.mot.FrameObjects`, one per frame."""
     return [FrameObjects(np.asarray(i, int), np.asarray(v, float).reshape(-1, 4, 2), np.asarray(s, float))
             for i, v, s in zip(result["ids"], result["vertices"], result["scale"])]
 
 
 def score_plates_tasks(tasks, out_dir):
-    """One row per task: ``clip, algo, particles, run``, the scores of :func:`~vistrack.mot.clear_mot`
+    """One row per task: ``clip, algo, particles, run``, the scores of :func:`~vistrack.core.mot.clear_mot`
     against the clip's ``objects.csv``, its ``ms`` per frame and mean ``ess``. A clip without
     ``objects.csv`` is a ``ValueError``."""
     truths, aspects, rows = {}, {}, []
@@ -106,23 +106,6 @@ def score_plates_tasks(tasks, out_dir):
         rows.append({"clip": t["clip"], "algo": t["algo"], "particles": int(t["particles"]), "run": t["run"], **s,
                      "ms": float(np.mean(r["ms"])), "ess": float(np.mean(r["ess"]))})
     return rows
-
-
-def pool_scores(rows):
-    """The scores of task rows (:func:`score_plates_tasks`) of one group: the means over runs of MOTA,
-    IDF1, MOTP, switches, false positives and misses per run, the plates reported in frames without
-    one (summed), ms per frame and mean ESS."""
-    def mean(k):
-        v = [r[k] for r in rows if r[k] is not None]
-        return float(np.mean(v)) if v else None
-
-    return {"runs": len(rows), "mota": mean("mota"), "idf1": mean("idf1"), "motp": mean("motp"),
-            "mota_std": float(np.std([r["mota"] or 0.0 for r in rows])),
-            "switches_per_run": mean("switches"), "false_positives_per_run": mean("false_positives"),
-            "misses_per_run": mean("misses"), "objects_per_run": mean("objects"),
-            "empty_frame_reports": int(sum(r["empty_frame_reports"] for r in rows)),
-            "frames_without": int(sum(r["frames_without"] for r in rows)),
-            "ms_per_frame": mean("ms"), "mean_ess": mean("ess")}
 
 
 def plates_results(cfg, tasks, out_dir):

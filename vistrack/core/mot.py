@@ -8,7 +8,7 @@ px); a frame without any object has one row with ``visible = 0`` and ``id = -1``
 
 Scores (:func:`clear_mot`), by the ``motmetrics`` library: a reported plate and a true one can
 be matched in a frame when their summed vertex error is at most a third of the true plate's
-height — the single-plate experiment's rule for "on the plate" (:mod:`vistrack.metrics`).
+height — the single-plate experiment's rule for "on the plate" (:mod:`vistrack.core.metrics`).
 
 * MOTA = 1 - (misses + false positives + identity switches) / true objects (Bernardin &
   Stiefelhagen 2008, CLEAR MOT);
@@ -26,7 +26,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 __all__ = ["MultiTarget", "Identities", "FrameObjects", "objects_by_frame", "plate_distances", "clear_mot",
-           "require_motmetrics",
+           "require_motmetrics", "pool_scores",
            "MOT_KEYS"]
 
 
@@ -114,7 +114,7 @@ class FrameObjects:
 
 def objects_by_frame(columns, frames=None):
     """Per-frame objects of a multi-target file read by
-    :func:`~vistrack.clips.read_groundtruth_csv` (``columns``: name -> array, one entry per row):
+    :func:`~vistrack.io.clips.read_groundtruth_csv` (``columns``: name -> array, one entry per row):
     a list with one :class:`FrameObjects` per frame ``0 .. frames - 1`` (default: up to the
     largest frame in the file), empty where the file has no visible row."""
     frame = np.asarray(columns["frame"], int)
@@ -178,3 +178,20 @@ def clear_mot(truth, hyp, aspect):
             "motp": motp if np.isfinite(motp) else None, "switches": int(s["num_switches"]),
             "false_positives": int(s["num_false_positives"]), "misses": int(s["num_misses"]), "objects": n_obj,
             "empty_frame_reports": int(empty_reports), "frames_without": int(frames_without)}
+
+
+def pool_scores(rows):
+    """The scores of task rows (:func:`score_plates_tasks`) of one group: the means over runs of MOTA,
+    IDF1, MOTP, switches, false positives and misses per run, the plates reported in frames without
+    one (summed), ms per frame and mean ESS."""
+    def mean(k):
+        v = [r[k] for r in rows if r[k] is not None]
+        return float(np.mean(v)) if v else None
+
+    return {"runs": len(rows), "mota": mean("mota"), "idf1": mean("idf1"), "motp": mean("motp"),
+            "mota_std": float(np.std([r["mota"] or 0.0 for r in rows])),
+            "switches_per_run": mean("switches"), "false_positives_per_run": mean("false_positives"),
+            "misses_per_run": mean("misses"), "objects_per_run": mean("objects"),
+            "empty_frame_reports": int(sum(r["empty_frame_reports"] for r in rows)),
+            "frames_without": int(sum(r["frames_without"] for r in rows)),
+            "ms_per_frame": mean("ms"), "mean_ess": mean("ess")}

@@ -11,11 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .models.plate.builder import PLATES_ALGOS
-from .models.registry import MODELS as _REGISTRY
-from .models.registry import get_model_spec
-from .starts import MAX_BOX_FACTOR, check_start_box, first_frame, initial_truth, start_box, start_frame
-from .video import VideoError, _short
+from ..io.starts import MAX_BOX_FACTOR, check_start_box, first_frame, initial_truth, start_box, start_frame
+from ..io.video import VideoError, _short
+from .plate.builder import PLATES_ALGOS
+from .registry import MODELS as _REGISTRY
+from .registry import get_model_spec
 
 __all__ = ["MODELS", "PLATES_ALGOS", "MAX_BOX_FACTOR", "initial_truth", "start_frame", "check_start_box", "build_model",
            "model_from_box", "read_support_points"]

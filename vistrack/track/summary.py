@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .metrics import center_error, iou, landmark_error, lost_frames, plate_frame_measures, precision, success_auc
+from ..core.metrics import center_error, iou, landmark_error, lost_frames, plate_frame_measures, precision, success_auc
 from .profiling import STAGES
 
 __all__ = ["summary_lines"]
@@ -50,7 +50,7 @@ def summary_lines(run, particles, *, model_name, model, truth, frame_width, obje
 
 def _mot_line(run, objects, model):
     """One line: the CLEAR-MOT and identity scores of the run's target rows against ``objects``."""
-    from .mot import clear_mot, objects_by_frame
+    from ..core.mot import clear_mot, objects_by_frame
 
     cols = {k: np.array([r[k] for r in run.target_rows], float) for k in ("frame", "visible", "id", "scale")
             + tuple(f"{c}{i}" for i in range(4) for c in "xy")}

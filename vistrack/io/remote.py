@@ -1,6 +1,6 @@
 """Clips given as URLs (``http://``, ``https://``, ``s3://``, ``file://``, ...): fetched once into a local cache.
 
-The batch engine's workers (:mod:`vistrack.engine`) need no filesystem in common with the client:
+The batch engine's workers (:mod:`vistrack.engine.grid`) need no filesystem in common with the client:
 a clip may be named by a URL that each worker reads with `fsspec <https://filesystem-spec.readthedocs.io>`_
 (``http(s)://`` through aiohttp; ``s3://``, ``gs://`` and others when their fsspec package is
 installed). A clip folder's files (video or images, ground truth, meta.json) are copied once into

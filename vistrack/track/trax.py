@@ -1,4 +1,4 @@
-"""vistrack as a tracker of the VOT toolkit: a TraX server (``vistrack trax``, ``python -m vistrack.trax``).
+"""vistrack as a tracker of the VOT toolkit: a TraX server (``vistrack trax``, ``python -m vistrack.track.trax``).
 
 The `TraX protocol <https://github.com/votchallenge/trax>`_ is how ``vot-toolkit`` talks to a
 tracker: it starts the tracker's command, sends the first frame (an image file's path) with the
@@ -67,10 +67,10 @@ def serve(model="box", algo=None, particles=100, seed=0, **model_options):
 
 
 def main(argv=None):
-    """``python -m vistrack.trax [--model M] [--algo A] [-n N] [--seed S]``."""
+    """``python -m vistrack.track.trax [--model M] [--algo A] [-n N] [--seed S]``."""
     import argparse
 
-    ap = argparse.ArgumentParser(prog="python -m vistrack.trax", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="python -m vistrack.track.trax", description=__doc__.splitlines()[0])
     ap.add_argument("--model", default="box")
     ap.add_argument("--algo", default=None)
     ap.add_argument("-n", "--particles", type=int, default=100)

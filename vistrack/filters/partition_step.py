@@ -30,9 +30,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.particles import ParticleSet, checked_weights
+from ..core.resampling import needs_resampling
 from ..models.protocol import PartitionLIS, Partitions, StateSpaceModel
-from ..particles import ParticleSet, checked_weights
-from ..resampling import needs_resampling
 from .base import ParticleFilter
 from .resampler import BirthReserve
 

@@ -48,7 +48,7 @@ class Clip:
     @property
     def objects(self):
         """The per-object ground truth (``objects.csv``: a row per frame and object, with ids;
-        :mod:`vistrack.mot`) as columns, or ``None`` when the clip has none."""
+        :mod:`vistrack.core.mot`) as columns, or ``None`` when the clip has none."""
         path = self.folder / "objects.csv"
         return read_groundtruth_csv(path) if path.is_file() else None
 
@@ -109,7 +109,7 @@ def _rects_truth(rects):
 
 def load_clip(path):
     """Open a clip folder, a video file (with its folder's ground truth) or an image folder; a URL
-    (``http://``, ``s3://``, ...) is fetched once into a local cache (:func:`vistrack.remote.local_clip`)."""
+    (``http://``, ``s3://``, ...) is fetched once into a local cache (:func:`vistrack.io.remote.local_clip`)."""
     from .remote import local_clip
     from .video import is_stream
 
@@ -284,7 +284,7 @@ def find_clips(paths):
     """
     clips = []
     for raw in paths:
-        if is_url(raw):  # one clip folder, fetched where it is read (vistrack.remote)
+        if is_url(raw):  # one clip folder, fetched where it is read (vistrack.io.remote)
             clips.append(str(raw))
             continue
         p = Path(raw)

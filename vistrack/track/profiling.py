@@ -14,7 +14,7 @@ import time
 from collections import defaultdict
 from contextlib import contextmanager
 
-from .models.protocol import (
+from ..models.protocol import (
     FusedLISStep,
     GridLikelihood,
     LocalMixture,
@@ -95,10 +95,10 @@ def profile_stages(model, filt, timer):
     """Within the block, time ``model``'s and ``filt``'s stages (module docstring) into ``timer``.
 
     The methods are wrapped on their classes (the model's, its proposal's and
-    :class:`~vistrack.features.FeatureMaps`), so that the parts the first step builds
+    :class:`~vistrack.core.features.FeatureMaps`), so that the parts the first step builds
     (:meth:`~vistrack.filters.base.ParticleFilter.part`) are timed too and the track is
     exactly as without profiling; use in one thread. Everything is restored after."""
-    from .features import FeatureMaps
+    from ..core.features import FeatureMaps
 
     restore = []
 

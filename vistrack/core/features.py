@@ -17,7 +17,7 @@ from functools import cached_property
 import cv2
 import numpy as np
 
-from . import kernels
+from .. import kernels
 
 __all__ = ["FeatureMaps", "box_dog", "remap_points", "blob_peaks", "is_grey", "colour_bins", "n_colour_bins",
            "bin_integrals", "box_sums"]
@@ -68,7 +68,7 @@ def colour_bins(image, grey=False, dst=None):
         return np.floor_divide(g, 256 // GREY_BINS, out=dst, dtype=np.uint8, casting="unsafe")
     hsv = cv2.cvtColor(image, cv2.COLOR_BGR2HSV)
     if kernels.use():
-        from .kernels.appearance import colour_labels
+        from ..kernels.appearance import colour_labels
 
         return colour_labels(hsv, np.empty(hsv.shape[:2], np.uint8) if dst is None else dst)
     h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
@@ -97,7 +97,7 @@ def bin_integrals(labels, n_bins):
     ndarray of shape (H + 1, W + 1, n_bins) int32
     """
     if kernels.use():
-        from .kernels.appearance import bin_integrals as compiled
+        from ..kernels.appearance import bin_integrals as compiled
 
         return compiled(np.ascontiguousarray(labels), int(n_bins))
     onehot = np.eye(n_bins, dtype=np.uint8)[labels]

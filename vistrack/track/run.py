@@ -2,7 +2,7 @@
 video written frame by frame, nothing lost on an interrupt, and the summary against ground truth.
 
 Writing whole or not at all: the track CSV goes to a temporary name of its own beside ``PATH``
-(``PATH.part``, or ``PATH.<pid>-<k>.part`` when that is taken; :mod:`vistrack.outputs`), one
+(``PATH.part``, or ``PATH.<pid>-<k>.part`` when that is taken; :mod:`vistrack.io.outputs`), one
 flushed row per frame, under a lock that a second run given the same ``PATH`` refuses,
 and is renamed to ``PATH`` when the run ends for any reason (done, Ctrl-C, SIGTERM, an
 error), so ``PATH`` is always a whole CSV of the frames tracked; a killed process leaves only
@@ -26,16 +26,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .hooks import Redetects, offers
-from .particles import DegenerateWeightsWarning
+from ..core.hooks import Redetects, offers
+from ..core.particles import DegenerateWeightsWarning
 from .profiling import STAGES, Timer, profile_stages
-from .render import annotate, annotate_targets
-from .results_format import result_paths
-from .run_summary import summary_lines
+from ..io.render import annotate, annotate_targets
+from ..io.results_format import result_paths
+from .summary import summary_lines
 from .signals import HARD_STOP, Terminated, deferred_signals, stop_on_signals, stop_reason
-from .track_files import TrackCSV
-from .tracking import top_particles, track, warm_up
-from .video_writer import VideoWriter
+from ..io.track_files import TrackCSV
+from .loop import top_particles, track, warm_up
+from ..io.video_writer import VideoWriter
 
 # TrackCSV, summary_lines and the signal handling live in track_files, run_summary and signals (re-exported)
 __all__ = ["TrackCSV", "VideoRun", "track_row", "target_rows", "track_video", "summary_lines", "Terminated",
@@ -52,7 +52,7 @@ class VideoRun:
     degenerate: int = 0
     #: ``None``, or how the run was cut short: ``"interrupt"`` (Ctrl-C) or ``"terminate"`` (SIGTERM)
     stopped: str | None = None
-    #: per-stage seconds (:class:`~vistrack.profiling.Timer`) or ``None``
+    #: per-stage seconds (:class:`~vistrack.track.profiling.Timer`) or ``None``
     timer: object = None
     #: why the annotated video is not H.264, or ``None``
     video_note: str | None = None
@@ -71,7 +71,7 @@ class VideoRun:
         self._was_lost = bool(res.lost_reason)
 
     def stage_split(self):
-        """``{stage: ms per frame}`` over :data:`~vistrack.profiling.STAGES`, plus ``other`` (the
+        """``{stage: ms per frame}`` over :data:`~vistrack.track.profiling.STAGES`, plus ``other`` (the
         rest of the filter step) and ``total`` (wall time per frame); ``None`` without a timer."""
         if self.timer is None or not self.rows:
             return None
@@ -88,7 +88,7 @@ class VideoRun:
 
 
 def track_row(model, res):
-    """The track-CSV row of a :class:`~vistrack.tracking.FrameResult`: ``frame, visible``, the
+    """The track-CSV row of a :class:`~vistrack.track.loop.FrameResult`: ``frame, visible``, the
     model's :meth:`describe` columns, ``redetected`` (a model that re-detects a lost object, the box
     model's: 1 on the frame it is re-found), ``ess, ms, lost_reason``."""
     row = {"frame": res.index, "visible": int(res.visible)}
@@ -100,7 +100,7 @@ def track_row(model, res):
 
 
 def target_rows(model, res):
-    """The track-CSV rows of a frame of a model of several targets (:class:`~vistrack.mot.MultiTarget`):
+    """The track-CSV rows of a frame of a model of several targets (:class:`~vistrack.core.mot.MultiTarget`):
     one per reported target, ``frame, visible = 1, id``, the target's :meth:`describe_target`
     columns, ``ess, ms, lost_reason``; one row with ``visible = 0, id = -1``, NaN geometry and the
     frame's ``lost_reason`` when none is reported."""
@@ -129,10 +129,10 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     rng : numpy.random.Generator
     track_path, out_path, results_path : path or None
         Track CSV (:class:`TrackCSV`), annotated mp4 and result file (``x,y,w,h``; for GOT-10k and
-        VOT the results folder, :func:`~vistrack.results_format.result_paths`).
+        VOT the results folder, :func:`~vistrack.io.results_format.result_paths`).
     results_format, sequence : str
         The result file's format, ``otb`` (1-based), ``got10k`` or ``vot``
-        (:mod:`vistrack.results_format`), and the sequence's name in the GOT-10k and VOT layouts.
+        (:mod:`vistrack.io.results_format`), and the sequence's name in the GOT-10k and VOT layouts.
     video_info, show_particles, label : tuple or None, int, str
         ``(fps, (width, height))`` for the annotated video; draw this many highest-weight particles,
         and ``label`` after the frame number.
@@ -140,13 +140,13 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         ``progress(ess)`` after every frame (a progress bar); ``notify(index, reason, detail)`` on the
         first frame of every stretch where the object is lost (:mod:`vistrack.models.collapse`).
     profile : bool
-        Time the stages (:mod:`vistrack.profiling`) into ``VideoRun.timer`` (the same tracks).
+        Time the stages (:mod:`vistrack.track.profiling`) into ``VideoRun.timer`` (the same tracks).
     lead : sequence of (int, ndarray)
         Frames before ``frames`` searched without finding the object
         (:class:`~vistrack.models.plate.detect.PlateSearch`): rows with ``visible=0``, "not found".
     frame_count, start : int or None, int
         The input's exact frame count (an image folder: frames after the last one decoded get rows
-        too), and the frame tracking starts from (:func:`~vistrack.starts.start_frame`; earlier
+        too), and the frame tracking starts from (:func:`~vistrack.io.starts.start_frame`; earlier
         frames get rows with ``lost_reason`` "not started").
     """
     run = VideoRun()
@@ -243,7 +243,7 @@ def _close_all(outs, writer):
 
 def _warmed(frames, filt, particles):
     """``frames`` with the filter's kernels loaded on a blank frame shaped like the first
-    (:func:`~vistrack.tracking.warm_up`) before they are taken: start-up, not tracking time."""
+    (:func:`~vistrack.track.loop.warm_up`) before they are taken: start-up, not tracking time."""
     frames = iter(frames)
     first = next(frames, None)
     if first is None:
@@ -279,7 +279,7 @@ def _record(run, res, model, outs, writer, show_particles, label, notify=None):
 
 
 class _Untracked:
-    """The :class:`~vistrack.tracking.FrameResult` fields of a frame that was not tracked."""
+    """The :class:`~vistrack.track.loop.FrameResult` fields of a frame that was not tracked."""
 
     visible = False
 

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .features import FeatureMaps
-from .models.protocol import Redetects, VideoModel, offers, require
-from .particles import ParticleSet
+from ..core.features import FeatureMaps
+from ..core.particles import ParticleSet
+from ..models.protocol import Redetects, VideoModel, offers, require
 
 __all__ = ["FrameResult", "FrameStepper", "track", "top_particles", "warm_up"]
 
@@ -35,9 +35,9 @@ class FrameResult:
     #: (:data:`~vistrack.models.collapse.REASONS`), and a sentence with the numbers
     lost_reason: str = ""
     lost_detail: str = ""
-    #: a model of several targets (:class:`~vistrack.mot.MultiTarget`): the frame's reported
+    #: a model of several targets (:class:`~vistrack.core.mot.MultiTarget`): the frame's reported
     #: targets as ``(ids (M,), states (M, d1))``, the ids kept from frame to frame
-    #: (:class:`~vistrack.mot.Identities`); ``None`` for a single-target model
+    #: (:class:`~vistrack.core.mot.Identities`); ``None`` for a single-target model
     targets: tuple = None
     #: the model re-found the object on this frame after a loss (a whole-frame search, the box model's
     #: ``redetect``) and reports it here (the track CSV's ``redetected``)
@@ -95,7 +95,7 @@ class FrameStepper:
         self.model = filt.model
         self.estimator = estimator or filt.model.estimate
         self._buffers = {}  # feature-map buffers reused from frame to frame
-        from .mot import Identities, MultiTarget
+        from ..core.mot import Identities, MultiTarget
 
         self.identities = Identities() if offers(self.model, MultiTarget) else None
 
@@ -129,7 +129,7 @@ def warm_up(filt, n, frame):
     cannot track a blank frame just skips this: the real frames will say what is wrong)."""
     import warnings
 
-    from . import kernels
+    from .. import kernels
 
     if not kernels.use():
         return

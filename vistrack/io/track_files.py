@@ -18,7 +18,7 @@ class TrackCSV:
     """Track rows (dicts) written as they come: header from the first row, one flushed row per
     :meth:`write` to ``path.part``; :meth:`close` renames it to ``path`` (module docstring); a
     device or pipe (``/dev/stdout``) is written directly.
-    ``boxes``: a result file of the tracking toolkits instead (:mod:`vistrack.results_format`):
+    ``boxes``: a result file of the tracking toolkits instead (:mod:`vistrack.io.results_format`):
     ``"otb"`` (or ``True``), ``"got10k"``, ``"vot"`` — ``x,y,w,h`` per frame, no header — or
     ``"time"``, GOT-10k's seconds per frame."""
 

@@ -3,11 +3,11 @@
 ``vistrack eval``, ``vistrack reproduce`` and ``vistrack demo`` hand their tasks to
 :func:`run_grid`; the CLI only parses options and prints. A task is a JSON-ready dict; a runner
 ``runner(task, out_dir) -> path`` tracks it on a worker and writes its result JSON under
-``out_dir/tasks`` (:func:`vistrack.evaluation.run_task` by default). The runner runs on the worker
+``out_dir/tasks`` (:func:`vistrack.engine.evaluation.run_task` by default). The runner runs on the worker
 in a scratch folder of the worker's own and the result travels back to this process through
 Dask, which writes ``OUT/tasks/<name>.json`` atomically: the workers need no filesystem in common
 with the client, only the clips, which may be given as URLs (``http://``, ``s3://``, ...: see
-:func:`vistrack.remote.local_clip`) that every worker fetches itself.
+:func:`vistrack.io.remote.local_clip`) that every worker fetches itself.
 
 A worker that dies (killed, out of memory) is replaced and its task runs again from its own seed
 stream, so the results are those of an uninterrupted run; task files are only ever replaced whole,
@@ -51,11 +51,11 @@ def open_client(scheduler=None, workers=0, timeout=10, in_process=False):
             raise EngineError(f"the Dask scheduler at {scheduler} has no workers (waited {timeout} s)") from None
         return client, None
     # the HTTP server on any free local port (not 8787, which another cluster may hold: a warning);
-    # workers ignore Ctrl-C, which this process handles (vistrack.evaluation.dask_setup)
+    # workers ignore Ctrl-C, which this process handles (vistrack.engine.evaluation.dask_setup)
     cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
                            processes=not in_process, dashboard_address=None, silence_logs=logging.CRITICAL,
                            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-                           **({} if in_process else {"preload": ["vistrack.evaluation"]}))
+                           **({} if in_process else {"preload": ["vistrack.engine.evaluation"]}))
     return Client(cluster), cluster
 
 
@@ -110,7 +110,7 @@ def execute(tasks, out_dir, client, *, resume=False, progress=None, key_prefix="
     """
     from distributed import KilledWorker, as_completed
 
-    from .video import VideoError
+    from ..io.video import VideoError
 
     pending = [t for t in tasks if not (resume and task_done(t, out_dir))]
     if progress and len(tasks) > len(pending):
@@ -144,7 +144,7 @@ def execute(tasks, out_dir, client, *, resume=False, progress=None, key_prefix="
 def run_grid(tasks, out, *, scheduler=None, workers=0, timeout=10, in_process=False, resume=False, progress=None,
              runner=None, notify=None, on_ready=None):
     """Execute ``tasks`` on Dask (a LocalCluster unless ``scheduler``), holding the ``out`` lock
-    (:func:`~vistrack.tasks.lock_out`); the task files are written into ``out/tasks`` here.
+    (:func:`~vistrack.engine.tasks.lock_out`); the task files are written into ``out/tasks`` here.
 
     ``on_ready()`` once the workers are there; ``progress(k)`` as tasks finish; ``notify(line)`` for
     what the user should hear even when quiet

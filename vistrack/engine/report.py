@@ -22,7 +22,7 @@ CSV_COLUMNS = ["clip", "algo", "particles", "run", "frames", "mean_error", "mean
 
 def task_row(r):
     """One ``results.csv`` row of a task result: the numbers ``results.json`` gives this one run
-    (:func:`~vistrack.evaluation.summarize`), so the two files agree — frames where the ground
+    (:func:`~vistrack.engine.evaluation.summarize`), so the two files agree — frames where the ground
     truth has no object (OTB/VOT absent frames) count in neither. ``mean_error`` is over the
     frames not lost, ``mean_error_all`` over every frame with the object in view and an estimate;
     empty where there is none."""
@@ -141,8 +141,8 @@ def _annotated_videos(out, results, max_trackers=8, width=480):
     clip)]``, empty where the task results carry no boxes (written by an older version)."""
     import cv2
 
-    from .clips import load_clip
-    from .video import VideoWriter
+    from ..io.clips import load_clip
+    from ..io.video import VideoWriter
 
     clips = list(dict.fromkeys(r["clip"] for r in results))
     if not clips:

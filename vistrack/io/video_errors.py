@@ -1,4 +1,4 @@
-"""What reading and writing videos raise and warn (re-exported by :mod:`vistrack.video`)."""
+"""What reading and writing videos raise and warn (re-exported by :mod:`vistrack.io.video`)."""
 
 from __future__ import annotations
 

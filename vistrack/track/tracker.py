@@ -6,7 +6,7 @@
 
 Frames are numpy BGR (or grey) arrays, as ``cv2.VideoCapture`` gives them, so it drops into
 code written for ``cv2.TrackerMIL``. It runs the same code as ``vistrack run``
-(:func:`~vistrack.builders.model_from_box`, :class:`~vistrack.tracking.FrameStepper`): the
+(:func:`~vistrack.models.builders.model_from_box`, :class:`~vistrack.track.loop.FrameStepper`): the
 same options and seed give the same track.
 """
 
@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .builders import model_from_box
-from .filters import make_filter
-from .models.registry import get_model_spec
-from .runtime import check_particle_memory
-from .tracking import FrameStepper
+from ..core.runtime import check_particle_memory
+from ..filters import make_filter
+from ..models.builders import model_from_box
+from ..models.registry import get_model_spec
+from .loop import FrameStepper
 
 __all__ = ["Tracker"]
 
@@ -73,7 +73,7 @@ class Tracker:
 
     @property
     def particles(self):
-        """The :class:`~vistrack.particles.ParticleSet` after the last frame (``None`` before :meth:`init`)."""
+        """The :class:`~vistrack.core.particles.ParticleSet` after the last frame (``None`` before :meth:`init`)."""
         return None if self._stepper is None else self._stepper.particles
 
     def init(self, frame, box):

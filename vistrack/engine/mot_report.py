@@ -1,5 +1,5 @@
 """The files ``vistrack eval --targets K`` writes: ``results.json``, ``results.csv`` and ``report.md``
-with the CLEAR-MOT and identity scores (:mod:`vistrack.mot`) per clip × algorithm × N and averaged
+with the CLEAR-MOT and identity scores (:mod:`vistrack.core.mot`) per clip × algorithm × N and averaged
 over clips."""
 
 from __future__ import annotations
@@ -9,6 +9,7 @@ import io
 import json
 from pathlib import Path
 
+from ..core.mot import pool_scores
 from .tasks import write_atomic
 
 __all__ = ["MOT_CSV_COLUMNS", "write_mot_outputs"]
@@ -42,7 +43,6 @@ def _table(groups):
 def write_mot_outputs(out, cfg, rows, targets, chosen=None):
     """Write ``results.json`` (the pooled scores per algorithm and N, over all clips and per clip),
     ``results.csv`` (``rows``: one per task, :data:`MOT_CSV_COLUMNS`) and ``report.md`` into ``out``."""
-    from .reproduce.plates import pool_scores
 
     out = Path(out)
     overall = {k: pool_scores(v) for k, v in _groups(rows, lambda r: (r["algo"], r["particles"])).items()}

@@ -35,9 +35,9 @@ class VideoWriter:
         browser plays them while they load), ``.mkv`` H.264 too, and ``.avi`` Motion JPEG under
         ``h264``/``auto`` (with :attr:`note`); any other name is a :class:`VideoError`.
     atomic : bool
-        Write under a temporary name beside ``path`` (:func:`vistrack.outputs.temporary_name`),
+        Write under a temporary name beside ``path`` (:func:`vistrack.io.outputs.temporary_name`),
         renamed over it by :meth:`close`, holding ``path``'s lock meanwhile
-        (:class:`vistrack.outputs.OutputLock`: a second writer is refused); ``path`` never
+        (:class:`vistrack.io.outputs.OutputLock`: a second writer is refused); ``path`` never
         holds half a video and is never the same file as another writer's.
 
     Attributes
