@@ -14,6 +14,7 @@ import click
 
 from vistrack import __version__
 from vistrack.core.runtime import keep_freed_memory
+from vistrack.io.outputs import OutputError
 from vistrack.track.run import Terminated, stop_on_signals
 
 from .demo import demo
@@ -49,6 +50,9 @@ class VistrackGroup(click.Group):
             sys.exit(e.exit_code)
         except (click.exceptions.Abort, KeyboardInterrupt) as e:
             _stopped(e)
+        except OutputError as e:  # names the output, the cause and what is left there
+            click.echo(f"Error: {e}", err=True)
+            sys.exit(1)
         except OSError as e:
             where = f": {e.filename}" if e.filename else ""
             click.echo(f"Error: {e.strerror or e}{where}", err=True)

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from matplotlib.figure import Figure
 
+from ..io.outputs import replacing
+
 
 def _subplots():
     fig = Figure(figsize=(6.4, 4.2), dpi=110)
@@ -19,7 +21,13 @@ def _finish(fig, ax, path):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path)
+    return _save(fig, path)
+
+
+def _save(fig, path):
+    """Save ``fig`` as a PNG at ``path``, whole or not at all (:func:`~vistrack.io.outputs.replacing`)."""
+    with replacing(path, "plot") as tmp:
+        fig.savefig(tmp, format="png")
     return path
 
 
@@ -53,8 +61,7 @@ def plot_error_vs_n(results, path, *, key="mean_error_final", err_key="std_error
     ax.grid(alpha=0.3, which="both")
     ax.legend()
     fig.tight_layout()
-    fig.savefig(path)
-    return path
+    return _save(fig, path)
 
 
 def plot_per_frame(curves, path, *, ylabel, title, xlabel="frame"):

@@ -176,12 +176,23 @@ def _annotated_videos(out, results, max_trackers=8, width=480):
                             cv2.LINE_AA)
                 if path not in opened:
                     opened[path] = VideoWriter(path, clip.source.fps or 25.0, (img.shape[1], img.shape[0]),
-                                               codec="auto")
+                                               codec="auto", atomic=True, what="report video")
                 opened[path].write(img)
     finally:
-        for wr in opened.values():
-            wr.close()
+        _close_videos(opened.values())
     return [(label, path, clips[0]) for label, _, path, _ in writers if path.exists()]
+
+
+def _close_videos(writers):
+    """Close every writer (each renamed into place when whole); the first error is raised."""
+    error = None
+    for wr in writers:
+        try:
+            wr.close()
+        except OSError as e:
+            error = error or e
+    if error is not None:
+        raise error
 
 
 _COLOURS = [(0, 0, 255), (255, 128, 0), (255, 0, 255), (0, 200, 255), (255, 255, 0), (128, 0, 255), (0, 128, 255),

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.outputs import replacing
+
 __all__ = ["task_fingerprint", "write_task_result", "write_atomic", "task_done", "stale_tasks", "load_task_results",
            "TaskFailed", "check_shared", "OutLocked", "lock_out"]
 
@@ -94,20 +96,13 @@ def write_task_result(path, result, task=None):
     return str(path)
 
 
-def write_atomic(path, text):
-    """Write ``text`` to ``path`` whole or not at all: a temporary file beside it, then a rename
-    (a crash leaves the old file or none, never half of the new one). A device or pipe such as
-    ``/dev/stdout`` is written directly."""
-    path = Path(path)
-    if path.exists() and not path.is_file():  # a device or pipe (/dev/stdout): a rename would replace it
-        path.write_text(text)
-        return
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    try:
-        tmp.write_text(text)
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
+def write_atomic(path, text, what="file"):
+    """Write ``text`` to ``path`` whole or not at all (:func:`vistrack.io.outputs.replacing`: a
+    temporary file beside it, renamed over ``path`` once written and closed; a crash or a full
+    disk leaves the old file, never half of the new one, and the error names ``path``). A device
+    or pipe such as ``/dev/stdout`` is written directly."""
+    with replacing(path, what) as tmp:
+        Path(tmp).write_text(text)
 
 def task_done(task, out_dir):
     """Whether ``task``'s result file exists, parses, and was computed by this very task (its

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .outputs import replacing
 from .remote import is_url
 from .video import VideoError, find_groundtruth, groundtruth_origin, open_video, read_rects
 
@@ -238,7 +239,7 @@ def excerpt_clip(src, dst, frames):
         if p.name not in written and p.suffix.lower() == ".png":
             p.unlink()
     t = clip.truth
-    with open(dst / "groundtruth.txt", "w") as f:
+    with replacing(dst / "groundtruth.txt", "ground truth") as tmp, open(tmp, "w") as f:
         for k in range(min(n, len(t["cx"]))):
             box = (t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k])
             f.write(",".join(f"{v:.2f}" for v in (box if t["visible"][k] > 0 else (0, 0, 0, 0))) + "\n")

@@ -10,19 +10,83 @@
 * :func:`temporary_name`: a name beside the output that no other file has (created
   exclusively), so two writers can never share a temporary file; the writer renames it over
   the output when done (:func:`os.replace`, atomic within a folder).
+* :func:`replacing`: that rule for a file written at once. An output is replaced only by a
+  complete file: renamed over the output after its last write, flush and close succeeded; on
+  any failure the temporary file is removed, the earlier output is left as it was, and
+  :class:`OutputError` names the output (never the temporary file) and the cause.
 """
 
 from __future__ import annotations
 
 import errno
 import os
+from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["OutputBusy", "same_file", "file_id", "input_files", "OutputLock", "temporary_name", "is_device"]
+__all__ = ["OutputBusy", "OutputError", "same_file", "file_id", "input_files", "OutputLock", "temporary_name",
+           "is_device", "replacing", "left_note"]
 
 
 class OutputBusy(RuntimeError):
     """Another live process writes this output."""
+
+
+class OutputError(OSError):
+    """An output could not be written whole (a full disk, a failed flush or close).
+
+    ``errno``, ``strerror`` are the cause's, ``filename`` the output the user gave (never its
+    temporary file); ``str()`` is one line: what, where, why, and what is left at that name.
+
+    Parameters
+    ----------
+    what : str
+        What the output is ("annotated video", "track file", ...).
+    path : str or Path
+        The output.
+    cause : BaseException
+        Why it failed.
+    left : str
+        What is left at ``path`` ("the earlier t.csv is kept", ...).
+    """
+
+    def __init__(self, what, path, cause, left=""):
+        strerror = getattr(cause, "strerror", None) or str(cause) or type(cause).__name__
+        super().__init__(getattr(cause, "errno", None), strerror, str(path))
+        self.what, self.left = what, left
+
+    def __str__(self):
+        return f"cannot write the {self.what} {self.filename}: {self.strerror}" + (f"; {self.left}" if self.left
+                                                                                    else "")
+
+
+def left_note(path, earlier):
+    """What a failed write leaves at ``path``: the earlier file (``earlier``: it existed), or nothing."""
+    name = Path(path).name
+    return f"the earlier {name} is kept" if earlier else f"no {name} was written"
+
+
+@contextmanager
+def replacing(path, what="file", tag="tmp"):
+    """Write ``path`` whole or not at all: yields a temporary path beside it
+    (:func:`temporary_name`) for the block to write and close; when the block succeeds it is
+    renamed over ``path``; when anything fails it is removed, ``path`` is left as it was and
+    :class:`OutputError` names ``path`` and the cause (an ``OSError``; other errors pass as
+    they are). A device (``/dev/stdout``) is yielded itself and written directly."""
+    path = Path(path)
+    if is_device(path):
+        yield path
+        return
+    earlier = path.is_file()
+    tmp = temporary_name(path, tag)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except OutputError:
+        raise
+    except OSError as e:
+        raise OutputError(what, path, e, left_note(path, earlier)) from None
+    finally:
+        tmp.unlink(missing_ok=True)
 
 
 def file_id(path):

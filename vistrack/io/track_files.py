@@ -1,5 +1,10 @@
 """The files a run writes frame by frame: the track CSV and the toolkits' result files
-(:class:`TrackCSV`), whole or not at all (a temporary name of their own, renamed when the run ends)."""
+(:class:`TrackCSV`), whole or not at all (a temporary name of their own, renamed when the run ends).
+
+A write that fails (a full disk) never costs an earlier file: the output is replaced only by a file
+whose every row was written, flushed and closed (:mod:`vistrack.io.outputs`). Where no earlier file
+is there, the rows written whole before the failure are kept (a shorter track, as after Ctrl-C).
+"""
 
 from __future__ import annotations
 
@@ -8,7 +13,7 @@ import os
 from pathlib import Path
 
 from .clips import format_value
-from .outputs import OutputLock, is_device, temporary_name
+from .outputs import OutputError, OutputLock, is_device, left_note, temporary_name
 from .results_format import format_line
 
 __all__ = ["TrackCSV"]
@@ -36,13 +41,37 @@ class TrackCSV:
             raise
         self._w = csv.writer(self._f)
         self.boxes = "otb" if boxes is True else (boxes or None)
+        self.what = "track file" if not boxes else "results file"
         self.columns = None
         self.rows = 0
         self._done = False
+        self._error = None  # the write that failed
+        self._complete = True  # False: the run failed (abandon)
+        self._whole = 0  # bytes of the part file that hold whole rows
 
     def write(self, row):
         """Write one track ``row`` (a dict: column -> value; ``visible``, ``cx``, ``cy``, ``w``, ``h`` for the box
-        format) and flush it."""
+        format) and flush it. A failed write (``OSError``: a full disk) raises
+        :class:`~vistrack.io.outputs.OutputError` naming :attr:`path`, and :meth:`close` then keeps
+        the earlier file (module docstring)."""
+        try:
+            self._write(row)
+        except Exception as e:
+            self._error = self._error or e
+            if isinstance(e, OSError) and not self.direct:
+                raise OutputError(self.what, self.path, e, self._left()) from None
+            raise
+        self.rows += 1
+        if not self.direct:
+            self._whole = os.lseek(self._f.fileno(), 0, os.SEEK_CUR)
+
+    def _left(self):
+        """What a failure leaves at :attr:`path`: the earlier file, or the rows written whole."""
+        if self.path.is_file():
+            return left_note(self.path, True)
+        return f"the {self.rows} rows written before are kept" if self.rows else left_note(self.path, False)
+
+    def _write(self, row):
         if self.boxes == "time":
             self._f.write(f"{float(row.get('ms') or 0.0) / 1e3:.6f}\n")
         elif self.boxes:
@@ -54,24 +83,46 @@ class TrackCSV:
                 self._w.writerow(self.columns)
             self._w.writerow([format_value(row.get(c, "")) for c in self.columns])
         self._f.flush()
-        self.rows += 1
+
+    def abandon(self):
+        """The run writing this file failed: :meth:`close` keeps an earlier :attr:`path`."""
+        self._complete = False
 
     def close(self):
-        """Close and rename to :attr:`path` (a run without frames removes the part file); after a
-        write error (disk full) the rows written whole so far are kept."""
+        """Close and rename to :attr:`path` (a run without frames removes the part file). After a
+        failed write or close (a full disk), or after :meth:`abandon` (the run failed), an
+        earlier :attr:`path` is kept and the part file removed; with no earlier file the rows
+        written whole so far are kept."""
         if self._done:
             return
         self._done = True
+        raised = self._error is not None  # write() raised it
         try:
             self._f.close()
-        except OSError:
-            pass
+        except OSError as e:  # the last rows did not reach the disk
+            self._error = self._error or e
         try:
             if self.direct:
                 return
-            if self.rows:
+            if self._error is not None or not self._complete:
+                left = self._left()
+                self._keep_whole_rows()
+                if self._error is not None and not raised:
+                    raise OutputError(self.what, self.path, self._error, left)
+            elif self.rows:
                 os.replace(self.part, self.path)
-            else:
-                self.part.unlink(missing_ok=True)
         finally:
+            if not self.direct:
+                self.part.unlink(missing_ok=True)
             self._lock.release()
+
+    def _keep_whole_rows(self):
+        """After a failure: the part file cut to its whole rows and renamed to :attr:`path` when no
+        earlier file is there and it holds rows; else removed."""
+        if not self.path.is_file() and self.rows:
+            try:
+                os.truncate(self.part, self._whole)
+                os.replace(self.part, self.path)
+            except OSError:
+                pass
+        self.part.unlink(missing_ok=True)

@@ -3,6 +3,7 @@ clips), H.264 through PyAV where it can, a codec the container holds, written wh
 
 from __future__ import annotations
 
+import errno
 import os
 from pathlib import Path
 
@@ -36,9 +37,19 @@ class VideoWriter:
         ``h264``/``auto`` (with :attr:`note`); any other name is a :class:`VideoError`.
     atomic : bool
         Write under a temporary name beside ``path`` (:func:`vistrack.io.outputs.temporary_name`),
-        renamed over it by :meth:`close`, holding ``path``'s lock meanwhile
-        (:class:`vistrack.io.outputs.OutputLock`: a second writer is refused); ``path`` never
-        holds half a video and is never the same file as another writer's.
+        renamed over it by :meth:`close` once the encoder flushed and the file closed, holding
+        ``path``'s lock meanwhile (:class:`vistrack.io.outputs.OutputLock`: a second writer is
+        refused); ``path`` never holds half a video and is never the same file as another writer's.
+    what : str or None
+        What the video is, for errors and the lock ("annotated video" when ``atomic``, else "video").
+
+    Raises
+    ------
+    vistrack.io.outputs.OutputError
+        From :meth:`write` or :meth:`close` when the video cannot be written whole (a full disk,
+        a failed flush or close, a file OpenCV's writer left unplayable): it names ``path`` and the
+        cause; the temporary (or, not atomic, the broken) file is removed and an earlier ``path``
+        is left as it was. A device (``/dev/null``) is written directly and its own error raised.
 
     Attributes
     ----------
@@ -48,7 +59,7 @@ class VideoWriter:
         Why H.264 was not written, under ``codec="auto"``.
     """
 
-    def __init__(self, path, fps, size, codec="mp4v", atomic=False):
+    def __init__(self, path, fps, size, codec="mp4v", atomic=False, what=None):
         from .outputs import OutputLock, is_device, temporary_name
 
         self.path = Path(path)
@@ -67,13 +78,21 @@ class VideoWriter:
             raise VideoError(f"cannot write a video to {self.path}: give a file name ending in "
                              f"{', '.join(CONTAINERS)}")
         self._w = _Closed()
+        self.what = what or ("annotated video" if atomic else "video")
+        self._error = None  # the first write that failed: close() then discards the file
+        self._complete = True  # False: the run failed (abandon)
         # atomic: written under a temporary name of its own, renamed over ``path`` by close(); one live writer
-        self._lock = OutputLock(self.path, "annotated video") if atomic else _NoLock()
+        self._lock = OutputLock(self.path, self.what) if atomic else _NoLock()
         self._final = self.path
+        self._earlier = self.path.is_file()
+        self._atomic = atomic and not is_device(self.path)
         try:
-            if atomic and not is_device(self.path):
+            if self._atomic:
                 self.path = temporary_name(self.path)
             self._open(fps, codec)
+        except OSError as e:  # the temporary file or the container could not be created (a full disk)
+            self._discard()
+            raise self._failure(e) from None
         except BaseException:
             self._discard()
             raise
@@ -133,6 +152,8 @@ class VideoWriter:
         if frame.ndim == 2:
             frame = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
         frame = np.ascontiguousarray(frame, dtype=np.uint8)
+        if self._error is not None:
+            raise self._failure(self._error)
         if self._av is None:
             self._w.write(frame)
         else:
@@ -140,44 +161,98 @@ class VideoWriter:
             h, w = frame.shape[:2]
             if w % 2 or h % 2:
                 frame = cv2.copyMakeBorder(frame, 0, h % 2, 0, w % 2, cv2.BORDER_REPLICATE)
-            for packet in stream.encode(av.VideoFrame.from_ndarray(frame, format="bgr24")):
-                container.mux(packet)
+            try:
+                for packet in stream.encode(av.VideoFrame.from_ndarray(frame, format="bgr24")):
+                    container.mux(packet)
+            except OSError as e:  # the disk is full: the video cannot be whole any more
+                self._error = e
+                raise self._failure(e) from None
         self.frames += 1
 
+    def abandon(self):
+        """The run writing this video failed: :meth:`close` keeps an earlier file at the path."""
+        self._complete = False
+
     def close(self):
-        """Flush the encoder, close the file and rename it over the output path (a video without
-        frames is removed; the path is left as it was)."""
+        """Flush the encoder, close the file and, when both succeeded, rename it over the output
+        path (a video without frames is removed; the path is left as it was). On a failure,
+        here or in an earlier :meth:`write`, the file is removed, the path left as it was, and
+        :class:`~vistrack.io.outputs.OutputError` raised (once: not again after :meth:`write` raised it).
+        After :meth:`abandon` an earlier file at the path is kept."""
         if self._lock is None:
             return
+        error, said = self._error, self._error is not None
+        keep_earlier = not self._complete and self._earlier
         try:
-            if self._av is None:
-                self._w.release()
-            else:
-                av, container, stream = self._av
-                self._av = None
-                try:
-                    for packet in stream.encode():
-                        container.mux(packet)
-                finally:
-                    container.close()
-                self._w = _Closed()
-        finally:  # the frames written so far are kept even when the encoder fails to flush (a full disk)
             try:
-                if self.path != self._final:
-                    if self.frames:
-                        os.replace(self.path, self._final)
-                    else:
-                        self.path.unlink(missing_ok=True)
-                    self.path = self._final
-            finally:
-                self._lock.release()
-                self._lock = None
+                self._finish()
+                if error is None and self.frames and self.path != self._final and not keep_earlier:
+                    os.replace(self.path, self._final)
+            except Exception as e:  # noqa: BLE001 - any failure to flush, close or rename: the file is not whole
+                error = error or e
+        finally:
+            if self.path != self._final or (error is not None and not self._device):
+                self.path.unlink(missing_ok=True)  # the temporary file (renamed, or not to be), or a broken one
+            self.path = self._final
+            self._lock.release()
+            self._lock = None
+        if error is not None and not said:
+            raise self._failure(error)
+
+    def _finish(self):
+        """Flush the encoder and close the file; a file OpenCV's writer left unplayable (it says
+        nothing when a write fails) raises ``OSError``."""
+        if self._av is None:
+            self._w.release()
+            self._w = _Closed()
+            if self.frames and not self._device:
+                _check_playable(self.path, self.frames)
+            return
+        av, container, stream = self._av
+        self._av = None
+        try:
+            for packet in stream.encode():
+                container.mux(packet)
+        finally:
+            container.close()
+
+    @property
+    def _device(self):
+        from .outputs import is_device
+
+        return is_device(self._final)
+
+    def _failure(self, cause):
+        """The error of a failed write: :class:`~vistrack.io.outputs.OutputError` naming the
+        output and the cause (a device: its own error)."""
+        from .outputs import OutputError, left_note
+
+        if self._device:
+            return cause
+        return OutputError(self.what, self._final, cause, left_note(self._final, self._earlier and self._atomic))
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
         self.close()
+
+
+def _check_playable(path, frames):
+    """Raise ``OSError`` unless OpenCV opens the video at ``path``, counts ``frames`` frames and
+    decodes the last one (the count is in the header or index, the last frame at the end: a file
+    cut short by a full disk fails one or the other)."""
+    cap = cv2.VideoCapture(str(path))
+    try:
+        n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) if cap.isOpened() else -1
+        ok = n == frames and cap.set(cv2.CAP_PROP_POS_FRAMES, frames - 1) and cap.read()[0]
+    finally:
+        cap.release()
+    if ok:
+        return
+    if os.statvfs(path.parent).f_bavail == 0:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    raise OSError(errno.EIO, f"the file OpenCV wrote does not play back its {frames} frames (a full disk?)")
 
 
 class _NoLock:

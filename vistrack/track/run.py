@@ -158,7 +158,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         outs, writer = _open_outputs(track_path, results_path, results_format, sequence, out_path, video_info)
         run.video_note = writer.note if writer else None
         _record_lead(run, lead, model, outs, writer, label)
-        t0 = time.perf_counter()
+        t0, failed = time.perf_counter(), False
         try:
             with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
                 warnings.simplefilter("ignore", DegenerateWeightsWarning)
@@ -168,9 +168,12 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
                             notify=notify, progress=progress)
         except (KeyboardInterrupt, SystemError) as e:  # Terminated is a KeyboardInterrupt
             run.stopped = stop_reason(e)
+        except BaseException:
+            failed = True
+            raise
         finally:
             run.wall = time.perf_counter() - t0
-            _close_all(outs, writer)
+            _close_all(outs, writer, complete=not failed)
         if stop.reason:  # a signal while the outputs were closed counts too
             run.stopped = stop.reason
     return run
@@ -212,7 +215,7 @@ def _open_outputs(track_path, results_path, results_format, sequence, out_path, 
                 outs.append(TrackCSV(time_path, boxes="time"))
         writer = VideoWriter(out_path, *video_info, codec="auto", atomic=True) if out_path else None
     except BaseException:
-        _close_all(outs, writer)
+        _close_all(outs, writer, complete=False)
         raise
     return outs, writer
 
@@ -230,15 +233,21 @@ def _record_lead(run, lead, model, outs, writer, label):
             writer.write(annotate(frame, [], [], f"#{index}  {label}  searching"))
 
 
-def _close_all(outs, writer):
+def _close_all(outs, writer, complete=True):
     """Close the track files, then the annotated video: a video that fails to close (a full disk
-    shows when its last packets are written) must not cost the track."""
-    try:
-        for o in outs:
+    shows when its last packets are written) must not cost the track. ``complete=False`` (the run
+    failed): none of them replaces an earlier file, and the run's own error is the one raised. Every
+    one is closed; the first error is raised."""
+    error = None
+    for o in [*outs, *([writer] if writer else [])]:
+        try:
+            if not complete:
+                o.abandon()
             o.close()
-    finally:
-        if writer:
-            writer.close()
+        except Exception as e:  # noqa: BLE001 - the others are closed all the same
+            error = error or e
+    if error is not None and complete:
+        raise error
 
 
 def _warmed(frames, filt, particles):

@@ -36,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...io.outputs import replacing
 from .spline import edge_peaks
 
 __all__ = ["NNSearchConfig", "NNSearch", "compose", "relative", "intersections", "simulate", "train",
@@ -167,10 +168,8 @@ class NNSearch:
         path.parent.mkdir(parents=True, exist_ok=True)
         arrays = {f"w{i}": w for i, w in enumerate(self.coefs)}
         arrays.update({f"b{i}": b for i, b in enumerate(self.intercepts)})
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        with open(tmp, "wb") as f:
+        with replacing(path, "network cache") as tmp, open(tmp, "wb") as f:
             np.savez(f, key=np.array(key), lam=self.lam, **arrays)
-        os.replace(tmp, path)
 
     @classmethod
     def load(cls, path, key):

@@ -1,0 +1,229 @@
+"""Issue 47, the third sweep: outputs replaced only by complete files (1), sizes checked before
+work starts (2), the Python API as careful as the CLI (3), TraX and start-up (4), run's summary
+scored as eval scores (6), the minor and wording cases (7). Each ends in one clear line or a
+correct output; never a traceback, never an earlier output lost."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from full_disk import Unavailable, on_tmpfs  # noqa: E402
+
+H, W = 120, 160
+INIT = "48,51,24,18"
+
+
+def box_frame(i, w=W, h=H):
+    img = np.full((h, w, 3), 100, np.uint8)
+    img[::7] = 60  # texture: the encoder has something to write
+    cv2.rectangle(img, (40 + i % 40, 50), (64 + i % 40, 68), (30, 60, 220), -1)
+    return img
+
+
+def avi(path, n, w=W, h=H):
+    wr = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 25, (w, h))
+    for i in range(n):
+        wr.write(box_frame(i, w, h))
+    wr.release()
+    return path
+
+
+def one_error(code, err, *words):
+    assert code not in (0, None) and "Traceback" not in err, err
+    lines = [ln for ln in err.splitlines() if ln.startswith("Error:")]
+    assert len(lines) == 1, err
+    for w in words:
+        assert w in lines[0], (w, lines[0])
+    return lines[0]
+
+
+# ------------------------------------------------------------------ 1: outputs replaced only by complete files
+
+
+def _tmpfs(steps, **kw):
+    try:
+        return on_tmpfs(steps, **kw)
+    except Unavailable as e:
+        pytest.skip(str(e))
+
+
+@pytest.mark.parametrize("name", ["old.mp4", "old.avi"])
+def test_a_full_disk_keeps_the_earlier_video(tmp_path, name):
+    """df_old: ``run --out T/old.mp4`` over an earlier valid video on a 48 kB tmpfs that fills up:
+    one line naming T/old.mp4 and the cause; the earlier video byte for byte; nothing else left."""
+    short, long = avi(tmp_path / "short.avi", 3), avi(tmp_path / "long.avi", 400)
+    base = ["run", "--init", INIT, "-n", "20", "-q", "--out", "{T}/" + name]
+    first, second = _tmpfs([[*base[:1], str(short), *base[1:]], [*base[:1], str(long), *base[1:]]])
+    assert first["code"] == 0 and first["files"][name]["frames"] == 3, first
+    one_error(second["code"], second["err"], f"{{T}}/{name}", "No space left on device", f"earlier {name} is kept")
+    assert second["files"] == first["files"]
+
+
+@pytest.mark.parametrize("outputs, kept", [
+    (["--out", "{T}/a.mp4"], []),
+    (["--out", "{T}/a.avi"], []),
+    (["--track", "{T}/t.csv", "--out", "{T}/a.mp4"], ["t.csv"]),  # the track is whole: it stays
+])
+def test_a_full_disk_leaves_no_unplayable_video(tmp_path, outputs, kept):
+    """df_out: no earlier file: nothing unplayable is left under the final name, and the error names
+    the final name (not the temporary file)."""
+    (step,) = _tmpfs([["run", str(avi(tmp_path / "long.avi", 400)), "--init", INIT, "-n", "20", "-q", *outputs]])
+    video = outputs[-1].split("/")[-1]
+    one_error(step["code"], step["err"], f"{{T}}/{video}", "No space left on device", f"no {video} was written")
+    assert sorted(step["files"]) == kept
+    assert ".part" not in step["err"]
+
+
+def test_a_full_disk_under_the_track_keeps_the_earlier_track(tmp_path):
+    short, long = avi(tmp_path / "short.avi", 3), avi(tmp_path / "long.avi", 400)
+    base = ["-n", "20", "-q", "--init", INIT, "--track", "{T}/t.csv", "--results", "{T}/r.txt"]
+    first, second = _tmpfs([["run", str(short), *base], ["run", str(long), *base, "--out", "/dev/null"]],
+                           size="24k")
+    assert first["code"] == 0 and sorted(first["files"]) == ["r.txt", "t.csv"]
+    one_error(second["code"], second["err"], "{T}/", "No space left on device", "is kept")
+    assert second["files"] == first["files"]
+
+
+def test_a_full_disk_with_no_earlier_track_keeps_its_whole_rows(tmp_path):
+    long = avi(tmp_path / "long.avi", 400)
+    (step,) = _tmpfs([["run", str(long), "--init", INIT, "-n", "20", "-q", "--track", "{T}/t.csv"]], size="12k")
+    one_error(step["code"], step["err"], "{T}/t.csv", "No space left on device", "rows written before are kept")
+    assert sorted(step["files"]) == ["t.csv"] and 0 < step["files"]["t.csv"]["size"] <= 12 * 1024
+
+
+def _failing_flush(monkeypatch):
+    """PyAV's flush fails as on a full disk (the container's last write)."""
+    import av
+
+    real = av.open
+
+    def open_(*a, **kw):
+        c = real(*a, **kw)
+        if kw.get("format") == "mp4" or (len(a) > 1 and a[1] == "w"):
+            return _Failing(c)
+        return c
+
+    monkeypatch.setattr(av, "open", open_)
+
+
+class _Failing:
+    def __init__(self, c):
+        self._c = c
+
+    def __getattr__(self, name):
+        return getattr(self._c, name)
+
+    def close(self):
+        self._c.close()
+        raise OSError(28, "No space left on device", "/somewhere/.a.part.mp4")
+
+
+def test_the_video_writer_renames_only_after_a_successful_flush(tmp_path, monkeypatch):
+    from vistrack.io.outputs import OutputError
+    from vistrack.io.video_writer import VideoWriter
+
+    out = tmp_path / "a.mp4"
+    with VideoWriter(out, 25, (W, H), codec="h264", atomic=True) as w:
+        w.write(box_frame(0))
+    earlier = out.read_bytes()
+    _failing_flush(monkeypatch)
+    w = VideoWriter(out, 25, (W, H), codec="h264", atomic=True)
+    for i in range(5):
+        w.write(box_frame(i))
+    with pytest.raises(OutputError) as e:
+        w.close()
+    assert str(e.value) == f"cannot write the annotated video {out}: No space left on device; the earlier a.mp4 is kept"
+    assert e.value.filename == str(out) and e.value.errno == 28
+    assert out.read_bytes() == earlier and sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4"]
+    w = VideoWriter(tmp_path / "b.mp4", 25, (W, H), codec="h264", atomic=True)
+    w.write(box_frame(0))
+    with pytest.raises(OutputError, match="no b.mp4 was written"):
+        w.close()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4"]
+
+
+def test_opencvs_silent_writer_is_checked(tmp_path, monkeypatch):
+    """OpenCV's writer says nothing when a write fails: a file that does not play back its frames
+    is an error, not an output."""
+    import vistrack.io.video_writer as vw
+    from vistrack.io.outputs import OutputError
+
+    out = tmp_path / "a.avi"
+    with vw.VideoWriter(out, 25, (W, H), codec="auto", atomic=True) as w:
+        for i in range(3):
+            w.write(box_frame(i))
+    earlier = out.read_bytes()
+    real = cv2.VideoWriter
+
+    class Lossy:  # drops every frame after the first, as on a full disk
+        def __init__(self, *a):
+            self._w, self._n = real(*a), 0
+
+        def isOpened(self):
+            return self._w.isOpened()
+
+        def write(self, f):
+            self._n += 1
+            if self._n == 1:
+                self._w.write(f)
+
+        def release(self):
+            self._w.release()
+
+    monkeypatch.setattr(vw.cv2, "VideoWriter", Lossy)
+    w = vw.VideoWriter(out, 25, (W, H), codec="auto", atomic=True)
+    for i in range(6):
+        w.write(box_frame(i))
+    with pytest.raises(OutputError, match=f"cannot write the annotated video {out}: .*; the earlier a.avi is kept"):
+        w.close()
+    assert out.read_bytes() == earlier and sorted(p.name for p in tmp_path.iterdir()) == ["a.avi"]
+
+
+def test_every_writer_keeps_the_earlier_file_on_a_failure(tmp_path, monkeypatch):
+    """write_atomic (results.json, report.md, task files), the plots and the track CSV: a failed
+    write removes the temporary file, keeps the earlier output and names it."""
+    import vistrack.engine.plots as plots
+    from vistrack.engine.tasks import write_atomic
+    from vistrack.io.outputs import OutputError
+    from vistrack.io.track_files import TrackCSV
+
+    (tmp_path / "results.json").write_text("{}")
+    real = Path.write_text
+
+    def full(self, *a, **kw):
+        real(self, "half")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(Path, "write_text", full)
+    with pytest.raises(OutputError, match=r"cannot write the file .*results.json: No space left on device; the "
+                                          r"earlier results.json is kept"):
+        write_atomic(tmp_path / "results.json", '{"a": 1}')
+    monkeypatch.undo()
+    assert (tmp_path / "results.json").read_text() == "{}"
+
+    png = plots.plot_per_frame({"lis": [1.0, 2.0]}, tmp_path / "p.png", ylabel="e", title="t")
+    earlier = png.read_bytes()
+    monkeypatch.setattr("matplotlib.figure.Figure.savefig",
+                        lambda self, f, **kw: (Path(f).write_bytes(b"x"), (_ for _ in ()).throw(OSError(28, "full"))))
+    with pytest.raises(OutputError, match="cannot write the plot .*p.png: full; the earlier p.png is kept"):
+        plots.plot_per_frame({"lis": [1.0, 3.0]}, png, ylabel="e", title="t")
+    assert png.read_bytes() == earlier
+
+    (tmp_path / "t.csv").write_text("frame,cx\n0,1.000\n")
+    t = TrackCSV(tmp_path / "t.csv")
+    t.write({"frame": 0, "cx": 5.0})
+    t._f.flush = lambda: (_ for _ in ()).throw(OSError(28, "No space left on device"))
+    with pytest.raises(OutputError, match="cannot write the track file .*t.csv: No space left on device; the "
+                                          "earlier t.csv is kept"):
+        t.write({"frame": 1, "cx": 6.0})
+    t.close()
+    assert (tmp_path / "t.csv").read_text() == "frame,cx\n0,1.000\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p.png", "results.json", "t.csv"]
