@@ -13,7 +13,7 @@ from contextlib import contextmanager
 import click
 
 from vistrack import __version__
-from vistrack.core.runtime import keep_freed_memory
+from vistrack.core.runtime import TooLarge, keep_freed_memory
 from vistrack.io.outputs import OutputError
 from vistrack.track.run import Terminated, stop_on_signals
 
@@ -50,7 +50,7 @@ class VistrackGroup(click.Group):
             sys.exit(e.exit_code)
         except (click.exceptions.Abort, KeyboardInterrupt) as e:
             _stopped(e)
-        except OutputError as e:  # names the output, the cause and what is left there
+        except (OutputError, TooLarge) as e:  # one line: the output, the cause, what is left; the size, what fits
             click.echo(f"Error: {e}", err=True)
             sys.exit(1)
         except OSError as e:

@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from vistrack.engine.evaluation import (OPENCV_TRACKERS, EvalConfig, check_algos, find_clips,
+from vistrack.engine.evaluation import (OPENCV_TRACKERS, EvalConfig, check_algos, check_task_grid, find_clips,
                                  load_task_results, result_files, score_result_file, summarize, task_list)
 from vistrack.engine.report import write_eval_outputs
 from vistrack.models.builders import MODELS as MODEL_NAMES
@@ -198,6 +198,8 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, sc
         for a in algos:  # one task's working memory (tasks run side by side: one per worker)
             for n in ([] if a in OPENCV_TRACKERS else particles):
                 check_particle_memory(n, spec.bytes_per_particle, a)
+        check_task_grid(clip_paths, EvalConfig(clips=clip_paths, algos=list(algos), particles=list(particles)).pairs(),
+                        runs)
     except (ValueError, VideoError) as e:
         raise click.ClickException(str(e)) from None
     out = _results_folder(out_dir)

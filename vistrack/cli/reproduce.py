@@ -105,7 +105,7 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
     check_writable(json_path, "--json file")
     _plots_dir(plots_dir, "p_lost_vs_frame.png")
     clips = _clip_suite(clips_dir, "contour-clips", make, frames, size, make_contour_clip, "contour", quiet,
-                        clutter="high", distractor=True)
+                        grid=(entries, runs), clutter="high", distractor=True)
     cfg = ContourConfig(clips=clips, entries=entries, runs=runs, seed=seed)
     tasks = contour_tasks(cfg)
     out = _run(tasks, out_dir, "contour", scheduler=scheduler, workers=workers,
@@ -210,7 +210,8 @@ def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targ
     _check_entries(entries)
     check_writable(json_path, "--json file")
     _plots_dir(plots_dir, "p_lost_vs_frame.png")
-    clips = _clip_suite(clips_dir, "plate-clips", make, frames, size, make_plate_clip, "plate", quiet)
+    clips = _clip_suite(clips_dir, "plate-clips", make, frames, size, make_plate_clip, "plate", quiet,
+                        grid=(entries, runs))
     cfg = PlateConfig(clips=clips, entries=entries, runs=runs, seed=seed)
     tasks = plate_tasks(cfg)
     out = _run(tasks, out_dir, "plate", runner=run_plate_task, scheduler=scheduler, workers=workers,

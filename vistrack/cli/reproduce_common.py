@@ -121,12 +121,16 @@ def _check_entries(entries):
             raise click.ClickException(f"unknown algorithm {algo!r}; choose from {', '.join(sorted(ALGORITHMS))}")
 
 
-def _clip_suite(clips_dir, default, make, frames, size, maker, prefix, quiet, **kw):
-    """:func:`vistrack.reproduce.suite.clip_suite` in ``clips_dir`` (or ``default``), with a progress bar."""
+def _clip_suite(clips_dir, default, make, frames, size, maker, prefix, quiet, grid=None, **kw):
+    """:func:`vistrack.reproduce.suite.clip_suite` in ``clips_dir`` (or ``default``), with a progress bar;
+    ``grid``: ``(entries, runs)``, the task grid checked against memory first (as made clips)."""
+    from vistrack.engine.evaluation import check_grid_size
     from vistrack.reproduce.suite import clip_suite
 
     from .options import Size
 
+    if grid is not None:
+        check_grid_size(make, *grid, frames)
     with tqdm(total=make * frames, unit="frame", desc="making clips", disable=quiet, leave=False) as bar:
         return clip_suite(clips_dir or default, make, frames, Size().convert(size, None, None), maker, prefix,
                           progress=bar.update, **kw)

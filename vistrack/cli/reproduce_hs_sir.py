@@ -70,7 +70,7 @@ def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, likel
     check_writable(json_path, "--json file")
     _plots_dir(plots_dir, "p_lost_vs_frame.png")
     clips = _clip_suite(clips_dir, "hs-sir-clips", make, frames, size, make_contour_clip, "contour-color", quiet,
-                        clutter="high", distractor=True, color=True)
+                        grid=(entries, runs), clutter="high", distractor=True, color=True)
     if equal_time:
         entries, times = equal_time_entries(clips[0], entries, likelihood=likelihood)
         click.echo("equal time: " + ", ".join(f"{a}:{n}" for a, n in entries) + " ("

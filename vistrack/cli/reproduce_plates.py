@@ -33,7 +33,7 @@ def overlap(clips_dir, make, frames, size, entries, runs, seed, targets, equal_t
     check_writable(json_path, "--json file")
     _require_scorer()
     clips = _clip_suite(clips_dir, "plate-overlap-clips", make, frames, size, make_plate_clip, "plate-overlap", quiet,
-                        overlap=True, cars=6)
+                        grid=(entries, runs), overlap=True, cars=6)
     if equal_time:
         entries, times = plates_equal_time(clips[0], entries, targets)
         click.echo("equal time: " + ", ".join(f"{a}:{n}" for a, n in entries) + " ("

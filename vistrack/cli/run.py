@@ -256,7 +256,7 @@ def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, 
             raise click.UsageError(f"--algo {algo} does not run on the {name} model"
                                    f"{' with --targets' if targets is not None else ''}; "
                                    f"choose from {', '.join(allowed)}{hint}")
-        check_particle_memory(particles, spec.bytes_per_particle, algo)
+        check_particle_memory(particles, spec.bytes_per_particle, algo, targets=targets or 1)
         model = build_model(name, clip, init=init, init_gt=init_gt, **extra)
         if search == "nn":  # train (once per template) or load before the progress bar starts
             network_for(model, notify=None if quiet else lambda m: click.echo(m, err=True))

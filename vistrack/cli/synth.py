@@ -12,7 +12,7 @@ from vistrack.data_synth.landmarks import make_landmark_clip
 from vistrack.data_synth.perturb import LIGHTS, Perturbation, perturb_clip, read_clip
 from vistrack.data_synth.plate import make_plate_clip
 from vistrack.data_synth.plate_composite import composite_plate_clip
-from vistrack.data_synth.render import prepare_suite
+from vistrack.data_synth.render import SuiteNames, check_suite_disk, prepare_suite
 
 from .options import SEED, Fraction, Ratio, Size
 
@@ -236,13 +236,14 @@ def synth_suite(kind, n_clips, seed, frames, size, out, quiet):
     make, frames_default, size_default = SUITES[kind]
     frames = frames or frames_default
     size = size or size_default
-    out = _out_dir(out, clip=False)
+    check_suite_disk(out, n_clips, frames, size)
+    out, names = _out_dir(out, clip=False), SuiteNames(kind, seed, n_clips)
     try:  # the folder holds this suite alone: an earlier suite's other clips go (issue 38)
-        prepare_suite(out, [f"{kind}-{s:02d}" for s in range(seed, seed + n_clips)])
+        prepare_suite(out, names)
     except ValueError as e:
         raise click.ClickException(str(e)) from None
     with tqdm(total=n_clips * frames, unit="frame", disable=quiet, desc=f"synth-suite {kind}") as bar:
         for s in range(seed, seed + n_clips):
-            _make(make, out / f"{kind}-{s:02d}", frames=frames, size=size, seed=s, progress=bar.update)
+            _make(make, out / names.name(s), frames=frames, size=size, seed=s, progress=bar.update)
     if not quiet:
         click.echo(f"wrote {n_clips} {kind} clips into {out}")

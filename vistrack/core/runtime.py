@@ -1,8 +1,16 @@
-"""Process-level settings for tracking workloads."""
+"""Process-level settings for tracking workloads, and the checks of the sizes a user gives
+(particles, the task grid, clips, targets, steps) against memory and disk before any work starts:
+a size too large for the machine is one :class:`TooLarge` line, never a process killed for memory."""
 
 from __future__ import annotations
 
-__all__ = ["keep_freed_memory", "available_memory", "check_particle_memory"]
+__all__ = ["keep_freed_memory", "available_memory", "check_particle_memory", "TooLarge", "check_memory",
+           "check_disk", "fmt_bytes"]
+
+
+class TooLarge(ValueError):
+    """A size the user gave needs more memory or disk than the machine has (one line: what, how
+    much, how much there is, and the largest that fits)."""
 
 #: glibc ``mallopt`` parameters
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
@@ -54,15 +62,50 @@ def available_memory():
 ALGO_MEMORY_FACTOR = {"lls": 8}
 
 
-def check_particle_memory(n, bytes_per_particle, algo="", share=0.5, available=None):
-    """Raise ``ValueError`` (one line) when ``n`` particles would need more than ``share`` of the
-    available memory per frame (the peak working memory of one step, measured with tracemalloc:
-    about 23 KB per particle for the box model, 16–39 KB for the contour, 37 KB for the plate,
-    8x that for LLS). Returns the estimate in bytes."""
-    need = int(n) * int(bytes_per_particle) * ALGO_MEMORY_FACTOR.get(algo, 1)
+def fmt_bytes(n):
+    """``n`` bytes as ``"1.5 GiB"`` (or MiB, TiB)."""
+    for unit, k in (("TiB", 40), ("GiB", 30), ("MiB", 20)):
+        if n >= 2**k or unit == "MiB":
+            return f"{n / 2**k:.1f} {unit}"
+
+
+def check_memory(need, what, most_of, share=0.5, available=None, per=""):
+    """Raise :class:`TooLarge` when ``need`` bytes exceed ``share`` of the available memory:
+    "``what`` about X GiB``per``, more than half of the Y GiB available; ``most_of(bytes)``"
+    (``most_of`` says what fits in the bytes there are, e.g. "use at most 2097"). Returns ``need``."""
     avail = available_memory() if available is None else available
     if avail is not None and need > share * avail:
-        most = int(share * avail // (bytes_per_particle * ALGO_MEMORY_FACTOR.get(algo, 1)))
-        raise ValueError(f"{n} particles need about {need / 2**30:.1f} GiB per frame, more than half of the "
-                         f"{avail / 2**30:.1f} GiB available; use at most {most}")
+        raise TooLarge(f"{what} about {fmt_bytes(need)}{per}, more than half of the {fmt_bytes(avail)} available; "
+                       f"{most_of(share * avail)}")
     return need
+
+
+def check_disk(need, folder, what, most_of):
+    """Raise :class:`TooLarge` when ``need`` bytes exceed the free space of the filesystem holding
+    ``folder`` (its nearest existing parent): "``what`` about X GiB, more than the Y GiB free
+    on FOLDER; ``most_of(bytes)``". Returns ``need``."""
+    import shutil
+    from pathlib import Path
+
+    p = Path(folder).absolute()
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    try:
+        free = shutil.disk_usage(p).free
+    except OSError:
+        return need
+    if need > free:
+        raise TooLarge(f"{what} about {fmt_bytes(need)}, more than the {fmt_bytes(free)} free on {p}; "
+                       f"{most_of(free)}")
+    return need
+
+
+def check_particle_memory(n, bytes_per_particle, algo="", share=0.5, available=None, targets=1):
+    """Raise :class:`TooLarge` (one line) when ``n`` particles (of ``targets`` plate slots each)
+    would need more than ``share`` of the available memory per frame (the peak working memory of
+    one step, measured with tracemalloc: about 23 KB per particle for the box model, 16–39 KB for
+    the contour, 37 KB for the plate, 8x that for LLS). Returns the estimate in bytes."""
+    each = int(bytes_per_particle) * ALGO_MEMORY_FACTOR.get(algo, 1) * int(targets)
+    return check_memory(int(n) * each, f"{n} particles{f' of {targets} targets' if targets > 1 else ''} need",
+                        lambda room: f"use at most {int(room // each)}" + (" particles" if targets > 1 else ""),
+                        share, available, per=" per frame")

@@ -11,10 +11,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from vistrack.core.runtime import check_disk
 from vistrack.io.clips import write_track_csv
 
 __all__ = ["smooth_noise", "clutter_background", "motion_blur", "lighting", "add_noise", "write_clip_files",
-           "atomic_clip", "is_synth_clip", "prepare_suite", "check_video_size"]
+           "atomic_clip", "is_synth_clip", "prepare_suite", "check_video_size", "check_suite_disk", "SuiteNames"]
 
 #: names in a clip folder that a run reads as part of the clip: never carried from an old folder into a new clip
 CLIP_NAMES = {"video.mp4", "groundtruth.csv", "groundtruth_rect.txt", "groundtruth.txt", "meta.json", "objects.csv",
@@ -160,6 +161,43 @@ def _check_clip_out(out):
     if clip:
         raise ValueError(f"{out} holds {', '.join(clip[:3])}{', ...' if len(clip) > 3 else ''}, not a clip vistrack "
                          "synth wrote: the new clip would be mixed with them; give an empty or new folder")
+
+
+#: the least a synthetic clip takes on disk: its small files, and per frame its ground-truth rows and
+#: bytes per pixel of video (a 640x480 plate clip takes 0.04, a 320x240 contour clip 0.03)
+CLIP_BYTES, CLIP_FRAME_BYTES, CLIP_PIXEL_BYTES = 1024, 100, 0.01
+
+
+def check_suite_disk(out, clips, frames, size):
+    """Raise :class:`~vistrack.core.runtime.TooLarge` (one line, before any clip is made) when
+    ``clips`` clips of ``frames`` frames of ``size`` would not fit on the disk holding ``out``
+    (:data:`CLIP_BYTES`, :data:`CLIP_FRAME_BYTES`, :data:`CLIP_PIXEL_BYTES`: the least they take)."""
+    each = CLIP_BYTES + int(frames) * (CLIP_FRAME_BYTES + CLIP_PIXEL_BYTES * size[0] * size[1])
+    check_disk(int(clips) * each, out, f"{clips} clips of {frames} frames at {size[0]}x{size[1]} need",
+               lambda free: f"give at most {int(free // each)} clips")
+
+
+class SuiteNames:
+    """The clip names of a suite, ``<kind>-<seed>`` (two digits at least) for ``count`` seeds from
+    ``first``: made as they are asked for, so a suite of a billion clips is a range, not a list."""
+
+    def __init__(self, kind, first, count):
+        self.kind, self.first, self.count = kind, int(first), int(count)
+
+    def name(self, seed):
+        """The folder name of the clip of ``seed``."""
+        return f"{self.kind}-{seed:02d}"
+
+    def __len__(self):
+        return self.count
+
+    def __iter__(self):
+        return (self.name(s) for s in range(self.first, self.first + self.count))
+
+    def __contains__(self, name):
+        kind, _, seed = str(name).rpartition("-")
+        return (kind == self.kind and seed.isdigit() and self.first <= int(seed) < self.first + self.count
+                and name == self.name(int(seed)))
 
 
 def prepare_suite(out, names):

@@ -34,13 +34,14 @@ from ..core.metrics import (PRECISION_THRESHOLDS, center_error, iou, lost_frames
                       precision_curve, success_auc, success_curve)
 from ..core.metrics import summarize as metrics_summarize
 from ..models.registry import get_model_spec
-from ..core.runtime import keep_freed_memory
+from ..core.runtime import check_memory, keep_freed_memory
 from .tasks import (OutLocked, TaskFailed, check_shared, load_task_results, lock_out, stale_tasks, task_done,
                     task_fingerprint, write_atomic, write_task_result)
 from ..track.loop import track
 from ..io.video import VideoError
 
-__all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_config", "run_task", "summarize",
+__all__ = ["EvalConfig", "find_clips", "task_list", "check_task_grid", "check_grid_size",
+           "entry_tasks", "entries_config", "run_task", "summarize",
            "pooled_summary", "OPENCV_TRACKERS", "check_algos", "sequence_name",
            "score_boxes", "score_result_file", "result_files",
            # the engine's task files (vistrack.engine.tasks), re-exported
@@ -84,6 +85,11 @@ class EvalConfig:
     #: explicit (algo, N) pairs instead of the algos × particles grid
     entries: list | None = None
 
+    def pairs(self):
+        """The ``(algo, N)`` pairs: :attr:`entries`, else every algorithm at every N (an OpenCV
+        tracker once, at N 1)."""
+        return self.entries or [(a, n) for a in self.algos for n in ([1] if a in OPENCV_TRACKERS else self.particles)]
+
 
 def check_algos(algos):
     """Raise ``ValueError`` for unknown algorithms or OpenCV trackers this OpenCV lacks."""
@@ -103,14 +109,61 @@ def _name(clip):
     return sequence_name(clip).replace("__", "_")
 
 
+#: memory a grid's task takes in this process: its dict and seed stream, Dask's future and
+#: scheduler state (about 6 KB measured with an in-process cluster), and its result when the
+#: summaries are made, per frame of its clip (the per-frame lists read back from JSON)
+TASK_BYTES, TASK_FRAME_BYTES = 20_000, 500
+
+
+def check_task_grid(clips, pairs, runs, available=None):
+    """Raise :class:`~vistrack.core.runtime.TooLarge` (one line, before any task is made) when the
+    grid of ``clips`` x ``pairs`` (algorithm, N) x ``runs`` would not fit in memory
+    (:func:`check_grid_size`, with the frames of the longest local clip). Returns the number of tasks."""
+    return check_grid_size(len(clips), pairs, runs, _longest(clips), available)
+
+
+def check_grid_size(clips, pairs, runs, frames=300, available=None):
+    """Raise :class:`~vistrack.core.runtime.TooLarge` when a grid of ``clips`` clips (of ``frames``
+    frames) x ``pairs`` (algorithm, N) x ``runs`` would not fit in memory: its tasks and their
+    results (:data:`TASK_BYTES`, :data:`TASK_FRAME_BYTES`). An OpenCV tracker runs once. Returns
+    the number of tasks."""
+    pairs = list(pairs)
+    fixed = sum(a in OPENCV_TRACKERS for a, _ in pairs)  # deterministic: one run
+    n = clips * ((len(pairs) - fixed) * int(runs) + fixed)
+    each = TASK_BYTES + TASK_FRAME_BYTES * int(frames)
+
+    def most(room):
+        runs_fit = (room // each // max(clips, 1) - fixed) // max(len(pairs) - fixed, 1)
+        return f"give at most {int(runs_fit)} runs" if runs_fit >= 1 else "give fewer clips or algorithms"
+
+    check_memory(n * each, f"a grid of {n} tasks ({clips} clip(s) x {len(pairs)} algorithm and N pair(s) x "
+                 f"{runs} run(s)) needs", most, available=available)
+    return n
+
+
+def _longest(clips, default=300):
+    """The most frames of the local ``clips`` (``default`` for URLs and where it is not known)."""
+    from ..io.remote import is_url
+
+    most = default
+    for c in clips:
+        if not is_url(c):
+            try:
+                most = max(most, load_clip(c).source.frame_count or 0)
+            except (OSError, ValueError):
+                pass
+    return most
+
+
 def task_list(cfg, clips):
-    """All tasks as dicts ``{clip, clip_index, algo, particles, run, seed_seq, name}``."""
+    """All tasks as dicts ``{clip, clip_index, algo, particles, run, seed_seq, name}``, the grid
+    checked against memory first (:func:`check_task_grid`)."""
+    check_task_grid(clips, cfg.pairs(), cfg.runs)
     streams = np.random.SeedSequence(cfg.seed).spawn(len(clips))
     tasks = []
     for ci, clip in enumerate(clips):
         seqs = streams[ci].spawn(cfg.runs)
-        pairs = cfg.entries or [(a, n) for a in cfg.algos
-                                 for n in ([1] if a in OPENCV_TRACKERS else cfg.particles)]
+        pairs = cfg.pairs()
         for algo, n in pairs:
             for r in range(cfg.runs):
                 if algo in OPENCV_TRACKERS and r > 0:

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..core.metrics import equal_time_search
 from ..core.particles import DegenerateWeightsWarning
+from ..core.runtime import check_memory
 from ..filters import ALGORITHMS, filter_steps, make_filter
 from ..models.bearings.model import LIS_PROPOSALS, Bearings, simulate
 
@@ -72,12 +73,33 @@ class BearingsConfig:
             raise ValueError(f"--particles must be positive integers, got {bad[0]}")
         if not self.algos:
             raise ValueError("--algos needs at least one algorithm")
+        self.check_size()
         model = Bearings(self.ships, proposal=self.proposal)
         for a in dict.fromkeys(a for a, _ in self.pairs()):
             if a not in ALGORITHMS or a == "sir":
                 choices = ", ".join(sorted(k for k in ALGORITHMS if k != "sir"))
                 raise ValueError(f"unknown algorithm {a!r} for bearings; choose from {choices}")
             make_filter(a, model)  # a filter whose model parts bearings lacks: its one-line ValueError
+
+
+    def check_size(self, available=None):
+        """Raise :class:`~vistrack.core.runtime.TooLarge` (one line) when the errors gathered
+        (:data:`VALUE_BYTES` per ship, step, run, sequence and pair), the runs' seed streams that
+        every task makes and one step's particles would not fit in memory."""
+        pairs = self.pairs()
+        per_step = VALUE_BYTES * self.sequences * len(pairs) * self.runs * self.ships
+        rest = 600 * self.sequences * self.runs + max(n for _, n in pairs) * 4 * self.ships * 8 * 32
+
+        def most(room):
+            steps = int((room - rest) // per_step)
+            return f"give at most {steps} --steps" if steps >= 1 else "give fewer --runs, --sequences or --particles"
+
+        check_memory(per_step * self.steps + rest, f"{self.sequences} sequences x {self.runs} runs x {self.steps} "
+                     f"steps x {len(pairs)} algorithm and N pair(s) need", most, available=available)
+
+
+#: bytes of one number gathered from the tasks: its JSON text, the parsed float, the array's copy
+VALUE_BYTES = 64
 
 
 def _sequence_runs(cfg, model, s):

@@ -24,8 +24,10 @@ from pathlib import Path
 import numpy as np
 
 from ..core.particles import DegenerateWeightsWarning, ParticleSet
+from ..core.runtime import check_memory
 from ..filters import make_filter
 from ..models.landmarks.model import Landmarks, simulate
+from .bearings import VALUE_BYTES
 
 __all__ = ["LandmarksConfig", "PAPER", "run_landmarks", "landmarks_run", "landmark_tasks", "run_landmark_task",
            "landmark_results"]
@@ -76,6 +78,22 @@ class LandmarksConfig:
         for a in self.algos:
             if a not in LANDMARK_ALGOS:
                 raise ValueError(f"unknown algorithm {a!r} for landmarks; choose from {', '.join(LANDMARK_ALGOS)}")
+        self.check_size()
+
+    def check_size(self, available=None):
+        """Raise :class:`~vistrack.core.runtime.TooLarge` (one line) when the errors gathered
+        (:data:`~vistrack.reproduce.bearings.VALUE_BYTES` per step, run and algorithm), the tasks
+        and one step's particles (PF-EIS's ``dim x dim`` matrices each) would not fit in memory."""
+        per_step = VALUE_BYTES * self.runs * len(self.algos)
+        dim = self.model().dim
+        rest = 20_000 * self.runs + int(self.particles) * dim * dim * 8 * 4
+
+        def most(room):
+            steps = int((room - rest) // per_step)
+            return f"give at most {steps} --steps" if steps >= 1 else "give fewer --runs or particles"
+
+        check_memory(per_step * self.steps + rest, f"{self.runs} runs x {self.steps} steps x {len(self.algos)} "
+                     f"algorithm(s) of {self.particles} particles need", most, available=available)
 
     def model(self):
         """The :class:`~vistrack.models.landmarks.Landmarks` model of the paper's experiment for ``k`` (seed 000 §4)."""

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..data_synth.render import check_suite_disk
+
 __all__ = ["clip_suite"]
 
 
@@ -33,6 +35,7 @@ def clip_suite(base, make, frames, size, maker, prefix, progress=None, **kw):
         return sorted(p for p in base.glob("[!.]*") if (p / "groundtruth.csv").is_file()) if base.is_dir() else []
 
     if not found():
+        check_suite_disk(base, make, frames, size)
         base.mkdir(parents=True, exist_ok=True)
         for s in range(1, make + 1):
             maker(base / f"{prefix}-{s:02d}", frames=frames, size=size, seed=s, progress=progress, **kw)

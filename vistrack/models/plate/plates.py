@@ -95,6 +95,12 @@ class Plates(VideoModelBase):
         if int(targets) < 1:
             raise ValueError(f"--targets must be at least 1, got {targets}")
         self.plate = Plate(frame_size, layout, **plate_params)
+        most = self.most_targets()
+        if int(targets) > most:
+            w, h = self.plate.frame_size
+            pw = self.plate.enter_mean[3]
+            raise ValueError(f"--targets {targets}: a {w}x{h} frame holds at most {most} plates of the size the model "
+                             f"looks for ({pw:.0f}x{pw / self.plate.layout.aspect:.0f} px) side by side")
         self.k = int(targets)
         self.dim = SLOT * self.k
         self.frame_size = self.plate.frame_size
@@ -114,6 +120,13 @@ class Plates(VideoModelBase):
         self.reserve_age = self.plate.reserve_age
         #: App. C: one partition per slot, its 10 columns
         self.partitions = tuple(np.arange(SLOT * j, SLOT * (j + 1)) for j in range(self.k))
+
+    def most_targets(self):
+        """How many plates of the entering density's mean width (and the layout's aspect) fit in the
+        frame side by side: the most slots that can each hold a plate."""
+        w, h = self.plate.frame_size
+        pw = self.plate.enter_mean[3]
+        return max(1, int(w * h // (pw * pw / self.plate.layout.aspect)))
 
     # -- slots ----------------------------------------------------------------------
     @staticmethod
