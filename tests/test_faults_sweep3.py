@@ -5,6 +5,7 @@ correct output; never a traceback, never an earlier output lost."""
 
 from __future__ import annotations
 
+import subprocess
 import sys
 from pathlib import Path
 
@@ -298,3 +299,199 @@ def test_a_large_suite_is_named_lazily(tmp_path):
         make_contour_clip(out / f"contour-{s:02d}", frames=2, size=(96, 72), seed=s, clutter="low", distractor=False)
     assert prepare_suite(out, SuiteNames("contour", 2, 10**9)) == ["contour-01"]
     assert sorted(p.name for p in out.iterdir()) == ["contour-02", "contour-07"]
+
+
+# ------------------------------------------------------------------ 3: the Python API as careful as the CLI
+
+
+@pytest.mark.parametrize("kw, words", [
+    (dict(seed=-1), "seed must be an integer >= 0"),
+    (dict(seed=1.5), "seed must be an integer >= 0"),
+    (dict(particles=2.5), "particles must be an integer >= 1, got 2.5"),
+    (dict(particles=0), "particles must be an integer >= 1, got 0"),
+    (dict(ess_threshold=float("nan")), "ess_threshold must be a number in [0, 1]"),
+    (dict(ess_threshold=-1), "ess_threshold must be a number in [0, 1]"),
+    (dict(ess_threshold=5), "ess_threshold must be a number in [0, 1]"),
+    (dict(resample="best"), "unknown resampling scheme 'best'; choose from"),
+    (dict(frobnicate=3), "unknown option 'frobnicate' for the box model; its options include"),
+    (dict(model="plate", frobnicate=3), "unknown option 'frobnicate' for the plate model; its options include"),
+], ids=lambda v: str(v)[:30])
+def test_the_tracker_checks_every_argument_when_it_is_made(kw, words):
+    import vistrack
+
+    with pytest.raises(ValueError) as e:
+        vistrack.Tracker(**kw)
+    assert words in str(e.value) and "\n" not in str(e.value)
+
+
+def test_the_tracker_names_the_options_it_takes():
+    import vistrack
+
+    with pytest.raises(ValueError, match="lambda_dcf, map_stride"):
+        vistrack.Tracker(frobnicate=3)
+    vistrack.Tracker(lambda_dcf=30.0, lambda_template=2.0)  # the model's own and its appearance's
+
+
+def _api_frames(n=5):
+    out = []
+    for k in range(n):
+        f = np.full((90, 120, 3), 50, np.uint8)
+        f[::6] = 80
+        cv2.rectangle(f, (30 + 2 * k, 30), (54 + 2 * k, 54), (40, 60, 230), -1)
+        out.append(f)
+    return out
+
+
+def _api_track(frames, box=(30, 30, 25, 25)):
+    import vistrack
+
+    t = vistrack.Tracker(seed=3, particles=50)
+    t.init(frames[0], box)
+    return [t.box_estimate] + [t.update(f) and t.box_estimate for f in frames[1:]]
+
+
+@pytest.mark.parametrize("convert", [
+    lambda f: f.astype(np.float64) / 255, lambda f: f.astype(np.float32), lambda f: f.astype(np.uint16) * 257,
+    lambda f: f.astype(np.int64), lambda f: f.tolist(), lambda f: cv2.cvtColor(f, cv2.COLOR_BGR2BGRA),
+], ids=["float 0..1", "float 0..255", "uint16", "int64", "nested lists", "BGRA"])
+def test_the_tracker_takes_any_reasonable_frame(convert):
+    """Frames a user may pass are converted once into the uint8 BGR frame run decodes: the same track."""
+    frames = _api_frames()
+    assert _api_track([convert(f) for f in frames]) == _api_track(frames)
+
+
+def test_the_tracker_takes_grey_frames_of_one_channel():
+    grey = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in _api_frames()]
+    assert _api_track([g[:, :, None] for g in grey]) == _api_track(grey)
+
+
+@pytest.mark.parametrize("frame, words", [
+    (np.ones((90, 120), bool), "dtype bool"),
+    (np.ones((90, 120), complex), "dtype complex128"),
+    (np.full((90, 120), np.nan), "NaN"),
+    (np.full((90, 120), 300, np.int64), "values in 0..255"),
+    (np.full((90, 120), -1.0), "values in 0..1 or 0..255"),
+    (np.zeros((90, 120, 2), np.uint8), "shape (90, 120, 2)"),
+    (np.zeros((2, 90, 120, 3), np.uint8), "shape (2, 90, 120, 3)"),
+    (np.zeros((0, 120, 3), np.uint8), "shape (0, 120, 3)"),
+    ([[1, 2], [3]], "ragged"),
+    ("frame.png", "dtype <U9"),
+], ids=["bool", "complex", "nan", "int over 255", "negative", "2 channels", "4-d", "empty", "ragged", "text"])
+def test_the_tracker_refuses_a_frame_it_cannot_read_with_one_line(frame, words):
+    import vistrack
+
+    with pytest.raises(ValueError) as e:
+        vistrack.Tracker().init(frame, (30, 30, 25, 25))
+    assert words in str(e.value) and "\n" not in str(e.value)
+
+
+def test_a_frame_size_or_kind_change_after_init_is_an_error_as_in_run():
+    import vistrack
+
+    frames = _api_frames()
+    t = vistrack.Tracker()
+    t.init(frames[0], (30, 30, 25, 25))
+    with pytest.raises(ValueError, match="this frame is 120x80 colour, but the tracker started on 120x90 colour"):
+        t.update(frames[1][:80])
+    with pytest.raises(ValueError, match="this frame is 120x90 grey, but the tracker started on 120x90 colour"):
+        t.update(cv2.cvtColor(frames[1], cv2.COLOR_BGR2GRAY))
+    ok, box = t.update(frames[1])  # the tracker goes on
+    assert t.result.index == 1
+    with pytest.raises(ValueError, match=r"box must be four numbers \(x, y, w, h\), got 3"):
+        vistrack.Tracker().init(frames[0], (1, 2, 3))
+    with pytest.raises(ValueError, match="box must be four numbers"):
+        vistrack.Tracker().init(frames[0], "30,30,25,25")
+
+
+# ------------------------------------------------------------------ 4: TraX and start-up
+
+
+def _vistrack(argv, stdin=subprocess.DEVNULL, **kw):
+    return subprocess.run([sys.executable, "-m", "vistrack.cli", *argv], stdin=stdin, capture_output=True, text=True,
+                          timeout=120, **kw)
+
+
+def test_trax_checks_its_options_before_the_hello():
+    p = _vistrack(["trax", "--model", "nonsense"])
+    assert p.stdout == "" and p.stderr.startswith("Error: unknown model 'nonsense'") and p.stderr.count("\n") == 1
+    p = _vistrack(["trax", "--algo", "pf-eis"])
+    assert p.stdout == "" and "does not run on the box model" in p.stderr and p.stderr.count("\n") == 1
+
+
+@pytest.mark.parametrize("stdin", ["", "garbage\n", "@@TRAX:frame\n"], ids=["nothing", "garbage", "out of order"])
+def test_trax_answers_an_absent_or_broken_client_with_one_line(stdin):
+    pytest.importorskip("trax", reason="vot-trax is not installed")
+    p = _vistrack(["trax"], stdin=None, input=stdin)
+    assert p.returncode == 1 and p.stdout.startswith("@@TRAX:hello")
+    assert p.stderr.startswith("Error: no TraX client") and p.stderr.count("\n") == 1, p.stderr
+
+
+@pytest.mark.parametrize("case, words", [
+    ("outside", "start box 500,500,10,10 lies outside the 120x90 frame"),
+    ("missing", "cannot read the frame {d}/nothere.png: no such file"),
+    ("size", "this frame is 120x80 colour, but the tracker started on 120x90 colour frames"),
+])
+def test_trax_session_errors_reach_the_client_and_no_traceback(tmp_path, case, words):
+    trax = pytest.importorskip("trax", reason="vot-trax is not installed")
+    from trax.client import Client
+    from trax.image import FileImage
+    from trax.region import Rectangle
+
+    f = _api_frames(1)[0]
+    cv2.imwrite(str(tmp_path / "f0.png"), f)
+    cv2.imwrite(str(tmp_path / "f1.png"), f[:80])
+    proc = subprocess.Popen([sys.executable, "-m", "vistrack.cli", "trax"], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        client = Client((proc.stdin.fileno(), proc.stdout.fileno()), timeout=120, log=[].append)
+        box = (500, 500, 10, 10) if case == "outside" else (30, 30, 25, 25)
+        with pytest.raises(trax.TraxException) as e:
+            client.initialize({"color": FileImage.create(str(tmp_path / "f0.png"))}, [(Rectangle.create(*box), {})],
+                              {})
+            client.frame({"color": FileImage.create(str(tmp_path / ("nothere.png" if case == "missing" else
+                                                                       "f1.png")))}, {}, [])
+        assert words.format(d=tmp_path) in str(e.value)
+    finally:
+        proc.stdin.close()
+        err = proc.stderr.read()
+        proc.wait(timeout=60)
+    assert proc.returncode == 1 and err == f"Error: {words.format(d=tmp_path)}" + err.split(words.format(d=tmp_path))[1]
+    assert err.count("\n") == 1 and "Traceback" not in err
+
+
+_INTERRUPT_AT = """
+import os, signal, sys, atexit
+signal.signal(signal.SIGINT, signal.default_int_handler)
+where = sys.argv.pop(1)
+if where == "start-up":  # Ctrl-C while the command line loads its modules
+    class Hook:
+        def find_spec(self, name, path=None, target=None):
+            if name == "vistrack.cli.demo":
+                os.kill(os.getpid(), signal.SIGINT)
+            return None
+    sys.meta_path.insert(0, Hook())
+elif where == "shut-down":  # Ctrl-C once the command is done, while the process ends
+    atexit.register(lambda: os.kill(os.getpid(), signal.SIGINT))
+from vistrack.cli import main
+main()
+"""
+
+
+@pytest.mark.parametrize("where", ["start-up", "shut-down"])
+def test_ctrl_c_at_start_up_and_shut_down_is_aborted_and_130(where):
+    p = subprocess.run([sys.executable, "-c", _INTERRUPT_AT, where, "--version"], capture_output=True, text=True,
+                       timeout=120)
+    assert (p.returncode, p.stderr) == (130, "Aborted.\n")
+
+
+def test_ctrl_c_while_trax_waits_for_its_client_is_aborted_and_130():
+    pytest.importorskip("trax", reason="vot-trax is not installed")
+    import signal
+
+    proc = subprocess.Popen([sys.executable, "-m", "vistrack.cli", "trax"], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    assert proc.stdout.readline().startswith("@@TRAX:hello")
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and err.strip() == "Aborted."

@@ -10,21 +10,24 @@ import sys
 import warnings
 from contextlib import contextmanager
 
-import click
+from vistrack.track.signals import abort_on_interrupt, interrupt_aborts
 
-from vistrack import __version__
-from vistrack.core.runtime import TooLarge, keep_freed_memory
-from vistrack.io.outputs import OutputError
-from vistrack.track.run import Terminated, stop_on_signals
+with interrupt_aborts():  # Ctrl-C in the seconds the modules load: "Aborted.", 130, no traceback
+    import click
 
-from .demo import demo
-from .eval import eval_cmd
-from .fit import fit_plate
-from .reproduce import reproduce
-from .run import run
-from .synth import synth, synth_suite
-from .train_search import train_search
-from .trax import trax
+    from vistrack import __version__
+    from vistrack.core.runtime import TooLarge, keep_freed_memory
+    from vistrack.io.outputs import OutputError
+    from vistrack.track.run import Terminated, stop_on_signals
+
+    from .demo import demo
+    from .eval import eval_cmd
+    from .fit import fit_plate
+    from .reproduce import reproduce
+    from .run import run
+    from .synth import synth, synth_suite
+    from .train_search import train_search
+    from .trax import trax
 
 __all__ = ["cli", "main"]
 
@@ -114,5 +117,11 @@ def _stopped(e):
 
 
 def main(argv=None):
-    """Console entry point: :meth:`VistrackGroup.main` on ``argv`` (default: the command line)."""
-    cli.main(args=argv)
+    """Console entry point: :meth:`VistrackGroup.main` on ``argv`` (default: the command line).
+    On the process's own command line, a Ctrl-C once the command is done (its shut-down) ends it
+    at once with ``Aborted.`` and 130, as in its start-up."""
+    try:
+        cli.main(args=argv)
+    finally:
+        if argv is None:
+            abort_on_interrupt()

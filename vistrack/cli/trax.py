@@ -29,10 +29,12 @@ def trax(model, algo, particles, seed):
       protocol = trax
       command = vistrack trax --seed 0
     """
-    from vistrack.track.trax import serve
+    from vistrack.track.trax import ClientError, SessionError, serve
 
     try:
         serve(model, algo, particles, seed)
     except ImportError as e:
         raise click.ClickException(f"vistrack trax needs the vot-trax package ({e}): pip install 'vistrack[trax]'") \
             from None
+    except (ValueError, SessionError, ClientError) as e:  # options (before the hello), the session, the client
+        raise click.ClickException(str(e)) from None

@@ -1,12 +1,15 @@
 """Signals during a run: Ctrl-C and SIGTERM stop it after the frame in hand, every output flushed
-(:func:`deferred_signals`); the exception a SIGTERM raises (:class:`Terminated`)."""
+(:func:`deferred_signals`); the exception a SIGTERM raises (:class:`Terminated`); and Ctrl-C while
+nothing is open (a command's start-up and shut-down: :func:`interrupt_aborts`), which ends the
+process at once with ``Aborted.`` and exit code 130."""
 
 from __future__ import annotations
 
 import signal
 from contextlib import contextmanager
 
-__all__ = ["Terminated", "stop_on_signals", "deferred_signals", "stop_reason", "HARD_STOP"]
+__all__ = ["Terminated", "stop_on_signals", "deferred_signals", "stop_reason", "HARD_STOP", "interrupt_aborts",
+           "abort_on_interrupt"]
 
 
 class Terminated(KeyboardInterrupt):
@@ -85,3 +88,38 @@ def stop_reason(exc):
     if not isinstance(cause, KeyboardInterrupt):
         raise exc
     return "terminate" if isinstance(cause, Terminated) else "interrupt"
+
+
+def _abort(signum, frame):
+    import os
+
+    os.write(2, b"Aborted.\n")
+    os._exit(130)
+
+
+def abort_on_interrupt():
+    """From now on Ctrl-C ends the process at once with ``Aborted.`` and exit code 130, no
+    traceback (a command line whose work is done and whose files are closed: its shut-down). A
+    SIGINT the process ignores stays ignored; outside the main thread nothing changes. Returns the
+    handler it replaced (``None`` where it changed nothing)."""
+    try:
+        old = signal.getsignal(signal.SIGINT)
+        if old is signal.SIG_IGN:
+            return None
+        signal.signal(signal.SIGINT, _abort)
+    except ValueError:  # not the main thread
+        return None
+    return old
+
+
+@contextmanager
+def interrupt_aborts():
+    """Within the block Ctrl-C ends the process at once with ``Aborted.`` and exit code 130
+    (:func:`abort_on_interrupt`): for the seconds a command line spends loading its modules, when
+    nothing is open yet. The previous handler is restored after."""
+    old = abort_on_interrupt()
+    try:
+        yield
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGINT, old)
