@@ -495,3 +495,56 @@ def test_ctrl_c_while_trax_waits_for_its_client_is_aborted_and_130():
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130 and err.strip() == "Aborted."
+
+
+# ------------------------------------------------------------------ 6: run's summary scored as eval scores
+
+
+def _otb_folder(folder, n, bad=()):
+    (folder / "img").mkdir(parents=True)
+    for i in range(n):
+        img = box_frame(2 * i)
+        cv2.imwrite(str(folder / "img" / f"{i + 1:04d}.png"), img)
+    for i in bad:
+        (folder / "img" / f"{i + 1:04d}.png").write_bytes(b"not a png")
+    (folder / "groundtruth_rect.txt").write_text("".join(f"{41 + 2 * i},51,25,19\n" for i in range(n)))
+    return folder
+
+
+def test_run_summary_scores_an_undecodable_frame_as_eval_does(tmp_path):
+    """run_summary_decode: one frame of 12 fails to decode; run's summary and eval --results-dir over
+    the same results give the same success AUC, precision, lost frames and mean error."""
+    import json
+    import re
+
+    seq = _otb_folder(tmp_path / "seq", 12, bad=[4])
+    (tmp_path / "mt").mkdir()
+    code, out, err = run(["run", seq, "--init-gt", "-n", "50", "--results", tmp_path / "mt" / "seq.txt"])
+    assert code == 0, err
+    line = next(ln for ln in out.splitlines() if ln.startswith("vs ground truth"))
+    code, _, err = run(["eval", seq, "--algos", "", "--results-dir", tmp_path / "mt", "--out", tmp_path / "ev", "-q"])
+    assert code == 0, err
+    (r,) = json.loads((tmp_path / "ev" / "results.json").read_text())["results"]
+    got = {k: float(re.search(pat, line).group(1)) for k, pat in (
+        ("success_auc", r"success AUC ([0-9.]+)"), ("precision_20px", r"precision@20px ([0-9.]+)"),
+        ("mean_error_all", r"mean centre error ([0-9.]+) px over all"), ("lost", r"in (\d+) frames$"))}
+    assert got["precision_20px"] == pytest.approx(r["precision_20px"], abs=1e-3) == 11 / 12
+    assert got["lost"] / 12 == pytest.approx(r["p_lost"]) == 1 / 12
+    assert got["success_auc"] == pytest.approx(r["success_auc"], abs=1e-3)
+    assert got["mean_error_all"] == pytest.approx(r["mean_error_all"], abs=0.01)
+    assert "but the 1 without an estimate" in line
+
+
+def test_eval_scores_a_plate_clip_from_its_first_box_frame(tmp_path):
+    """eval on a plate clip whose first 7 frames have no plate: the plate rule compares each frame's
+    report with that frame's truth (the reports were 7 frames off: every frame lost, no mean error)."""
+    import json
+
+    from vistrack.data_synth.plate import make_plate_clip
+
+    make_plate_clip(tmp_path / "p", frames=40, size=(320, 240), seed=1, cars=1)
+    code, _, err = run(["eval", tmp_path / "p", "--model", "plate", "--algos", "lis", "--particles", "50", "--runs",
+                        "1", "--in-process", "--out", tmp_path / "ev", "-q"])
+    assert code == 0, err
+    (r,) = json.loads((tmp_path / "ev" / "results.json").read_text())["results"]
+    assert r["p_lost"] < 0.6 and r["mean_error"] < 2.0, r["p_lost"]

@@ -19,7 +19,7 @@ import numpy as np
 
 __all__ = ["center_error", "contour_lost_threshold", "plate_frame_measures", "lost_frames", "summarize_runs",
            "landmark_error", "iou", "success_auc", "success_curve", "precision", "precision_curve", "IOU_THRESHOLDS",
-           "PRECISION_THRESHOLDS", "box_scores", "summarize", "pooled_summary",
+           "PRECISION_THRESHOLDS", "box_scores", "score_frames", "summarize", "pooled_summary",
            "equal_time_n", "equal_time_search"]
 
 #: IoU thresholds of the success plot (OTB protocol)
@@ -179,6 +179,45 @@ def lost_frames(rule, centre_err, frame_width, *, truth=None, reported=None, ver
     if rule not in ("centre", "plate", "size"):
         raise ValueError(f"unknown lost rule {rule!r}")
     return centre_err > contour_lost_threshold(frame_width)
+
+
+def score_frames(truth, boxes, frame_width, *, rule="size", reported=(), vertices=(), aspect=None):
+    """Per-frame measures of one track, what ``eval`` records per task and ``run``'s summary scores.
+
+    Parameters
+    ----------
+    truth : dict
+        The ground truth's columns (``cx``, ``cy``, ``w``, ``h``, ``visible``; a plate's vertices).
+    boxes : ndarray, shape (frames, 4)
+        ``x, y, w, h`` per frame from the first, NaN where the tracker gave no estimate (a frame
+        that failed to decode, one before the start): such a frame is a missed frame (error
+        infinite: lost, outside every precision threshold, IoU 0).
+    frame_width : int
+    rule, reported, vertices, aspect
+        The lost rule and its inputs (:func:`lost_frames`).
+
+    Returns
+    -------
+    dict
+        ``frames``, ``visible``, ``error`` (centre, px; ``None`` without an estimate), ``lost``,
+        ``iou`` and ``boxes`` (``None`` without an estimate), lists of ``frames`` values.
+    """
+    t = truth
+    m = min(len(boxes), len(t["cx"]))
+    tb = np.stack([t["cx"] - t["w"] / 2, t["cy"] - t["h"] / 2, t["w"], t["h"]], axis=1)[:m]
+    boxes = np.asarray(boxes, float)[:m]
+    err = center_error(boxes[:, 0] + boxes[:, 2] / 2, boxes[:, 1] + boxes[:, 3] / 2, tb[:, 0] + tb[:, 2] / 2,
+                       tb[:, 1] + tb[:, 3] / 2)
+    err = np.where(np.isfinite(err), err, np.inf)
+    visible = np.asarray(t["visible"][:m]) > 0
+    return {
+        "frames": int(m), "visible": visible.astype(int).tolist(),
+        "error": [float(e) if np.isfinite(e) else None for e in err],
+        "lost": lost_frames(rule, err, frame_width, truth=t, reported=list(reported)[:m],
+                            vertices=list(vertices)[:m], aspect=aspect).astype(int).tolist(),
+        "iou": [float(v) for v in np.nan_to_num(iou(boxes, tb), nan=0.0)],
+        "boxes": [None if not np.all(np.isfinite(b)) else [round(float(v), 3) for v in b] for b in boxes],
+    }
 
 
 # -- summaries of eval's task results --------------------------------------------------------

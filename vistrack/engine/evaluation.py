@@ -31,7 +31,7 @@ from ..io.clips import GroundTruthWarning, find_clips, load_clip, sequence_name 
 from ..io.results_format import find_result_file, read_result_file
 from ..filters import ALGORITHMS, make_filter
 from ..core.metrics import (PRECISION_THRESHOLDS, center_error, iou, lost_frames, pooled_summary, precision,  # noqa: F401
-                      precision_curve, success_auc, success_curve)
+                      precision_curve, score_frames, success_auc, success_curve)
 from ..core.metrics import summarize as metrics_summarize
 from ..models.registry import get_model_spec
 from ..core.runtime import check_memory, keep_freed_memory
@@ -290,8 +290,10 @@ def run_task(task, out_dir):
         # boxes centred on the pose centre, as groundtruth.csv's (cx, cy, w, h)
         boxes = _by_index(np.concatenate([est[:, :2] - wh / 2, wh], axis=1), index)
         ms, ess = np.array(ms), _by_index(np.array(ess), index)
-        if spec.lost_rule == "plate":
+        if spec.lost_rule == "plate":  # placed at their frames too: not reported before the start or where undecoded
             rule, aspect = "plate", model.layout.aspect
+            reported = np.nan_to_num(_by_index(np.array(reported, float), index)).astype(bool).tolist()
+            vertices = _by_index(np.array(vertices, float), index)
     result = score_boxes(clip, boxes, rule=rule, reported=reported, vertices=vertices, aspect=aspect)
     result.update({"clip": task["clip"], "algo": algo, "particles": n, "run": task["run"],
                    "ms": [float(v) for v in ms[:result["frames"]]],
@@ -301,26 +303,10 @@ def run_task(task, out_dir):
 
 def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=None):
     """Per-frame measures of ``boxes (frames, 4)`` (``x, y, w, h``; NaN where there is no
-    estimate) against ``clip``'s ground truth: ``frames``, ``visible``, ``error`` (centre, px;
-    ``None`` without an estimate), ``lost`` (by ``rule``, :func:`~vistrack.core.metrics.lost_frames`)
-    and ``iou``."""
-    t = clip.truth
-    m = min(len(boxes), len(t["cx"]))
-    truth = _truth_boxes(t)[:m]
-    boxes = boxes[:m]
-    err = center_error(boxes[:, 0] + boxes[:, 2] / 2, boxes[:, 1] + boxes[:, 3] / 2,
-                       truth[:, 0] + truth[:, 2] / 2, truth[:, 1] + truth[:, 3] / 2)
-    err = np.where(np.isfinite(err), err, np.inf)
-    visible = np.asarray(t["visible"][:m]) > 0
-    return {
-        "frames": int(m), "visible": visible.astype(int).tolist(),
-        "error": [float(e) if np.isfinite(e) else None for e in err],
-        "lost": lost_frames(rule, err, clip.source.size[0], truth=t, reported=list(reported)[:m],
-                            vertices=list(vertices)[:m], aspect=aspect).astype(int).tolist(),
-        "iou": [float(v) for v in np.nan_to_num(iou(boxes, truth), nan=0.0)],
-        # the boxes themselves (x, y, w, h; None without an estimate): the report's annotated videos
-        "boxes": [None if not np.all(np.isfinite(b)) else [round(float(v), 3) for v in b] for b in boxes],
-    }
+    estimate) against ``clip``'s ground truth (:func:`~vistrack.core.metrics.score_frames`:
+    ``frames``, ``visible``, ``error``, ``lost``, ``iou``, ``boxes``)."""
+    return score_frames(clip.truth, boxes, clip.source.size[0], rule=rule, reported=reported, vertices=vertices,
+                        aspect=aspect)
 
 
 def result_files(dirs, clips, fmt="otb"):

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.metrics import center_error, iou, landmark_error, lost_frames, plate_frame_measures, precision, success_auc
+from ..core.metrics import landmark_error, plate_frame_measures, score_frames, summarize
 from .profiling import STAGES
 
 __all__ = ["summary_lines"]
@@ -77,23 +77,28 @@ def _lost_line(run):
             f"{detail}){times}")
 
 
+#: a track row's ``lost_reason`` where the filter did not look at the frame: it has no estimate
+NO_ESTIMATE = ("decode", "not started", "not found")
+
+
 def _box_summary(rows, t, frame_width):
-    k = np.array([r["frame"] for r in rows], int)
-    m = int(np.sum(k < len(t["cx"])))
-    k = k[:m]
-    est = np.array([[rows[i]["cx"], rows[i]["cy"], rows[i]["w"], rows[i]["h"]] for i in range(m)], float)
-    err = center_error(est[:, 0], est[:, 1], t["cx"][k], t["cy"][k])
-    ious = iou(np.column_stack([est[:, :2] - est[:, 2:] / 2, est[:, 2:]]),
-               np.column_stack([t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k]]))
-    vis = (t["w"][k] > 0) & (t["h"][k] > 0)
-    searched = np.isnan(err)  # frames searched before the object was found: no estimate, lost
-    lost = (lost_frames("size", np.nan_to_num(err), frame_width, truth={"w": t["w"][k], "h": t["h"][k]})
-            | searched) & vis
-    tracked = f"{err[vis & ~lost].mean():.2f} px" if (vis & ~lost).any() else "none"
-    n = int(vis.sum())
-    mean = f"{err[vis & ~searched].mean():.2f} px" if (vis & ~searched).any() else "n/a"
-    return (f"vs ground truth ({n} frames with the object): success AUC {success_auc(ious[vis]):.3f}, precision@20px "
-            f"{precision(err[vis]):.3f}, mean centre error {mean} over all of them"
-            + (f" but the {int((vis & searched).sum())} searched before it was found" if (vis & searched).any() else "")
-            + f" ({tracked} over tracked frames); lost (centre error > half the object's larger side) in "
-            f"{int(lost.sum())} frames")
+    """One line: the track scored as ``eval`` scores a task (:func:`~vistrack.core.metrics.score_frames`,
+    :func:`~vistrack.core.metrics.summarize`), over the same frames: a frame without an estimate
+    (undecodable, searched before the object was found) is a missed frame in both."""
+    n_frames = int(max(r["frame"] for r in rows)) + 1
+    boxes = np.full((n_frames, 4), np.nan)
+    for r in rows:
+        if r["lost_reason"] not in NO_ESTIMATE:
+            boxes[r["frame"]] = (r["cx"] - r["w"] / 2, r["cy"] - r["h"] / 2, r["w"], r["h"])
+    scored = score_frames(t, boxes, frame_width, rule="size")
+    s = summarize([{**scored, "clip": "", "algo": "", "particles": 0, "run": 0, "ms": [], "ess": []}])[0]
+    vis = np.array(scored["visible"], bool)
+    missed = int(np.sum(vis & np.array([e is None for e in scored["error"]])))
+    lost = int(np.sum(vis & np.array(scored["lost"], bool)))
+    mean_all = "n/a" if s["mean_error_all"] is None else f"{s['mean_error_all']:.2f} px"
+    tracked = "none" if s["mean_error"] is None else f"{s['mean_error']:.2f} px"
+    but = f" but the {missed} without an estimate (undecodable, or searched before it was found)" if missed else ""
+    return (f"vs ground truth ({int(vis.sum())} frames with the object): success AUC {s['success_auc']:.3f}, "
+            f"precision@20px {s['precision_20px']:.3f}, mean centre error {mean_all} over all of them{but} ({tracked} "
+            f"over tracked frames); lost (centre error > half the object's larger side, or no estimate) in {lost} "
+            "frames")
