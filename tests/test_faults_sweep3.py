@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import cv2
@@ -548,3 +549,83 @@ def test_eval_scores_a_plate_clip_from_its_first_box_frame(tmp_path):
     assert code == 0, err
     (r,) = json.loads((tmp_path / "ev" / "results.json").read_text())["results"]
     assert r["p_lost"] < 0.6 and r["mean_error"] < 2.0, r["p_lost"]
+
+
+# ------------------------------------------------------------------ 7: the minor and wording cases
+
+
+def test_init_gt_with_missing_first_boxes_keeps_the_redetected_column(tmp_path):
+    import csv
+
+    seq = _otb_folder(tmp_path / "seq", 8)
+    rows = (seq / "groundtruth_rect.txt").read_text().splitlines()
+    (seq / "groundtruth_rect.txt").write_text("\n".join(["NaN,NaN,NaN,NaN"] * 3 + rows[3:]) + "\n")
+    code, _, err = run(["run", seq, "--init-gt", "-n", "30", "-q", "--track", tmp_path / "t.csv"])
+    assert code == 0, err
+    with open(tmp_path / "t.csv", newline="") as f:
+        track = list(csv.DictReader(f))
+    assert list(track[0]) == ["frame", "visible", "cx", "cy", "w", "h", "angle_deg", "scale", "redetected", "ess", "ms",
+                              "lost_reason"]
+    assert [r["lost_reason"] for r in track[:3]] == ["not started"] * 3
+    assert {r["redetected"] for r in track[:3]} == {"0"}
+
+
+def _perturb_source(tmp_path):
+    return _otb_folder(tmp_path / "src", 10)
+
+
+def test_perturb_gain_without_light_is_refused(tmp_path):
+    from vistrack.data_synth.perturb import Perturbation
+
+    code, _, err = run(["synth", "perturb", _perturb_source(tmp_path), "--out", tmp_path / "o", "--gain", "0.5:1"])
+    one_error(code, err, "--gain sets the range of --light")
+    assert not (tmp_path / "o").exists()
+    assert Perturbation(light="ramp").gain == (0.3, 1.6) and Perturbation(blur=3).gain == (0.3, 1.6)
+
+
+def test_perturb_marks_an_object_shaken_out_of_view_absent(tmp_path):
+    from vistrack.data_synth.perturb import PerturbWarning
+
+    with pytest.warns(PerturbWarning, match="moves the object wholly out of the frame in 10 of the 10 frames"):
+        code, _, err = run(["synth", "perturb", _perturb_source(tmp_path), "--out", tmp_path / "o", "--shake", "1000",
+                            "-q"])
+    assert code == 0, err
+    gt = np.loadtxt(tmp_path / "o" / "groundtruth_rect.txt", delimiter=",")
+    assert np.all(gt == 0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PerturbWarning)
+        code, _, err = run(["synth", "perturb", tmp_path / "src", "--out", tmp_path / "o6", "--shake", "6", "-q"])
+    assert code == 0, err
+    assert np.all(np.loadtxt(tmp_path / "o6" / "groundtruth_rect.txt", delimiter=",")[:, 2] > 0)
+
+
+def test_perturb_overwrites_its_own_earlier_output(tmp_path):
+    src = _perturb_source(tmp_path)
+    for blur in ("3", "5"):
+        code, _, err = run(["synth", "perturb", src, "--out", tmp_path / "o", "--blur", blur, "-q"])
+        assert code == 0, err
+    (tmp_path / "o" / "notes.txt").write_text("mine")
+    code, _, err = run(["synth", "perturb", src, "--out", tmp_path / "o", "--blur", "7", "-q"])
+    assert code == 0, err
+    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["groundtruth_rect.txt", "notes.txt", "perturb.json",
+                                                                  "src.mp4"]
+    import json
+
+    assert json.loads((tmp_path / "o" / "perturb.json").read_text())["blur"] == 7
+
+
+@pytest.mark.parametrize("gt, words", [
+    ("1,1,0.5,0.5", "is smaller than 2 px (0.5x0.5)"),
+    ("500,500,20,20", "lies outside the 160x120 frame"),
+])
+def test_a_tiny_ground_truth_box_is_called_tiny_not_outside(tmp_path, gt, words):
+    seq = _otb_folder(tmp_path / "seq", 3)
+    (seq / "groundtruth_rect.txt").write_text(f"{gt}\n" * 3)
+    code, _, err = run(["run", seq, "--init-gt", "-q"])
+    one_error(code, err, words)
+
+
+def test_init_gt_given_a_folder_says_so(tmp_path):
+    seq = _otb_folder(tmp_path / "seq", 3)
+    code, _, err = run(["run", seq, "--init-gt", seq, "-q"])
+    assert "does not exist" not in one_error(code, err, f"--init-gt: {seq} is a folder; give a ground-truth file")

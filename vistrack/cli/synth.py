@@ -144,7 +144,7 @@ def landmarks(out, k, frames, size, seed, clutter_blobs, occlusion, quiet):
 @click.option("--light", type=click.Choice(LIGHTS), default=None,
               help="ramp: the gain goes linearly from the first --gain factor to the second (dark into light); "
                    "flicker: a random gain per frame between them.")
-@click.option("--gain", default="0.3:1.6", show_default=True, type=Ratio(), help="Gain range of --light.")
+@click.option("--gain", default=None, type=Ratio(), help="Gain range of --light [default: 0.3:1.6].")
 @click.option("--blur", default=0, show_default=True, type=click.IntRange(0, 200),
               help="Motion blur: a line kernel K px long along a random direction per frame.")
 @click.option("--shake", default=0.0, show_default=True, type=click.FloatRange(0, 1000),

@@ -30,6 +30,7 @@ on pixel values only and leave the ground truth as it is. Frames without the obj
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -40,9 +41,15 @@ from vistrack.io.video import VideoWriter, find_groundtruth, groundtruth_origin,
 
 from .render import atomic_clip, motion_blur
 
-__all__ = ["Perturbation", "perturb_frames", "perturb_clip", "STRESS_PRESETS"]
+__all__ = ["Perturbation", "perturb_frames", "perturb_clip", "STRESS_PRESETS", "PerturbWarning", "DEFAULT_GAIN"]
 
 LIGHTS = ("ramp", "flicker")
+#: the gain range of a light stress unless one is given: from dark into light
+DEFAULT_GAIN = (0.3, 1.6)
+
+
+class PerturbWarning(UserWarning):
+    """A stress that leaves the copy of little use (the object out of view)."""
 
 
 @dataclass(frozen=True)
@@ -50,7 +57,8 @@ class Perturbation:
     """What to do to a clip (every field off by default; see the module doc for each)."""
 
     light: str | None = None
-    gain: tuple[float, float] = (0.3, 1.6)
+    #: the gain range of ``light`` (``None``: :data:`DEFAULT_GAIN`); only with a ``light``
+    gain: tuple[float, float] | None = None
     blur: int = 0
     shake: float = 0.0
     zoom: tuple[float, float] | None = None
@@ -60,6 +68,10 @@ class Perturbation:
     def __post_init__(self):
         if self.light is not None and self.light not in LIGHTS:
             raise ValueError(f"light must be one of {', '.join(LIGHTS)}, got {self.light!r}")
+        if self.gain is not None and self.light is None:
+            raise ValueError("--gain sets the range of --light: give --light ramp or --light flicker with it")
+        if self.gain is None:
+            object.__setattr__(self, "gain", DEFAULT_GAIN)
         g0, g1 = self.gain
         if not (0 < g0 < 100 and 0 < g1 < 100):
             raise ValueError(f"gain must be two positive factors below 100, got {g0}:{g1}")
@@ -182,7 +194,16 @@ def perturb_frames(frames, gt, p):
             img = motion_blur(img, p.blur * np.array([np.cos(angle[t]), np.sin(angle[t])]), border=cv2.BORDER_REPLICATE)
         if gain[t] != 1.0:
             img = np.clip(np.rint(img.astype(np.float32) * gain[t]), 0, 255).astype(np.uint8)
-        yield t, img, boxes[t]
+        yield t, img, _in_view(boxes[t], img.shape[1], img.shape[0])
+
+
+def _in_view(box, w, h):
+    """``box`` (0-based ``x, y, w, h``), or ``0,0,0,0`` (not in view) where the geometry moved it
+    wholly out of the ``w`` x ``h`` frame."""
+    x, y, bw, bh = box
+    if bw > 0 and bh > 0 and (x >= w or y >= h or x + bw <= 0 or y + bh <= 0):
+        return np.zeros(4)
+    return box
 
 
 def read_clip(clip):
@@ -208,9 +229,10 @@ def perturb_clip(out, clip, p, progress=None):
     video, gt = read_clip(src)
     name = (src if src.is_dir() else src.parent).name
     out.mkdir(parents=True)
-    rows, writer = [], None
+    rows, kept, writer = [], [], None
     try:
         for t, img, box in perturb_frames((f for _, f in video), gt, p):
+            kept.append(t)
             if writer is None:
                 writer = VideoWriter(out / f"{name}.mp4", video.fps or 30.0, (img.shape[1], img.shape[0]),
                                      codec="auto")
@@ -223,7 +245,12 @@ def perturb_clip(out, clip, p, progress=None):
             writer.close()
     if not rows:
         raise ValueError(f"{src}: no frame to write")
+    gone = sum(1 for t, box in zip(kept, rows) if gt[t, 2] > 0 and gt[t, 3] > 0 and not box[2] > 0)
+    if gone:
+        warnings.warn(f"the {p.name} stress moves the object wholly out of the frame in {gone} of the {len(rows)} "
+                      "frames: their ground truth is 0,0,0,0 (not in view)", PerturbWarning, stacklevel=2)
     np.savetxt(out / "groundtruth_rect.txt", np.array(rows), fmt="%.3f", delimiter=",")
-    meta = {"source": str(src.resolve()), "frames_in": int(len(gt)), "frames_out": len(rows), **asdict(p)}
+    meta = {"source": str(src.resolve()), "video": f"{name}.mp4", "frames_in": int(len(gt)), "frames_out": len(rows),
+            **asdict(p)}
     (out / "perturb.json").write_text(json.dumps(meta, indent=2) + "\n")
     return len(rows)

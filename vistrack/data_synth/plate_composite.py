@@ -131,7 +131,7 @@ def composite_plate_clip(out, clip, *, layout="single-row", seed=0, width=0.4, c
         if writer is not None:
             writer.close()
     np.savetxt(out / "groundtruth_rect.txt", boxes[:n], fmt="%.3f", delimiter=",")
-    meta = {"source": str(src.resolve()), "layout": layout, "seed": seed, "width": width, "centre": list(centre),
-            "smooth": smooth, "blur": blur, "noise": noise, "upscale": upscale}
+    meta = {"source": str(src.resolve()), "video": f"{name}_plate.mp4", "layout": layout, "seed": seed, "width": width,
+            "centre": list(centre), "smooth": smooth, "blur": blur, "noise": noise, "upscale": upscale}
     (out / "composite.json").write_text(json.dumps(meta, indent=2) + "\n")
     return n

@@ -120,10 +120,25 @@ def _swap_in(new, out):
     old = out.with_name(f".{out.name}.old-{os.getpid()}")
     out.rename(old)
     new.rename(out)
+    own = _clip_files(old)
     for e in old.iterdir():  # the user's own files; not the old clip's (a plate clip's objects.csv, frames)
-        if e.name not in CLIP_NAMES and not (out / e.name).exists():
+        if e.name not in own and not (out / e.name).exists():
             e.rename(out / e.name)
     shutil.rmtree(old)
+
+
+def _clip_files(folder):
+    """The names in a clip folder that are the clip's own: :data:`CLIP_NAMES`, the records of
+    :data:`SYNTH_RECORDS` and the video a ``synth perturb`` or ``plate-on-car`` record names (``video``)."""
+    own = set(CLIP_NAMES) | set(SYNTH_RECORDS)
+    for record in ("perturb.json", "composite.json"):
+        try:
+            meta = json.loads((folder / record).read_text())
+        except (OSError, ValueError):
+            continue
+        if isinstance(meta, dict) and isinstance(meta.get("video"), str):
+            own.add(meta["video"])
+    return own
 
 
 def check_video_size(size):
@@ -138,17 +153,26 @@ def check_video_size(size):
         raise ValueError(f"frame size {w}x{h}: the clip's MPEG-4 video has at most {MAX_SIDE} pixels a side")
 
 
+#: the record each ``vistrack synth`` command writes beside its clip, and what it names
+SYNTH_RECORDS = {"meta.json": ("kind", "model"), "perturb.json": ("source",), "composite.json": ("source",)}
+
+
 def is_synth_clip(folder):
-    """Whether ``folder`` holds a clip ``vistrack synth`` wrote (``video.mp4`` and a ``meta.json``
-    object naming its ``kind`` or ``model``)."""
+    """Whether ``folder`` holds a clip ``vistrack synth`` wrote: a video beside its record
+    (:data:`SYNTH_RECORDS`: ``meta.json`` naming its ``kind`` or ``model``; ``synth perturb``'s
+    ``perturb.json`` and ``synth plate-on-car``'s ``composite.json`` naming their ``source``)."""
     folder = Path(folder)
-    if not ((folder / "video.mp4").is_file() and (folder / "meta.json").is_file()):
-        return False
-    try:
-        meta = json.loads((folder / "meta.json").read_text())
-    except (OSError, ValueError):
-        return False
-    return isinstance(meta, dict) and bool(meta.get("kind") or meta.get("model"))
+    for record, keys in SYNTH_RECORDS.items():
+        video = (folder / "video.mp4").is_file() if record == "meta.json" else any(folder.glob("*.mp4"))
+        if not (video and (folder / record).is_file()):
+            continue
+        try:
+            meta = json.loads((folder / record).read_text())
+        except (OSError, ValueError):
+            continue
+        if isinstance(meta, dict) and any(meta.get(k) for k in keys):
+            return True
+    return False
 
 
 def _check_clip_out(out):

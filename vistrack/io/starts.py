@@ -28,8 +28,12 @@ def initial_truth(clip, init_gt):
                              "give a file (--init-gt FILE) or a box (--init x,y,w,h)")
     else:
         p = Path(init_gt)
+        if p.is_dir():
+            raise VideoError(f"--init-gt: {p} is a folder; give a ground-truth file (groundtruth.csv, or x,y,w,h "
+                             "per line), or --init-gt alone for the clip's own")
         if not p.is_file():
-            raise VideoError(f"--init-gt: {p} does not exist")
+            raise VideoError(f"--init-gt: {p} does not exist" if not p.exists() else
+                             f"--init-gt: {p} is not a regular file")
         if p.suffix == ".csv":
             truth = read_groundtruth_csv(p)
         else:
@@ -73,8 +77,8 @@ MAX_BOX_FACTOR = 2
 
 def check_start_box(box, size, what="--init box"):
     """Raise :class:`VideoError` unless ``box`` ``(x, y, w, h)`` is one to start tracking from in
-    a frame of ``size`` ``(width, height)``: finite, a positive size, at least 2 px of it inside
-    the frame each way, and at most :data:`MAX_BOX_FACTOR` times the frame's width and height."""
+    a frame of ``size`` ``(width, height)``: finite, at least 2 px wide and high, at least 2 px of it
+    inside the frame each way, and at most :data:`MAX_BOX_FACTOR` times the frame's width and height."""
     fw, fh = size
     x, y, w, h = (float(v) for v in box)
     text = f"{x:.6g},{y:.6g},{w:.6g},{h:.6g}"
@@ -83,6 +87,9 @@ def check_start_box(box, size, what="--init box"):
     if w > MAX_BOX_FACTOR * fw or h > MAX_BOX_FACTOR * fh:
         raise VideoError(f"{what} {text} is far larger than the {fw}x{fh} frame (at most {MAX_BOX_FACTOR} times "
                          "its width and height): give the object's box")
+    if w < 2 or h < 2:
+        raise VideoError(f"{what} {text} is smaller than 2 px ({w:.6g}x{h:.6g}): give a box of at least 2x2 px "
+                         "on the object")
     if min(x + w, fw) - max(x, 0) < 2 or min(y + h, fh) - max(y, 0) < 2:
         raise VideoError(f"{what} {text} lies outside the {fw}x{fh} frame (less than 2 px of it inside): "
                          "give a box on the object")

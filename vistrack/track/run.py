@@ -91,11 +91,15 @@ def track_row(model, res):
     """The track-CSV row of a :class:`~vistrack.track.loop.FrameResult`: ``frame, visible``, the
     model's :meth:`describe` columns, ``redetected`` (a model that re-detects a lost object, the box
     model's: 1 on the frame it is re-found), ``ess, ms, lost_reason``."""
-    row = {"frame": res.index, "visible": int(res.visible)}
-    row.update(model.describe(res.estimate))
+    return _row(model, res.index, res.visible, res.estimate, int(res.redetected), res.ess, res.ms, res.lost_reason)
+
+
+def _row(model, index, visible, estimate, redetected, ess, ms, lost_reason):
+    """A track-CSV row, its columns in :func:`track_row`'s order whether the frame was tracked or not."""
+    row = {"frame": index, "visible": int(visible), **model.describe(estimate)}
     if offers(model, Redetects):
-        row["redetected"] = int(res.redetected)
-    row["ess"], row["ms"], row["lost_reason"] = res.ess, res.ms, res.lost_reason
+        row["redetected"] = redetected
+    row["ess"], row["ms"], row["lost_reason"] = ess, ms, lost_reason
     return row
 
 
@@ -224,8 +228,7 @@ def _record_lead(run, lead, model, outs, writer, label):
     """Rows (``visible=0``, "not found") and unmarked video frames for the frames searched without
     finding the object (:class:`~vistrack.models.plate.detect.PlateSearch`)."""
     for index, frame in lead:
-        row = {"frame": index, "visible": 0, **model.describe(np.full(model.dim, np.nan)),
-               "ess": 0.0, "ms": 0.0, "lost_reason": "not found"}
+        row = _row(model, index, 0, np.full(model.dim, np.nan), 0, 0.0, 0.0, "not found")
         run.rows.append(row)
         for o in outs:
             o.write(row)
@@ -303,18 +306,13 @@ def _record_decode(run, index, near, model, outs, writer, label, notify=None, pr
     ``ms`` 0; a blank annotated frame saying so."""
     reason, detail = ("not started", "before the first ground-truth box") if before else \
         ("decode", "the frame failed to decode")
-    if near.targets is None:
-        row = {"frame": index, "visible": 0, **model.describe(near.estimate), "ess": near.ess, "ms": 0.0,
-               "lost_reason": reason}
-        rows = [row]
-    else:
-        row = {"frame": index, "visible": 0, "id": -1,
-               **{k: np.nan for k in model.describe_target(np.zeros(near.targets[1].shape[1]))},
-               "ess": near.ess, "ms": 0.0, "lost_reason": reason}
-        rows = [row]
+    row = _row(model, index, 0, near.estimate, 0, near.ess, 0.0, reason)
+    rows = [row]
+    if near.targets is not None:
+        rows = [{"frame": index, "visible": 0, "id": -1,
+                 **{k: np.nan for k in model.describe_target(np.zeros(near.targets[1].shape[1]))},
+                 "ess": near.ess, "ms": 0.0, "lost_reason": reason}]
         run.target_rows += rows
-        row = {"frame": index, "visible": 0, **model.describe(near.estimate), "ess": near.ess, "ms": 0.0,
-               "lost_reason": reason}
     if not before:
         run.note_lost(_Untracked(index, reason, detail), notify)
     run.rows.append(row)
