@@ -5,10 +5,10 @@
 :func:`on_tmpfs` mounts a tmpfs of ``size`` in a private mount namespace (``unshare -m`` as root,
 ``unshare -rm`` otherwise: nothing outlives the process, nothing else sees it), runs each step there
 (``python -m vistrack.cli ARGV``, ``{T}`` standing for the tmpfs folder) and records after each its
-exit code, its stderr and every file in the folder (hidden ones too: a temporary file left behind
-shows): size, SHA-256 and, for a video, the frames OpenCV decodes (-1: it does not open). Where no
-tmpfs can be mounted (no ``unshare``, no privilege) it raises :class:`Unavailable` with the reason:
-the tests skip, ``soak.py`` says so.
+exit code, its stderr and every file in the folder and below (hidden ones too: a temporary file
+left behind shows), by its path there: size, SHA-256 and, for a video, the frames OpenCV decodes
+(-1: it does not open). Where no tmpfs can be mounted (no ``unshare``, no privilege) it raises
+:class:`Unavailable` with the reason: the tests skip, ``soak.py`` says so.
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ def _files(folder):
     import cv2
 
     out = {}
-    for p in sorted(Path(folder).iterdir()):
+    for p in sorted(q for q in Path(folder).rglob("*") if q.is_file()):
         data = p.read_bytes()
         frames = None
         if p.suffix.lower() in VIDEOS:
@@ -60,7 +60,8 @@ def _files(folder):
             while frames >= 0 and cap.read()[0]:
                 frames += 1
             cap.release()
-        out[p.name] = {"size": len(data), "sha256": hashlib.sha256(data).hexdigest(), "frames": frames}
+        out[str(p.relative_to(folder))] = {"size": len(data), "sha256": hashlib.sha256(data).hexdigest(),
+                                           "frames": frames}
     return out
 
 

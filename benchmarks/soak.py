@@ -1,8 +1,10 @@
-"""Fault-injection soak: ~200 scenarios of bad input, broken files and interruptions, each run as a
+"""Fault-injection soak: ~280 scenarios of bad input, broken files and interruptions, each run as a
 user would (``python -m vistrack.cli ...`` in a fresh folder), its outcome classified automatically.
 
-Not part of CI (about 10 minutes on 2 cores). The fast cases that guard each fix live in
-``tests/test_faults.py``; this sweep looks for new ones.
+Not part of CI (about 25 minutes on 2 cores). The fast cases that guard each fix live in
+``tests/test_faults*.py``; this sweep looks for new ones. Issue 47's cases are in ``soak_sweep3.py``
+(a full disk on a small tmpfs where one can be mounted, else ``skipped``); a case whose fix is another
+issue's is counted apart (``..., awaits issue 46``), not as a failure.
 
     python benchmarks/soak.py [--only SUBSTRING] [--keep DIR] [--timeout 180]
 
@@ -18,7 +20,8 @@ Outcomes, in this order of precedence:
 * ``misleading error``: a non-zero exit without exactly one ``Error:`` line, an error that does
   not name what is wrong (the scenario's keyword), or valid input refused;
 * ``clear error``: a non-zero exit with one ``Error:`` line and no traceback;
-* ``correct``: exit 0 (or 130 / 143 where the scenario interrupts) and outputs that parse.
+* ``correct``: exit 0 (or 130 / 143 where the scenario interrupts) and outputs that parse;
+* ``skipped``: the scenario cannot run here (no tmpfs can be mounted, no vot-trax), with the reason.
 
 Prints a markdown table (scenario, command, exit code, outcome, note) and the totals.
 """
@@ -43,10 +46,12 @@ os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # this script reads damag
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-OUTCOMES = ["clear error", "correct", "misleading error", "traceback", "silent wrong", "data loss", "hang"]
+OUTCOMES = ["clear error", "correct", "misleading error", "traceback", "silent wrong", "data loss", "hang", "skipped"]
 W, H, FRAMES = 160, 120, 40
 INIT = "48,51,24,18"
 FX = None  # the fixtures folder (set by main)
+#: the outcomes that are failures (a scenario that awaits another issue's fix is counted apart)
+BAD = ("traceback", "hang", "silent wrong", "data loss")
 NAN = re.compile(r"(?<![A-Za-z_])(nan|-?inf|infinity)(?![A-Za-z_])", re.I)
 
 
@@ -58,6 +63,7 @@ class Result:
     seconds: float
     timeout: bool = False
     note: str = ""
+    skip: str = ""  # why the scenario could not run here (no tmpfs, no vot-trax)
 
 
 @dataclass
@@ -71,6 +77,7 @@ class Scenario:
     driver: object = None  # driver(w, argv, timeout) -> Result, instead of one plain run
     codes: tuple = (0,)
     extra: list = field(default_factory=list)
+    awaits: str = ""  # another issue's fix: a failure here is counted apart ("awaits issue 46"), not as one
 
 
 # ---------------------------------------------------------------- fixtures
@@ -276,13 +283,16 @@ def bad_output(w, since):
 
 def classify(sc, w, res, since):
     text = res.out + res.err
+    if res.skip:
+        return "skipped", res.skip
     if res.timeout:
         return "hang", f"no exit in {res.seconds:.0f} s"
     if "Traceback (most recent call last)" in text:
         last = [ln for ln in res.err.splitlines() if ln and not ln.startswith(" ")][-1:] or ["?"]
         return "traceback", last[0][:100]
     if res.code is not None and res.code < 0 and res.code not in sc.codes:
-        return "traceback", f"died by signal {-res.code}"
+        last = [ln for ln in res.err.splitlines() if ln.strip()][-1:] or [""]
+        return "traceback", f"died by signal {-res.code} {last[0][:80]!r}"
     parts = [p.name for p in w.rglob("*.part")]
     if parts and (res.code is None or res.code >= 0):
         return "data loss", f"{', '.join(parts)} left behind (not renamed into place)"
@@ -1219,8 +1229,11 @@ def sweep2_scenarios():
 
 
 def scenarios():
+    import soak_sweep3
+
     return (video_scenarios() + number_scenarios() + output_scenarios() + interrupt_scenarios() + eval_scenarios()
-            + synth_scenarios() + reproduce_scenarios() + sweep2_scenarios())
+            + synth_scenarios() + reproduce_scenarios() + sweep2_scenarios()
+            + soak_sweep3.scenarios(sys.modules[__name__]))
 
 
 # ---------------------------------------------------------------- main
@@ -1251,6 +1264,8 @@ def main():
                 argv, res, outcome, note = run_scenario(sc, work, FX, args.timeout)
             except Exception as e:  # noqa: BLE001  (a bug of this script: say so, go on)
                 argv, res, outcome, note = sc.argv, Result(None, "", "", 0.0), "harness error", repr(e)[:100]
+            if sc.awaits and outcome in BAD + ("misleading error",):
+                outcome = f"{outcome}, awaits {sc.awaits}"
             totals[outcome] = totals.get(outcome, 0) + 1
             wdir = str(work / re.sub(r"[^A-Za-z0-9_.-]", "_", sc.name))
             cmd = " ".join(a.replace(wdir, "W").replace(str(FX), "FX") for a in argv)
@@ -1261,7 +1276,7 @@ def main():
             shutil.rmtree(base, ignore_errors=True)
     print(f"\n{len(chosen)} scenarios in {time.time() - t0:.0f} s: "
           + ", ".join(f"{n} {o}" for o, n in totals.items() if n or o in OUTCOMES))
-    bad = ("traceback", "hang", "silent wrong", "data loss")
+    bad = BAD
     print("failures: " + ", ".join(f"{totals.get(o, 0)} {o}" for o in bad)
           + f" ({sum(totals.get(o, 0) for o in bad)} of {len(chosen)} scenarios)")
 

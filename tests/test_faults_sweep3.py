@@ -20,6 +20,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from full_disk import Unavailable, on_tmpfs  # noqa: E402
+from soak_sweep3 import INTERRUPT_AT, trax_session  # noqa: E402
 
 H, W = 120, 160
 INIT = "48,51,24,18"
@@ -433,54 +434,21 @@ def test_trax_answers_an_absent_or_broken_client_with_one_line(stdin):
     ("size", "this frame is 120x80 colour, but the tracker started on 120x90 colour frames"),
 ])
 def test_trax_session_errors_reach_the_client_and_no_traceback(tmp_path, case, words):
-    trax = pytest.importorskip("trax", reason="vot-trax is not installed")
-    from trax.client import Client
-    from trax.image import FileImage
-    from trax.region import Rectangle
-
+    pytest.importorskip("trax", reason="vot-trax is not installed")
     f = _api_frames(1)[0]
     cv2.imwrite(str(tmp_path / "f0.png"), f)
     cv2.imwrite(str(tmp_path / "f1.png"), f[:80])
-    proc = subprocess.Popen([sys.executable, "-m", "vistrack.cli", "trax"], stdin=subprocess.PIPE,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        client = Client((proc.stdin.fileno(), proc.stdout.fileno()), timeout=120, log=[].append)
-        box = (500, 500, 10, 10) if case == "outside" else (30, 30, 25, 25)
-        with pytest.raises(trax.TraxException) as e:
-            client.initialize({"color": FileImage.create(str(tmp_path / "f0.png"))}, [(Rectangle.create(*box), {})],
-                              {})
-            client.frame({"color": FileImage.create(str(tmp_path / ("nothere.png" if case == "missing" else
-                                                                       "f1.png")))}, {}, [])
-        assert words.format(d=tmp_path) in str(e.value)
-    finally:
-        proc.stdin.close()
-        err = proc.stderr.read()
-        proc.wait(timeout=60)
-    assert proc.returncode == 1 and err == f"Error: {words.format(d=tmp_path)}" + err.split(words.format(d=tmp_path))[1]
-    assert err.count("\n") == 1 and "Traceback" not in err
-
-
-_INTERRUPT_AT = """
-import os, signal, sys, atexit
-signal.signal(signal.SIGINT, signal.default_int_handler)
-where = sys.argv.pop(1)
-if where == "start-up":  # Ctrl-C while the command line loads its modules
-    class Hook:
-        def find_spec(self, name, path=None, target=None):
-            if name == "vistrack.cli.demo":
-                os.kill(os.getpid(), signal.SIGINT)
-            return None
-    sys.meta_path.insert(0, Hook())
-elif where == "shut-down":  # Ctrl-C once the command is done, while the process ends
-    atexit.register(lambda: os.kill(os.getpid(), signal.SIGINT))
-from vistrack.cli import main
-main()
-"""
+    box = (500, 500, 10, 10) if case == "outside" else (30, 30, 25, 25)
+    second = {"outside": None, "missing": tmp_path / "nothere.png", "size": tmp_path / "f1.png"}[case]
+    code, err, heard = trax_session(tmp_path / "f0.png", box, second)
+    words = words.format(d=tmp_path)
+    assert isinstance(heard, str) and words in heard  # the client was told why
+    assert code == 1 and err.startswith(f"Error: {words}") and err.count("\n") == 1 and "Traceback" not in err
 
 
 @pytest.mark.parametrize("where", ["start-up", "shut-down"])
 def test_ctrl_c_at_start_up_and_shut_down_is_aborted_and_130(where):
-    p = subprocess.run([sys.executable, "-c", _INTERRUPT_AT, where, "--version"], capture_output=True, text=True,
+    p = subprocess.run([sys.executable, "-c", INTERRUPT_AT, where, "--version"], capture_output=True, text=True,
                        timeout=120)
     assert (p.returncode, p.stderr) == (130, "Aborted.\n")
 
