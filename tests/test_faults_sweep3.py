@@ -60,48 +60,32 @@ def _tmpfs(steps, **kw):
         pytest.skip(str(e))
 
 
-@pytest.mark.parametrize("name", ["old.mp4", "old.avi"])
-def test_a_full_disk_keeps_the_earlier_video(tmp_path, name):
-    """df_old: ``run --out T/old.mp4`` over an earlier valid video on a 48 kB tmpfs that fills up:
-    one line naming T/old.mp4 and the cause; the earlier video byte for byte; nothing else left."""
-    short, long = avi(tmp_path / "short.avi", 3), avi(tmp_path / "long.avi", 400)
-    base = ["run", "--init", INIT, "-n", "20", "-q", "--out", "{T}/" + name]
-    first, second = _tmpfs([[*base[:1], str(short), *base[1:]], [*base[:1], str(long), *base[1:]]])
-    assert first["code"] == 0 and first["files"][name]["frames"] == 3, first
-    one_error(second["code"], second["err"], f"{{T}}/{name}", "No space left on device", f"earlier {name} is kept")
-    assert second["files"] == first["files"]
+def test_a_full_disk_keeps_the_earlier_video_and_leaves_no_unplayable_one(tmp_path):
+    """df_old: ``run --out T/old.mp4`` over an earlier valid video on a 16 kB tmpfs that fills up: one
+    line naming T/old.mp4 and the cause; the earlier video byte for byte. df_out: with no earlier file
+    nothing is left under the final name, and the error names it (not the temporary file)."""
+    short, long = avi(tmp_path / "short.avi", 3), avi(tmp_path / "long.avi", 120)
+    run_ = ["run", "--init", INIT, "-n", "20", "-q"]
+    first, over, new = _tmpfs([[*run_, "--out", "{T}/old.mp4", str(v)] for v in (short, long)]
+                              + [[*run_, "--out", "{T}/a.mp4", str(long)]], size="16k")
+    assert first["code"] == 0 and first["files"]["old.mp4"]["frames"] == 3, first
+    one_error(over["code"], over["err"], "{T}/old.mp4", "No space left on device", "the earlier old.mp4 is kept")
+    assert over["files"] == first["files"]
+    one_error(new["code"], new["err"], "{T}/a.mp4", "No space left on device", "no a.mp4 was written")
+    assert new["files"] == first["files"] and ".part" not in new["err"]
 
 
-@pytest.mark.parametrize("outputs, kept", [
-    (["--out", "{T}/a.mp4"], []),
-    (["--out", "{T}/a.avi"], []),
-    (["--track", "{T}/t.csv", "--out", "{T}/a.mp4"], ["t.csv"]),  # the track is whole: it stays
-])
-def test_a_full_disk_leaves_no_unplayable_video(tmp_path, outputs, kept):
-    """df_out: no earlier file: nothing unplayable is left under the final name, and the error names
-    the final name (not the temporary file)."""
-    (step,) = _tmpfs([["run", str(avi(tmp_path / "long.avi", 400)), "--init", INIT, "-n", "20", "-q", *outputs]])
-    video = outputs[-1].split("/")[-1]
-    one_error(step["code"], step["err"], f"{{T}}/{video}", "No space left on device", f"no {video} was written")
-    assert sorted(step["files"]) == kept
-    assert ".part" not in step["err"]
-
-
-def test_a_full_disk_under_the_track_keeps_the_earlier_track(tmp_path):
-    short, long = avi(tmp_path / "short.avi", 3), avi(tmp_path / "long.avi", 400)
+def test_a_full_disk_under_the_track_keeps_the_earlier_track_else_its_whole_rows(tmp_path):
+    short, long = avi(tmp_path / "short.avi", 3), avi(tmp_path / "long.avi", 120)
     base = ["-n", "20", "-q", "--init", INIT, "--track", "{T}/t.csv", "--results", "{T}/r.txt"]
-    first, second = _tmpfs([["run", str(short), *base], ["run", str(long), *base, "--out", "/dev/null"]],
-                           size="24k")
+    first, second, alone = _tmpfs([["run", str(short), *base], ["run", str(long), *base, "--out", "/dev/null"],
+                                   ["run", str(long), "--init", INIT, "-n", "20", "-q", "--track", "{T}/new.csv"]],
+                                  size="16k")  # 4 pages: two files and their locks (a lock holds its pid)
     assert first["code"] == 0 and sorted(first["files"]) == ["r.txt", "t.csv"]
     one_error(second["code"], second["err"], "{T}/", "No space left on device", "is kept")
     assert second["files"] == first["files"]
-
-
-def test_a_full_disk_with_no_earlier_track_keeps_its_whole_rows(tmp_path):
-    long = avi(tmp_path / "long.avi", 400)
-    (step,) = _tmpfs([["run", str(long), "--init", INIT, "-n", "20", "-q", "--track", "{T}/t.csv"]], size="12k")
-    one_error(step["code"], step["err"], "{T}/t.csv", "No space left on device", "rows written before are kept")
-    assert sorted(step["files"]) == ["t.csv"] and 0 < step["files"]["t.csv"]["size"] <= 12 * 1024
+    one_error(alone["code"], alone["err"], "{T}/new.csv", "No space left on device", "rows written before are kept")
+    assert sorted(alone["files"]) == ["new.csv", "r.txt", "t.csv"] and 0 < alone["files"]["new.csv"]["size"] <= 4096
 
 
 def _failing_flush(monkeypatch):

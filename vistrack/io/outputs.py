@@ -50,8 +50,8 @@ class OutputError(OSError):
     """
 
     def __init__(self, what, path, cause, left=""):
-        strerror = getattr(cause, "strerror", None) or str(cause) or type(cause).__name__
-        super().__init__(getattr(cause, "errno", None), strerror, str(path))
+        errno_, strerror = (cause.errno, cause.strerror) if isinstance(cause, OSError) else (None, None)
+        super().__init__(errno_, strerror or str(cause) or type(cause).__name__, str(path))
         self.what, self.left = what, left
 
     def __str__(self):

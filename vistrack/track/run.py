@@ -129,8 +129,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     ----------
     frames : iterable of (int, ndarray)
     model, filt : the model and its filter
-    particles : int
-    rng : numpy.random.Generator
+    particles, rng : int, numpy.random.Generator
     track_path, out_path, results_path : path or None
         Track CSV (:class:`TrackCSV`), annotated mp4 and result file (``x,y,w,h``; for GOT-10k and
         VOT the results folder, :func:`~vistrack.io.results_format.result_paths`).
@@ -156,8 +155,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     run = VideoRun()
     run.timer = Timer() if profile else None
     frames = _warmed(frames, filt, particles)
-    if profile:
-        frames = run.timer.timed_iter(frames, "decode")
+    frames = run.timer.timed_iter(frames, "decode") if profile else frames
     with deferred_signals() as stop:  # from opening the outputs to closing them: a signal waits for the frame
         outs, writer = _open_outputs(track_path, results_path, results_format, sequence, out_path, video_info)
         run.video_note = writer.note if writer else None
@@ -166,10 +164,9 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         try:
             with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
                 warnings.simplefilter("ignore", DegenerateWeightsWarning)
-                first = lead[-1][0] + 1 if len(lead) else 0
-                _track_loop(run, track(frames, filt, particles, rng), model, outs, writer, stop, first=first,
-                            start=start, frame_count=frame_count, show_particles=show_particles, label=label,
-                            notify=notify, progress=progress)
+                _track_loop(run, track(frames, filt, particles, rng), model, outs, writer, stop,
+                            first=lead[-1][0] + 1 if len(lead) else 0, start=start, frame_count=frame_count,
+                            show_particles=show_particles, label=label, notify=notify, progress=progress)
         except (KeyboardInterrupt, SystemError) as e:  # Terminated is a KeyboardInterrupt
             run.stopped = stop_reason(e)
         except BaseException:
