@@ -4,12 +4,12 @@ HTTP on 127.0.0.1, tracked like the file with --max-frames; a camera index that 
 import socket
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
 
 from cli_helpers import run
+from process_helpers import listening, wait_until
 from vistrack.io.clips import read_groundtruth_csv
 from vistrack.io.video import VideoWriter, is_stream
 
@@ -31,12 +31,7 @@ def served(tmp_path):
         port = s.getsockname()[1]
     server = subprocess.Popen([sys.executable, "-m", "http.server", str(port), "--bind", "127.0.0.1"], cwd=tmp_path,
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    for _ in range(50):
-        try:
-            socket.create_connection(("127.0.0.1", port), timeout=0.2).close()
-            break
-        except OSError:
-            time.sleep(0.1)
+    wait_until(lambda: listening(port), "the HTTP server listening", proc=server)
     yield f"http://127.0.0.1:{port}/v.mp4", tmp_path / "v.mp4"
     server.kill()
     server.wait()
