@@ -19,8 +19,10 @@ from vistrack.models.contour.nn import network_for
 from vistrack.models.plate.detect import PlateSearch
 from vistrack.engine.evaluation import sequence_name
 from vistrack.io.results_format import FORMATS, result_paths
+from vistrack.io.starts import one_based_init_note
 from vistrack.models.registry import DEFAULT_MODEL, all_algos, get_model_spec
 from vistrack.core.runtime import check_particle_memory
+from vistrack.core.seeds import run_seed
 from vistrack.track.run import stop_on_signals, summary_lines, track_video
 from vistrack.io.outputs import OutputBusy
 from vistrack.io.video import is_stream, VideoDecodeWarning, VideoError, prefetch
@@ -102,12 +104,18 @@ def lost_notice(most=5):
                    "measurements (thesis §4.3.1; trained on first use, cached; see train-search) [default: lms].")
 @click.option("-n", "--particles", default=100, show_default=True, type=click.IntRange(min=1),
               help="Number of particles N.")
-@click.option("--seed", default=0, show_default=True, type=SEED, help="Random seed (same seed, same track).")
-@click.option("--init", type=Box(), help="Start from this box (x,y,w,h) in the first frame; the contour is the "
-                                        "ellipse in it.")
+@click.option("--seed", default=0, show_default=True, type=SEED,
+              help="Random seed: the same seed gives the same track, bit for bit. eval --seed S tracks a clip in "
+                   "its run 0 as run --seed S does (eval --runs 1 --seed S: this track), in its run r as "
+                   "--seed S --run r.")
+@click.option("--run", "run_no", default=0, show_default=True, type=SEED,
+              help="Track as eval's run R does under the same --seed (run 0 is --seed alone).")
+@click.option("--init", type=Box(), help="Start from this box in the first frame: x,y,w,h in 0-based pixels (the "
+                                        "top-left pixel is 0,0; OTB's and LaSOT's ground-truth files count from 1: "
+                                        "use --init-gt to start from them). The contour is the ellipse in it.")
 @click.option("--init-gt", "init_gt", is_flag=False, flag_value="", default=None, metavar="[FILE]",
-              help="Start from the first ground-truth frame: the clip's own (groundtruth.csv with meta.json "
-                   "template, or OTB groundtruth_rect.txt), or FILE.")
+              help="Start from the first ground-truth box, read in its dataset's own convention (OTB and LaSOT "
+                   "1-based, VOT, GOT-10k and vistrack's groundtruth.csv 0-based): the clip's own, or FILE.")
 @click.option("--template", "template_path", type=click.Path(dir_okay=False),
               help="Contour support points (x y per line, or JSON): used where they lie in the first "
                    "frame, or fitted to --init / --init-gt boxes. Default: an ellipse, or the clip's template. "
@@ -138,7 +146,8 @@ def lost_notice(most=5):
                    "likelihood only (no appearance learned from the --init box).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary.")
 def run(video, model_name, layout, algo, search, particles, seed, init, init_gt, template_path, track_path, out_path,
-        results_path, results_format, show_particles, resample, ess_threshold, targets, max_frames, no_colour, quiet):
+        results_path, results_format, show_particles, resample, ess_threshold, targets, max_frames, no_colour, quiet,
+        run_no=0):
     """Track the object in VIDEO (a video file, an image folder or a clip folder).
 
     \b
@@ -188,7 +197,7 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     outputs = {"track_path": track_path, "out_path": out_path, "results_path": results_path,
                "results_format": results_format, "sequence": sequence_name(video)}
     start = _start(clip, init, init_gt, max_frames)
-    done = _track(clip, frames, model, filt, particles, seed, max_frames, show_particles, quiet,
+    done = _track(clip, frames, model, filt, particles, run_seed(seed, run_no), max_frames, show_particles, quiet,
                   f"{algo} N={particles}", outputs, lead, start=start)
     _report(video, clip, done, name, model, particles, quiet, outputs)
 
@@ -282,6 +291,9 @@ def _start(clip, init, init_gt, max_frames):
     if start and max_frames is not None and start >= max_frames:
         raise click.ClickException(f"--init-gt: the ground truth's first box is at frame {start}, past --max-frames "
                                    f"{max_frames}")
+    note = one_based_init_note(clip, init)
+    if note:
+        click.echo(note, err=True)
     if start:
         click.echo(f"note: the ground truth has no box before frame {start}: tracking starts there (frames 0-"
                    f"{start - 1} get rows with visible=0, lost_reason \"not started\"; scores count from frame "
@@ -291,7 +303,8 @@ def _start(clip, init, init_gt, max_frames):
 
 def _track(clip, frames, model, filt, particles, seed, max_frames, show_particles, quiet, label, outputs, lead=(),
            start=0):
-    """:func:`~vistrack.track.run.track_video` over ``frames`` from ``start`` with a progress bar (``lead``:
+    """:func:`~vistrack.track.run.track_video` over ``frames`` from ``start``, drawing from ``seed`` (an
+    integer or a :class:`numpy.random.SeedSequence`), with a progress bar (``lead``:
     the frames searched before them); stops cleanly on SIGINT/SIGTERM after the frame in hand (the
     outputs so far kept, holding the same frames)."""
     src = clip.source

@@ -3,10 +3,13 @@
 Every task tracks one clip once and writes its own result file
 ``tasks/<clip>__<algo>__N<n>__r<run>.json`` (written to a temporary name and
 renamed, so a file that exists is complete). Finished tasks are skipped on
-``resume``; a worker that dies loses only its own task. Run ``r`` on clip
-``c`` draws from ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]`` (the
-same stream for every algorithm and N: common random numbers), so results do
-not depend on the number of workers or the order in which tasks run.
+``resume``; a worker that dies loses only its own task. Run ``r`` draws from
+:func:`~vistrack.core.seeds.run_seed` ``(seed, r)`` on every clip (the same stream
+for every algorithm and N: common random numbers), the stream of ``vistrack run
+--seed S --run r``, so results do not depend on the number of workers or the order
+in which tasks run. The reproductions (:func:`entry_tasks`) keep the streams their
+published tables were computed with: run ``r`` on clip ``c`` draws from
+``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]``.
 
 Boxes are ``(cx ± w/2, cy ± h/2)`` with ``cx, cy`` the pose centre, as in
 groundtruth.csv. Per frame a task records the centre error, whether the tracker is lost
@@ -35,6 +38,7 @@ from ..core.metrics import (PRECISION_THRESHOLDS, center_error, iou, lost_frames
 from ..core.metrics import summarize as metrics_summarize
 from ..models.registry import get_model_spec
 from ..core.runtime import keep_freed_memory
+from ..core.seeds import run_seed
 from .tasks import (OutLocked, TaskFailed, check_shared, load_task_results, lock_out, stale_tasks, task_done,
                     task_fingerprint, write_atomic, write_task_result)
 from ..track.loop import track
@@ -51,6 +55,9 @@ __all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_conf
 #: OpenCV trackers by name -> constructor attribute (contrib ones may be missing)
 OPENCV_TRACKERS = {"opencv-mil": "TrackerMIL_create", "opencv-kcf": "TrackerKCF_create",
                    "opencv-csrt": "TrackerCSRT_create"}
+#: the OpenCV trackers whose result varies from run to run (randomised inside OpenCV, which no seed
+#: reaches: MIL's samples); they run ``runs`` times like the particle filters, the others once
+OPENCV_RANDOMISED = {"opencv-mil"}
 
 
 @dataclass
@@ -68,7 +75,8 @@ class EvalConfig:
     runs : int
         Runs per clip, algorithm and ``N``.
     seed : int
-        Root seed: run ``r`` on clip ``c`` draws from ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]``.
+        Root seed: run ``r`` draws from :func:`~vistrack.core.seeds.run_seed` ``(seed, r)`` on every clip
+        (``vistrack run --seed seed --run r``'s stream).
     model : str
         A registered model (:mod:`vistrack.models.registry`).
     entries : list of (str, int) or None
@@ -104,19 +112,19 @@ def _name(clip):
 
 
 def task_list(cfg, clips):
-    """All tasks as dicts ``{clip, clip_index, algo, particles, run, seed_seq, name}``."""
-    streams = np.random.SeedSequence(cfg.seed).spawn(len(clips))
+    """All tasks as dicts ``{clip, clip_index, algo, particles, run, seed_seq, model, name}``: run ``r``
+    draws from :func:`~vistrack.core.seeds.run_seed` ``(cfg.seed, r)``; a deterministic OpenCV tracker
+    runs once (:data:`OPENCV_RANDOMISED`: as many runs as the filters)."""
     tasks = []
     for ci, clip in enumerate(clips):
-        seqs = streams[ci].spawn(cfg.runs)
         pairs = cfg.entries or [(a, n) for a in cfg.algos
                                  for n in ([1] if a in OPENCV_TRACKERS else cfg.particles)]
         for algo, n in pairs:
             for r in range(cfg.runs):
-                if algo in OPENCV_TRACKERS and r > 0:
+                if algo in OPENCV_TRACKERS and algo not in OPENCV_RANDOMISED and r > 0:
                     continue  # deterministic: one run
                 tasks.append({"clip": str(clip), "clip_index": ci, "algo": algo, "particles": int(n), "run": r,
-                              "seed_seq": seqs[r], "model": cfg.model,
+                              "seed_seq": run_seed(cfg.seed, r), "model": cfg.model,
                               "name": f"{ci:03d}_{_name(clip)}__{algo}__N{n}__r{r}"})
     return tasks
 
@@ -130,6 +138,8 @@ def entry_tasks(cfg, model):
     tasks = task_list(ev, list(cfg.clips))
     for t in tasks:
         t["lost_rule"] = "thesis"
+        # the published tables' streams: SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]
+        t["seed_seq"] = np.random.SeedSequence(cfg.seed, spawn_key=(t["clip_index"], t["run"]))
     return tasks
 
 
