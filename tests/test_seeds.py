@@ -83,3 +83,12 @@ def test_help_says_how_eval_runs_relate_to_run_seed():
     assert "--seed S --run r" in " ".join(out.split()) and "eval --runs 1 --seed S" in " ".join(out.split())
     _, out, _ = run(["run", "--help"])
     assert "--run" in out and "eval --runs 1 --seed S" in " ".join(out.split())
+
+
+def test_a_deterministic_opencv_tracker_runs_once_mil_as_often_as_the_filters():
+    from vistrack.engine.evaluation import EvalConfig, task_list
+
+    tasks = task_list(EvalConfig(clips=["c"], algos=["lis", "opencv-mil", "opencv-kcf"], particles=[30], runs=3,
+                                 seed=1, model="box"), ["c"])
+    assert [(t["algo"], t["run"]) for t in tasks] == [("lis", 0), ("lis", 1), ("lis", 2), ("opencv-mil", 0),
+                                                      ("opencv-mil", 1), ("opencv-mil", 2), ("opencv-kcf", 0)]

@@ -89,7 +89,7 @@ def demo(ctx, out_dir, frames, runs, seed, real_clip, real_frames):
     clip = out / "clips" / "jumps"
     click.echo(f"1/4 generating a {frames}-frame 320x240 clip in {clip}: a textured object in heavy clutter that "
                "jumps 38-51 px every 25 frames or so")
-    make_contour_clip(clip, frames=frames, seed=seed + 1, **CLIP)
+    make_contour_clip(clip, frames=frames, seed=seed + 1, model="box", **CLIP)  # what run and eval track it with
     click.echo("2/4 tracking it once per algorithm (annotated video + track CSV)")
     made = []
     for algo, n in DEMO_ALGOS:
@@ -98,10 +98,10 @@ def demo(ctx, out_dir, frames, runs, seed, real_clip, real_frames):
         ctx.invoke(run, video=str(clip), model_name="box", algo=algo, particles=n, seed=seed, init_gt="",
                    out_path=str(video), track_path=str(track), quiet=False, show_particles=10)
         made += [video, track]
-    click.echo(f"3/4 comparing them over {runs} runs (as vistrack eval does): "
+    click.echo(f"3/4 comparing them over {_runs(runs)} (as vistrack eval does): "
                + ", ".join(f"{a} N={n}" for a, n in DEMO_ALGOS))
     click.echo(compare(clip, DEMO_ALGOS, "box", runs, seed, out / "eval"))
-    made.append(out / "eval" / "report.md")
+    made += [out / "eval" / "report.md", out / "eval" / "report.html"]
     real = Path(real_clip) if real_clip else (find_real_clip() if real_clip is None else None)
     if real is None or not real.exists():
         where = real_clip or ("(none given)" if real_clip == "" else f"{REAL_CLIP} above {Path.cwd()} or the package")
@@ -118,10 +118,17 @@ def demo(ctx, out_dir, frames, runs, seed, real_clip, real_frames):
         took = f"the first {real_frames} frames" if got >= real_frames else \
             f"all {got} frames (fewer than --real-frames {real_frames})"
         click.echo(f"4/4 {took} of {real} ({excerpt}): vistrack's default box tracker "
-                   f"({REAL_ALGOS[0][0].upper()} N={REAL_ALGOS[0][1]}, {runs} runs) beside OpenCV MIL")
+                   f"({REAL_ALGOS[0][0].upper()} N={REAL_ALGOS[0][1]}) beside OpenCV MIL, {_runs(runs)} each")
         click.echo(compare(excerpt, REAL_ALGOS, DEFAULT_MODEL, runs, seed, out / "eval-real"))
-        made.append(out / "eval-real" / "report.md")
+        made += [out / "eval-real" / "report.md", out / "eval-real" / "report.html"]
     click.echo("")
     click.echo(f"done. In {out}/:")
+    notes = {".md": " (tables and plots; results.json, results.csv beside it)",
+             ".html": " (the same in a browser, with an annotated video per tracker)"}
     for p in made:
-        click.echo(f"  {p}" + (" (tables and plots; results.json, results.csv beside it)" if p.suffix == ".md" else ""))
+        click.echo(f"  {p}{notes.get(p.suffix, '')}")
+
+
+def _runs(n):
+    """``1 run``, ``4 runs``."""
+    return f"{n} run{'' if n == 1 else 's'}"

@@ -14,13 +14,13 @@ from tqdm import tqdm
 from vistrack.models.builders import MODELS, PLATES_ALGOS, build_model, read_support_points, start_frame
 from vistrack.io.clips import load_clip
 from vistrack.filters import make_filter
-from vistrack.models.registry import MODELS as MODEL_REGISTRY
+from vistrack.models.choice import choose
 from vistrack.models.contour.nn import network_for
 from vistrack.models.plate.detect import PlateSearch
 from vistrack.engine.evaluation import sequence_name
 from vistrack.io.results_format import FORMATS, result_paths
 from vistrack.io.starts import one_based_init_note
-from vistrack.models.registry import DEFAULT_MODEL, all_algos, get_model_spec
+from vistrack.models.registry import all_algos, get_model_spec
 from vistrack.core.runtime import check_particle_memory
 from vistrack.core.seeds import run_seed
 from vistrack.track.run import stop_on_signals, summary_lines, track_video
@@ -218,9 +218,6 @@ def _find_plate(search, frames, video, quiet):
     """``(model, frames, lead)``: the plate model built where :class:`PlateSearch` finds a plate in the
     first frames, the frames from that one on, and the frames searched before it; one error line with
     the ``--init`` hint where it finds none."""
-    if not quiet:  # which model and why, on one line (the error below is the one line with -q)
-        click.echo("no --init and no model in meta.json: looking for a license plate (the plate model) in the "
-                   "first 30 frames; to track any other object give --init x,y,w,h", err=True)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", VideoDecodeWarning)
@@ -247,13 +244,12 @@ def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, 
             fw, fh = clip.source.size
             if x >= fw or y >= fh or x + w <= 0 or y + h <= 0:
                 raise click.UsageError(f"--init box {x:g},{y:g},{w:g},{h:g} lies outside the {fw}x{fh} frame")
-        name = model_name or clip.model_name or (DEFAULT_MODEL if init is not None or init_gt is not None else "plate")
-        if model_name is None and name not in MODEL_REGISTRY:
-            raise click.ClickException(f"{video}: meta.json names model {name!r}, which this version cannot track")
-        spec = get_model_spec(name)
+        choice = choose(clip, model=model_name, algo=algo, init=init, init_gt=init_gt, targets=targets)
+        name, algo, spec = choice.model, choice.algo, get_model_spec(choice.model)
+        if not quiet:  # which model and algorithm, and why: one line
+            click.echo(choice.line(particles), err=True)
         extra = model_options(name, layout=layout, no_colour=no_colour,
                               template=read_support_points(template_path) if template_path else None, targets=targets)
-        algo = algo or ("partitioned-lis" if targets is not None else spec.default_algo)
         if search is not None:
             if algo != "ls-n-ips" or name != "contour":
                 raise click.UsageError("--search is for --algo ls-n-ips on the contour model")

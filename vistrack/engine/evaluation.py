@@ -45,7 +45,7 @@ from ..track.loop import track
 from ..io.video import VideoError
 
 __all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_config", "run_task", "summarize",
-           "pooled_summary", "OPENCV_TRACKERS", "check_algos", "sequence_name",
+           "pooled_summary", "OPENCV_TRACKERS", "OPENCV_RANDOMISED", "check_algos", "sequence_name",
            "score_boxes", "score_result_file", "result_files",
            # the engine's task files (vistrack.engine.tasks), re-exported
            "task_fingerprint", "task_done", "stale_tasks", "write_task_result", "write_atomic", "OutLocked",

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .evaluation import OPENCV_TRACKERS, write_atomic
+from .evaluation import OPENCV_RANDOMISED, OPENCV_TRACKERS, write_atomic
 
 __all__ = ["CSV_COLUMNS", "task_row", "write_eval_outputs"]
 
@@ -82,13 +82,15 @@ def _label(s):
 
 
 def _runs_line(labels):
-    """``lis, N=100: 20 runs; opencv-mil: 1 run (deterministic)``: the true run count per tracker."""
+    """``lis, N=100: 20 runs; opencv-mil: 20 runs (randomised inside OpenCV, not seeded); opencv-kcf: 1 run
+    (deterministic)``: the true run count per tracker."""
     parts = []
     for k, ss in labels.items():
         n = sorted({s["runs"] for s in ss})
         runs = "/".join(str(v) for v in n)
-        note = " (deterministic)" if ss[0]["algo"] in OPENCV_TRACKERS else (
-            " (a result file)" if not ss[0].get("particle_filter", True) else "")
+        algo = ss[0]["algo"]
+        note = (" (randomised inside OpenCV, not seeded)" if algo in OPENCV_RANDOMISED else " (deterministic)"
+                if algo in OPENCV_TRACKERS else " (a result file)" if not ss[0].get("particle_filter", True) else "")
         parts.append(f"{k}: {runs} run{'s' if n != [1] else ''}{note}")
     return "; ".join(parts)
 
