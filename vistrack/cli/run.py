@@ -25,6 +25,7 @@ from vistrack.core.runtime import check_particle_memory
 from vistrack.core.seeds import run_seed
 from vistrack.track.run import stop_on_signals, summary_lines, track_video
 from vistrack.io.outputs import OutputBusy
+from vistrack.io.remote import is_url
 from vistrack.io.video import is_stream, VideoDecodeWarning, VideoError, prefetch
 
 from .options import SEED, Box, Fraction, check_outputs, check_writable
@@ -33,14 +34,15 @@ __all__ = ["run"]
 
 
 class _Video(click.Path):
-    """A video file, image folder or clip folder that exists, a camera's index (``0``) or a stream URL."""
+    """A video file, image folder or clip folder that exists, a camera's index (``0``: a file or folder
+    of that name wins), a live stream or a URL."""
 
     def __init__(self):
         super().__init__(exists=True)
 
     def convert(self, value, param, ctx):
-        """The path checked as ``click.Path(exists=True)`` does, unless it names a camera or a stream."""
-        if is_stream(value) and not os.path.exists(value):
+        """The path checked as ``click.Path(exists=True)`` does, unless it names a camera, a stream or a URL."""
+        if is_stream(value) or is_url(value):
             return value
         return super().convert(value, param, ctx)
 
@@ -148,7 +150,10 @@ def lost_notice(most=5):
 def run(video, model_name, layout, algo, search, particles, seed, init, init_gt, template_path, track_path, out_path,
         results_path, results_format, show_particles, resample, ess_threshold, targets, max_frames, no_colour, quiet,
         run_no=0):
-    """Track the object in VIDEO (a video file, an image folder or a clip folder).
+    """Track the object in VIDEO: a video file, an image folder or a clip folder, a camera's index (0,
+    1, ...; a file or folder of that name wins), a live stream (rtsp://...) or the URL of a video or
+    clip folder (http(s)://, s3://, ...: read with seeking where the server allows it, else downloaded
+    into a cache checked against the server on every use).
 
     \b
     Examples:
@@ -238,7 +243,9 @@ def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, 
            targets=None):
     """``(clip, model name, algorithm, model)`` of a run, checked; one error line for bad input."""
     try:
-        clip = load_clip(video)
+        clip = load_clip(video, progress=not quiet)
+        if clip.remote is not None and not quiet:  # read from the server, downloaded or a cached copy
+            click.echo(clip.remote.describe(), err=True)
         if init is not None:
             x, y, w, h = init
             fw, fh = clip.source.size

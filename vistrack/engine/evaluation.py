@@ -31,6 +31,7 @@ import numpy as np
 
 from ..models.builders import build_model, start_frame
 from ..io.clips import GroundTruthWarning, find_clips, load_clip, sequence_name  # noqa: F401  (find_clips: re-exported)
+from ..io.remote import is_url, url_version
 from ..io.results_format import find_result_file, read_result_file
 from ..filters import ALGORITHMS, make_filter
 from ..core.metrics import (PRECISION_THRESHOLDS, center_error, iou, lost_frames, pooled_summary, precision,  # noqa: F401
@@ -119,13 +120,16 @@ def task_list(cfg, clips):
     for ci, clip in enumerate(clips):
         pairs = cfg.entries or [(a, n) for a in cfg.algos
                                  for n in ([1] if a in OPENCV_TRACKERS else cfg.particles)]
+        # a clip given as a URL: the server's version of it now (its validators), which every task's
+        # copy must match and which its fingerprint records (--resume after a change runs it again)
+        version = {"clip_version": url_version(clip)} if is_url(clip) else {}
         for algo, n in pairs:
             for r in range(cfg.runs):
                 if algo in OPENCV_TRACKERS and algo not in OPENCV_RANDOMISED and r > 0:
                     continue  # deterministic: one run
                 tasks.append({"clip": str(clip), "clip_index": ci, "algo": algo, "particles": int(n), "run": r,
                               "seed_seq": run_seed(cfg.seed, r), "model": cfg.model,
-                              "name": f"{ci:03d}_{_name(clip)}__{algo}__N{n}__r{r}"})
+                              "name": f"{ci:03d}_{_name(clip)}__{algo}__N{n}__r{r}", **version})
     return tasks
 
 
@@ -219,6 +223,7 @@ def run_task(task, out_dir):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", GroundTruthWarning)  # said once, when eval found the clips
         clip = load_clip(task["clip"])
+    source = _remote_source(clip, task)
     # the run starts at the first frame with a ground-truth box (earlier frames: no estimate, not scored)
     start = start_frame(clip, None, "")
     frames = [(i, f) for i, f in clip.source if i >= start]
@@ -252,8 +257,23 @@ def run_task(task, out_dir):
     result = score_boxes(clip, boxes, rule=rule, reported=reported, vertices=vertices, aspect=aspect)
     result.update({"clip": task["clip"], "algo": algo, "particles": n, "run": task["run"],
                    "ms": [float(v) for v in ms[:result["frames"]]],
-                   "ess": [None if not np.isfinite(v) else float(v) for v in ess[:result["frames"]]]})
+                   "ess": [None if not np.isfinite(v) else float(v) for v in ess[:result["frames"]]], **source})
     return write_task_result(out, result, task)
+
+
+def _remote_source(clip, task):
+    """``{"source": ...}`` for a task result on a clip given as a URL (:meth:`Remote.record`: the
+    server's version and whether a cached copy was used), ``{}`` for a local clip; a
+    :class:`VideoError` when the copy is not the version the evaluation started with (the clip
+    changed on the server while it ran)."""
+    remote = clip.remote
+    if remote is None:
+        return {}
+    want = task.get("clip_version")
+    if want is not None and remote.version != want:
+        raise VideoError(f"{task['clip']} changed on the server while the evaluation ran (its ETag, Last-Modified "
+                         "or length differ from those it had at the start): run the evaluation again")
+    return {"source": remote.record()}
 
 
 def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=None):

@@ -127,14 +127,36 @@ def write_eval_outputs(out, cfg, summaries, results, chosen=None):
     for clip, lab in by_clip.items():
         lines += [f"### {Path(clip).name}", "", _table(lab, first="algo | N"), ""]
     lines += [_lost_note(cfg)]
+    sources = _sources_note(results)
+    if sources:
+        lines += ["", sources]
     lines += ["", "Plots:", ""] + [f"![{Path(p).stem}]({Path(p).name})" for p in plots]
     videos = _annotated_videos(out, results)
     lines += ["", "Per-task rows: `results.csv`; everything: `results.json`; the table, plots and "
               + (f"annotated videos ({len(videos)}, one run per tracker on {Path(videos[0][2]).name}) "
                  if videos else "") + "in a browser: `report.html`."]
     write_atomic(out / "report.md", "\n".join(lines) + "\n")
-    write_atomic(out / "report.html", _html(head, labels, by_clip, plots, videos, _lost_note(cfg)))
+    write_atomic(out / "report.html", _html(head, labels, by_clip, plots, videos,
+                                            " ".join(t for t in (_lost_note(cfg), sources) if t)))
     return plots
+
+
+def _sources_note(results):
+    """What the report says of the clips given as URLs: for each, the server's version its tasks read
+    and how many of them used a cached copy (checked against the server) or downloaded it; ``""``
+    without such clips."""
+    from ..io.remote import describe_version
+
+    by_url = {}
+    for r in results:
+        if r.get("source"):
+            by_url.setdefault(r["source"]["url"], []).append(r["source"])
+    parts = []
+    for url, seen in by_url.items():
+        cached = sum(bool(s["cached"]) for s in seen)
+        parts.append(f"{url} ({describe_version(seen[0]['version'])}): {cached} of {len(seen)} task(s) used a cached "
+                     f"copy checked against the server, {len(seen) - cached} downloaded it")
+    return ("Clips given as URLs, read as the server had them: " + "; ".join(parts) + ".") if parts else ""
 
 
 def _annotated_videos(out, results, max_trackers=8, width=480):

@@ -46,6 +46,12 @@ class Clip:
     truth: dict | None
 
     @property
+    def remote(self):
+        """How a clip given as a URL was read (:class:`~vistrack.io.remote.Remote`: from the server, a
+        fresh download or a cached copy checked against the server), or ``None``."""
+        return getattr(self.source, "remote", None)
+
+    @property
     def objects(self):
         """The per-object ground truth (``objects.csv``: a row per frame and object, with ids;
         :mod:`vistrack.core.mot`) as columns, or ``None`` when the clip has none."""
@@ -107,16 +113,25 @@ def _rects_truth(rects):
             "cy": y + h / 2, "w": w, "h": h, "x": x, "y": y}
 
 
-def load_clip(path):
-    """Open a clip folder, a video file (with its folder's ground truth) or an image folder; a URL
-    (``http://``, ``s3://``, ...) is fetched once into a local cache (:func:`vistrack.io.remote.local_clip`)."""
-    from .remote import local_clip
-    from .video import is_stream
+def load_clip(path, progress=False):
+    """Open a clip folder, a video file (with its folder's ground truth) or an image folder, a camera
+    or a live stream (no ground truth); a URL (``http://``, ``s3://``, ...) of a video or clip folder
+    is read from the server or from a copy in a local cache checked against the server on every use
+    (:func:`vistrack.io.remote.open_url`; ``progress``: a download's progress bar; ``Clip.remote``
+    says which)."""
+    from .remote import open_url
+    from .video import is_stream, open_remote
 
-    if is_stream(path) and not Path(str(path)).exists():  # a camera or a live stream: no ground truth
+    if is_stream(path):  # a camera or a live stream: no ground truth
         return Clip(open_video(path), Path.cwd(), None, None)
-    p = local_clip(path)
-    source = open_video(p)
+    if is_url(path) and not str(path).startswith("file://"):
+        remote = open_url(str(path), progress=progress)
+        if remote.path is None:  # read from the server: a video alone
+            return Clip(open_remote(remote), Path.cwd(), None, None)
+        source, p = open_remote(remote), remote.path
+    else:
+        p = Path(str(path)[len("file://"):] if str(path).startswith("file://") else path)
+        source = open_video(p)
     folder = p if p.is_dir() else p.parent
     meta = None
     if (folder / "meta.json").is_file():
