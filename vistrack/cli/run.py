@@ -23,6 +23,7 @@ from vistrack.io.starts import one_based_init_note
 from vistrack.models.registry import all_algos, get_model_spec
 from vistrack.core.runtime import check_particle_memory
 from vistrack.core.seeds import run_seed
+from vistrack.track.compiling import compile_message, compile_notice
 from vistrack.track.run import stop_on_signals, summary_lines, track_video
 from vistrack.io.outputs import OutputBusy
 from vistrack.io.remote import is_url
@@ -190,20 +191,22 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
         raise click.UsageError("give either --init or --init-gt, not both")
     if targets is not None and results_path:
         raise click.UsageError("--results writes one box per frame: not with --targets (use --track)")
-    clip, name, algo, model = _setup(video, model_name, algo, search, particles, init, init_gt, quiet,
-                                     layout=layout, no_colour=no_colour, template_path=template_path, targets=targets)
-    frames, lead = _frames(clip.source, max_frames), ()
-    if isinstance(model, PlateSearch):  # real footage without a box: find the plate first
-        model, frames, lead = _find_plate(model, frames, video, quiet)
-    try:
-        filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)
-    except ValueError as e:
-        raise click.ClickException(str(e)) from None
-    outputs = {"track_path": track_path, "out_path": out_path, "results_path": results_path,
-               "results_format": results_format, "sequence": sequence_name(video)}
-    start = _start(clip, init, init_gt, max_frames)
-    done = _track(clip, frames, model, filt, particles, run_seed(seed, run_no), max_frames, show_particles, quiet,
-                  f"{algo} N={particles}", outputs, lead, start=start)
+    with compile_notice(None if quiet else _say) as watch:  # the first run after an install compiles the kernels
+        clip, name, algo, model = _setup(video, model_name, algo, search, particles, init, init_gt, quiet, watch=watch,
+                                         layout=layout, no_colour=no_colour, template_path=template_path,
+                                         targets=targets)
+        frames, lead = _frames(clip.source, max_frames), ()
+        if isinstance(model, PlateSearch):  # real footage without a box: find the plate first
+            model, frames, lead = _find_plate(model, frames, video, quiet)
+        try:
+            filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)
+        except ValueError as e:
+            raise click.ClickException(str(e)) from None
+        outputs = {"track_path": track_path, "out_path": out_path, "results_path": results_path,
+                   "results_format": results_format, "sequence": sequence_name(video)}
+        start = _start(clip, init, init_gt, max_frames)
+        done = _track(clip, frames, model, filt, particles, run_seed(seed, run_no), max_frames, show_particles, quiet,
+                      f"{algo} N={particles}", outputs, lead, start=start)
     _report(video, clip, done, name, model, particles, quiet, outputs)
 
 
@@ -240,8 +243,9 @@ def _find_plate(search, frames, video, quiet):
 
 
 def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, layout, no_colour, template_path,
-           targets=None):
-    """``(clip, model name, algorithm, model)`` of a run, checked; one error line for bad input."""
+           targets=None, watch=None):
+    """``(clip, model name, algorithm, model)`` of a run, checked; one error line for bad input. ``watch``: the
+    :class:`~vistrack.track.compiling.CompileWatch` told the model chosen (its compile time)."""
     try:
         clip = load_clip(video, progress=not quiet)
         if clip.remote is not None and not quiet:  # read from the server, downloaded or a cached copy
@@ -255,6 +259,8 @@ def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, 
         name, algo, spec = choice.model, choice.algo, get_model_spec(choice.model)
         if not quiet:  # which model and algorithm, and why: one line
             click.echo(choice.line(particles), err=True)
+        if watch is not None:
+            watch.message = compile_message(name)
         extra = model_options(name, layout=layout, no_colour=no_colour,
                               template=read_support_points(template_path) if template_path else None, targets=targets)
         if search is not None:
@@ -327,11 +333,16 @@ def _track(clip, frames, model, filt, particles, seed, max_frames, show_particle
             return track_video(frames, model, filt, particles, np.random.default_rng(seed),
                                video_info=(src.fps, src.size), show_particles=show_particles, label=label,
                                progress=progress, notify=None if quiet else lost_notice(), frame_count=exact,
-                               start=start, lead=lead, **outputs)
+                               start=start, lead=lead, ready=bar.unpause, **outputs)
     except (VideoError, OSError, OutputBusy) as e:
         raise click.ClickException(str(e)) from None
     finally:
         bar.close()
+
+
+def _say(line):
+    """A line on stderr, above the progress bar."""
+    tqdm.write(line, file=sys.stderr)
 
 
 def _report(video, clip, done, name, model, particles, quiet, outputs):

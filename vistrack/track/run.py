@@ -116,7 +116,7 @@ def target_rows(model, res):
 
 def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, results_path=None,
                 video_info=None, show_particles=10, label="", progress=None, notify=None, profile=True,
-                frame_count=None, start=0, lead=(), results_format="otb", sequence="sequence"):
+                frame_count=None, start=0, lead=(), results_format="otb", sequence="sequence", ready=None):
     """Track ``frames`` (iterable of ``(index, frame)``), writing the track CSV and annotated video as
     it goes; every frame of the input accounted for and a signal honoured after the frame in hand
     (module docstring). Returns a :class:`VideoRun`.
@@ -139,6 +139,10 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     progress, notify : callable or None
         ``progress(ess)`` after every frame (a progress bar); ``notify(index, reason, detail)`` on the
         first frame of every stretch where the object is lost (:mod:`vistrack.models.collapse`).
+    ready : callable or None
+        ``ready()`` once the kernels are loaded (:func:`~vistrack.track.loop.warm_up`; compiled on the
+        first run after an install), before the first frame is tracked: a progress bar's clock
+        starts there.
     profile : bool
         Time the stages (:mod:`vistrack.track.profiling`) into ``VideoRun.timer`` (the same tracks).
     lead : sequence of (int, ndarray)
@@ -151,7 +155,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     """
     run = VideoRun()
     run.timer = Timer() if profile else None
-    frames = _warmed(frames, filt, particles)
+    frames = _warmed(frames, filt, particles, ready)
     if profile:
         frames = run.timer.timed_iter(frames, "decode")
     with deferred_signals() as stop:  # from opening the outputs to closing them: a signal waits for the frame
@@ -241,15 +245,18 @@ def _close_all(outs, writer):
             writer.close()
 
 
-def _warmed(frames, filt, particles):
+def _warmed(frames, filt, particles, ready=None):
     """``frames`` with the filter's kernels loaded on a blank frame shaped like the first
-    (:func:`~vistrack.track.loop.warm_up`) before they are taken: start-up, not tracking time."""
+    (:func:`~vistrack.track.loop.warm_up`) before they are taken: start-up, not tracking time; then
+    ``ready()``."""
     frames = iter(frames)
     first = next(frames, None)
-    if first is None:
-        return frames
-    warm_up(filt, particles, first[1])
-    return itertools.chain([first], frames)
+    if first is not None:
+        warm_up(filt, particles, first[1])
+        frames = itertools.chain([first], frames)
+    if ready:
+        ready()
+    return frames
 
 
 def _record(run, res, model, outs, writer, show_particles, label, notify=None):
