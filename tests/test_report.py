@@ -69,3 +69,12 @@ def test_report_html_loads_in_headless_chromium(report, tmp_path):
     check = json.loads(found.group(1))
     assert len(check["images"]) >= 5 and all(w > 0 for w in check["images"]), check
     assert len(check["videos"]) == 2 and all(d > 0 for d in check["videos"]), check
+
+
+def test_a_small_clip_s_videos_are_enlarged_so_the_player_controls_do_not_cover_them(report):
+    """issue 46: a 96x72 clip's annotated videos are 3x (288 px would still be covered): 288 -> 384."""
+    import cv2
+
+    for v in sorted((report / "videos").glob("*.mp4")):
+        cap = cv2.VideoCapture(str(v))
+        assert (cap.get(cv2.CAP_PROP_FRAME_WIDTH), cap.get(cv2.CAP_PROP_FRAME_HEIGHT)) == (384, 288), v

@@ -133,14 +133,19 @@ class Size(click.ParamType):
         return (w, h)
 
 
-def check_writable(path, what):
-    """Raise ``click.ClickException`` unless ``path`` can be written as a file."""
+def check_writable(path, what, create=False):
+    """Raise ``click.ClickException`` unless ``path`` can be written as a file (``create``: its missing
+    folders made first, so the nearest existing one must be a writable folder)."""
     if path is None:
         return
     path = os.path.abspath(path)
     parent = os.path.dirname(path)
     if os.path.isdir(path):
         raise click.ClickException(f"{what} {path} is a directory, not a file")
+    while create and not os.path.exists(parent):
+        parent = os.path.dirname(parent)
+    if os.path.exists(parent) and not os.path.isdir(parent):
+        raise click.ClickException(f"cannot write {what} {path}: {parent} is a file, not a folder")
     if not os.path.isdir(parent):
         raise click.ClickException(f"cannot write {what} {path}: folder {parent} does not exist")
     if not os.access(parent, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):

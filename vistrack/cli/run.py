@@ -214,8 +214,8 @@ def _check_output_paths(video, track_path, out_path, results_path, results_forma
     """One error line for an output ``run`` cannot write, or one that is an input or another output."""
     check_writable(track_path, "track file")
     check_writable(out_path, "annotated video")
-    if results_format == "otb":
-        check_writable(results_path, "results file")
+    if results_format == "otb":  # its folder is made as the GOT-10k and VOT layouts' are
+        check_writable(results_path, "results file", create=True)
     elif results_path is not None and os.path.exists(results_path) and not os.path.isdir(results_path):
         raise click.ClickException(f"--results {results_path}: the {results_format} layout is a folder "
                                    "(SEQ/SEQ_001.txt inside it), not a file")

@@ -159,10 +159,12 @@ def _sources_note(results):
     return ("Clips given as URLs, read as the server had them: " + "; ".join(parts) + ".") if parts else ""
 
 
-def _annotated_videos(out, results, max_trackers=8, width=480):
+def _annotated_videos(out, results, max_trackers=8, width=480, least=320):
     """Run 0 of each tracker on the first clip drawn over its frames (the true box green, the
-    tracker's in its colour) as ``out/videos/<tracker>.mp4`` (H.264, index first); ``[(label, path,
-    clip)]``, empty where the task results carry no boxes (written by an older version)."""
+    tracker's in its colour) as ``out/videos/<tracker>.mp4`` (H.264, index first), at most ``width``
+    pixels wide and at least ``least`` (a small clip enlarged by a whole factor, pixels kept sharp, so
+    that a browser's player controls do not cover it); ``[(label, path, clip)]``, empty where the task
+    results carry no boxes (written by an older version)."""
     import cv2
 
     from ..io.clips import load_clip
@@ -188,8 +190,9 @@ def _annotated_videos(out, results, max_trackers=8, width=480):
             if i >= len(truth):
                 break
             f = frame if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
-            scale = min(1.0, width / f.shape[1])
-            small = cv2.resize(f, None, fx=scale, fy=scale) if scale < 1 else f  # once per frame
+            scale = min(1.0, width / f.shape[1]) if f.shape[1] >= least else float(-(-least // f.shape[1]))
+            small = f if scale == 1 else cv2.resize(f, None, fx=scale, fy=scale,  # once per frame
+                                                     interpolation=cv2.INTER_LINEAR if scale < 1 else cv2.INTER_NEAREST)
             for label, r, path, k in writers:
                 img = small.copy()
                 _draw(img, truth[i] * scale, (0, 200, 0))

@@ -22,7 +22,7 @@ from .video import VideoError, find_groundtruth, groundtruth_origin, open_video,
 
 __all__ = ["Clip", "load_clip", "excluded_frames",
            "read_meta", "read_groundtruth_csv", "write_track_csv", "format_value", "excerpt_clip",
-           "GroundTruthWarning", "find_clips", "sequence_name"]
+           "GroundTruthWarning", "SkippedFoldersWarning", "find_clips", "sequence_name"]
 
 
 @dataclass
@@ -203,6 +203,10 @@ class GroundTruthWarning(UserWarning):
     """The ground truth and the video disagree (e.g. in length)."""
 
 
+class SkippedFoldersWarning(UserWarning):
+    """Folders of a dataset root that hold no clip were left out."""
+
+
 def write_track_csv(path, rows, columns=None):
     """Write track rows (dicts) with a header; ``columns`` fixes the order (default: first row's keys)."""
     columns = columns or (list(rows[0]) if rows else [])
@@ -285,9 +289,15 @@ def _dataset_clips(p):
     # hidden folders are not clips: synth renders into .NAME.partial-PID before renaming it
     subs = sorted(q for q in p.iterdir() if q.is_dir() and not q.name.startswith("."))
     clips = [q for q in subs if _is_clip(q)]
-    if clips:
-        return clips
-    return [r for q in subs for r in sorted(q.iterdir()) if r.is_dir() and not r.name.startswith(".") and _is_clip(r)]
+    if not clips:  # LaSOT: root/category/sequence
+        subs = [r for q in subs for r in sorted(q.iterdir()) if r.is_dir() and not r.name.startswith(".")]
+        clips = [r for r in subs if _is_clip(r)]
+    skipped = [q for q in subs if q not in clips]
+    if clips and skipped:
+        names = ", ".join(str(q.relative_to(p)) for q in skipped[:5]) + (", ..." if len(skipped) > 5 else "")
+        warnings.warn(f"{p}: {len(skipped)} folder(s) hold no clip (no video.mp4, img/ or color/ frames and no "
+                      f"ground truth) and were left out: {names}", SkippedFoldersWarning, stacklevel=3)
+    return clips
 
 
 def find_clips(paths):
