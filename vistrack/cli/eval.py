@@ -133,6 +133,28 @@ def _results_folder(out_dir):
     return out
 
 
+#: ``eval --help``
+EVAL_HELP = """Evaluate algorithms over CLIPS with ground truth: clip folders, videos or image folders (OTB, VOT,
+GOT-10k, LaSOT or vistrack's layout), folders of them, dataset roots (a LaSOT root, a GOT-10k split,
+a VOT workspace) or URLs of clip folders.
+
+\b
+Examples:
+  vistrack eval suite --algos ls-n-ips,lis,bootstrap,opencv-mil --particles 30,100 --runs 20 --out results
+  vistrack eval LaSOT/ --algos lis,opencv-csrt --runs 3 --out ev      # a dataset root
+  vistrack eval suite --algos lis,bootstrap --particles 100 --equal-time --out eq
+  vistrack eval suite --resume --out results ...                      # continue an interrupted run
+  vistrack eval clips/ --algos lis --results-dir other/ --out results # score another tracker's files too
+
+Every clip × algorithm × N × run is one Dask task writing its own file
+under OUT/tasks, so --resume continues an interrupted evaluation. Each
+run starts from the first ground-truth box. Writes OUT/report.md (tables
+and plots), OUT/report.html (the same with an annotated video per tracker,
+opened from the folder alone), OUT/results.json, OUT/results.csv (one row
+per task) and PNG plots.
+"""
+
+
 def _clips_model(clips):
     """The model of ``eval`` without ``--model``, as ``run`` chooses it: the one the clips' ``meta.json``
     names, else the default; clips naming different models need ``--model``."""
@@ -142,7 +164,7 @@ def _clips_model(clips):
     return named.pop()
 
 
-@click.command("eval")
+@click.command("eval", help=EVAL_HELP)
 @click.argument("clips", nargs=-1, required=True, type=click.Path())
 @click.option("--algos", default="lis,bootstrap", show_default=True, type=StrList(),
               help="Algorithms, any that run takes on the model (" + ", ".join(all_algos()) + ") and OpenCV "
@@ -180,25 +202,7 @@ def _clips_model(clips):
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, scheduler, workers, timeout, in_process,
              resume, results_dirs, results_format, out_dir, quiet):
-    """Evaluate algorithms over CLIPS with ground truth: clip folders, videos or image folders (OTB, VOT,
-    GOT-10k, LaSOT or vistrack's layout), folders of them, dataset roots (a LaSOT root, a GOT-10k split,
-    a VOT workspace) or URLs of clip folders.
-
-    \b
-    Examples:
-      vistrack eval suite --algos ls-n-ips,lis,bootstrap,opencv-mil --particles 30,100 --runs 20 --out results
-      vistrack eval LaSOT/ --algos lis,opencv-csrt --runs 3 --out ev      # a dataset root
-      vistrack eval suite --algos lis,bootstrap --particles 100 --equal-time --out eq
-      vistrack eval suite --resume --out results ...                      # continue an interrupted run
-      vistrack eval clips/ --algos lis --results-dir other/ --out results # score another tracker's files too
-
-    Every clip × algorithm × N × run is one Dask task writing its own file
-    under OUT/tasks, so --resume continues an interrupted evaluation. Each
-    run starts from the first ground-truth box. Writes OUT/report.md (tables
-    and plots), OUT/report.html (the same with an annotated video per tracker,
-    opened from the folder alone), OUT/results.json, OUT/results.csv (one row
-    per task) and PNG plots.
-    """
+    """``vistrack eval``: :data:`EVAL_HELP`."""
     if any(n < 1 for n in particles) or not particles:
         raise click.ClickException("--particles needs positive integers")
     if not algos and not results_dirs:

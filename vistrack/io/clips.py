@@ -49,7 +49,7 @@ class Clip:
     def remote(self):
         """How a clip given as a URL was read (:class:`~vistrack.io.remote.Remote`: from the server, a
         fresh download or a cached copy checked against the server), or ``None``."""
-        return getattr(self.source, "remote", None)
+        return self.source.remote
 
     @property
     def objects(self):
@@ -119,8 +119,8 @@ def load_clip(path, progress=False):
     is read from the server or from a copy in a local cache checked against the server on every use
     (:func:`vistrack.io.remote.open_url`; ``progress``: a download's progress bar; ``Clip.remote``
     says which)."""
-    from .remote import open_url
-    from .video import is_stream, open_remote
+    from .remote import open_remote, open_url
+    from .video import is_stream
 
     if is_stream(path):  # a camera or a live stream: no ground truth
         return Clip(open_video(path), Path.cwd(), None, None)

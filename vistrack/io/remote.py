@@ -26,7 +26,7 @@ import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["is_url", "open_url", "fetch", "url_version", "probe", "Remote", "FetchError", "cache_dir",
+__all__ = ["is_url", "open_url", "open_remote", "fetch", "url_version", "probe", "Remote", "FetchError", "cache_dir",
            "describe_version"]
 
 
@@ -38,6 +38,8 @@ def cache_dir():
 
 #: seconds to wait for a server to answer
 TIMEOUT = 60
+#: how vistrack names itself to servers
+AGENT = "vistrack"
 #: the validators of a file, by the names servers and fsspec filesystems give them
 VALIDATORS = {"etag": ("ETag", "etag", "md5Hash"), "last_modified": ("Last-Modified", "LastModified",
                                                                      "last_modified", "updated", "mtime"),
@@ -180,7 +182,7 @@ def _reason(e):
     if isinstance(r, FileNotFoundError):
         return "no such file there"
     if isinstance(r, ConnectionError) or isinstance(e, URLError):
-        return f"the connection failed ({getattr(r, 'strerror', None) or r})"
+        return f"the connection failed ({r.strerror if isinstance(r, OSError) and r.strerror else r})"
     return f"{type(e).__name__}: {e}"
 
 
@@ -189,9 +191,7 @@ def probe(url):
     :class:`Probe`; a :class:`FetchError` naming the URL for a connection that fails or an HTTP error."""
     from urllib.request import Request, urlopen
 
-    from .. import __version__
-
-    req = Request(url, headers={"Range": "bytes=0-0", "User-Agent": f"vistrack/{__version__}"})
+    req = Request(url, headers={"Range": "bytes=0-0", "User-Agent": AGENT})
     try:
         with urlopen(req, timeout=TIMEOUT) as r:
             h, status = r.headers, r.status
@@ -274,9 +274,7 @@ def _download(url, source, dest, length, bar):
         if _is_http(source):
             from urllib.request import Request, urlopen
 
-            from .. import __version__
-
-            src = urlopen(Request(source, headers={"User-Agent": f"vistrack/{__version__}"}), timeout=TIMEOUT)
+            src = urlopen(Request(source, headers={"User-Agent": AGENT}), timeout=TIMEOUT)
         else:
             src = _fs(url)[0].open(source, "rb")
     except FetchError:
@@ -350,3 +348,19 @@ def open_url(url, cache=None, progress=False):
         if not p.listing and (p.ranges or p.live):
             return Remote(url, None, p.version, live=p.live)
     return fetch(url, cache, progress)
+
+
+def open_remote(remote):
+    """The video (:class:`~vistrack.io.video.VideoSource`) of a URL as :func:`open_url` gave it:
+    read from the server, or the local copy; a :class:`~vistrack.io.video.VideoError` naming the URL
+    where the copy is not a video."""
+    from .video import VideoError, VideoSource, open_video
+
+    if remote.path is None:
+        return VideoSource(remote.url, remote=remote)
+    try:
+        src = open_video(remote.path)
+    except VideoError as e:
+        raise VideoError(f"{remote.url} is not a video (downloaded to {remote.path}: {e})") from None
+    src.remote = remote
+    return src

@@ -30,7 +30,7 @@ import numpy as np
 # frame is counted and reported once (VideoDecodeWarning). Read when the first capture opens.
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 
-__all__ = ["is_stream", "open_remote",
+__all__ = ["is_stream",
     "VideoError",
     "VideoDecodeWarning",
     "FrameOrderWarning",
@@ -211,10 +211,8 @@ PLAYLIST_EXT = {".m3u8", ".mpd"}
 
 
 def is_stream(path):
-    """Whether ``path`` is a camera or a live stream, read by OpenCV (FFmpeg) as it comes: a camera's
-    index (``"0"``, ``"1"``...) when no file or folder of that name is here (a local path wins), a
-    ``rtsp://``, ``rtmp://``, ``udp://``... URL, or an HTTP(S) playlist (``.m3u8``, ``.mpd``). Other
-    URLs are files (:func:`open_video`: read with seeking, or downloaded)."""
+    """Whether ``path`` is a camera's index (``"0"``...; a file or folder of that name wins) or a live
+    stream (``rtsp://``, ``udp://``..., an HTTP(S) ``.m3u8``/``.mpd`` playlist), read as it comes."""
     s = str(path)
     if s.isdigit():
         return not os.path.exists(s)
@@ -233,17 +231,12 @@ def stream_source(path):
     return int(s) if s.isdigit() else s
 
 
-def open_video(path, progress=False):
+def open_video(path):
     """Open a video file, an image-sequence folder or a clip folder (see module doc), a camera by its
-    index (``"0"``) or a live stream (:func:`is_stream`), or the URL of a video (read from the server
-    or a validated local copy, :func:`vistrack.io.remote.open_url`; ``progress``: a download's
-    progress bar). A local path always wins over a camera's index."""
+    index (``"0"``; a local path wins) or a live stream (:func:`is_stream`). URLs of files:
+    :func:`vistrack.io.clips.load_clip`."""
     if is_stream(path):
         return VideoSource(str(path))
-    if "://" in str(path) and not str(path).startswith("file://"):
-        from .remote import open_url
-
-        return open_remote(open_url(str(path), progress=progress))
     p = Path(str(path)[len("file://"):] if str(path).startswith("file://") else path)
     if not p.exists():
         raise VideoError(f"{p} does not exist")
@@ -270,19 +263,6 @@ def open_video(path, progress=False):
     if len(videos) > 1:
         raise VideoError(f"{p} holds several videos ({', '.join(v.name for v in videos)}); name one")
     raise VideoError(f"{p} holds no video and no images")
-
-
-def open_remote(remote):
-    """The video of a URL as :func:`vistrack.io.remote.open_url` gave it (``remote``): read from the
-    server, or the local copy; a :class:`VideoError` naming the URL where it is not a video."""
-    if remote.path is None:
-        return VideoSource(remote.url, remote=remote)
-    try:
-        src = open_video(remote.path)
-    except VideoError as e:
-        raise VideoError(f"{remote.url} is not a video (downloaded to {remote.path}: {e})") from None
-    src.remote = remote
-    return src
 
 
 def read_rects(path, origin=0):

@@ -125,8 +125,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     ----------
     frames : iterable of (int, ndarray)
     model, filt : the model and its filter
-    particles : int
-    rng : numpy.random.Generator
+    particles, rng : int, numpy.random.Generator
     track_path, out_path, results_path : path or None
         Track CSV (:class:`TrackCSV`), annotated mp4 and result file (``x,y,w,h``; for GOT-10k and
         VOT the results folder, :func:`~vistrack.io.results_format.result_paths`).
@@ -136,13 +135,10 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     video_info, show_particles, label : tuple or None, int, str
         ``(fps, (width, height))`` for the annotated video; draw this many highest-weight particles,
         and ``label`` after the frame number.
-    progress, notify : callable or None
+    progress, notify, ready : callable or None
         ``progress(ess)`` after every frame (a progress bar); ``notify(index, reason, detail)`` on the
-        first frame of every stretch where the object is lost (:mod:`vistrack.models.collapse`).
-    ready : callable or None
-        ``ready()`` once the kernels are loaded (:func:`~vistrack.track.loop.warm_up`; compiled on the
-        first run after an install), before the first frame is tracked: a progress bar's clock
-        starts there.
+        first frame of every stretch where the object is lost (:mod:`vistrack.models.collapse`);
+        ``ready()`` once the kernels are loaded, before the first frame (a progress bar's clock starts).
     profile : bool
         Time the stages (:mod:`vistrack.track.profiling`) into ``VideoRun.timer`` (the same tracks).
     lead : sequence of (int, ndarray)
