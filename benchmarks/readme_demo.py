@@ -15,6 +15,7 @@ empty kernel cache (``NUMBA_CACHE_DIR``: as after a fresh install, the kernels c
 import argparse
 import os
 import re
+import resource
 import subprocess
 import sys
 import tempfile
@@ -48,15 +49,16 @@ def merge(cells):
 
 
 def demo(env=None):
-    """``(stdout, seconds)`` of one ``vistrack demo`` into a temporary folder, from the repository root."""
+    """``(stdout, wall seconds, CPU seconds)`` of one ``vistrack demo`` into a temporary folder, from the
+    repository root."""
     with tempfile.TemporaryDirectory() as d:
-        t0 = time.perf_counter()
+        cpu0, t0 = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
         res = subprocess.run([sys.executable, "-c", "from vistrack.cli import main; main()", "demo", "--out",
                               str(Path(d) / "demo")], capture_output=True, text=True, cwd=ROOT, env=env)
-        took = time.perf_counter() - t0
+        took, cpu1 = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_CHILDREN)
     if res.returncode:
         sys.exit(res.stderr)
-    return res.stdout, took
+    return res.stdout, took, cpu1.ru_utime + cpu1.ru_stime - cpu0.ru_utime - cpu0.ru_stime
 
 
 def readme_block(readme):
@@ -79,20 +81,23 @@ def check(readme):
 
 
 def timings(first, later):
-    """Wall seconds of ``first`` demos, each with an empty kernel cache, then ``later`` ones."""
+    """Wall (and CPU) seconds of ``first`` demos, each with an empty kernel cache, then ``later`` ones."""
     env = dict(os.environ)
+    runs = {"first": [], "later": []}
     with tempfile.TemporaryDirectory() as cache:
-        firsts = []
-        for k in range(first):
-            env["NUMBA_CACHE_DIR"] = str(Path(cache) / f"c{k}")
-            firsts.append(demo(env)[1])
-            print(f"first run {k + 1}: {firsts[-1]:.1f} s", file=sys.stderr)
-        laters = []
-        for k in range(later):
-            laters.append(demo(env)[1])
-            print(f"later run {k + 1}: {laters[-1]:.1f} s", file=sys.stderr)
-    print(f"vistrack demo, wall time: first run (kernels compiled) {min(firsts):.0f}-{max(firsts):.0f} s "
-          f"({first} runs); later runs {min(laters):.0f}-{max(laters):.0f} s ({later} runs)")
+        for kind, n in (("first", first), ("later", later)):
+            for k in range(n):
+                if kind == "first":
+                    env["NUMBA_CACHE_DIR"] = str(Path(cache) / f"c{k}")
+                runs[kind].append(demo(env)[1:])
+                print(f"{kind} run {k + 1}: {runs[kind][-1][0]:.1f} s ({runs[kind][-1][1]:.1f} s CPU)", file=sys.stderr)
+
+    def span(v):
+        return f"{min(v):.0f}–{max(v):.0f}"
+
+    print("vistrack demo, wall seconds (CPU seconds): " + "; ".join(
+        f"{kind} run{'s' if len(v) > 1 else ''} {span([w for w, _ in v])} ({span([c for _, c in v])})"
+        for kind, v in runs.items() if v))
 
 
 def main():
