@@ -43,8 +43,9 @@ def merge(cells):
     """One cell from the runs' values: the value when they agree, else ``lo–hi`` of the numbers."""
     if len(set(cells)) == 1:
         return cells[0]
-    nums = [float(re.match(r"[-0-9.]+", c).group()) for c in cells]
-    width = max(len(c.split(".")[1]) if "." in c.split()[0] else 0 for c in cells)
+    first = [re.match(r"[-0-9.]+", c).group() for c in cells]  # a cell's number (of "mean ± sd": the mean)
+    nums = [float(v) for v in first]
+    width = max(len(v.split(".")[1]) if "." in v else 0 for v in first)
     return f"{min(nums):.{width}f}–{max(nums):.{width}f}"
 
 
