@@ -4,27 +4,10 @@ line (1-based) as --init gets a note with the 0-based box."""
 
 from pathlib import Path
 
-import cv2
-import numpy as np
-
 from cli_helpers import run
 from vistrack.io.clips import read_groundtruth_csv
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def otb_clip(folder, frames=6):
-    """An OTB-layout folder: ``img/0001.jpg..`` of a red square moving right, its box 1-based in
-    ``groundtruth_rect.txt`` (as OTB writes it); returns the 0-based boxes."""
-    (folder / "img").mkdir(parents=True)
-    boxes = []
-    for t in range(frames):
-        img = np.full((72, 96, 3), 40, np.uint8)
-        img[20:40, 20 + t:40 + t] = (40, 60, 220)
-        cv2.imwrite(str(folder / "img" / f"{t + 1:04d}.png"), img)
-        boxes.append((20 + t, 20, 20, 20))
-    np.savetxt(folder / "groundtruth_rect.txt", np.array(boxes) + [1, 1, 0, 0], fmt="%d", delimiter=",")
-    return np.array(boxes, float)
 
 
 def test_help_and_readme_say_init_is_0_based_pixels():
@@ -36,7 +19,9 @@ def test_help_and_readme_say_init_is_0_based_pixels():
 
 
 def test_init_gt_reads_otb_1_based_and_a_pasted_first_line_gets_a_note(tmp_path):
-    truth = otb_clip(tmp_path / "sq")
+    from test_results_format import otb_clip  # img/ and a 1-based groundtruth_rect.txt, as OTB writes it
+
+    truth = otb_clip(tmp_path / "sq", 6)
     code, _, err = run(["run", tmp_path / "sq", "--init-gt", "-n", "50", "--track", tmp_path / "gt.csv"])
     assert code == 0 and "note: --init" not in err, err
     first = read_groundtruth_csv(tmp_path / "gt.csv")
