@@ -186,3 +186,29 @@ def test_eval_of_a_url_clip_checks_the_server_every_time(serve, tmp_path):
     again = re.search(rf"read as the server had them: {re.escape(url)} \((2 files, .*?)\): ", report)
     assert again and again[1] != said[1], report  # the new version was read, not the cached copy
     assert changed == auc(served / "sq", "e4")[0] and changed < first - 0.2
+
+
+def test_an_fsspec_url_is_fetched_and_checked_again_on_every_use(tmp_path):
+    """Any fsspec filesystem (here ``memory://``): the clip folder is copied into the cache, used from
+    there while its files' validators stay, and copied again once one changed."""
+    import fsspec
+
+    from clip_helpers import square_clip
+
+    square_clip(tmp_path / "sq", 6)
+    fs = fsspec.filesystem("memory")
+    for f in (tmp_path / "sq").iterdir():
+        fs.pipe(f"/suite46/sq/{f.name}", f.read_bytes())
+    url = "memory://suite46/sq"
+    said = []
+    for k in range(3):
+        if k == 2:  # a changed ground truth (another length) on the "server"
+            fs.pipe("/suite46/sq/groundtruth_rect.txt", b"21,20,20,20\n" * 6)
+        code, _, err = run(["run", url, "--init-gt", "-n", "30", "--track", tmp_path / f"t{k}.csv"])
+        assert code == 0, err
+        said.append(next(line for line in err.replace("\r", "\n").splitlines()
+                         if line.startswith((f"downloaded {url}", f"{url}:"))))
+    assert said[0].startswith(f"downloaded {url} into the cache") and "2 files" in said[0]
+    assert said[1].startswith(f"{url}: using the cached copy")
+    assert said[2].startswith(f"downloaded {url} into the cache")
+    fs.rm("/suite46", recursive=True)

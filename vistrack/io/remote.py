@@ -29,21 +29,20 @@ from pathlib import Path
 __all__ = ["is_url", "open_url", "open_remote", "fetch", "url_version", "probe", "Remote", "FetchError", "cache_dir",
            "describe_version"]
 
+#: seconds to wait for a server to answer
+TIMEOUT = 60
+#: how vistrack names itself to servers
+AGENT = "vistrack"
+#: the validators of a file, by the names servers and fsspec filesystems give them
+VALIDATORS = {"etag": ("ETag", "etag", "md5Hash"),
+              "last_modified": ("Last-Modified", "LastModified", "last_modified", "updated", "mtime", "created"),
+              "length": ("size", "Content-Length")}
 
 
 def cache_dir():
     """Where fetched videos and clips are kept: ``$VISTRACK_CACHE/clips`` (default
     ``~/.cache/vistrack/clips``)."""
     return Path(os.environ.get("VISTRACK_CACHE", Path.home() / ".cache" / "vistrack")) / "clips"
-
-#: seconds to wait for a server to answer
-TIMEOUT = 60
-#: how vistrack names itself to servers
-AGENT = "vistrack"
-#: the validators of a file, by the names servers and fsspec filesystems give them
-VALIDATORS = {"etag": ("ETag", "etag", "md5Hash"), "last_modified": ("Last-Modified", "LastModified",
-                                                                     "last_modified", "updated", "mtime"),
-              "length": ("size", "Content-Length")}
 
 
 class FetchError(OSError):
@@ -85,7 +84,7 @@ class Probe:
 
 @dataclass
 class Remote:
-    """A URL as :func:`fetch` or :func:`open_video`'s caller got it.
+    """How a URL was read (:func:`open_url`, :func:`fetch`).
 
     Attributes
     ----------
@@ -99,7 +98,7 @@ class Remote:
     validated : bool
         The server gave validators to check a copy against (else it is read anew on every use).
     live : bool
-        Read as a live stream.
+        Read as a live stream (the server gives no length and takes no range requests).
     """
 
     url: str
@@ -107,7 +106,6 @@ class Remote:
     version: dict = field(default_factory=dict)
     cached: bool = False
     validated: bool = True
-    #: read as a live stream (the server gives no length and takes no range requests)
     live: bool = False
 
     def describe(self):
