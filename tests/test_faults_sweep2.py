@@ -420,6 +420,7 @@ def test_8_after_any_interrupt_track_video_and_results_hold_the_same_frames(tmp_
     (("SIGINT",), "interrupt"), (("SIGINT", "SIGINT"), "interrupt"), (("SIGTERM",), "terminate"),
     (("SIGTERM", "SIGINT"), "terminate"),
 ], ids=["SIGINT", "SIGINT-twice", "SIGTERM", "SIGTERM-then-SIGINT"])
+@pytest.mark.usefixtures("ctrl_c_reaches_python")
 def test_8_a_signal_between_the_track_row_and_the_video_frame(tmp_path, names, reason):
     """The signals arrive at the worst moment, after frame 3's track row is written and before
     its annotated frame is: the frame in hand is finished, so the track, the results and the
@@ -454,6 +455,7 @@ def test_8_a_signal_between_the_track_row_and_the_video_frame(tmp_path, names, r
     assert _decoded_frames(out) == 4
 
 
+@pytest.mark.usefixtures("ctrl_c_reaches_python")
 def test_8_a_second_signal_while_the_outputs_close_is_waited_for(tmp_path):
     """Ctrl-C twice, the second while the files are being closed: the video and the track are
     closed whole all the same (before: the video was left unclosed, about 40 frames short)."""
