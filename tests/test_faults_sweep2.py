@@ -433,7 +433,7 @@ def test_8_a_signal_between_the_track_row_and_the_video_frame(tmp_path, names, r
 
     from vistrack.filters import make_filter
     from vistrack.io.clips import load_clip
-    from vistrack.models.builders import build_model
+    from vistrack.registry.builders import build_model
     from vistrack.track.run import stop_on_signals, track_video
 
     image_folder(tmp_path / "c", 10)
@@ -466,7 +466,7 @@ def test_8_a_second_signal_while_the_outputs_close_is_waited_for(tmp_path):
 
     from vistrack.filters import make_filter
     from vistrack.io.clips import load_clip
-    from vistrack.models.builders import build_model
+    from vistrack.registry.builders import build_model
     from vistrack.track.run import TrackCSV, track_video
 
     image_folder(tmp_path / "c", 6)

@@ -12,7 +12,7 @@ from vistrack.engine.evaluation import EvalConfig, load_task_results, summarize,
 from vistrack.engine.report import write_eval_outputs
 from vistrack.io.clips import excerpt_clip
 from vistrack.io.video import VideoError
-from vistrack.models.registry import DEFAULT_MODEL, get_model_spec
+from vistrack.registry import DEFAULT_MODEL, get_model_spec
 
 from .grid import run_tasks
 from .options import SEED

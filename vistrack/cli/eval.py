@@ -11,10 +11,9 @@ import numpy as np
 from vistrack.engine.evaluation import (OPENCV_TRACKERS, EvalConfig, check_algos, find_clips,
                                  load_task_results, result_files, score_result_file, summarize, task_list)
 from vistrack.engine.report import write_eval_outputs
-from vistrack.models.builders import MODELS as MODEL_NAMES
+from vistrack.registry import DEFAULT_MODEL, MODELS, all_algos, clip_model, default_comparison, get_model_spec
 from vistrack.io.clips import load_clip
 from vistrack.io.results_format import FORMATS
-from vistrack.models.registry import DEFAULT_MODEL, all_algos, clip_model, get_model_spec
 from vistrack.core.metrics import equal_time_n
 from vistrack.core.runtime import check_particle_memory
 from vistrack.io.video import VideoError
@@ -28,12 +27,12 @@ def _equal_time(cfg, clips, frames=30):
     """N per algorithm for the time per frame of the first algorithm at the first N (thesis Tables 4.1, 4.3)."""
     import time
 
-    from vistrack.models.builders import build_model
+    from vistrack.registry import build_model
     from vistrack.io.clips import load_clip
     from vistrack.filters import make_filter
     from vistrack.track.loop import track
 
-    from vistrack.models.builders import start_frame
+    from vistrack.registry.builders import start_frame
     from vistrack.core.runtime import check_particle_memory
 
     clip = load_clip(clips[0])
@@ -75,7 +74,6 @@ def _equal_time(cfg, clips, frames=30):
 
 def _eval_targets(cfg, targets, equal_time, results_dirs, out, engine):
     """``eval --targets K``: several plates at once, scored by MOTA and IDF1 (:mod:`vistrack.engine.mot_report`)."""
-    from vistrack.models.builders import PLATES_ALGOS
     from vistrack.engine.mot_report import write_mot_outputs
     from vistrack.reproduce.multi_plate import plates_equal_time, run_plates_task, score_plates_tasks
 
@@ -86,9 +84,6 @@ def _eval_targets(cfg, targets, equal_time, results_dirs, out, engine):
     _require_scorer()
     if results_dirs:
         raise click.UsageError("--results-dir scores one box per frame: not with --targets")
-    bad = [a for a in cfg.algos if a not in PLATES_ALGOS]
-    if bad:
-        raise click.UsageError(f"with --targets, --algos are {', '.join(PLATES_ALGOS)}; not {', '.join(bad)}")
     missing = [str(c) for c in cfg.clips if not (Path(c) / "objects.csv").is_file()]
     if missing:
         raise click.ClickException(f"{missing[0]} has no objects.csv (the per-plate ground truth of synth plate)")
@@ -144,14 +139,14 @@ def _clips_model(clips):
 
 @click.command("eval")
 @click.argument("clips", nargs=-1, required=True, type=click.Path())
-@click.option("--algos", default="lis,bootstrap", show_default=True, type=StrList(),
+@click.option("--algos", default=",".join(default_comparison()), show_default=True, type=StrList(),
               help="Algorithms, any that run takes on the model (" + ", ".join(all_algos()) + ") and OpenCV "
                    "trackers (" + ", ".join(OPENCV_TRACKERS) + "; KCF and CSRT need opencv-contrib-python-headless).")
 @click.option("--particles", default="100,750", show_default=True, type=IntList(), help="Particle counts N.")
 @click.option("--runs", default=20, show_default=True, type=click.IntRange(min=1), help="Runs per clip × algo × N.")
 @click.option("--seed", default=0, show_default=True, type=SEED,
               help="Random seed: the same seed gives the same output, bit for bit.")
-@click.option("--model", default=None, metavar="[" + "|".join(MODEL_NAMES) + "]",
+@click.option("--model", default=None, metavar="[" + "|".join(MODELS) + "]",
               help="Tracking model, any registered one, started from the first ground-truth box [default: as run: "
                    "the model the clips' meta.json names (synthetic clips), else " + DEFAULT_MODEL + ", any object, "
                    "appearance learned from the first frame]. plate: layout from the box's aspect.")
@@ -195,6 +190,7 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, sc
         if model is None and targets is None:
             model = _clips_model(clip_paths)
         spec = get_model_spec(model or "plate")
+        check_algos(algos, spec.name if targets is None or model == "plate" else None, targets is not None)
         for a in algos:  # one task's working memory (tasks run side by side: one per worker)
             for n in ([] if a in OPENCV_TRACKERS else particles):
                 check_particle_memory(n, spec.bytes_per_particle, a)

@@ -7,7 +7,7 @@ import click
 
 from vistrack.reproduce.bearings import (DEFAULT_ALGOS, BearingsConfig, bearing_results, bearing_tasks,
                                          equal_time_pairs, format_ship_table, run_bearing_task)
-from vistrack.reproduce.landmarks import (LANDMARK_ALGOS, LandmarksConfig, landmark_results, landmark_tasks,
+from vistrack.reproduce.landmarks import (STREAMS, LandmarksConfig, landmark_results, landmark_tasks,
                                           run_landmark_task)
 from vistrack.reproduce.plate import PlateConfig, plate_results, plate_tasks, run_plate_task
 from vistrack.engine.evaluation import entries_config
@@ -123,7 +123,7 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
 @click.option("--seed", default=0, show_default=True, type=SEED,
               help="Random seed: the same seed gives the same output, bit for bit.")
 @click.option("--algos", default=None, type=StrList(),
-              help=f"Algorithms, comma-separated ({', '.join(LANDMARK_ALGOS)}) [default: the paper's for K].")
+              help=f"Algorithms, comma-separated ({', '.join(STREAMS)}) [default: the paper's for K].")
 @click.option("-n", "--particles", default=None, type=click.IntRange(min=1),
               help="Particles N [default: the paper's, 50 for K=5 and 20 for K=8].")
 @click.option("--mt-dims", default=None, type=click.IntRange(min=0),

@@ -11,15 +11,15 @@ import click
 import numpy as np
 from tqdm import tqdm
 
-from vistrack.models.builders import MODELS, PLATES_ALGOS, build_model, read_support_points, start_frame
+from vistrack.registry import (DEFAULT_MODEL, DEFAULT_PARTICLES, MODELS, OptionError, all_algos, check_algo,
+                               get_model_spec, model_params, build_model, read_support_points)
+from vistrack.registry.builders import start_frame
 from vistrack.io.clips import load_clip
 from vistrack.filters import make_filter
-from vistrack.models.registry import MODELS as MODEL_REGISTRY
 from vistrack.models.contour.nn import network_for
 from vistrack.models.plate.detect import PlateSearch
 from vistrack.engine.evaluation import sequence_name
 from vistrack.io.results_format import FORMATS, result_paths
-from vistrack.models.registry import DEFAULT_MODEL, all_algos, get_model_spec
 from vistrack.core.runtime import check_particle_memory
 from vistrack.track.run import stop_on_signals, summary_lines, track_video
 from vistrack.io.outputs import OutputBusy
@@ -44,29 +44,6 @@ class _Video(click.Path):
 
 #: every algorithm a registered model runs (the registry is the one list: ``eval --algos`` takes the same)
 RUN_ALGOS = all_algos()
-
-
-def model_options(name, *, layout, no_colour, template, targets=None):
-    """The model-specific options of ``run`` as builder parameters; a usage error where they do
-    not apply to model ``name``."""
-    opts = {}
-    if targets is not None:
-        if name != "plate":
-            raise click.UsageError("--targets is for the plate model")
-        opts["targets"] = targets
-    if template is not None:
-        if name in ("plate", "box"):
-            raise click.UsageError("--template is for the contour and landmarks models")
-        opts["template"] = template
-    if layout not in (None, "auto"):
-        if name != "plate":
-            raise click.UsageError("--layout is for the plate model")
-        opts["layout"] = layout
-    if no_colour:
-        if name not in ("contour", "plate"):
-            raise click.UsageError("--no-colour is for the contour and plate models")
-        opts["colour" if name == "contour" else "appearance"] = False
-    return opts
 
 
 def lost_notice(most=5):
@@ -100,7 +77,7 @@ def lost_notice(most=5):
 @click.option("--search", type=click.Choice(["lms", "nn"]), default=None,
               help="LS-N-IPS on contour: the local search, LMS or the neural network trained on simulated "
                    "measurements (thesis §4.3.1; trained on first use, cached; see train-search) [default: lms].")
-@click.option("-n", "--particles", default=100, show_default=True, type=click.IntRange(min=1),
+@click.option("-n", "--particles", default=DEFAULT_PARTICLES, show_default=True, type=click.IntRange(min=1),
               help="Number of particles N.")
 @click.option("--seed", default=0, show_default=True, type=SEED, help="Random seed (same seed, same track).")
 @click.option("--init", type=Box(), help="Start from this box (x,y,w,h) in the first frame; the contour is the "
@@ -239,23 +216,17 @@ def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, 
             if x >= fw or y >= fh or x + w <= 0 or y + h <= 0:
                 raise click.UsageError(f"--init box {x:g},{y:g},{w:g},{h:g} lies outside the {fw}x{fh} frame")
         name = model_name or clip.model_name or (DEFAULT_MODEL if init is not None or init_gt is not None else "plate")
-        if model_name is None and name not in MODEL_REGISTRY:
+        if model_name is None and name not in MODELS:
             raise click.ClickException(f"{video}: meta.json names model {name!r}, which this version cannot track")
         spec = get_model_spec(name)
-        extra = model_options(name, layout=layout, no_colour=no_colour,
-                              template=read_support_points(template_path) if template_path else None, targets=targets)
-        algo = algo or ("partitioned-lis" if targets is not None else spec.default_algo)
-        if search is not None:
-            if algo != "ls-n-ips" or name != "contour":
-                raise click.UsageError("--search is for --algo ls-n-ips on the contour model")
-            extra["search"] = search
-        allowed = PLATES_ALGOS if targets is not None else spec.algos
-        if algo not in allowed:
-            hint = "; partitioned sampling tracks several plates: add --targets K" \
-                if name == "plate" and algo in PLATES_ALGOS else ""
-            raise click.UsageError(f"--algo {algo} does not run on the {name} model"
-                                   f"{' with --targets' if targets is not None else ''}; "
-                                   f"choose from {', '.join(allowed)}{hint}")
+        algo = algo or ((spec.multi_algos or spec.algos)[0] if targets is not None else spec.default_algo)
+        flags = {"--targets": targets, "--template": template_path and read_support_points(template_path),
+                 "--layout": None if layout == "auto" else layout, "--no-colour": no_colour or None, "--search": search}
+        try:
+            extra = model_params(name, flags, algo)
+            check_algo(name, algo, targets is not None, who=f"--algo {algo}")
+        except OptionError as e:
+            raise click.UsageError(str(e)) from None
         check_particle_memory(particles, spec.bytes_per_particle, algo)
         model = build_model(name, clip, init=init, init_gt=init_gt, **extra)
         if search == "nn":  # train (once per template) or load before the progress bar starts

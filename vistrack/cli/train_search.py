@@ -5,9 +5,9 @@ from __future__ import annotations
 import click
 
 from vistrack.io.video import VideoError
-from vistrack.models.builders import read_support_points
 from vistrack.models.contour.model import Contour
 from vistrack.models.contour.nn import NNSearchConfig, load_or_train
+from vistrack.registry import read_support_points
 
 from .options import SEED, Size
 

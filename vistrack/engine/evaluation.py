@@ -26,14 +26,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..models.builders import build_model, start_frame
+from ..registry.builders import build_model, start_frame
 from ..io.clips import GroundTruthWarning, find_clips, load_clip, sequence_name  # noqa: F401  (find_clips: re-exported)
 from ..io.results_format import find_result_file, read_result_file
 from ..filters import ALGORITHMS, make_filter
 from ..core.metrics import (PRECISION_THRESHOLDS, center_error, iou, lost_frames, pooled_summary, precision,  # noqa: F401
                       precision_curve, success_auc, success_curve)
 from ..core.metrics import summarize as metrics_summarize
-from ..models.registry import get_model_spec
+from ..registry import DEFAULT_MODEL, check_algo, default_comparison, get_model_spec
 from ..core.runtime import keep_freed_memory
 from .tasks import (OutLocked, TaskFailed, check_shared, load_task_results, lock_out, stale_tasks, task_done,
                     task_fingerprint, write_atomic, write_task_result)
@@ -70,23 +70,25 @@ class EvalConfig:
     seed : int
         Root seed: run ``r`` on clip ``c`` draws from ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]``.
     model : str
-        A registered model (:mod:`vistrack.models.registry`).
+        A registered model (:mod:`vistrack.registry`).
     entries : list of (str, int) or None
         Explicit ``(algo, N)`` pairs instead of the ``algos × particles`` grid.
     """
 
     clips: list
-    algos: list = field(default_factory=lambda: ["lis", "bootstrap"])
+    algos: list = field(default_factory=lambda: list(default_comparison()))
     particles: list = field(default_factory=lambda: [100, 750])
     runs: int = 20
     seed: int = 0
-    model: str = "contour"
+    model: str = DEFAULT_MODEL
     #: explicit (algo, N) pairs instead of the algos × particles grid
     entries: list | None = None
 
 
-def check_algos(algos):
-    """Raise ``ValueError`` for unknown algorithms or OpenCV trackers this OpenCV lacks."""
+def check_algos(algos, model=None, targets=False):
+    """Raise ``ValueError`` (one line) for an unknown algorithm, an OpenCV tracker this OpenCV lacks, or
+    (given ``model``) an algorithm that does not run on that model (with ``targets``: on its several-target
+    form; the line names those that do, :func:`vistrack.registry.check_algo`)."""
     import cv2
 
     for a in algos:
@@ -97,6 +99,8 @@ def check_algos(algos):
         elif a not in ALGORITHMS:
             known = sorted(set(ALGORITHMS) | set(OPENCV_TRACKERS))
             raise ValueError(f"unknown algorithm {a!r}; choose from {', '.join(known)}")
+        elif model is not None:
+            check_algo(model, a, targets, who=f"--algos {a}")
 
 
 def _name(clip):

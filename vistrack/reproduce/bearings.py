@@ -22,8 +22,9 @@ import numpy as np
 
 from ..core.metrics import equal_time_search
 from ..core.particles import DegenerateWeightsWarning
-from ..filters import ALGORITHMS, filter_steps, make_filter
+from ..filters import FILTERS, filter_steps, make_filter
 from ..models.bearings.model import LIS_PROPOSALS, Bearings, simulate
+from ..registry import derived_algos
 
 __all__ = ["BearingsConfig", "run_bearings", "bearing_tasks", "run_bearing_task", "bearing_results", "DEFAULT_ALGOS",
            "equal_time_pairs", "format_ship_table"]
@@ -74,9 +75,9 @@ class BearingsConfig:
             raise ValueError("--algos needs at least one algorithm")
         model = Bearings(self.ships, proposal=self.proposal)
         for a in dict.fromkeys(a for a, _ in self.pairs()):
-            if a not in ALGORITHMS or a == "sir":
-                choices = ", ".join(sorted(k for k in ALGORITHMS if k != "sir"))
-                raise ValueError(f"unknown algorithm {a!r} for bearings; choose from {choices}")
+            if a not in FILTERS:
+                runs = ", ".join(derived_algos(Bearings))
+                raise ValueError(f"unknown algorithm {a!r} for bearings; choose from {runs}")
             make_filter(a, model)  # a filter whose model parts bearings lacks: its one-line ValueError
 
 

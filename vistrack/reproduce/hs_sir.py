@@ -97,7 +97,7 @@ def equal_time_entries(clip_path, entries, frames=20, likelihood=None):
     ``likelihood``; linear in N between N and 2N), as Table 3.1's counts were chosen. Returns
     ``(entries, {algo: ms per frame})``."""
     from ..io.clips import load_clip
-    from ..models.builders import build_model
+    from ..registry.builders import build_model
 
     clip = load_clip(clip_path)
     fr = []

@@ -30,7 +30,10 @@ from ..models.landmarks.model import Landmarks, simulate
 __all__ = ["LandmarksConfig", "PAPER", "run_landmarks", "landmarks_run", "landmark_tasks", "run_landmark_task",
            "landmark_results"]
 
-LANDMARK_ALGOS = ("pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt")
+#: the filters of §4 (seed 000's, :data:`~vistrack.filters.registry.FILTERS`), each with its random stream
+#: within a run in the paper's order (PF-Gordon, PF-Doucet, PF-EIS, PF-EIS-MT): fixed, so that a run's draws
+#: do not depend on which filters are chosen
+STREAMS = ("pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt")
 
 #: the two experiments of §4: model parameters, N, algorithms
 PAPER = {
@@ -74,8 +77,8 @@ class LandmarksConfig:
             if v < 1:
                 raise ValueError(f"--{name} must be a positive integer, got {v}")
         for a in self.algos:
-            if a not in LANDMARK_ALGOS:
-                raise ValueError(f"unknown algorithm {a!r} for landmarks; choose from {', '.join(LANDMARK_ALGOS)}")
+            if a not in STREAMS:
+                raise ValueError(f"unknown algorithm {a!r} for landmarks; choose from {', '.join(STREAMS)}")
 
     def model(self):
         """The :class:`~vistrack.models.landmarks.Landmarks` model of the paper's experiment for ``k`` (seed 000 §4)."""
@@ -102,12 +105,12 @@ def _one_run(cfg, model, r, seed_seq):
 
     Returns ``{algo: (squared error per step, seconds, degenerate steps)}``.
     """
-    seq_ss, *algo_ss = seed_seq.spawn(1 + len(LANDMARK_ALGOS))
+    seq_ss, *algo_ss = seed_seq.spawn(1 + len(STREAMS))
     states, obs = simulate(model, cfg.steps, np.random.default_rng(seq_ss))
     truth = model.configuration(states[1:])
     out = {}
     for a in cfg.algos:
-        rng = np.random.default_rng(algo_ss[LANDMARK_ALGOS.index(a)])
+        rng = np.random.default_rng(algo_ss[STREAMS.index(a)])
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", DegenerateWeightsWarning)
             t0 = time.perf_counter()

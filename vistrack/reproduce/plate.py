@@ -30,7 +30,7 @@ from ..core.particles import DegenerateWeightsWarning
 from ..engine.evaluation import entry_tasks, prepare_worker, write_task_result
 from ..filters import make_filter
 from ..io.clips import load_clip
-from ..models.builders import build_model
+from ..registry.builders import build_model
 from ..track.loop import track
 from .contour import ContourConfig
 

@@ -7,7 +7,7 @@ import numpy as np
 from ...core.features import FeatureMaps, is_grey
 from ...io.starts import first_frame, initial_truth, start_frame
 from ...io.video import VideoError
-from ..spec import HISTORY_ALGOS, THESIS_ALGOS, ModelSpec
+from ..spec import ModelOption, ModelSpec
 from .model import Contour
 
 __all__ = ["SPEC"]
@@ -80,6 +80,12 @@ def _contour(clip, size, init, init_gt, template, params):
 
 
 
-SPEC = ModelSpec("contour", THESIS_ALGOS + HISTORY_ALGOS + ("ls-n-ips-nn",),
-                 "B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
-                 from_box=_contour_from_box, from_clip=_contour_from_clip, bytes_per_particle=48_000)
+SPEC = ModelSpec("contour", description="B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
+                 from_box=_contour_from_box, from_clip=_contour_from_clip, bytes_per_particle=48_000,
+                 model_class=Contour, options=(
+                     ModelOption("template", None, "support points (n, 2) in pixels instead of the ellipse",
+                                 flag="--template"),
+                     ModelOption("colour", "auto", "the colour term: on for colour video (auto), True or False",
+                                 flag="--no-colour", value=False),
+                     ModelOption("search", None, "LS-N-IPS's local search: lms or nn (the neural network)",
+                                 flag="--search", algos=("ls-n-ips",))))
