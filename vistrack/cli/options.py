@@ -6,6 +6,7 @@ import os
 
 import click
 
+from vistrack.io.outputs import check_writable as writable
 from vistrack.io.video_errors import quoted
 
 __all__ = ["Ratio",
@@ -130,17 +131,12 @@ class Size(click.ParamType):
 
 
 def check_writable(path, what):
-    """Raise ``click.ClickException`` unless ``path`` can be written as a file."""
-    if path is None:
-        return
-    path = os.path.abspath(path)
-    parent = os.path.dirname(path)
-    if os.path.isdir(path):
-        raise click.ClickException(f"{what} {path} is a directory, not a file")
-    if not os.path.isdir(parent):
-        raise click.ClickException(f"cannot write {what} {path}: folder {parent} does not exist")
-    if not os.access(parent, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
-        raise click.ClickException(f"cannot write {what} {path}: permission denied")
+    """Raise ``click.ClickException`` unless ``path`` can be written as a file
+    (:func:`vistrack.io.outputs.check_writable`)."""
+    try:
+        writable(path, what)
+    except ValueError as e:
+        raise click.ClickException(str(e)) from None
 
 
 #: files of a clip folder that ``run`` reads (besides the frames of ``img/``, ``color/`` or the folder itself)

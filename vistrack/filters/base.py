@@ -63,6 +63,8 @@ class ParticleFilter:
     #: protocols a part the caller may pass in needs of the model when none is passed (LS-N-IPS's
     #: search)
     part_needs = ()
+    #: the working memory of a step per particle, in units of the model's (its ``bytes_per_particle``)
+    memory_factor = 1
 
     def __init__(self, model, *, resample="systematic", ess_threshold=None, birth_reserve=None):
         require(model, self.needs, self.name)

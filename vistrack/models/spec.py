@@ -27,8 +27,9 @@ class ModelOption:
         The ``vistrack run`` option that sets it (``--no-colour``, ...).
     value : object
         What the flag passes (``None``: the option's own value; ``False`` for ``--no-colour``).
-    algos : tuple of str
-        The algorithms it is for (empty: all).
+    needs : Protocol or None
+        It is for the algorithms that need this protocol of the model (``--search``: those of
+        :class:`~vistrack.models.protocol.LocalSearch`); ``None``: for all.
     """
 
     name: str
@@ -36,7 +37,7 @@ class ModelOption:
     help: str
     flag: str | None = None
     value: object = None
-    algos: tuple = ()
+    needs: type | None = None
 
 
 @dataclass(frozen=True)
@@ -64,7 +65,7 @@ class ModelSpec:
         How ``eval`` decides a frame is lost (:func:`vistrack.core.metrics.lost_frames`).
     bytes_per_particle : int
         Peak working memory of one step per particle (bytes; measured, rounded up), for
-        :func:`vistrack.core.runtime.check_particle_memory`.
+        :func:`vistrack.registry.catalog.check_particle_memory`.
     multi_algos : tuple of str or None
         Algorithms that track several targets at once (``run``/``eval --targets K``), the default
         first; ``None``: derived from :attr:`targets_class` (none without one).

@@ -14,9 +14,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.runtime import check_particle_memory
 from ..filters import make_filter
-from ..registry import DEFAULT_MODEL, DEFAULT_PARTICLES, check_algo, get_model_spec, model_from_box
+from ..registry import (
+    DEFAULT_MODEL,
+    DEFAULT_PARTICLES,
+    check_algo,
+    check_particle_memory,
+    get_model_spec,
+    model_from_box,
+)
 from .loop import FrameStepper
 
 __all__ = ["Tracker"]
