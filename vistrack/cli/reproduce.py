@@ -20,8 +20,16 @@ from vistrack.reproduce.suite import experiment_clips
 from .errors import one_line
 from .grid import progress
 from .options import SEED, Fraction, IntList, Size, StrList
-from .reproduce_common import (config_default, default_entries, engine_options, equal_time_line, making_clips,
-                               output_options, results_lines, suite_options)
+from .reproduce_common import (
+    config_default,
+    default_entries,
+    engine_options,
+    equal_time_line,
+    making_clips,
+    output_options,
+    results_lines,
+    suite_options,
+)
 
 __all__ = ["reproduce"]
 

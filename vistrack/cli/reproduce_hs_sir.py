@@ -12,8 +12,15 @@ from vistrack.reproduce.suite import experiment_clips
 from .errors import one_line
 from .grid import progress
 from .options import Size
-from .reproduce_common import (default_entries, engine_options, equal_time_line, making_clips, output_options,
-                               results_lines, suite_options)
+from .reproduce_common import (
+    default_entries,
+    engine_options,
+    equal_time_line,
+    making_clips,
+    output_options,
+    results_lines,
+    suite_options,
+)
 
 __all__ = ["Likelihood", "hs_sir"]
 

@@ -9,7 +9,8 @@ import click
 from tqdm import tqdm
 
 from vistrack.core.resampling import SCHEMES
-from vistrack.filters import ParticleFilter
+from vistrack.filters import FILTERS, SIR, ParticleFilter
+from vistrack.filters.history import HistorySampling
 from vistrack.filters.registry import filter_options
 from vistrack.io.clips import sequence_name
 from vistrack.io.results_format import FORMATS, result_paths
@@ -52,6 +53,15 @@ def _defaults():
     return first + "".join(f"; {a} for {' and '.join(by_algo[a])}" for a in others)
 
 
+def _history():
+    """``Box and contour also run sir and the history-sampling family of thesis §3.2 (basic-sir, ...)``."""
+    family = [n for n, f in FILTERS.items() if issubclass(f.cls, HistorySampling) and f.alias_of is None]
+    sir = next(n for n, f in FILTERS.items() if f.cls is SIR)
+    models = [s.name for s in MODELS.values() if sir in s.algos]
+    return (" and ".join(models).capitalize() + f" also run {sir} and the history-sampling family of thesis §3.2 ("
+            + ", ".join(family) + ")")
+
+
 def lost_notice(most=5):
     """``notify(index, reason, detail)`` for :func:`~vistrack.track.run.track_video`: a line on stderr
     (above the progress bar) for each of the first ``most`` frames where the object is lost."""
@@ -81,10 +91,9 @@ def _say(line):
               help="Plate layout: auto decides between the two-row Japanese (jp) and the single-row layout from "
                    "the clip, the --init box's aspect ratio or the plate found.")
 @click.option("--algo", default=None, type=click.Choice(RUN_ALGOS),
-              help="Particle filter [default: " + _defaults() + "]. Contour and box also run sir and "
-                   "the history-sampling family of thesis §3.2 (basic-sir, hs-sir, rb-hs-sir, rb-ss-hs-sir), "
-                   "whose innovations come from the image only: the colour-blob proposal (the target's "
-                   "Gaussian colour learned from the first frame, drawn over a grid of cells).")
+              help="Particle filter [default: " + _defaults() + "]. " + _history() + ", whose innovations come "
+                   "from the image only: the colour-blob proposal (the target's Gaussian colour learned from the "
+                   "first frame, drawn over a grid of cells).")
 @click.option("--search", type=click.Choice(["lms", "nn"]), default=None,
               help="LS-N-IPS on contour: the local search, LMS or the neural network trained on simulated "
                    "measurements (thesis §4.3.1; trained on first use, cached; see train-search) [default: lms].")

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-
 import click
 from tqdm import tqdm
 
@@ -46,7 +45,8 @@ def _clip_options(size, frames):
     opts = [click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write."),
             click.option("--frames", default=frames, show_default=True, type=click.IntRange(min=1),
                          help="Number of frames to generate."),
-            click.option("--size", default=size, show_default=True, type=Size(), help="Frame size WIDTHxHEIGHT in pixels."),
+            click.option("--size", default=size, show_default=True, type=Size(),
+                         help="Frame size WIDTHxHEIGHT in pixels."),
             click.option("--seed", default=0, show_default=True, type=SEED,
                          help="Random seed: the same seed gives the same output, bit for bit.")]
 

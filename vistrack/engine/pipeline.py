@@ -22,12 +22,12 @@ from .grid import run_experiment
 from .mot_report import write_mot_outputs
 from .multi_target import plates_equal_time
 from .report import write_eval_outputs
-from .tasks import lock_out
+from .tasks import lock_out, task_path
 
 __all__ = ["Evaluation", "eval_config", "eval_equal_time", "evaluate", "results_folder", "clips_model"]
 
-#: the files ``eval`` writes into ``--out`` (``tasks`` a folder)
-OUT_FILES = ("tasks", "results.json", "results.csv", "report.md")
+#: the files ``eval`` writes into ``--out`` besides the task files
+OUT_FILES = ("results.json", "results.csv", "report.md")
 
 
 @dataclass
@@ -102,11 +102,12 @@ def results_folder(out):
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise ValueError(f"cannot create --out {out}: {e.strerror}") from None
-    blocked = next((out / n for n in OUT_FILES if (out / n).exists() and (out / n).is_dir() != (n == "tasks")), None)
+    paths = [(task_path(out), True)] + [(out / n, False) for n in OUT_FILES]  # (path, a folder)
+    blocked = next(((p, folder) for p, folder in paths if p.exists() and p.is_dir() != folder), None)
     if blocked is not None:  # found before the grid runs, not after
-        raise ValueError(f"cannot write the results into {out}: {blocked} is a "
-                         f"{'folder' if blocked.is_dir() else 'file'}, where eval writes a "
-                         f"{'folder' if blocked.name == 'tasks' else 'file'}")
+        raise ValueError(f"cannot write the results into {out}: {blocked[0]} is a "
+                         f"{'folder' if blocked[0].is_dir() else 'file'}, where eval writes a "
+                         f"{'folder' if blocked[1] else 'file'}")
     if not os.access(out, os.W_OK):
         raise ValueError(f"cannot write the results into {out}: permission denied")
     return out

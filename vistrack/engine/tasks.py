@@ -153,35 +153,21 @@ class TaskFailed(RuntimeError):
     task files finished so far are kept, so ``--resume`` runs only the rest."""
 
 
-def _sees(probe, paths):
-    """On a worker: which of ``probe`` (``None``: none) and ``paths`` it cannot see (the paths as the
-    tasks give them)."""
-    return [p for p in ([probe] if probe else []) + list(paths) if not os.path.exists(p)]
+def _unseen(paths):
+    """On a worker: the ``paths`` (as the tasks give them) it cannot see."""
+    return [p for p in paths if not os.path.exists(p)]
 
 
-def check_shared(client, tasks, out_dir=None):
+def check_shared(client, tasks):
     """Raise ``TaskFailed`` unless every worker of ``client`` sees the tasks' clips at the paths the
-    tasks give (clips given as URLs are fetched by each worker and not checked) and, with
-    ``out_dir``, that folder (a file written there now)."""
-    import uuid
-
-    probe = None
-    if out_dir is not None:
-        probe = Path(out_dir) / f".vistrack-probe-{uuid.uuid4().hex[:12]}"
-        probe.write_text("")
-    try:
-        clips = sorted({t["clip"] for t in tasks if "clip" in t and "://" not in str(t["clip"])})
-        missing = {w: m for w, m in client.run(_sees, str(probe) if probe else None, clips).items() if m}
-    finally:
-        if probe is not None:
-            probe.unlink(missing_ok=True)
+    tasks give (clips given as URLs are fetched by each worker and not checked; the results come back
+    through Dask, so no worker needs ``--out``)."""
+    clips = sorted({t["clip"] for t in tasks if "clip" in t and "://" not in str(t["clip"])})
+    missing = {w: m for w, m in client.run(_unseen, clips).items() if m}
     if missing:
         worker, paths = next(iter(missing.items()))
-        what = f"--out {out_dir}" if probe is not None and paths[0] == str(probe) else f"clip {paths[0]}"
-        raise TaskFailed(f"{len(missing)} worker(s) of the scheduler (e.g. {worker}) cannot see {what}: --out and "
-                         "the clips must be on a filesystem the workers share, at the same paths" if probe else
-                         f"{len(missing)} worker(s) of the scheduler (e.g. {worker}) cannot see {what}: give the "
-                         "clips at paths the workers share, or as URLs they can fetch (http://, s3://, ...)")
+        raise TaskFailed(f"{len(missing)} worker(s) of the scheduler (e.g. {worker}) cannot see clip {paths[0]}: give "
+                         "the clips at paths the workers share, or as URLs they can fetch (http://, s3://, ...)")
 
 
 class OutLocked(RuntimeError):

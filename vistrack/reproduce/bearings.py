@@ -27,7 +27,7 @@ from ..models.bearings.model import LIS_PROPOSALS, Bearings, simulate
 from ..registry import derived_algos
 from ..registry.comparisons import BEARINGS
 
-__all__ = ["BearingsConfig", "run_bearings", "run_bearing_task", "DEFAULT_ALGOS", "format_ship_table"]
+__all__ = ["BearingsConfig", "run_bearings", "run_bearing_task", "sequence", "DEFAULT_ALGOS", "format_ship_table"]
 
 #: Tables 4.3 and 4.4's algorithms
 DEFAULT_ALGOS = BEARINGS
@@ -112,7 +112,7 @@ class BearingsConfig:
         CPU time of this thread, of ``runs`` runs on the first sequence. Returns ``(pairs, {"algo:N": ms
         per run})``, the times at the answers."""
         model = Bearings(self.ships, proposal=self.proposal)
-        _, obs, seeds = _sequence(self, model, 0)
+        _, obs, seeds = sequence(self, model, 0)
         seeds = seeds[:runs]
 
         def ms(algo, n):
@@ -135,7 +135,7 @@ def _sequence_runs(cfg, model, s):
     position error. Run ``r`` draws from ``SeedSequence(seed).spawn(2)[1].spawn(sequences *
     runs)[s * runs + r]`` for every algorithm and N (common random numbers).
     """
-    truth, obs, run_seeds = _sequence(cfg, model, s)
+    truth, obs, run_seeds = sequence(cfg, model, s)
     out = {}
     for algo, n in cfg.pairs():
         filt = make_filter(algo, model, resample=cfg.resample, ess_threshold=cfg.ess_threshold)
@@ -152,7 +152,7 @@ def _sequence_runs(cfg, model, s):
     return out
 
 
-def _sequence(cfg, model, s):
+def sequence(cfg, model, s):
     """Sequence ``s``'s ``(truth (steps, d), obs (steps, M), run seeds (runs,))``."""
     seq_ss, run_ss = np.random.SeedSequence(cfg.seed).spawn(2)
     truth, obs = simulate(model, cfg.steps, np.random.default_rng(seq_ss.spawn(cfg.sequences)[s]))

@@ -42,12 +42,8 @@ class HSConfig(ContourConfig):
     table = "hs-sir"
 
     def tasks(self):
-        """The contour experiment's tasks, each building its model with :attr:`likelihood`."""
-        tasks = super().tasks()
-        if self.likelihood:  # absent by default, so the default tasks (and their --resume files) stay as they are
-            for t in tasks:
-                t["model_params"] = dict(self.likelihood)
-        return tasks
+        """:func:`hs_tasks`."""
+        return hs_tasks(self)
 
     def equal_time(self, frames=20):
         """:func:`equal_time_entries` on the first clip: ``(entries, {"algo:N": ms per frame})``."""
@@ -79,8 +75,13 @@ def likelihood_params(text):
 
 
 def hs_tasks(cfg):
-    """The experiment's tasks (:meth:`HSConfig.tasks`)."""
-    return cfg.tasks()
+    """The contour experiment's tasks of ``cfg`` (an :class:`HSConfig`), each building its model with
+    ``cfg.likelihood``."""
+    tasks = ContourConfig.tasks(cfg)
+    if cfg.likelihood:  # absent by default, so the default tasks (and their --resume files) stay as they are
+        for t in tasks:
+            t["model_params"] = dict(cfg.likelihood)
+    return tasks
 
 
 def equal_time_entries(clip_path, entries, frames=20, likelihood=None):

@@ -47,11 +47,11 @@ def _plate(clip, size, init, init_gt, params):
         from .detect import PlateSearch
 
         def build(frame, det):
-            # the angle's random walk 0.003 rad/frame, not 0.01: started from a detection, the angle
-            # wandered 3 -> 9 degrees on the dashcam clip blurred 7 px (the learned appearance reads the
-            # parallelogram's axis-aligned box and hardly holds it): no box, seeds 1-3, AUC 0.70 / 0.68
-            # / 0.47 -> 0.77 / 0.75 / 0.77, mean of the 10 plate clips 0.832 -> 0.850. From a box 0.01
-            # stays: 0.003 lowered every clip there (dashcam 0.877 -> 0.861; docs/experiments.md, issue 35)
+            # the angle's random walk 0.003 rad/frame, not 0.01: started from a detection, with 0.01 the
+            # angle wanders 3 -> 9 degrees on the dashcam clip blurred 7 px (the learned appearance reads the
+            # parallelogram's axis-aligned box and hardly holds it): no box, seeds 1-3, AUC 0.77 / 0.75 /
+            # 0.77 against 0.70 / 0.68 / 0.47, mean of the 10 plate clips 0.850 against 0.832. From a box
+            # 0.01: 0.003 lowers every clip there (dashcam 0.861 against 0.877; docs/experiments.md)
             return _plate_from_box(size, det.box, layout or det.layout, params, frame, angle_sigma=0.003)
 
         return PlateSearch(build)
@@ -79,7 +79,7 @@ def _plate_from_box(size, box, layout, params, frame=None, angle_sigma=None):
     if frame is not None and box is not None:
         # one plate, its appearance learned: no entering-car births (they take the track to other
         # plate-like structure: dashcam from the first box, LIS-100 seeds 1-3, AUC 0.35 / 0.85 /
-        # 0.48 with the births; docs/experiments.md, issue 35)
+        # 0.48 with the births; docs/experiments.md)
         params = {"enter_weight": 0.0, "birth_reserve": 0.0, **params}
     model = Plate(size, layout=layout or "jp", **params)
     if box is not None:
