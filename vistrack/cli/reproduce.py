@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import click
 from click.core import ParameterSource
 
@@ -195,12 +193,12 @@ def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targ
     experiment = "plates" if overlap else "plate"
     with making_clips(make, frames, quiet) as made, one_line():
         clips = experiment_clips(experiment, clips_dir, make, frames, Size().convert(size, None, None), made)
-    cfg = PlatesConfig(clips, runs=runs, seed=seed, targets=targets) if overlap else PlateConfig(clips, runs=runs,
-                                                                                                 seed=seed)
-    cfg = dataclasses.replace(cfg, entries=entries) if "entries" in given or not overlap else cfg
+    chosen = {"entries": entries} if "entries" in given or not overlap else {}  # else the experiment's own
+    cfg = PlatesConfig(clips, runs=runs, seed=seed, targets=targets, **chosen) if overlap else \
+        PlateConfig(clips, runs=runs, seed=seed, **chosen)
+    out = out_dir if "out_dir" in given or not overlap else "plate-overlap-results"
     with progress(experiment, quiet) as hooks:
-        done = run_reproduction(cfg, out_dir if "out_dir" in given or not overlap else "plate-overlap-results",
-                                json_path=json_path, plots_dir=plots_dir, equal_time=equal_time,
+        done = run_reproduction(cfg, out, json_path=json_path, plots_dir=plots_dir, equal_time=equal_time,
                                 on_equal_time=equal_time_line("frame"), scheduler=scheduler, workers=workers,
                                 in_process=in_process, resume=resume, **hooks)
     click.echo(f"{len(clips)} clips x {runs} runs" + (f", K = {targets} plate slots" if overlap else ""))

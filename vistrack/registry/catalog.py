@@ -67,7 +67,8 @@ def register(spec):
     multi = (derived_algos(spec.targets_class, spec.seed) if spec.targets_class is not None else ()) \
         if multi is None else _checked(spec, multi, spec.targets_class)
     if not algos:
-        raise ValueError(f"model {spec.name!r}: no algorithm runs on it")
+        raise ValueError(f"model {spec.name!r}: no algorithm runs on it (give its model_class, whose protocols "
+                         "decide, or its algos)")
     entry = dataclasses.replace(spec, algos=algos, multi_algos=multi)
     MODELS[spec.name] = entry
     return entry
