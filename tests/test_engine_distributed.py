@@ -1,7 +1,8 @@
 """The batch engine on a real Dask cluster with no filesystem in common (issue 36, item 1): a
 `dask scheduler` and two `dask worker` processes on 127.0.0.1, each in its own empty working folder
-and clip cache, run an eval whose --out only the client writes and whose clip is served over HTTP
-on 127.0.0.1; the results equal the local run's, and killing a worker mid-run changes nothing."""
+and clip cache, run an eval whose clip is served over HTTP on 127.0.0.1, started in a folder of the
+client's that no worker runs in, with --out relative to it: a worker that wrote --out would write it
+into its own folder. The results equal the local run's, and killing a worker mid-run changes nothing."""
 
 import json
 import os
@@ -63,17 +64,19 @@ def test_eval_on_a_cluster_without_a_shared_filesystem_equals_the_local_run(tmp_
         wait_until(lambda: listening(http_port), "the HTTP server listening", proc=procs[0])
         url = f"http://127.0.0.1:{http_port}/sq/"
         client_env = {**env, "VISTRACK_CACHE": str(tmp_path / "client-cache")}
-        out = tmp_path / "client-only" / "out"
-        run = subprocess.Popen(eval_args(url, out, "--scheduler", f"tcp://127.0.0.1:{sched_port}", "--timeout",
+        client = tmp_path / "client-only"  # the client's working folder, no worker's
+        client.mkdir()
+        out = client / "out"
+        run = subprocess.Popen(eval_args(url, "out", "--scheduler", f"tcp://127.0.0.1:{sched_port}", "--timeout",
                                          str(PATIENCE)),
-                               cwd=tmp_path, env=client_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                               cwd=client, env=client_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         # a worker killed mid-run, holding a task: the task runs again elsewhere from its own seed stream
         wait_until(lambda: gate.started() >= 2, "both workers holding a task", proc=run)
         workers[0].send_signal(signal.SIGKILL)
         gate.open()
         _, err = run.communicate(timeout=PATIENCE)
         assert run.returncode == 0, err
-        for k in range(2):  # the workers wrote nothing where they ran; one fetched the clip into its cache
+        for k in range(2):  # the workers wrote nothing where they ran (no "out"); one fetched the clip into its cache
             assert sorted(p.name for p in (tmp_path / f"worker{k}").iterdir()) in ([], ["cache"])
         assert (tmp_path / "worker1" / "cache").is_dir()
         local = tmp_path / "local"

@@ -2,15 +2,16 @@
 
 The model is ``--model`` when given; else the one the clip's ``meta.json`` names (a synthetic clip's,
 or a clip that ``vistrack demo`` wrote); else the box model when there is a start box (``--init`` or
-``--init-gt``: any object); else the plate model, which looks for a license plate by itself. The
-algorithm is ``--algo`` when given, else the model's default (``partitioned-lis`` with ``--targets``).
+``--init-gt``: any object); else the plate model (:data:`~vistrack.registry.catalog.SEARCH_MODEL`), which
+looks for a license plate by itself. The algorithm is ``--algo`` when given, else the model's default (its
+first several-target algorithm with ``--targets``).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .registry import DEFAULT_MODEL, MODELS, get_model_spec
+from .catalog import DEFAULT_MODEL, MODELS, SEARCH_MODEL, get_model_spec
 
 __all__ = ["Choice", "choose"]
 
@@ -47,10 +48,11 @@ def choose(clip, *, model=None, algo=None, init=None, init_gt=None, targets=None
     elif init is not None or init_gt is not None:
         name, why = DEFAULT_MODEL, "the default with a start box: any object, its appearance learned from the box"
     else:
-        name, why = "plate", ("no --init and no model in meta.json: it looks for a license plate in the first 30 "
-                              "frames; to track any other object give --init x,y,w,h")
+        name, why = SEARCH_MODEL, ("no --init and no model in meta.json: it looks for a license plate in the first "
+                                   "30 frames; to track any other object give --init x,y,w,h")
     if algo is not None:
         return Choice(name, algo, why, "--algo")
+    spec = get_model_spec(name)
     if targets is not None:
-        return Choice(name, "partitioned-lis", why, "the default with --targets")
-    return Choice(name, get_model_spec(name).default_algo, why, f"the {name} model's default")
+        return Choice(name, (spec.multi_algos or spec.algos)[0], why, "the default with --targets")
+    return Choice(name, spec.default_algo, why, f"the {name} model's default")
