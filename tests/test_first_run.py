@@ -45,7 +45,7 @@ def recorded(*args, ready=None, **kw):
 
 from vistrack.cli import main
 
-sys.modules["vistrack.cli.run"].track_video = recorded  # (vistrack.cli.run is also the click command's name)
+sys.modules["vistrack.track.plan"].track_video = recorded  # run_plan calls it by this name
 try:
     main(sys.argv[1:])
 finally:
