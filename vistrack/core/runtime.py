@@ -4,8 +4,8 @@ a size too large for the machine is one :class:`TooLarge` line, never a process 
 
 from __future__ import annotations
 
-__all__ = ["keep_freed_memory", "available_memory", "check_particle_memory", "TooLarge", "check_memory",
-           "check_disk", "fmt_bytes"]
+__all__ = ["keep_freed_memory", "available_memory", "prepare_worker", "TooLarge", "check_memory", "check_disk",
+           "fmt_bytes"]
 
 
 class TooLarge(ValueError):
@@ -57,9 +57,13 @@ def available_memory():
         return None
 
 
-#: working memory per particle and frame is ``bytes_per_particle`` of the model times this for
-#: LLS, which evaluates the likelihood on a grid of the window for every particle
-ALGO_MEMORY_FACTOR = {"lls": 8}
+def prepare_worker():
+    """Prepare an engine worker before its task: one worker per core, so keep OpenCV from starting threads
+    of its own; and let ``malloc`` reuse freed memory (:func:`keep_freed_memory`)."""
+    import cv2
+
+    cv2.setNumThreads(1)
+    keep_freed_memory()
 
 
 def fmt_bytes(n):
@@ -98,14 +102,3 @@ def check_disk(need, folder, what, most_of):
         raise TooLarge(f"{what} about {fmt_bytes(need)}, more than the {fmt_bytes(free)} free on {p}; "
                        f"{most_of(free)}")
     return need
-
-
-def check_particle_memory(n, bytes_per_particle, algo="", share=0.5, available=None, targets=1):
-    """Raise :class:`TooLarge` (one line) when ``n`` particles (of ``targets`` plate slots each)
-    would need more than ``share`` of the available memory per frame (the peak working memory of
-    one step, measured with tracemalloc: about 23 KB per particle for the box model, 16–39 KB for
-    the contour, 37 KB for the plate, 8x that for LLS). Returns the estimate in bytes."""
-    each = int(bytes_per_particle) * ALGO_MEMORY_FACTOR.get(algo, 1) * int(targets)
-    return check_memory(int(n) * each, f"{n} particles{f' of {targets} targets' if targets > 1 else ''} need",
-                        lambda room: f"use at most {int(room // each)}" + (" particles" if targets > 1 else ""),
-                        share, available, per=" per frame")

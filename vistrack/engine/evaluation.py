@@ -3,10 +3,13 @@
 Every task tracks one clip once and writes its own result file
 ``tasks/<clip>__<algo>__N<n>__r<run>.json`` (written to a temporary name and
 renamed, so a file that exists is complete). Finished tasks are skipped on
-``resume``; a worker that dies loses only its own task. Run ``r`` on clip
-``c`` draws from ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]`` (the
-same stream for every algorithm and N: common random numbers), so results do
-not depend on the number of workers or the order in which tasks run.
+``resume``; a worker that dies loses only its own task. Run ``r`` draws from
+:func:`~vistrack.core.seeds.run_seed` ``(seed, r)`` on every clip (the same stream
+for every algorithm and N: common random numbers), the stream of ``vistrack run
+--seed S --run r``, so results do not depend on the number of workers or the order
+in which tasks run. The reproductions (:func:`entry_tasks`) keep the streams their
+published tables were computed with: run ``r`` on clip ``c`` draws from
+``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]``.
 
 Boxes are ``(cx ± w/2, cy ± h/2)`` with ``cx, cy`` the pose centre, as in
 groundtruth.csv. Per frame a task records the centre error, whether the tracker is lost
@@ -26,32 +29,32 @@ from pathlib import Path
 
 import numpy as np
 
-from ..models.builders import build_model, start_frame
-from ..io.clips import GroundTruthWarning, find_clips, load_clip, sequence_name  # noqa: F401  (find_clips: re-exported)
-from ..io.results_format import find_result_file, read_result_file
-from ..filters import ALGORITHMS, make_filter
-from ..core.metrics import (PRECISION_THRESHOLDS, center_error, iou, lost_frames, pooled_summary, precision,  # noqa: F401
-                      precision_curve, score_frames, success_auc, success_curve)
+from ..core.metrics import score_frames
 from ..core.metrics import summarize as metrics_summarize
-from ..models.registry import get_model_spec
-from ..core.runtime import check_memory, keep_freed_memory
-from .tasks import (OutLocked, TaskFailed, check_shared, load_task_results, lock_out, stale_tasks, task_done,
-                    task_fingerprint, write_atomic, write_task_result)
-from ..track.loop import track
+from ..core.runtime import check_memory, prepare_worker
+from ..core.seeds import run_seed
+from ..filters import ALGORITHMS, make_filter
+from ..io.clips import GroundTruthWarning, load_clip, sequence_name
+from ..io.remote import is_url, url_version
+from ..io.results_format import find_result_file, read_result_file
 from ..io.video import VideoError
+from ..registry import DEFAULT_MODEL, build_model, check_algo, default_comparison, get_model_spec
+from ..registry.builders import start_frame
+from ..track.loop import track
+from .multi_target import run_plates_task, score_plates_tasks
+from .tasks import load_task_results, save_result
 
-__all__ = ["EvalConfig", "find_clips", "task_list", "check_task_grid", "check_grid_size",
-           "entry_tasks", "entries_config", "run_task", "summarize",
-           "pooled_summary", "OPENCV_TRACKERS", "check_algos", "sequence_name",
-           "score_boxes", "score_result_file", "result_files",
-           # the engine's task files (vistrack.engine.tasks), re-exported
-           "task_fingerprint", "task_done", "stale_tasks", "write_task_result", "write_atomic", "OutLocked",
-           "lock_out", "load_task_results", "TaskFailed", "check_shared", "dask_setup"]
+__all__ = ["EvalConfig", "task_list", "check_task_grid", "check_grid_size", "entry_tasks", "entries_config",
+           "run_task", "summarize", "OPENCV_TRACKERS", "OPENCV_RANDOMISED", "check_algos", "score_boxes",
+           "score_result_file", "result_files", "ResultsLengthWarning", "dask_setup"]
 
 
 #: OpenCV trackers by name -> constructor attribute (contrib ones may be missing)
 OPENCV_TRACKERS = {"opencv-mil": "TrackerMIL_create", "opencv-kcf": "TrackerKCF_create",
                    "opencv-csrt": "TrackerCSRT_create"}
+#: the OpenCV trackers whose result varies from run to run (randomised inside OpenCV, which no seed
+#: reaches: MIL's samples); they run ``runs`` times like the particle filters, the others once
+OPENCV_RANDOMISED = {"opencv-mil"}
 
 
 @dataclass
@@ -69,30 +72,57 @@ class EvalConfig:
     runs : int
         Runs per clip, algorithm and ``N``.
     seed : int
-        Root seed: run ``r`` on clip ``c`` draws from ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]``.
+        Root seed: run ``r`` draws from :func:`~vistrack.core.seeds.run_seed` ``(seed, r)`` on every clip
+        (``vistrack run --seed seed --run r``'s stream).
     model : str
-        A registered model (:mod:`vistrack.models.registry`).
+        A registered model (:mod:`vistrack.registry`).
     entries : list of (str, int) or None
         Explicit ``(algo, N)`` pairs instead of the ``algos × particles`` grid.
+    targets : int or None
+        Several targets at once: the plate model's ``targets`` slots, scored against each clip's
+        ``objects.csv`` (:mod:`vistrack.engine.multi_target`).
+
+    An :class:`~vistrack.engine.grid.Experiment`: :meth:`tasks`, :attr:`runner`, :meth:`results`.
     """
 
     clips: list
-    algos: list = field(default_factory=lambda: ["lis", "bootstrap"])
+    algos: list = field(default_factory=lambda: list(default_comparison()))
     particles: list = field(default_factory=lambda: [100, 750])
     runs: int = 20
     seed: int = 0
-    model: str = "contour"
+    model: str = DEFAULT_MODEL
     #: explicit (algo, N) pairs instead of the algos × particles grid
     entries: list | None = None
+    targets: int | None = None
 
     def pairs(self):
         """The ``(algo, N)`` pairs: :attr:`entries`, else every algorithm at every N (an OpenCV
-        tracker once, at N 1)."""
+        tracker at N 1)."""
         return self.entries or [(a, n) for a in self.algos for n in ([1] if a in OPENCV_TRACKERS else self.particles)]
 
+    def tasks(self):
+        """:func:`task_list` of the clips, each with ``targets`` when tracking several."""
+        tasks = task_list(self, self.clips)
+        if self.targets is not None:
+            for t in tasks:
+                t["targets"] = self.targets
+        return tasks
 
-def check_algos(algos):
-    """Raise ``ValueError`` for unknown algorithms or OpenCV trackers this OpenCV lacks."""
+    @property
+    def runner(self):
+        """:func:`run_task`, or with ``targets`` :func:`~vistrack.engine.multi_target.run_plates_task`."""
+        return run_task if self.targets is None else run_plates_task
+
+    def results(self, tasks, out_dir):
+        """The task results (:func:`~vistrack.engine.tasks.load_task_results`); with ``targets`` their
+        scores (:func:`~vistrack.engine.multi_target.score_plates_tasks`)."""
+        return load_task_results(tasks, out_dir) if self.targets is None else score_plates_tasks(tasks, out_dir)
+
+
+def check_algos(algos, model=None, targets=False):
+    """Raise ``ValueError`` (one line) for an unknown algorithm, an OpenCV tracker this OpenCV lacks, or
+    (given ``model``) an algorithm that does not run on that model (with ``targets``: on its several-target
+    form; the line names those that do, :func:`vistrack.registry.check_algo`)."""
     import cv2
 
     for a in algos:
@@ -103,6 +133,8 @@ def check_algos(algos):
         elif a not in ALGORITHMS:
             known = sorted(set(ALGORITHMS) | set(OPENCV_TRACKERS))
             raise ValueError(f"unknown algorithm {a!r}; choose from {', '.join(known)}")
+        elif model is not None:
+            check_algo(model, a, targets, who=f"--algos {a}")
 
 
 def _name(clip):
@@ -125,10 +157,10 @@ def check_task_grid(clips, pairs, runs, available=None):
 def check_grid_size(clips, pairs, runs, frames=300, available=None):
     """Raise :class:`~vistrack.core.runtime.TooLarge` when a grid of ``clips`` clips (of ``frames``
     frames) x ``pairs`` (algorithm, N) x ``runs`` would not fit in memory: its tasks and their
-    results (:data:`TASK_BYTES`, :data:`TASK_FRAME_BYTES`). An OpenCV tracker runs once. Returns
-    the number of tasks."""
+    results (:data:`TASK_BYTES`, :data:`TASK_FRAME_BYTES`). A deterministic OpenCV tracker runs once
+    (:data:`OPENCV_RANDOMISED`). Returns the number of tasks."""
     pairs = list(pairs)
-    fixed = sum(a in OPENCV_TRACKERS for a, _ in pairs)  # deterministic: one run
+    fixed = sum(a in OPENCV_TRACKERS and a not in OPENCV_RANDOMISED for a, _ in pairs)  # one run
     n = clips * ((len(pairs) - fixed) * int(runs) + fixed)
     each = TASK_BYTES + TASK_FRAME_BYTES * int(frames)
 
@@ -143,8 +175,6 @@ def check_grid_size(clips, pairs, runs, frames=300, available=None):
 
 def _longest(clips, default=300):
     """The most frames of the local ``clips`` (``default`` for URLs and where it is not known)."""
-    from ..io.remote import is_url
-
     most = default
     for c in clips:
         if not is_url(c):
@@ -156,21 +186,24 @@ def _longest(clips, default=300):
 
 
 def task_list(cfg, clips):
-    """All tasks as dicts ``{clip, clip_index, algo, particles, run, seed_seq, name}``, the grid
-    checked against memory first (:func:`check_task_grid`)."""
-    check_task_grid(clips, cfg.pairs(), cfg.runs)
-    streams = np.random.SeedSequence(cfg.seed).spawn(len(clips))
+    """All tasks as dicts ``{clip, clip_index, algo, particles, run, seed_seq, model, name}``, the grid
+    checked against memory first (:func:`check_task_grid`): run ``r`` draws from
+    :func:`~vistrack.core.seeds.run_seed` ``(cfg.seed, r)``; a deterministic OpenCV tracker runs once
+    (:data:`OPENCV_RANDOMISED`: as many runs as the filters)."""
+    pairs = cfg.pairs()
+    check_task_grid(clips, pairs, cfg.runs)
     tasks = []
     for ci, clip in enumerate(clips):
-        seqs = streams[ci].spawn(cfg.runs)
-        pairs = cfg.pairs()
+        # a clip given as a URL: the server's version of it now (its validators), which every task's
+        # copy must match and which its fingerprint records (--resume after a change runs it again)
+        version = {"clip_version": url_version(clip)} if is_url(clip) else {}
         for algo, n in pairs:
             for r in range(cfg.runs):
-                if algo in OPENCV_TRACKERS and r > 0:
+                if algo in OPENCV_TRACKERS and algo not in OPENCV_RANDOMISED and r > 0:
                     continue  # deterministic: one run
                 tasks.append({"clip": str(clip), "clip_index": ci, "algo": algo, "particles": int(n), "run": r,
-                              "seed_seq": seqs[r], "model": cfg.model,
-                              "name": f"{ci:03d}_{_name(clip)}__{algo}__N{n}__r{r}"})
+                              "seed_seq": run_seed(cfg.seed, r), "model": cfg.model,
+                              "name": f"{ci:03d}_{_name(clip)}__{algo}__N{n}__r{r}", **version})
     return tasks
 
 
@@ -183,6 +216,8 @@ def entry_tasks(cfg, model):
     tasks = task_list(ev, list(cfg.clips))
     for t in tasks:
         t["lost_rule"] = "thesis"
+        # the published tables' streams: SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]
+        t["seed_seq"] = np.random.SeedSequence(cfg.seed, spawn_key=(t["clip_index"], t["run"]))
     return tasks
 
 
@@ -232,15 +267,6 @@ def _track_opencv(algo, clip, frames):
     return _by_index(np.array(boxes, float), index), np.array(ms), np.full(max(index) + 1, np.nan)
 
 
-def prepare_worker():
-    """Prepare an engine worker: one worker per core, so keep OpenCV from starting threads of its
-    own; and let ``malloc`` reuse freed memory (:func:`keep_freed_memory`)."""
-    import cv2
-
-    cv2.setNumThreads(1)
-    keep_freed_memory()
-
-
 def dask_setup(worker):
     """Dask preload hook of the LocalCluster's worker processes (``preload=["vistrack.engine.evaluation"]``).
 
@@ -256,12 +282,13 @@ def dask_setup(worker):
 
 
 def run_task(task, out_dir):
-    """Track one clip once; write ``out_dir/tasks/<name>.json``; return its path."""
+    """Engine runner: track one clip once; write its result under ``out_dir``
+    (:func:`~vistrack.engine.tasks.save_result`); return its path."""
     prepare_worker()
-    out = Path(out_dir) / "tasks" / f"{task['name']}.json"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", GroundTruthWarning)  # said once, when eval found the clips
         clip = load_clip(task["clip"])
+    source = _remote_source(clip, task)
     # the run starts at the first frame with a ground-truth box (earlier frames: no estimate, not scored)
     start = start_frame(clip, None, "")
     frames = [(i, f) for i, f in clip.source if i >= start]
@@ -297,8 +324,23 @@ def run_task(task, out_dir):
     result = score_boxes(clip, boxes, rule=rule, reported=reported, vertices=vertices, aspect=aspect)
     result.update({"clip": task["clip"], "algo": algo, "particles": n, "run": task["run"],
                    "ms": [float(v) for v in ms[:result["frames"]]],
-                   "ess": [None if not np.isfinite(v) else float(v) for v in ess[:result["frames"]]]})
-    return write_task_result(out, result, task)
+                   "ess": [None if not np.isfinite(v) else float(v) for v in ess[:result["frames"]]], **source})
+    return save_result(out_dir, task, result)
+
+
+def _remote_source(clip, task):
+    """``{"source": ...}`` for a task result on a clip given as a URL (:meth:`Remote.record`: the
+    server's version and whether a cached copy was used), ``{}`` for a local clip; a
+    :class:`VideoError` when the copy is not the version the evaluation started with (the clip
+    changed on the server while it ran)."""
+    remote = clip.remote
+    if remote is None:
+        return {}
+    want = task.get("clip_version")
+    if want is not None and remote.version != want:
+        raise VideoError(f"{task['clip']} changed on the server while the evaluation ran (its ETag, Last-Modified "
+                         "or length differ from those it had at the start): run the evaluation again")
+    return {"source": remote.record()}
 
 
 def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=None):

@@ -13,10 +13,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.features import FeatureMaps
+from ..core.metrics import best_ms
 from ..core.particles import ParticleSet
+from ..filters import make_filter
 from ..models.protocol import Redetects, VideoModel, offers, require
 
-__all__ = ["FrameResult", "FrameStepper", "track", "top_particles", "warm_up"]
+__all__ = ["FrameResult", "FrameStepper", "track", "top_particles", "warm_up", "ms_per_frame"]
 
 
 @dataclass
@@ -122,11 +124,14 @@ class FrameStepper:
 
 def warm_up(filt, n, frame):
     """Run ``filt``'s first step and one more step with ``n`` particles on a blank frame shaped like
-    ``frame``, with a throwaway generator and no adaptation, and the model's likelihood at one
-    particle (what the collapse test computes at the estimate), so that the compiled kernels the
-    model and filter call (:mod:`vistrack.kernels`) are loaded before tracking starts: their loading
-    (0.1–1 s) is start-up, not tracking. The model and filter are left as they were (a model that
-    cannot track a blank frame just skips this: the real frames will say what is wrong)."""
+    ``frame``, with a throwaway generator, the model's likelihood at one particle (what the collapse
+    test computes at the estimate) and an adaptation of a copy of the model, so that the compiled
+    kernels the model and filter call (:mod:`vistrack.kernels`) are loaded before tracking starts:
+    their loading (0.1–1 s) is start-up, not tracking, and on the first run after an install, when
+    they compile (:mod:`vistrack.track.compiling`), nothing is left to compile mid-track. The model
+    and filter are left as they were (a model that cannot track a blank frame just skips this: the
+    real frames will say what is wrong)."""
+    import copy
     import warnings
 
     from .. import kernels
@@ -142,6 +147,8 @@ def warm_up(filt, n, frame):
             obs = model.observe(FeatureMaps(blank), particles)
             filt.step(particles, obs, rng)
             model.loglik(obs, np.array(particles.states[:1], float))
+            twin = copy.deepcopy(model)  # adapted instead of the model, which stays as it was
+            twin.adapt(twin.observe(FeatureMaps(blank), particles), model.estimate(particles))
         except Exception:  # noqa: BLE001 - best effort: tracking raises the real error itself
             pass
 
@@ -154,3 +161,14 @@ def track(frames, filt, n, rng, *, estimator=None):
     stepper = FrameStepper(filt, n, rng, estimator=estimator)
     for i, frame in frames:
         yield stepper.step(i, frame)
+
+
+def ms_per_frame(frames, model, algo, n, repeats=2):
+    """The time per frame (ms) of filter ``algo`` with ``n`` particles tracking ``frames`` (a list of
+    ``(index, frame)``) on ``model``: a new filter each run from seed 0, the best of ``repeats``
+    (:func:`~vistrack.core.metrics.best_ms`); what equal-time comparisons measure."""
+    def run():
+        for _ in track(frames, make_filter(algo, model), n, np.random.default_rng(0)):
+            pass
+
+    return best_ms(run, repeats) / len(frames)

@@ -28,14 +28,14 @@ import numpy as np
 
 from ..core.hooks import Redetects, offers
 from ..core.particles import DegenerateWeightsWarning
-from .profiling import STAGES, Timer, profile_stages
 from ..io.render import annotate, annotate_targets
 from ..io.results_format import result_paths
-from .summary import summary_lines
-from .signals import HARD_STOP, Terminated, deferred_signals, stop_on_signals, stop_reason
 from ..io.track_files import TrackCSV
-from .loop import top_particles, track, warm_up
 from ..io.video_writer import VideoWriter
+from .loop import top_particles, track, warm_up
+from .profiling import STAGES, Timer, profile_stages
+from .signals import HARD_STOP, Terminated, deferred_signals, stop_on_signals, stop_reason
+from .summary import summary_lines
 
 # TrackCSV, summary_lines and the signal handling live in track_files, run_summary and signals (re-exported)
 __all__ = ["TrackCSV", "VideoRun", "track_row", "target_rows", "track_video", "summary_lines", "Terminated",
@@ -120,7 +120,7 @@ def target_rows(model, res):
 
 def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, results_path=None,
                 video_info=None, show_particles=10, label="", progress=None, notify=None, profile=True,
-                frame_count=None, start=0, lead=(), results_format="otb", sequence="sequence"):
+                frame_count=None, start=0, lead=(), results_format="otb", sequence="sequence", ready=None):
     """Track ``frames`` (iterable of ``(index, frame)``), writing the track CSV and annotated video as
     it goes; every frame of the input accounted for and a signal honoured after the frame in hand
     (module docstring). Returns a :class:`VideoRun`.
@@ -139,9 +139,10 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     video_info, show_particles, label : tuple or None, int, str
         ``(fps, (width, height))`` for the annotated video; draw this many highest-weight particles,
         and ``label`` after the frame number.
-    progress, notify : callable or None
+    progress, notify, ready : callable or None
         ``progress(ess)`` after every frame (a progress bar); ``notify(index, reason, detail)`` on the
-        first frame of every stretch where the object is lost (:mod:`vistrack.models.collapse`).
+        first frame of every stretch where the object is lost (:mod:`vistrack.models.collapse`);
+        ``ready()`` once the kernels are loaded, before the first frame (a progress bar's clock starts).
     profile : bool
         Time the stages (:mod:`vistrack.track.profiling`) into ``VideoRun.timer`` (the same tracks).
     lead : sequence of (int, ndarray)
@@ -154,7 +155,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     """
     run = VideoRun()
     run.timer = Timer() if profile else None
-    frames = _warmed(frames, filt, particles)
+    frames = _warmed(frames, filt, particles, ready)
     frames = run.timer.timed_iter(frames, "decode") if profile else frames
     with deferred_signals() as stop:  # from opening the outputs to closing them: a signal waits for the frame
         outs, writer = _open_outputs(track_path, results_path, results_format, sequence, out_path, video_info)
@@ -250,15 +251,18 @@ def _close_all(outs, writer, complete=True):
         raise error
 
 
-def _warmed(frames, filt, particles):
+def _warmed(frames, filt, particles, ready=None):
     """``frames`` with the filter's kernels loaded on a blank frame shaped like the first
-    (:func:`~vistrack.track.loop.warm_up`) before they are taken: start-up, not tracking time."""
+    (:func:`~vistrack.track.loop.warm_up`) before they are taken: start-up, not tracking time; then
+    ``ready()``."""
     frames = iter(frames)
     first = next(frames, None)
-    if first is None:
-        return frames
-    warm_up(filt, particles, first[1])
-    return itertools.chain([first], frames)
+    if first is not None:
+        warm_up(filt, particles, first[1])
+        frames = itertools.chain([first], frames)
+    if ready:
+        ready()
+    return frames
 
 
 def _record(run, res, model, outs, writer, show_particles, label, notify=None):

@@ -26,6 +26,8 @@ from __future__ import annotations
 import os
 import sys
 
+from ..registry import DEFAULT_MODEL, DEFAULT_PARTICLES
+
 __all__ = ["serve", "main", "SessionError", "ClientError"]
 
 
@@ -48,7 +50,7 @@ def _box(region):
     return tuple(region.bounds())
 
 
-def serve(model="box", algo=None, particles=100, seed=0, **model_options):
+def serve(model=DEFAULT_MODEL, algo=None, particles=DEFAULT_PARTICLES, seed=0, **model_options):
     """Answer one TraX session on standard input and output (or the socket in ``TRAX_SOCKET``) until
     the client quits. Raises ``ImportError`` without ``vot-trax``, ``ValueError`` for bad options
     (before the hello), :class:`SessionError` and :class:`ClientError` (module docstring)."""
@@ -124,9 +126,9 @@ def main(argv=None):
     import argparse
 
     ap = argparse.ArgumentParser(prog="python -m vistrack.track.trax", description=__doc__.splitlines()[0])
-    ap.add_argument("--model", default="box")
+    ap.add_argument("--model", default=DEFAULT_MODEL)
     ap.add_argument("--algo", default=None)
-    ap.add_argument("-n", "--particles", type=int, default=100)
+    ap.add_argument("-n", "--particles", type=int, default=DEFAULT_PARTICLES)
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
     try:
