@@ -22,7 +22,6 @@ precision at 20 px, frames/s, mean ESS).
 
 from __future__ import annotations
 
-import time
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -42,19 +41,12 @@ from ..registry import DEFAULT_MODEL, build_model, check_algo, default_compariso
 from ..registry.builders import start_frame
 from ..track.loop import track
 from .multi_target import run_plates_task, score_plates_tasks
+from .opencv_trackers import OPENCV_RANDOMISED, OPENCV_TRACKERS, check_opencv, track_opencv
 from .tasks import load_task_results, save_result
 
 __all__ = ["EvalConfig", "task_list", "check_task_grid", "check_grid_size", "entry_tasks", "entries_config",
            "run_task", "summarize", "OPENCV_TRACKERS", "OPENCV_RANDOMISED", "check_algos", "score_boxes",
            "score_result_file", "result_files", "ResultsLengthWarning", "dask_setup"]
-
-
-#: OpenCV trackers by name -> constructor attribute (contrib ones may be missing)
-OPENCV_TRACKERS = {"opencv-mil": "TrackerMIL_create", "opencv-kcf": "TrackerKCF_create",
-                   "opencv-csrt": "TrackerCSRT_create"}
-#: the OpenCV trackers whose result varies from run to run (randomised inside OpenCV, which no seed
-#: reaches: MIL's samples); they run ``runs`` times like the particle filters, the others once
-OPENCV_RANDOMISED = {"opencv-mil"}
 
 
 @dataclass
@@ -123,13 +115,9 @@ def check_algos(algos, model=None, targets=False):
     """Raise ``ValueError`` (one line) for an unknown algorithm, an OpenCV tracker this OpenCV lacks, or
     (given ``model``) an algorithm that does not run on that model (with ``targets``: on its several-target
     form; the line names those that do, :func:`vistrack.registry.check_algo`)."""
-    import cv2
-
     for a in algos:
         if a in OPENCV_TRACKERS:
-            if not hasattr(cv2, OPENCV_TRACKERS[a]) and not hasattr(getattr(cv2, "legacy", None), OPENCV_TRACKERS[a]):
-                raise ValueError(f"{a} is not in this OpenCV build ({cv2.__version__}); "
-                                 "KCF and CSRT need opencv-contrib-python")
+            check_opencv(a)
         elif a not in ALGORITHMS:
             known = sorted(set(ALGORITHMS) | set(OPENCV_TRACKERS))
             raise ValueError(f"unknown algorithm {a!r}; choose from {', '.join(known)}")
@@ -246,27 +234,6 @@ def _truth_boxes(t):
     return np.stack([t["cx"] - t["w"] / 2, t["cy"] - t["h"] / 2, t["w"], t["h"]], axis=1)
 
 
-def _track_opencv(algo, clip, frames):
-    import cv2
-
-    ctor = getattr(cv2, OPENCV_TRACKERS[algo], None) or getattr(cv2.legacy, OPENCV_TRACKERS[algo])
-    tracker = ctor()
-    x, y, w, h = clip.first_box()
-    boxes, ms, index = [], [], []
-    for k, (i, frame) in enumerate(frames):
-        index.append(i)
-        t0 = time.perf_counter()
-        if k == 0:
-            tracker.init(frame, (int(round(x)), int(round(y)), int(round(w)), int(round(h))))
-            box = (x, y, w, h)
-        else:
-            ok, b = tracker.update(frame)
-            box = tuple(float(v) for v in b) if ok else (np.nan,) * 4
-        ms.append((time.perf_counter() - t0) * 1e3)
-        boxes.append(box)
-    return _by_index(np.array(boxes, float), index), np.array(ms), np.full(max(index) + 1, np.nan)
-
-
 def dask_setup(worker):
     """Dask preload hook of the LocalCluster's worker processes (``preload=["vistrack.engine.evaluation"]``).
 
@@ -297,7 +264,8 @@ def run_task(task, out_dir):
     rule = "centre" if task.get("lost_rule") == "thesis" else "size"
     reported, vertices, aspect = [], [], None
     if algo in OPENCV_TRACKERS:
-        boxes, ms, ess = _track_opencv(algo, clip, frames)
+        boxes, ms, index = track_opencv(algo, clip.first_box(), frames)
+        boxes, ess = _by_index(boxes, index), np.full(index.max() + 1, np.nan)
     else:
         spec = get_model_spec(task["model"])
         model = build_model(task["model"], clip, init_gt="", **task.get("model_params", {}))

@@ -153,8 +153,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
         too), and the frame tracking starts from (:func:`~vistrack.io.starts.start_frame`; earlier
         frames get rows with ``lost_reason`` "not started").
     """
-    run = VideoRun()
-    run.timer = Timer() if profile else None
+    run = VideoRun(timer=Timer() if profile else None)
     frames = _warmed(frames, filt, particles, ready)
     frames = run.timer.timed_iter(frames, "decode") if profile else frames
     with deferred_signals() as stop:  # from opening the outputs to closing them: a signal waits for the frame
