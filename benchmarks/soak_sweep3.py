@@ -5,8 +5,8 @@ wording cases (7). :func:`scenarios` takes the ``soak`` module (its ``Scenario``
 
 The full-disk cases run where a tmpfs can be mounted in a private namespace
 (:mod:`full_disk`); elsewhere they are ``skipped`` with the reason. The cases whose fix is issue
-46's (URL cache validation, ``run 0`` beside a file ``0``, an unreachable URL's wording) are marked
-``awaits="issue 46"``: counted apart, not as failures, until that work lands.
+46's (URL cache validation, ``run 0`` beside a file ``0``, an unreachable URL's wording) count as
+every other case: issue 46 has landed.
 """
 
 from __future__ import annotations
@@ -481,13 +481,12 @@ def _urls(S):
     shown = [a.replace("{url}", "URL") for a in ev] + ["W/R2"]
     return [
         S.Scenario("#47-5 eval a URL clip whose ground truth changed on the server", shown, "ok",
-                   prepare=lambda w: shutil.copytree(S.FX / "suite" / "c1", w / "www" / "c1"), awaits="issue 46",
+                   prepare=lambda w: shutil.copytree(S.FX / "suite" / "c1", w / "www" / "c1"),
                    check=_fresh_scores,
                    driver=_served(S, [[*ev, "{w}/R1"], _shift_truth, [*ev, "{w}/R2"]])),
-        S.Scenario("#47-7 eval an unreachable URL names it", S.EV("http://127.0.0.1:9/c1"), mention="127.0.0.1:9/c1",
-                   awaits="issue 46"),
+        S.Scenario("#47-7 eval an unreachable URL names it", S.EV("http://127.0.0.1:9/c1"), mention="127.0.0.1:9/c1"),
         S.Scenario("#47-7 run 0 beside a file 0 reads the file", ["run", "0", "--init", S.INIT, "-n", "20", "-q",
-                                                                  "--track", "{w}/t.csv"], "ok", awaits="issue 46",
+                                                                  "--track", "{w}/t.csv"], "ok",
                    prepare=lambda w: shutil.copy(S.FX / "v.avi", w / "0"), check=S.track_has(S.FRAMES, S.FRAMES)),
     ]
 
