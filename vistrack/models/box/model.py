@@ -48,6 +48,7 @@ from ...proposals.translation import TranslationMoves
 from .appearance import Appearance
 from ..collapse import CollapseCheck
 from .correlation import CorrelationFilter
+from .scale_filter import ScaleFilter
 from ..innovation import ARInnovation
 from ...core.transition import is_prior
 from ..protocol import VideoModelBase
@@ -123,7 +124,8 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
     def __init__(self, frame, box, *, sigma_xy=None, sigma_scale=None, damping=0.5, prior_std=(0.04, 0.02),
                  window=2.5, map_stride=1, dcf=True, lambda_dcf=60.0, dcf_share=0.5, dcf_tempering=(60.0, 0.05),
                  dcf_scale_std=0.02, redetect=0.5, reentry=0.05, collapse_drop=28.0,
-                 dcf_options=None, **appearance):
+                 dcf_options=None, dcf_scale_read="interp", scale_filter=None, lambda_scale=0.0,
+                 scale_proposal="dcf", **appearance):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
             raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
@@ -163,6 +165,10 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         self._d = self.damping  # this frame's damping: 0 on the frame after a re-detection (no velocity)
         self._found = False  # this frame is a re-detection
         self._reentry = False  # this frame's dynamics has the re-entry share
+        self.dcf_scale_read = dcf_scale_read
+        self.sf = ScaleFilter(frame, (x, y, w, h), **scale_filter) if (dcf and scale_filter is not None) else None
+        self.lambda_scale = float(lambda_scale)
+        self.scale_proposal = scale_proposal
 
     # -- geometry ---------------------------------------------------------------------
     def boxes(self, states):
@@ -303,6 +309,11 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
                max(roi[2], int(np.ceil(x1 + grow))), max(roi[3], int(np.ceil(y1 + grow))))
         obs = self.app.frame(frame, roi)
         obs.dcf, obs.dcf_share, obs.redetected, obs.frame_image = resp, share, redetected, frame
+        obs.scale = None if self.sf is None else self.sf.detect(frame, resp.peak_xy, float(centre[2]))
+        if self.scale_proposal == "filter" and obs.scale is not None:
+            obs.scale_centre = obs.scale.peak_log_scale
+        elif self.scale_proposal == "prediction":
+            obs.scale_centre = float(centre[2])
         return obs
 
     def _redetect(self, frame, roi, pred):
@@ -337,7 +348,13 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
             out = self.app.loglik(obs, self.boxes(states))
         resp = obs.dcf
         if resp is not None and self.lambda_dcf:
-            out = out + self.lambda_dcf * resp.read(np.atleast_2d(states))
+            s = np.atleast_2d(states)
+            if self.dcf_scale_read == "best":
+                s = s.copy()
+                s[:, 2] = resp.log_scales[resp.best]
+            out = out + self.lambda_dcf * resp.read(s)
+        if obs.scale is not None and self.lambda_scale:
+            out = out + self.lambda_scale * obs.scale.read(np.atleast_2d(states)[:, 2])
         return out
 
     def estimate(self, particles):
@@ -352,6 +369,8 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         if resp is not None and not self._lost:
             e = np.asarray(estimate, float).ravel()
             self.cf.adapt(obs.frame_image, e[:2], float(e[2]))
+            if self.sf is not None:
+                self.sf.adapt(obs.frame_image, e[:2], float(e[2]))
         return done
 
     def check_lost(self, obs, state):

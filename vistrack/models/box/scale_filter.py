@@ -1,0 +1,205 @@
+"""A one-dimensional correlation filter over scales (DSST's scale filter): the box model's scale cue.
+
+The translation filter (:mod:`~vistrack.models.box.correlation`) sees the object with a margin of
+background at three scales; its peak value moves little with the object's size and, on footage where
+the object deforms (a walker, a car under changing light), drifts towards larger boxes. Danelljan et
+al. (*Accurate scale estimation for robust visual tracking*, BMVC 2014) learn a second filter over
+scales only: ``S`` samples of the object's box (no margin) at sizes ``a^k`` about the current one,
+each described by the same grid of feature cells, form a ``d × S`` signal ``F`` (times a Hann window
+over ``k``); with a Gaussian label ``g`` over ``k`` peaked at the current size, MOSSE's closed form
+along ``k``:
+
+    ``A = conj(G) F``,  ``B = Σ_d |F|²``  (DFT along the scales),
+    ``y = IDFT(Σ_d conj(A) Z / (B + λ))``,
+
+adapted as ``(1 - η) old + η new`` on frames where the object is reported, and applied as ``(1 - γ)``
+of the adapted filter plus ``γ`` of the first frame's. ``y`` over the scales is about 1 at the
+object's size; the box model reads it as a term of ``log r`` in the state's log-scale (linearly
+between samples) and draws its proposal's log-scale about its peak.
+
+Samples
+    The features (:func:`~vistrack.models.box.correlation.dcf_features`) are computed once a frame, on
+    one patch about the centre that holds the largest sample (the box at ``a^{S//2}``) and a margin,
+    at the resolution where the box at the reference scale is the model's size (about
+    ``model_area`` px). Sample ``k``'s cells are the feature map read bilinearly at the cells' centres
+    scaled by ``a^k`` (fDSST's economy: one feature extraction for every scale); the adaptation reads
+    the same map about the estimate when it lies inside it.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from ... import kernels
+
+__all__ = ["ScaleFilter", "ScaleResponse"]
+
+
+class ScaleResponse:
+    """The scale filter's response ``values (S,)`` at log-scales ``log_scales (S,)`` (ascending), with
+    its peak (``best``: the index, ``peak``: the value, ``peak_log_scale``: refined by a parabola
+    through the peak and its neighbours)."""
+
+    def __init__(self, log_scales, values):
+        self.log_scales = np.asarray(log_scales, float)
+        self.values = np.asarray(values, float)
+        k = int(np.argmax(self.values))
+        self.best, self.peak = k, float(self.values[k])
+        off = 0.0
+        if 0 < k < len(self.values) - 1:
+            a, b, c = self.values[k - 1: k + 2]
+            den = a - 2 * b + c
+            if den < 0:
+                off = float(np.clip(0.5 * (a - c) / den, -0.5, 0.5))
+        step = self.log_scales[1] - self.log_scales[0] if len(self.log_scales) > 1 else 0.0
+        self.peak_log_scale = float(self.log_scales[k] + off * step)
+
+    def read(self, log_scale):
+        """The response ``(N,)`` at log-scales ``log_scale (N,)``: linear between samples, the end values
+        held beyond them."""
+        return np.interp(np.asarray(log_scale, float), self.log_scales, self.values)
+
+
+class _FeatureMap:
+    """One frame's feature channels ``feat (C, H, W)`` about ``centre`` at ``log_scale``: map pixel
+    ``(i, j)`` at frame point ``centre + ((j, i) - anchor) / (px e^{-log_scale})``."""
+
+    def __init__(self, feat, centre, log_scale, anchor, px):
+        self.feat, self.centre, self.log_scale, self.anchor, self.px = feat, centre, log_scale, anchor, px
+
+
+class ScaleFilter:
+    """DSST's scale filter of one object (module docstring).
+
+    Parameters
+    ----------
+    frame : ndarray of shape (H, W, 3) uint8 BGR, or (H, W)
+        The first frame.
+    box : tuple of float
+        ``(x, y, w, h)`` of the object.
+    n_scales : int
+        ``S``, the samples over scales (made odd).
+    scale_step : float
+        ``a``, the ratio of neighbouring samples' sizes.
+    model_area : float
+        The box at the reference scale covers about this many feature pixels (the object's aspect).
+    cell : int
+        Feature cells' side (feature px): a sample is the channels at its ``n_x × n_y`` cells' centres.
+    lam : float
+        ``λ``.
+    rate : float
+        ``η``.
+    anchor : float
+        ``γ``, the first frame's share of the filter applied.
+    sigma : float
+        The label's std in samples.
+    n_orient : int
+        Orientation channels of :func:`~vistrack.models.box.correlation.dcf_features`.
+    """
+
+    def __init__(self, frame, box, *, n_scales=17, scale_step=1.03, model_area=512.0, cell=4, lam=1e-2,
+                 rate=0.01, anchor=0.0, sigma=0.75, n_orient=6):
+        x, y, w, h = (float(v) for v in box)
+        self.size0 = np.array([w, h])
+        n_scales = int(n_scales) | 1
+        steps = np.arange(n_scales) - n_scales // 2
+        self.log_steps = steps * np.log(scale_step)
+        f = np.sqrt(model_area / (w * h))
+        self.cell = int(cell)
+        #: cells across and down the box
+        self.cells = tuple(max(2, int(round(v * f / self.cell))) for v in (w, h))
+        #: feature px per frame px at log-scale 0 (x, y): the box at the model's size
+        self.px = np.array([self.cells[0] * self.cell / w, self.cells[1] * self.cell / h])
+        # the patch: the largest sample's box, a cell of gradient support and two cells to move the estimate
+        reach = np.exp(self.log_steps[-1])
+        self.shape = tuple(int(np.ceil(reach * (n * self.cell + 2) + 4 * self.cell)) for n in self.cells[::-1])
+        self.anchor_px = np.array([self.shape[1] / 2, self.shape[0] / 2])
+        self.n_orient = int(n_orient)
+        self.lam, self.rate, self.anchor = float(lam), float(rate), float(anchor)
+        g = np.exp(-0.5 * (steps / float(sigma)) ** 2)
+        self._conj_g = np.conj(np.fft.fft(g))
+        self.window = np.hanning(n_scales + 2)[1:-1]
+        self._last = None
+        centre = np.array([x + w / 2, y + h / 2])
+        F = np.fft.fft(self.samples(self.feature_map(np.asarray(frame), centre, 0.0), centre, 0.0), axis=1)
+        self.A = self._conj_g * F
+        self.B = np.sum((F * np.conj(F)).real, axis=0)
+        self.A0, self.B0 = self.A.copy(), self.B.copy()
+
+    def feature_map(self, frame, centre, log_scale):
+        """The grey patch about ``centre`` (frame px) at ``log_scale`` that every sample is read from
+        (:class:`_FeatureMap`; ``feat``: ``(H, W) float32``)."""
+        s = self.px * np.exp(-log_scale)
+        ph, pw = self.shape
+        if s.max() < 0.5:  # shrinking much: average the frame's pixels (warpAffine would alias)
+            patch = _shrunk_patch(frame, centre, s, (pw, ph), self.anchor_px)
+        else:
+            m = np.array([[1 / s[0], 0, centre[0] - self.anchor_px[0] / s[0]],
+                          [0, 1 / s[1], centre[1] - self.anchor_px[1] / s[1]]], np.float64)
+            patch = cv2.warpAffine(frame, m, (pw, ph), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                                   borderMode=cv2.BORDER_REPLICATE)
+        grey = (cv2.cvtColor(patch, cv2.COLOR_BGR2GRAY) if patch.ndim == 3 else patch).astype(np.float32)
+        return _FeatureMap(grey, np.asarray(centre, float).copy(), float(log_scale), self.anchor_px, self.px)
+
+    def samples(self, fmap, centre, log_scale):
+        """The descriptors ``(d, S)`` of the boxes about ``centre`` at ``log_scale + log_steps``, read from
+        ``fmap``'s patch (:func:`~vistrack.models.box.scale_kernels.scale_samples`), each times the scales'
+        Hann window."""
+        scale = np.exp(log_scale + self.log_steps - fmap.log_scale)  # patch px per sample px
+        ax, ay = fmap.anchor + (np.asarray(centre, float) - fmap.centre) * fmap.px * np.exp(-fmap.log_scale)
+        nx, ny = self.cells
+        if kernels.use():
+            from .scale_kernels import scale_samples
+
+            vals = scale_samples(fmap.feat, float(ax), float(ay), scale, nx, ny, self.cell, self.n_orient,
+                                 np.empty((len(scale), self.n_orient + 1, ny, nx), np.float32))
+        else:
+            from .scale_kernels import scale_samples_numpy
+
+            vals = scale_samples_numpy(fmap.feat, float(ax), float(ay), scale, nx, ny, self.cell, self.n_orient)
+        return vals.reshape(len(scale), -1).T * self.window
+
+    def detect(self, frame, centre, log_scale):
+        """The :class:`ScaleResponse` of the boxes about ``centre`` at the scales about ``log_scale``."""
+        fmap = self.feature_map(frame, centre, log_scale)
+        self._last = fmap
+        Z = np.fft.fft(self.samples(fmap, centre, log_scale), axis=1)
+        g = self.anchor
+        A, B = (1 - g) * self.A + g * self.A0, (1 - g) * self.B + g * self.B0
+        y = np.fft.ifft(np.sum(np.conj(A) * Z, axis=0) / (B + self.lam)).real
+        return ScaleResponse(log_scale + self.log_steps, y)
+
+    def adapt(self, frame, centre, log_scale):
+        """Adapt ``A, B`` towards the samples about the estimate ``centre`` at ``log_scale`` (read from the
+        last detection's feature map where it holds them)."""
+        fmap, self._last = self._last, None
+        if fmap is None or not self._holds(fmap, centre, log_scale):
+            fmap = self.feature_map(frame, centre, log_scale)
+        F = np.fft.fft(self.samples(fmap, centre, log_scale), axis=1)
+        r = self.rate
+        self.A = (1 - r) * self.A + r * (self._conj_g * F)
+        self.B = (1 - r) * self.B + r * np.sum((F * np.conj(F)).real, axis=0)
+
+    def _holds(self, fmap, centre, log_scale):
+        """Whether ``fmap`` holds every sample about ``centre`` at ``log_scale``."""
+        if abs(log_scale - fmap.log_scale) > 0.5 * (self.log_steps[1] - self.log_steps[0]) * 2:
+            return False
+        d = np.abs(np.asarray(centre, float) - fmap.centre) * fmap.px * np.exp(-fmap.log_scale)
+        return bool(np.all(d <= 2 * self.cell))
+
+
+def _shrunk_patch(frame, centre, s, size, anchor):
+    """The patch of :meth:`ScaleFilter.feature_map` by area averaging: the frame's pixels it covers (edge
+    pixels repeated beyond the frame), resized to ``size`` ``(W, H)``."""
+    W, H = size
+    x0, y0 = centre[0] - anchor[0] / s[0], centre[1] - anchor[1] / s[1]
+    x1, y1 = x0 + W / s[0], y0 + H / s[1]
+    ix0, iy0, ix1, iy1 = int(np.floor(x0)), int(np.floor(y0)), int(np.ceil(x1)), int(np.ceil(y1))
+    fh, fw = frame.shape[:2]
+    cx0, cy0, cx1, cy1 = min(max(ix0, 0), fw - 1), min(max(iy0, 0), fh - 1), max(min(ix1, fw), 1), max(min(iy1, fh), 1)
+    region = frame[cy0:cy1, cx0:cx1]
+    if (cx0, cy0, cx1, cy1) != (ix0, iy0, ix1, iy1):
+        region = cv2.copyMakeBorder(region, max(cy0 - iy0, 0), max(iy1 - cy1, 0), max(cx0 - ix0, 0),
+                                    max(ix1 - cx1, 0), cv2.BORDER_REPLICATE)
+    return cv2.resize(region, (W, H), interpolation=cv2.INTER_AREA)
