@@ -31,9 +31,8 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
-
 from real_corpus import DATA, ROOT, find_clips, run_jobs, sre_starts
+from tqdm import tqdm
 
 CACHE = Path.home() / ".cache" / "vistrack" / "tune_box.jsonl"
 

@@ -107,7 +107,8 @@ def scale_samples_numpy(grey, ax, ay, scales, nx, ny, cell, n_orient):
         x0 = np.minimum(u.astype(int), w - 2)
         b, a = (v - y0)[:, None], (u - x0)[None, :]
         yy, xx = y0[:, None], x0[None, :]
-        g = (g0[yy, xx] * (1 - a) + g0[yy, xx + 1] * a) * (1 - b) + (g0[yy + 1, xx] * (1 - a) + g0[yy + 1, xx + 1] * a) * b
+        g = ((g0[yy, xx] * (1 - a) + g0[yy, xx + 1] * a) * (1 - b)
+             + (g0[yy + 1, xx] * (1 - a) + g0[yy + 1, xx + 1] * a) * b)
         inner = g[1:-1, 1:-1]
         mean = inner.mean()
         sd = np.sqrt(max((inner ** 2).mean() - mean ** 2, 0.0))
