@@ -158,31 +158,54 @@ def opencv_tracker(name):
 @dataclass
 class Run:
     """One tracker's run on one clip from one start: boxes ``(T, 4)``, whether each frame was reported
-    visible ``(T,)``, its confidence ``(T,)`` (NaN where the tracker gives none), tracking seconds."""
+    visible ``(T,)``, its confidence ``(T,)`` (NaN where the tracker gives none), tracking seconds; for
+    vistrack's box model, the confidence's cues ``(T, F)`` (:mod:`vistrack.models.box.confidence`; NaN on
+    the first frame), whether each frame was a re-detection ``(T,)`` and its ``lost_reason`` ``(T,)``; probed
+    (``vistrack-probe``), a whole-frame search's ``K`` candidates on every frame after the first: their
+    cues ``(T, K, len(SEEN))`` and boxes ``(T, K, 4)``."""
 
     boxes: np.ndarray
     visible: np.ndarray
     confidence: np.ndarray
     seconds: float
+    features: np.ndarray | None = None
+    redetected: np.ndarray | None = None
+    reasons: np.ndarray | None = None
+    candidates: np.ndarray | None = None
+    candidate_boxes: np.ndarray | None = None
 
 
-def run_vistrack(frames, start, seed, options=None, n_frames=None):
-    """vistrack's default box tracker (``vistrack.Tracker(seed=seed, **options)``) from ``start``."""
+def run_vistrack(frames, start, seed, options=None, n_frames=None, probe=False):
+    """vistrack's default box tracker (``vistrack.Tracker(seed=seed, **options)``) from ``start``; ``probe``:
+    after every frame, a whole-frame search's candidates (``Box.search_whole``) and their cues, which change
+    nothing the tracking reads."""
     import vistrack
+    from vistrack.models.box.confidence import FEATURES, SEEN
 
     n = len(frames) if n_frames is None else n_frames
     t = vistrack.Tracker(seed=seed, **(options or {}))
     boxes, vis, conf = np.zeros((n, 4)), np.ones(n, bool), np.full(n, np.nan)
+    feats, found, reasons = np.full((n, len(FEATURES)), np.nan), np.zeros(n, bool), np.full(n, "", dtype=object)
     t0 = time.perf_counter()
     t.init(np.asarray(frames[0]), start)
     boxes[0] = t.box_estimate
+    cues = getattr(t.model, "conf", None)  # the box model's confidence cues
+    k = 2 * t.model.search_peaks if probe else 0  # at most two scales
+    cand, cand_boxes = np.full((n, k, len(SEEN)), np.nan), np.full((n, k, 4), np.nan)
     for i in range(1, n):
         ok, _ = t.update(np.asarray(frames[i]))
+        for j, (obs, pose) in enumerate(t.model.search_whole(np.asarray(frames[i])) if probe else []):
+            cand[i, j] = cues.candidate_cues(t.model, obs, pose)
+            cand_boxes[i, j] = t.model.box(np.concatenate([pose, pose]))[0]
         boxes[i], vis[i] = t.box_estimate, ok
         c = getattr(t, "confidence", None)
         if c is not None:
             conf[i] = c
-    return Run(boxes, vis, conf, time.perf_counter() - t0)
+        if cues is not None and cues.features is not None:
+            feats[i] = cues.features
+        found[i], reasons[i] = t.result.redetected, t.lost_reason
+    return Run(boxes, vis, conf, time.perf_counter() - t0, feats if cues is not None else None, found,
+               reasons.astype(str), cand if probe else None, cand_boxes if probe else None)
 
 
 def run_opencv(frames, start, name, n_frames=None):
@@ -207,8 +230,8 @@ def _job(args):
     clip = load_clip(folder)
     frames = clip.frames()
     cv2.setNumThreads(1)
-    if tracker == "vistrack":
-        run = run_vistrack(frames, start, seed, options)
+    if tracker in ("vistrack", "vistrack-probe"):
+        run = run_vistrack(frames, start, seed, options, probe=tracker == "vistrack-probe")
     else:
         run = run_opencv(frames, start, tracker)
     return box_scores(run.boxes, clip.truth[: len(run.boxes)]), run

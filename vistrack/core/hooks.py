@@ -81,9 +81,13 @@ class ProposalMap(Protocol):
 @runtime_checkable
 class Redetects(Protocol):
     """A model that searches the frame again for a lost object (the box model: the track CSV's
-    ``redetected`` column); ``redetect`` is its acceptance level (``None``: off) and
-    ``redetected(obs)`` whether the frame observed as ``obs`` found it again."""
+    ``redetected`` column); ``redetect`` is its acceptance level (``None``: off),
+    ``redetected(obs)`` whether the frame observed as ``obs`` found it again and
+    ``reseed(obs, particles, rng)`` the particle set re-seeded where it was found (``None``: kept), which
+    the frame loop steps from."""
 
     redetect: float
 
     def redetected(self, obs): ...
+
+    def reseed(self, obs, particles, rng): ...

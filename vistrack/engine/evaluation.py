@@ -11,10 +11,13 @@ not depend on the number of workers or the order in which tasks run.
 Boxes are ``(cx ± w/2, cy ± h/2)`` with ``cx, cy`` the pose centre, as in
 groundtruth.csv. Per frame a task records the centre error, whether the tracker is lost
 (centre error > 50 px at 240-px width, scaled — thesis §3.2.5), the IoU of the
-estimated box with the true box, ESS and ms. :func:`summarize` turns the task
-files into per clip × algo × N summaries (mean error over frames not lost,
-P(lost) per frame and overall, success AUC over IoU thresholds 0..1,
-precision at 20 px, frames/s, mean ESS).
+estimated box with the true box, ESS and ms, whether the tracker reported the object
+(``reported``: vistrack's ``visible``, OpenCV's ``update`` result, a result file's non-empty
+box) and its confidence (``confidence``; ``None`` for a tracker without one). :func:`summarize`
+turns the task files into per clip × algo × N summaries (mean error over frames not lost,
+P(lost) per frame and overall, the share of frames reported lost, success AUC over IoU
+thresholds 0..1 and with the frames reported lost as empty, VOT-LT's long-term precision,
+recall and F-score, precision at 20 px, frames/s, mean ESS).
 """
 
 from __future__ import annotations
@@ -216,6 +219,7 @@ def run_task(task, out_dir):
     # eval: the object's own size (the plate's vertex rule for plates); reproduce: the thesis's
     rule = "centre" if task.get("lost_rule") == "thesis" else "size"
     reported, vertices, aspect = [], [], None
+    shown, conf = None, None  # what the tracker reported per frame, its confidence
     if algo in OPENCV_TRACKERS:
         boxes, ms, ess = _track_opencv(algo, clip, frames)
     else:
@@ -223,12 +227,14 @@ def run_task(task, out_dir):
         model = build_model(task["model"], clip, init_gt="", **task.get("model_params", {}))
         filt = make_filter(algo, model)
         rng = np.random.default_rng(task["seed_seq"])
-        est, ms, ess, index = [], [], [], []
+        est, ms, ess, index, shown, conf = [], [], [], [], [], []
         for res in track(frames, filt, n, rng):
             index.append(res.index)
             est.append(res.estimate)
             ms.append(res.ms)
             ess.append(res.ess)
+            shown.append(res.visible)
+            conf.append(np.nan if res.confidence is None else res.confidence)
             if spec.lost_rule == "plate":  # the plate rule scores what was reported
                 reported.append(res.visible)
                 vertices.append(model.vertices(res.estimate)[0])
@@ -237,20 +243,24 @@ def run_task(task, out_dir):
         # boxes centred on the pose centre, as groundtruth.csv's (cx, cy, w, h)
         boxes = _by_index(np.concatenate([est[:, :2] - wh / 2, wh], axis=1), index)
         ms, ess = np.array(ms), _by_index(np.array(ess), index)
+        shown = np.nan_to_num(_by_index(np.array(shown, float), index)) > 0  # a frame not decoded: not reported
+        conf = _by_index(np.array(conf, float), index) if np.isfinite(conf).any() else None
         if spec.lost_rule == "plate":
             rule, aspect = "plate", model.layout.aspect
-    result = score_boxes(clip, boxes, rule=rule, reported=reported, vertices=vertices, aspect=aspect)
+    result = score_boxes(clip, boxes, rule=rule, reported=reported, vertices=vertices, aspect=aspect, shown=shown,
+                         confidence=conf)
     result.update({"clip": task["clip"], "algo": algo, "particles": n, "run": task["run"],
                    "ms": [float(v) for v in ms[:result["frames"]]],
                    "ess": [None if not np.isfinite(v) else float(v) for v in ess[:result["frames"]]]})
     return write_task_result(out, result, task)
 
 
-def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=None):
+def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=None, shown=None, confidence=None):
     """Per-frame measures of ``boxes (frames, 4)`` (``x, y, w, h``; NaN where there is no
     estimate) against ``clip``'s ground truth: ``frames``, ``visible``, ``error`` (centre, px;
-    ``None`` without an estimate), ``lost`` (by ``rule``, :func:`~vistrack.core.metrics.lost_frames`)
-    and ``iou``."""
+    ``None`` without an estimate), ``lost`` (by ``rule``, :func:`~vistrack.core.metrics.lost_frames`),
+    ``iou``, ``reported`` (``shown (frames,)``, whether the tracker reported the object; by default
+    where it gave a box with an area) and ``confidence`` (``(frames,)`` or ``None``)."""
     t = clip.truth
     m = min(len(boxes), len(t["cx"]))
     truth = _truth_boxes(t)[:m]
@@ -259,7 +269,13 @@ def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=No
                        truth[:, 0] + truth[:, 2] / 2, truth[:, 1] + truth[:, 3] / 2)
     err = np.where(np.isfinite(err), err, np.inf)
     visible = np.asarray(t["visible"][:m]) > 0
+    if shown is None:
+        shown = np.all(np.isfinite(boxes), axis=1) & (np.nan_to_num(boxes[:, 2]) > 0) & (np.nan_to_num(boxes[:, 3]) > 0)
+    shown = np.asarray(shown, bool)[:m]
     return {
+        "reported": shown.astype(int).tolist(),
+        "confidence": None if confidence is None else [None if not np.isfinite(v) else round(float(v), 4)
+                                                       for v in np.asarray(confidence, float)[:m]],
         "frames": int(m), "visible": visible.astype(int).tolist(),
         "error": [float(e) if np.isfinite(e) else None for e in err],
         "lost": lost_frames(rule, err, clip.source.size[0], truth=t, reported=list(reported)[:m],

@@ -90,12 +90,15 @@ class VideoRun:
 def track_row(model, res):
     """The track-CSV row of a :class:`~vistrack.track.loop.FrameResult`: ``frame, visible``, the
     model's :meth:`describe` columns, ``redetected`` (a model that re-detects a lost object, the box
-    model's: 1 on the frame it is re-found), ``ess, ms, lost_reason``."""
+    model's: 1 on the frame it is re-found), ``ess, ms, lost_reason`` and ``confidence`` (the model's
+    calibrated confidence in ``[0, 1]``, :class:`~vistrack.models.protocol.Confidence`; empty for a model
+    without one)."""
     row = {"frame": res.index, "visible": int(res.visible)}
     row.update(model.describe(res.estimate))
     if offers(model, Redetects):
         row["redetected"] = int(res.redetected)
     row["ess"], row["ms"], row["lost_reason"] = res.ess, res.ms, res.lost_reason
+    row["confidence"] = "" if res.confidence is None else float(res.confidence)
     return row
 
 

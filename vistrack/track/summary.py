@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.metrics import center_error, iou, landmark_error, lost_frames, plate_frame_measures, precision, success_auc
+from ..core.metrics import (center_error, iou, landmark_error, lost_frames, lt_scores, plate_frame_measures, precision,
+                            success_auc)
 from .profiling import STAGES
 
 __all__ = ["summary_lines"]
@@ -78,22 +79,38 @@ def _lost_line(run):
 
 
 def _box_summary(rows, t, frame_width):
+    """The line against box ground truth: the scores, the centre error over the frames the tracker reported
+    (``visible=1``), and the frames it reported lost beside those the ground truth says it lost."""
     k = np.array([r["frame"] for r in rows], int)
     m = int(np.sum(k < len(t["cx"])))
     k = k[:m]
     est = np.array([[rows[i]["cx"], rows[i]["cy"], rows[i]["w"], rows[i]["h"]] for i in range(m)], float)
+    reported = np.array([bool(rows[i]["visible"]) for i in range(m)])
+    conf = np.array([np.nan if rows[i].get("confidence", "") == "" else rows[i]["confidence"] for i in range(m)],
+                    float)
     err = center_error(est[:, 0], est[:, 1], t["cx"][k], t["cy"][k])
-    ious = iou(np.column_stack([est[:, :2] - est[:, 2:] / 2, est[:, 2:]]),
-               np.column_stack([t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k]]))
+    boxes = np.column_stack([est[:, :2] - est[:, 2:] / 2, est[:, 2:]])
+    truth = np.column_stack([t["cx"][k] - t["w"][k] / 2, t["cy"][k] - t["h"][k] / 2, t["w"][k], t["h"][k]])
+    ious = iou(boxes, truth)
     vis = (t["w"][k] > 0) & (t["h"][k] > 0)
+    if "visible" in t:
+        vis &= np.asarray(t["visible"][k]) > 0
     searched = np.isnan(err)  # frames searched before the object was found: no estimate, lost
     lost = (lost_frames("size", np.nan_to_num(err), frame_width, truth={"w": t["w"][k], "h": t["h"][k]})
             | searched) & vis
-    tracked = f"{err[vis & ~lost].mean():.2f} px" if (vis & ~lost).any() else "none"
+    tracked = f"{err[vis & reported].mean():.2f} px" if (vis & reported).any() else "none"
     n = int(vis.sum())
     mean = f"{err[vis & ~searched].mean():.2f} px" if (vis & ~searched).any() else "n/a"
-    return (f"vs ground truth ({n} frames with the object): success AUC {success_auc(ious[vis]):.3f}, precision@20px "
-            f"{precision(err[vis]):.3f}, mean centre error {mean} over all of them"
+    lt = lt_scores(boxes, np.where(vis[:, None], truth, 0.0), reported,
+                   conf if np.isfinite(conf[1:]).all() and m > 1 else None)
+    absent = int((~vis).sum())
+    return (f"vs ground truth ({n} frames with the object): success AUC {success_auc(ious[vis]):.3f} "
+            f"({success_auc(np.where(reported, ious, 0.0)[vis]):.3f} with the frames reported lost as empty), "
+            f"precision@20px {precision(err[vis]):.3f}, long-term F-score {lt['f_score']:.3f} (precision "
+            f"{lt['precision']:.3f}, recall {lt['recall']:.3f}), mean centre error {mean} over all of them"
             + (f" but the {int((vis & searched).sum())} searched before it was found" if (vis & searched).any() else "")
-            + f" ({tracked} over tracked frames); lost (centre error > half the object's larger side) in "
-            f"{int(lost.sum())} frames")
+            + f" ({tracked} over the frames reported tracked); reported lost (visible=0) in "
+            f"{int((vis & ~reported).sum())} of them, lost by the ground truth (centre error > half the object's "
+            f"larger side) in {int(lost.sum())} (both in {int((lost & ~reported).sum())})"
+            + (f"; the object absent in {absent} frames, reported absent in {int((~vis & ~reported).sum())}"
+               if absent else ""))

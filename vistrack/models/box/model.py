@@ -30,9 +30,12 @@ Local moves (thesis 001, §4.3–4.5)
     (:class:`~vistrack.models.box.correlation_proposal.CorrelationProposal`, exact density, proper weights).
 Lost
     ``visible=0`` where ``log r`` at the estimate falls far below its running level, the
-    scale below a floor or the centre leaves the frame (:mod:`~vistrack.models.collapse`).
-    With the filter, while lost, each frame is searched whole (:meth:`Box._redetect`) and the
-    particles re-seeded where the object is found (the track CSV's ``redetected``).
+    scale below a floor or the centre leaves the frame (:mod:`~vistrack.models.collapse`), and,
+    with the filter, where the estimate's calibrated confidence falls below its threshold
+    (:mod:`~vistrack.models.box.confidence`; ``low-confidence``). The model does not adapt on a
+    frame reported lost. After ``redetect_after`` frames reported lost in a row, each frame is
+    searched whole (:meth:`Box._redetect`); a place found there whose confidence clears the
+    threshold re-seeds the particles (:meth:`Box.reseed`; the track CSV's ``redetected``).
 """
 
 from __future__ import annotations
@@ -41,12 +44,14 @@ import numpy as np
 
 from ... import kernels
 from ...core.gaussian import diag_logpdf
+from ...core.particles import ParticleSet
 from ...proposals import MapProposal
 from .correlation_proposal import CorrelationProposal
 from .moves import BoxMoves
 from ...proposals.translation import TranslationMoves
 from .appearance import Appearance
 from ..collapse import CollapseCheck
+from .confidence import BoxConfidence, Calibration
 from .correlation import CorrelationFilter
 from .scale_filter import ScaleFilter
 from ..innovation import ARInnovation
@@ -107,6 +112,21 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         at the estimate fell by 43-47 on the synthetic clip of ``tests/test_box_dcf.py`` when the object
         vanished; 28 (was 35; 7-clip mean 0.685 -> 0.690, and with the filter's rate 0.004 0.695 and the
         hand held on 6 of 6 seeds: ``docs/experiments.md``, issue 34).
+    confidence : bool, tuple or path
+        With the filter, the estimate's confidence on each frame (:mod:`~vistrack.models.box.confidence`):
+        ``True`` the calibrations shipped with the package, a pair of
+        :class:`~vistrack.models.box.confidence.Calibration` (an estimate's, a candidate's) or the path of an
+        ``.npz`` holding them; ``False``: none (nor without the filter).
+    lost_confidence : float or None
+        The object is reported lost (``low-confidence``) on a frame whose confidence is below this
+        (``None``: the calibration's threshold; 0: never).
+    redetect_after : int
+        Frames reported lost in a row before each frame is searched whole (:meth:`_redetect`).
+    search_crop : float or None
+        That search correlates the filter's taps over the object's box grown this many times
+        (:meth:`CorrelationFilter.search`; ``None``: all its taps, the surroundings learnt with it too).
+    search_peaks : int
+        The best places of that search whose confidence is computed; the most confident is the candidate.
     dcf_options : dict or None
         Passed to :class:`~vistrack.models.box.correlation.CorrelationFilter` (its ``padding``: ``4 sigma_xy``
         unless given, so that the search region about the dynamics' prediction holds 4 innovation stds).
@@ -125,7 +145,8 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
                  window=2.5, map_stride=1, dcf=True, lambda_dcf=60.0, dcf_share=0.5, dcf_tempering=(60.0, 0.05),
                  dcf_scale_std=0.02, redetect=0.5, reentry=0.05, collapse_drop=28.0,
                  dcf_options=None, dcf_scale_read="interp", scale_filter=None, lambda_scale=0.0,
-                 scale_proposal="dcf", **appearance):
+                 scale_proposal="dcf", confidence=True, lost_confidence=None, redetect_after=3, search_crop=1.0,
+                 search_peaks=3, **appearance):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
             raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
@@ -169,6 +190,18 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         self.sf = ScaleFilter(frame, (x, y, w, h), **scale_filter) if (dcf and scale_filter is not None) else None
         self.lambda_scale = float(lambda_scale)
         self.scale_proposal = scale_proposal
+        # -- the confidence and what it decides (issue 44; vistrack/models/box/confidence.py) --
+        self.conf = None
+        if dcf and confidence is not False:
+            cal = None if confidence is True else tuple(confidence) if isinstance(confidence, (tuple, list)) \
+                else (Calibration.load(confidence), Calibration.load(confidence, "candidate"))
+            self.conf = BoxConfidence(self, cal)
+        self.lost_confidence = lost_confidence
+        self.redetect_after = int(redetect_after)
+        self.search_crop, self.search_peaks = search_crop, int(search_peaks)
+        self._lost_run = 0  # frames reported lost in a row
+        self._pred = None  # this frame's mean prediction (cx, cy, l), the motion cue's reference
+        self._conf_obs = None  # the observation the last confidence was computed on
 
     # -- geometry ---------------------------------------------------------------------
     def boxes(self, states):
@@ -290,9 +323,9 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
             obs = self.app.frame(maps.frame, roi)
             obs.dcf, obs.dcf_share, obs.redetected, obs.frame_image = None, self.dcf_share, False, maps.frame
             return obs
-        pred = particles.weights @ self.predict_mean(particles.states)[:, :3]
-        if self._lost and self.redetect is not None:
-            found = self._redetect(maps.frame, roi, pred)
+        pred = self._pred = particles.weights @ self.predict_mean(particles.states)[:, :3]
+        if self._lost_run >= self.redetect_after and self.redetect is not None:
+            found = self._redetect(maps.frame)
             if found is not None:
                 return found
         return self._dcf_frame(maps.frame, roi, pred, self.dcf_share, False)
@@ -316,24 +349,55 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
             obs.scale_centre = float(centre[2])
         return obs
 
-    def _redetect(self, frame, roi, pred):
-        """While the track is lost: the best place of a whole-frame search with the filter
-        (:meth:`CorrelationFilter.search`) at the last reported frame's scale, taken (the observation about it,
-        ``β`` at least 0.9, the dynamics' re-entry share on, and no velocity carried into the next frame's
-        prediction: ``d = 0`` there) when ``log r`` of the pose there at
-        the response's peak is within ``redetect`` times the collapse test's ``drop`` of its running
-        level; ``None`` otherwise."""
-        scale = self._last_scale  # the estimate's scale drifts while the object is lost
-        x, y, _ = self.cf.search(frame, scale)
-        obs = self._dcf_frame(frame, roi, np.array([x, y, scale]), max(self.dcf_share, 0.9), True)
-        r = obs.dcf
-        cand = np.array([[*r.peak_xy, r.log_scales[r.best]]])
-        level, drop = self._collapse.level, self._collapse.drop
-        if level is None or drop is None or not self.loglik(obs, cand)[0] >= level - self.redetect * drop:
-            return None
+    def _redetect(self, frame):
+        """While the track is lost (:attr:`redetect_after` frames in a row): of the best places of a whole-frame
+        search (:meth:`search_whole`), the most confident (:meth:`BoxConfidence.candidate`; without a
+        confidence, the best), taken (the observation about it, the particles re-seeded there by
+        :meth:`reseed`, the dynamics' re-entry share on, and no velocity carried into the next frame's
+        prediction: ``d = 0`` there) when its confidence (:meth:`BoxConfidence.candidate`) clears
+        :attr:`threshold` (without a confidence: when ``log r`` of the pose there is within ``redetect``
+        times the collapse test's ``drop`` of its running level); ``None`` otherwise."""
+        found = self.search_whole(frame)
+        if self.conf is not None and self.conf.candidate_calibration is not None:
+            c, k = max((self.conf.candidate(self, o, p), -k) for k, (o, p) in enumerate(found))
+            obs, cand = found[-k][0], found[-k][1][None]
+            if not c >= self.threshold:
+                return None
+        else:
+            obs, cand = found[0][0], found[0][1][None]
+            level, drop = self._collapse.level, self._collapse.drop
+            if level is None or drop is None or not self.loglik(obs, cand)[0] >= level - self.redetect * drop:
+                return None
         self._reentry = self.reentry > 0
         self._found = True
+        obs.found = cand[0]
         return obs
+
+    def search_whole(self, frame):
+        """A whole-frame search with the filter (:meth:`CorrelationFilter.search`: its taps over the object's
+        box, ``search_crop``) at the last reported frame's scale, and at the first frame's where they differ
+        by more than 10 %: for each of its :attr:`search_peaks` best places at each scale, the observation about it (the filter's response there, ``β`` at least 0.9, marked a
+        re-detection) and the pose ``(cx, cy, l) (3,)`` at that response's peak. Changes nothing the tracking
+        reads (``benchmarks/fit_confidence.py`` calls it on any frame)."""
+        out = []
+        # the estimate's scale drifts while the object is lost, and may shrink as it leaves the frame
+        scales = (self._last_scale,) if abs(self._last_scale) < 0.1 else (self._last_scale, 0.0)
+        for scale in scales:
+            for x, y, _ in self.cf.search(frame, scale, crop=self.search_crop, peaks=self.search_peaks):
+                roi = self.app.roi(self.boxes(np.array([[x, y, scale]])), 0.0)
+                obs = self._dcf_frame(frame, roi, np.array([x, y, scale]), max(self.dcf_share, 0.9), True)
+                r = obs.dcf
+                out.append((obs, np.array([*r.peak_xy, r.log_scales[r.best]])))
+        return out
+
+    def reseed(self, obs, particles, rng):
+        """On a frame whose whole-frame search found the object (:meth:`_redetect`): the previous particles
+        replaced by ``N`` equally weighted draws about the place found (the prior's spread ``p_0`` about it,
+        no velocity); ``None`` on any other frame (the particles stay)."""
+        if not obs.redetected:
+            return None
+        z = obs.found + self.prior_std * rng.standard_normal((particles.n, 3))
+        return ParticleSet(np.concatenate([z, z], axis=1), np.zeros(particles.n))
 
     def redetected(self, obs):
         """Whether this frame's observation is a whole-frame search's find (:meth:`_redetect`)."""
@@ -362,11 +426,14 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         return particles.mean()
 
     def adapt(self, obs, estimate):
-        """Adapt the appearance to the estimate on a confident frame (:meth:`Appearance.adapt`) and the
-        correlation filter on a frame where the object is reported (:meth:`CorrelationFilter.adapt`)."""
+        """On a frame where the object is reported, adapt the appearance to the estimate where it is confident
+        (:meth:`Appearance.adapt`) and the correlation filter (:meth:`CorrelationFilter.adapt`); a frame
+        reported lost changes nothing."""
+        if self._lost:
+            return False
         done = self.app.adapt(obs, self.boxes(estimate)[0])
         resp = obs.dcf
-        if resp is not None and not self._lost:
+        if resp is not None:
             e = np.asarray(estimate, float).ravel()
             self.cf.adapt(obs.frame_image, e[:2], float(e[2]))
             if self.sf is not None:
@@ -374,13 +441,41 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         return done
 
     def check_lost(self, obs, state):
-        """The collapse test (:class:`~vistrack.models.collapse.CollapseCheck`), remembered for the next
-        frame's re-detection."""
-        out = super().check_lost(obs, state)
+        """The collapse test (:class:`~vistrack.models.collapse.CollapseCheck`) and the confidence's
+        (``low-confidence`` below :attr:`threshold`, when :meth:`confidence` was computed on ``obs``),
+        remembered for the next frame's re-detection."""
+        c, low = self.conf.value if self.conf is not None and obs is self._conf_obs else None, ""
+        if c is not None and c < self.threshold:
+            low = f"confidence {c:.3f}, below the threshold {self.threshold:.3f}"
+        out = super().check_lost(obs, state, low)
         self._lost = bool(out[0])
+        self._lost_run = self._lost_run + 1 if self._lost else 0
         if not self._lost:
             self._last_scale = float(np.ravel(state)[2])
         return out
+
+    # -- the confidence (issue 44; :mod:`~vistrack.models.box.confidence`) ------------------------
+    @property
+    def threshold(self):
+        """The confidence below which the object is reported lost (``lost_confidence``, else the
+        calibration's); 0 without a confidence."""
+        if self.conf is None or self.conf.calibration is None:
+            return 0.0
+        return self.conf.calibration.threshold if self.lost_confidence is None else float(self.lost_confidence)
+
+    def confidence(self, obs, state, particles):
+        """The calibrated confidence in ``[0, 1]`` that the estimate ``state (6,)`` lies on the object, on
+        the frame observed as ``obs`` with the weighted ``particles`` (1 on the first frame); ``None``
+        without one (no correlation filter, or ``confidence=False``)."""
+        if self.conf is None:
+            return None
+        self._conf_obs = obs
+        return self.conf.update(self, obs, state, None if obs.dcf is None else particles)
+
+    def predicted_pose(self):
+        """This frame's mean prediction ``(cx, cy, l)`` (the weighted mean of ``K``'s means), ``None`` on the
+        first frame."""
+        return self._pred
 
     # -- local moves (and :class:`~vistrack.models.box.moves.BoxMoves`) ------------------------
     def lis_proposal(self, kernel=None):
