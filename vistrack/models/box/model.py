@@ -47,6 +47,7 @@ from .moves import BoxMoves
 from ...proposals.translation import TranslationMoves
 from .appearance import Appearance
 from ..collapse import CollapseCheck
+from .bacf import BackgroundAwareFilter
 from .correlation import CorrelationFilter
 from .scale_filter import ScaleFilter
 from ..innovation import ARInnovation
@@ -125,7 +126,7 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
                  window=2.5, map_stride=1, dcf=True, lambda_dcf=60.0, dcf_share=0.5, dcf_tempering=(60.0, 0.05),
                  dcf_scale_std=0.02, redetect=0.5, reentry=0.05, collapse_drop=28.0,
                  dcf_options=None, dcf_scale_read="interp", scale_filter=None, lambda_scale=0.0,
-                 scale_proposal="dcf", **appearance):
+                 scale_proposal="dcf", estimator="mean", frame_bound=False, **appearance):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
             raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
@@ -151,8 +152,15 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         self.blob_cell = 0.25 * side  # the colour-blob proposal's cell (frame px)
         self.learn_blob(frame, _inner_ellipse(frame.shape[:2], (x, y, w, h)))
         # the search region: the box grown by 4 innovation stds of the centre on each side, about the prediction
-        dcf_options = {"padding": 4.0 * sigma_xy, **(dcf_options or {})}
-        self.cf = CorrelationFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
+        dcf_options = dict(dcf_options or {})
+        kind = dcf_options.pop("kind", "dcf")
+        if kind == "bacf":
+            self.cf = BackgroundAwareFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
+        else:
+            dcf_options = {"padding": 4.0 * sigma_xy, **dcf_options}
+            if dcf_options.pop("colour", False):
+                dcf_options.update(colour_lut=self.app.colour.backprojection, colour_grey=self.app.grey)
+            self.cf = CorrelationFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
         self._reach = 1.0 if dcf else 1.0 + self.window  # the observed region's reach, in 4 innovation stds
         if dcf:  # log r's scale with the filter's term: lost 28 below the running level (issue 34)
             self.collapse_options = {"drop": float(collapse_drop)}
@@ -169,6 +177,8 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         self.sf = ScaleFilter(frame, (x, y, w, h), **scale_filter) if (dcf and scale_filter is not None) else None
         self.lambda_scale = float(lambda_scale)
         self.scale_proposal = scale_proposal
+        self.estimator = estimator
+        self.frame_bound = bool(frame_bound)
 
     # -- geometry ---------------------------------------------------------------------
     def boxes(self, states):
@@ -355,10 +365,23 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
             out = out + self.lambda_dcf * resp.read(s)
         if obs.scale is not None and self.lambda_scale:
             out = out + self.lambda_scale * obs.scale.read(np.atleast_2d(states)[:, 2])
+        if self.frame_bound:
+            s = np.atleast_2d(states)
+            w, h = self.frame_size
+            out = np.where((s[:, 0] >= 0) & (s[:, 0] < w) & (s[:, 1] >= 0) & (s[:, 1] < h), out, out - 1e3)
         return out
 
     def estimate(self, particles):
-        """The weighted mean state."""
+        """The weighted mean state (``estimator="mode"``: the weighted mean of the particles whose centre is
+        within a third of the box's side of the heaviest particle's)."""
+        if self.estimator == "mode":
+            s = particles.states
+            w = particles.weights
+            k = int(np.argmax(w))
+            side = np.sqrt(np.prod(self.size0)) * np.exp(s[k, 2])
+            near = np.hypot(s[:, 0] - s[k, 0], s[:, 1] - s[k, 1]) <= side / 3
+            wn = w * near
+            return wn @ s / wn.sum()
         return particles.mean()
 
     def adapt(self, obs, estimate):

@@ -3,7 +3,8 @@
 :func:`scale_samples` resamples a grey patch at ``S`` sizes about a point and describes each sample by
 its feature cells: the cells' mean grey level (normalised by the sample's mean and deviation) and
 ``n_orient`` cells of unsigned gradient orientation (central differences, soft-binned magnitude),
-each divided by the root of its cell's mean squared gradient. :func:`scale_samples_numpy` is the same
+each divided by the root of its cell's mean squared gradient (the orientation by the polynomial of
+``atan`` that OpenCV's ``fastAtan32f`` uses). :func:`scale_samples_numpy` is the same
 arithmetic in numpy (the reference; the compiled one equals it to float32 rounding, ``tests``).
 """
 
@@ -17,6 +18,24 @@ from numba import njit
 __all__ = ["scale_samples", "scale_samples_numpy"]
 
 _EPS = 1e-2
+#: the odd polynomial of ``atan(c)`` on ``[0, 1]`` (OpenCV's ``fastAtan32f``'s, radians; error < 0.005 rad)
+_A1, _A3, _A5, _A7 = 0.9997878412794807, -0.3258083974640975, 0.1555786518463281, -0.04432655554792128
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _orientation(gx, gy):
+    """The unsigned orientation ``[0, π)`` of the gradient ``(gx, gy)`` by the polynomial of ``atan``."""
+    ax, ay = abs(gx), abs(gy)
+    c = min(ax, ay) / (max(ax, ay) + 1e-12)
+    cc = c * c
+    a = (((_A7 * cc + _A5) * cc + _A3) * cc + _A1) * c
+    if ax < ay:
+        a = 0.5 * math.pi - a
+    if (gx < 0.0) != (gy < 0.0):
+        a = math.pi - a
+    if a >= math.pi:
+        a -= math.pi
+    return a
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -75,10 +94,7 @@ def scale_samples(grey, ax, ay, scales, nx, ny, cell, n_orient, out):
                         gy = g[i + 1, j] - g[i - 1, j]
                         m2 = gx * gx + gy * gy
                         mag = math.sqrt(m2)
-                        ang = math.atan2(gy, gx)
-                        if ang < 0.0:
-                            ang += math.pi
-                        pos = ang * inv_pi
+                        pos = _orientation(gx, gy) * inv_pi
                         lo = int(pos)
                         frac = pos - lo
                         lo = lo % n_orient
@@ -115,8 +131,13 @@ def scale_samples_numpy(grey, ax, ay, scales, nx, ny, cell, n_orient):
         gx = g[1:-1, 2:] - g[1:-1, :-2]
         gy = g[2:, 1:-1] - g[:-2, 1:-1]
         mag = np.sqrt(gx ** 2 + gy ** 2)
-        ang = np.arctan2(gy, gx)
-        ang = np.where(ang < 0, ang + np.pi, ang)
+        ax_, ay_ = np.abs(gx), np.abs(gy)
+        c = np.minimum(ax_, ay_) / (np.maximum(ax_, ay_) + 1e-12)
+        cc = c * c
+        ang = (((_A7 * cc + _A5) * cc + _A3) * cc + _A1) * c
+        ang = np.where(ax_ < ay_, 0.5 * np.pi - ang, ang)
+        ang = np.where((gx < 0) != (gy < 0), np.pi - ang, ang)
+        ang = np.where(ang >= np.pi, ang - np.pi, ang)
         pos = ang * (n_orient / np.pi)
         lo = pos.astype(int)
         frac = pos - lo
