@@ -216,8 +216,8 @@ class CorrelationFilter:
     lam : float
         ``λ``, the regulariser.
     rate : float
-        ``η``, the adaptation rate (0.004; 0.0025 before the box model's collapse ``drop`` went to 28:
-        ``docs/experiments.md``, issue 34).
+        ``η``, the adaptation rate (0.004, with the box model's collapse ``drop`` of 28:
+        ``docs/experiments.md``).
     anchor : float
         ``γ``, the first frame's share of the filter applied.
     n_scales, scale_step : int, float

@@ -13,7 +13,7 @@ Likelihood
     around the box (Bhattacharyya; the ring's weight ``κ`` 0.5 with the filter, 1 without)
     + normalised cross-correlation with a grey template,
     learned from the first frame and adapted on confident frames; with the correlation filter
-    (``dcf``, the default since issue 34), plus ``λ_dcf`` times its response at the state
+    (``dcf``, on by default), plus ``λ_dcf`` times its response at the state
     (:class:`~vistrack.models.box.correlation.CorrelationFilter`: gradient-orientation and
     brightness-normalised grey features, a 3-scale search about the dynamics' prediction,
     adapted on frames where the object is reported, anchored to the first frame's filter).
@@ -41,18 +41,18 @@ import numpy as np
 
 from ... import kernels
 from ...core.gaussian import diag_logpdf
+from ...core.transition import is_prior
 from ...proposals import MapProposal
-from .correlation_proposal import CorrelationProposal
-from .moves import BoxMoves
 from ...proposals.translation import TranslationMoves
-from .appearance import Appearance
 from ..collapse import CollapseCheck
+from ..innovation import ARInnovation
+from ..protocol import VideoModelBase
+from .appearance import Appearance
 from .bacf import BackgroundAwareFilter
 from .correlation import CorrelationFilter
+from .correlation_proposal import CorrelationProposal
+from .moves import BoxMoves
 from .scale_filter import ScaleFilter
-from ..innovation import ARInnovation
-from ...core.transition import is_prior
-from ..protocol import VideoModelBase
 
 __all__ = ["Box"]
 
@@ -81,13 +81,13 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         LIS/LLS window std as a multiple of the innovation's std.
     map_stride : int
         The LIS proposal map's step in working pixels (:meth:`Appearance.proposal_map`): 2 makes
-        ``cv2.matchTemplate`` about 4x cheaper (0.46 -> 0.12 ms on girl_otb) but lowered the success
-        AUC on the real clips (girl 0.650 -> 0.632, 12 seeds; hand 0.44 -> 0.39, 24 and 36 seeds; car4
-        0.819 -> 0.813): 1 by default (``docs/experiments.md``, speed, third pass).
+        ``cv2.matchTemplate`` about 4x cheaper (0.12 against 0.46 ms on girl_otb) but lowers the success
+        AUC on the real clips (girl 0.632 against 0.650, 12 seeds; hand 0.39 against 0.44, 24 and 36 seeds;
+        car4 0.813 against 0.819): 1 by default (``docs/experiments.md``, speed).
     dcf : bool
         Learn a correlation filter (:class:`~vistrack.models.box.correlation.CorrelationFilter`) whose
         response is LIS's proposal (:class:`~vistrack.models.box.correlation_proposal.CorrelationProposal`) and a
-        term ``λ_dcf y`` of ``log r``; ``False``: the colour/template map proposal alone (before issue 34).
+        term ``λ_dcf y`` of ``log r``; ``False``: the colour/template map proposal alone.
     lambda_dcf : float
         ``λ_dcf``, the weight of the response ``y`` (about 1 at the object) in ``log r``.
     dcf_share : float
@@ -105,9 +105,9 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         That share.
     collapse_drop : float
         With the filter, the collapse test's ``drop`` (:attr:`collapse_options`: 55 without it): ``log r``
-        at the estimate fell by 43-47 on the synthetic clip of ``tests/test_box_dcf.py`` when the object
-        vanished; 28 (was 35; 7-clip mean 0.685 -> 0.690, and with the filter's rate 0.004 0.695 and the
-        hand held on 6 of 6 seeds: ``docs/experiments.md``, issue 34).
+        at the estimate falls by 43-47 on the synthetic clip of ``tests/test_box_dcf.py`` when the object
+        vanishes; 28 (the 7-clip mean AUC 0.690 against 0.685 with 35, and with the filter's rate 0.004
+        0.695 and the hand held on 6 of 6 seeds: ``docs/experiments.md``).
     dcf_options : dict or None
         Passed to :class:`~vistrack.models.box.correlation.CorrelationFilter` (its ``padding``: ``4 sigma_xy``
         unless given, so that the search region about the dynamics' prediction holds 4 innovation stds).
@@ -133,8 +133,8 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         self.frame_size = (frame.shape[1], frame.shape[0])
         self.size0 = np.array([w, h])
         if dcf:  # the colour and template terms weaker beside the filter's, and the colour ring's pull to larger
-            # boxes halved (κ 1 -> 0.5: the estimate's scale was 10-14 % too large on car4 and blurred girl;
-            # 7-clip mean 0.670 -> 0.685, blur 0.588 -> 0.639; docs/experiments.md, issue 34)
+            # boxes halved (κ 0.5, not 1: with 1 the estimate's scale is 10-14 % too large on car4 and blurred
+            # girl; 7-clip mean AUC 0.685 against 0.670, blur 0.639 against 0.588; docs/experiments.md)
             appearance = {"lambda_colour": 12.0, "lambda_template": 8.0, "kappa": 0.5, **appearance}
         self.app = Appearance(frame, (x, y, w, h), **appearance)
         if sigma_xy is None:
@@ -162,7 +162,7 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
                 dcf_options.update(colour_lut=self.app.colour.backprojection, colour_grey=self.app.grey)
             self.cf = CorrelationFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
         self._reach = 1.0 if dcf else 1.0 + self.window  # the observed region's reach, in 4 innovation stds
-        if dcf:  # log r's scale with the filter's term: lost 28 below the running level (issue 34)
+        if dcf:  # log r's scale with the filter's term: lost 28 below the running level
             self.collapse_options = {"drop": float(collapse_drop)}
         self.lambda_dcf, self.dcf_share, self.dcf_scale_std = float(lambda_dcf), float(dcf_share), float(dcf_scale_std)
         self.dcf_tempering = tuple(float(v) for v in dcf_tempering)
