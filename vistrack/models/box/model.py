@@ -126,7 +126,8 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
                  window=2.5, map_stride=1, dcf=True, lambda_dcf=60.0, dcf_share=0.5, dcf_tempering=(60.0, 0.05),
                  dcf_scale_std=0.02, redetect=0.5, reentry=0.05, collapse_drop=28.0,
                  dcf_options=None, dcf_scale_read="interp", scale_filter=None, lambda_scale=0.0,
-                 scale_proposal="dcf", estimator="mean", frame_bound=False, **appearance):
+                 scale_proposal="dcf", estimator="mean", frame_bound=False, bacf_term=None, lambda_bacf=0.0,
+                 **appearance):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
             raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
@@ -178,6 +179,8 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         self.lambda_scale = float(lambda_scale)
         self.scale_proposal = scale_proposal
         self.estimator = estimator
+        self.cf2 = BackgroundAwareFilter(frame, (x, y, w, h), **bacf_term) if bacf_term is not None else None
+        self.lambda_bacf = float(lambda_bacf)
         self.frame_bound = bool(frame_bound)
 
     # -- geometry ---------------------------------------------------------------------
@@ -320,6 +323,7 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         obs = self.app.frame(frame, roi)
         obs.dcf, obs.dcf_share, obs.redetected, obs.frame_image = resp, share, redetected, frame
         obs.scale = None if self.sf is None else self.sf.detect(frame, resp.peak_xy, float(centre[2]))
+        obs.dcf2 = None if self.cf2 is None else self.cf2.detect(frame, centre[:2], float(centre[2]))
         if self.scale_proposal == "filter" and obs.scale is not None:
             obs.scale_centre = obs.scale.peak_log_scale
         elif self.scale_proposal == "prediction":
@@ -365,6 +369,10 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
             out = out + self.lambda_dcf * resp.read(s)
         if obs.scale is not None and self.lambda_scale:
             out = out + self.lambda_scale * obs.scale.read(np.atleast_2d(states)[:, 2])
+        if self.cf2 is not None and self.lambda_bacf and obs.dcf2 is not None:
+            s = np.atleast_2d(states).copy()
+            s[:, 2] = obs.dcf2.log_scales[0]
+            out = out + self.lambda_bacf * obs.dcf2.read(s)
         if self.frame_bound:
             s = np.atleast_2d(states)
             w, h = self.frame_size
@@ -394,6 +402,8 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
             self.cf.adapt(obs.frame_image, e[:2], float(e[2]))
             if self.sf is not None:
                 self.sf.adapt(obs.frame_image, e[:2], float(e[2]))
+            if self.cf2 is not None:
+                self.cf2.adapt(obs.frame_image, e[:2], float(e[2]))
         return done
 
     def check_lost(self, obs, state):

@@ -114,7 +114,7 @@ class ScaleFilter:
         self.px = np.array([self.cells[0] * self.cell / w, self.cells[1] * self.cell / h])
         # the patch: the largest sample's box, a cell of gradient support and two cells to move the estimate
         reach = np.exp(self.log_steps[-1])
-        self.shape = tuple(int(np.ceil(reach * (n * self.cell + 2) + 4 * self.cell)) for n in self.cells[::-1])
+        self.shape = tuple(int(np.ceil(reach * n * self.cell + 4 * self.cell)) for n in self.cells[::-1])
         self.anchor_px = np.array([self.shape[1] / 2, self.shape[0] / 2])
         self.n_orient = int(n_orient)
         self.lam, self.rate, self.anchor = float(lam), float(rate), float(anchor)
@@ -129,30 +129,38 @@ class ScaleFilter:
         self.A0, self.B0 = self.A.copy(), self.B.copy()
 
     def feature_map(self, frame, centre, log_scale):
-        """The grey patch about ``centre`` (frame px) at ``log_scale`` that every sample is read from
-        (:class:`_FeatureMap`; ``feat``: ``(H, W) float32``)."""
+        """The summed-area tables of the per-pixel channels of the grey patch about ``centre`` (frame px) at
+        ``log_scale`` that every sample is read from (:class:`_FeatureMap`; ``feat``:
+        :func:`~vistrack.models.box.scale_kernels.pixel_channels`)."""
         ph, pw = self.shape
         img = patch(frame, centre, self.px * np.exp(-log_scale), (pw, ph), self.anchor_px)
         grey = (cv2.cvtColor(img, cv2.COLOR_BGR2GRAY) if img.ndim == 3 else img).astype(np.float32)
-        return _FeatureMap(grey, np.asarray(centre, float).copy(), float(log_scale), self.anchor_px, self.px)
+        if kernels.use():
+            from .scale_kernels import N_EXTRA, pixel_channels
+
+            ii = pixel_channels(grey, self.n_orient, np.empty((ph + 1, pw + 1, N_EXTRA + self.n_orient)))
+        else:
+            ii = grey
+        return _FeatureMap(ii, np.asarray(centre, float).copy(), float(log_scale), self.anchor_px, self.px)
 
     def samples(self, fmap, centre, log_scale):
         """The descriptors ``(d, S)`` of the boxes about ``centre`` at ``log_scale + log_steps``, read from
-        ``fmap``'s patch (:func:`~vistrack.models.box.scale_kernels.scale_samples`), each times the scales'
-        Hann window."""
-        scale = np.exp(log_scale + self.log_steps - fmap.log_scale)  # patch px per sample px
-        ax, ay = fmap.anchor + (np.asarray(centre, float) - fmap.centre) * fmap.px * np.exp(-fmap.log_scale)
+        ``fmap`` (:func:`~vistrack.models.box.scale_kernels.scale_samples`), each times the scales' Hann window."""
+        rel = np.exp(log_scale + self.log_steps - fmap.log_scale)
         nx, ny = self.cells
+        widths, heights = nx * self.cell * rel, ny * self.cell * rel  # patch px
+        # the point in the tables' coordinates (a pixel's left edge at its index): patch coordinates + 0.5
+        ax, ay = fmap.anchor + (np.asarray(centre, float) - fmap.centre) * fmap.px * np.exp(-fmap.log_scale) + 0.5
         if kernels.use():
             from .scale_kernels import scale_samples
 
-            vals = scale_samples(fmap.feat, float(ax), float(ay), scale, nx, ny, self.cell, self.n_orient,
-                                 np.empty((len(scale), self.n_orient + 1, ny, nx), np.float32))
+            vals = scale_samples(fmap.feat, float(ax), float(ay), widths, heights, nx, ny, self.n_orient,
+                                 np.empty((len(rel), self.n_orient + 1, ny, nx), np.float32))
         else:
             from .scale_kernels import scale_samples_numpy
 
-            vals = scale_samples_numpy(fmap.feat, float(ax), float(ay), scale, nx, ny, self.cell, self.n_orient)
-        return vals.reshape(len(scale), -1).T * self.window
+            vals = scale_samples_numpy(fmap.feat, float(ax), float(ay), widths, heights, nx, ny, self.n_orient)
+        return vals.reshape(len(rel), -1).T * self.window
 
     def _label(self, shift):
         """``conj(G)``: the DFT's conjugate of the Gaussian label over the samples, peaked ``shift`` samples
