@@ -22,7 +22,7 @@ from vistrack.core.runtime import keep_freed_memory
 from vistrack.data_synth.landmarks import make_landmark_clip, simulate
 from vistrack.filters import make_filter
 from vistrack.io.clips import load_clip
-from vistrack.models.builders import build_model
+from vistrack.registry.builders import build_model
 from vistrack.reproduce.landmarks import LandmarksConfig
 
 

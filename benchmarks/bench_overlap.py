@@ -22,7 +22,7 @@ from vistrack.data_synth.contour import make_contour_clip
 from vistrack.filters import make_filter
 from vistrack.io.clips import load_clip
 from vistrack.io.video import open_video, prefetch
-from vistrack.models.builders import build_model
+from vistrack.registry.builders import build_model
 from vistrack.track.loop import FrameStepper, warm_up
 
 

@@ -41,7 +41,7 @@ from vistrack.core.particles import logsumexp
 from vistrack.filters import BranchedPartitioned, filter_steps, make_filter
 from vistrack.filters.partition_step import PartitionedBase
 from vistrack.models import Bearings
-from vistrack.reproduce.bearings import BearingsConfig, _sequence
+from vistrack.reproduce.bearings import BearingsConfig, sequence
 
 
 class GroupShares(BranchedPartitioned):
@@ -70,7 +70,7 @@ class GroupByGroup(BranchedPartitioned):
 
 def speed(cfg, model):
     """Print a table row per N: CPU ms per run of each filter and the ratios to partitioned."""
-    _, obs, _ = _sequence(cfg, model, 0)
+    _, obs, _ = sequence(cfg, model, 0)
     for n in (100, 1000, 3000):
         filters = {"partitioned": make_filter("partitioned", model),
                    "branched": make_filter("branched-partitioned", model), "group by group": GroupByGroup(model)}
@@ -89,7 +89,7 @@ def speed(cfg, model):
 def group_shares(cfg, model, n):
     """Print the heaviest group's mean share and the effective number of groups."""
     for s in range(cfg.sequences):
-        _, obs, seeds = _sequence(cfg, model, s)
+        _, obs, seeds = sequence(cfg, model, s)
         for ss in seeds:
             list(filter_steps(GroupShares(model), obs, n, np.random.default_rng(ss)))
     sh = np.array(GroupShares.shares)
@@ -159,7 +159,7 @@ def main():
     rows = {algo: ([], [], 0.0) for algo in a.algos.split(",")}
     ref = []
     for s in range(a.sequences):
-        truth, obs, seeds = _sequence(cfg, model, s)
+        truth, obs, seeds = sequence(cfg, model, s)
         if a.reference:
             ref.append(reference_errors(model, truth, obs, a.reference))
         for algo, (err, div, _) in rows.items():

@@ -18,8 +18,8 @@ from vistrack.core.runtime import keep_freed_memory
 from vistrack.data_synth.plate import make_plate_clip
 from vistrack.filters import make_filter
 from vistrack.io.clips import load_clip
-from vistrack.models.builders import build_model
 from vistrack.models.plate.model import PlateLikelihood
+from vistrack.registry.builders import build_model
 
 from _timing import Timer, run_timed, split_table, stepper
 

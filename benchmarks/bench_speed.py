@@ -42,7 +42,7 @@ from vistrack.data_synth.plate import make_plate_clip
 from vistrack.filters import make_filter
 from vistrack.io.clips import load_clip
 from vistrack.io.video import groundtruth_origin, open_video, prefetch, read_rects
-from vistrack.models.builders import build_model
+from vistrack.registry.builders import build_model
 from vistrack.track.loop import FrameStepper, warm_up
 from vistrack.track.run import track_video
 

@@ -21,8 +21,8 @@ from vistrack.core.features import FeatureMaps
 from vistrack.core.particles import ParticleSet
 from vistrack.filters import make_filter
 from vistrack.io.clips import load_clip
-from vistrack.models.builders import build_model
 from vistrack.models.contour.spline import edge_peaks, pose_from
+from vistrack.registry.builders import build_model
 from vistrack.reproduce.hs_sir import likelihood_params
 from vistrack.track.loop import track
 

@@ -724,7 +724,7 @@ def tasks_kept(n):
 
 def clip_intact(w, res):
     """An interrupted synth over ``w/c1``: the old clip byte for byte, nothing eval would take."""
-    from vistrack.engine.evaluation import find_clips
+    from vistrack.io.clips import find_clips
 
     if _clip_state(w / "c1") != _saved_state(w):
         return "data loss", "the old clip changed"

@@ -10,8 +10,8 @@ import vistrack
 from cli_helpers import run
 from vistrack.core.features import FeatureMaps
 from vistrack.io.clips import read_groundtruth_csv
-from vistrack.models.builders import model_from_box
 from vistrack.models.collapse import REASONS, CollapseWatch
+from vistrack.registry.builders import model_from_box
 
 GONE = 20  # the object vanishes from this frame on
 BOX = (36, 42, 28, 36)  # its first box (x, y, w, h)

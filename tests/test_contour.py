@@ -8,8 +8,8 @@ from vistrack.core.features import FeatureMaps
 from vistrack.core.metrics import center_error
 from vistrack.filters import make_filter
 from vistrack.io.clips import load_clip
-from vistrack.models.builders import build_model
 from vistrack.models.contour.model import BSpline, Contour, ellipse_template, pose_from, pose_params
+from vistrack.registry.builders import build_model
 from vistrack.track.loop import track
 
 

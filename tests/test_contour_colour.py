@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 
 from vistrack.core.features import FeatureMaps, colour_bins
-from vistrack.models.builders import model_from_box
+from vistrack.registry.builders import model_from_box
 
 H, W = 200, 260
 CX, CY, RX, RY = 130.0, 100.0, 30.0, 22.0

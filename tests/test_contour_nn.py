@@ -97,7 +97,7 @@ def small_clip(synth_clip):
 
 def test_same_seed_same_network_and_track(small_clip):
     from vistrack.io.clips import load_clip
-    from vistrack.models.builders import build_model
+    from vistrack.registry.builders import build_model
     from vistrack.track.loop import track
 
     cfg = nn.NNSearchConfig(samples=400, epochs=5)

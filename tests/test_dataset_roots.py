@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
-from vistrack.engine.evaluation import find_clips
+from vistrack.io.clips import find_clips
 from vistrack.io.video import read_rects
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"

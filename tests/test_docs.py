@@ -119,3 +119,20 @@ def test_the_layering_holds():
     res = subprocess.run([*cmd, "--no-cache"], cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-2000:]
     assert "0 broken" in res.stdout
+
+
+def test_the_api_reference_covers_every_public_module():
+    """Every public module of vistrack has its section on an API page (``tools/api_pages.py`` writes
+    them), and the experiment log is a file of the repository, not a page of the site."""
+    pages = sorted((ROOT / "docs" / "api").glob("*.md"))
+    documented = {line[4:].strip() for p in pages for line in p.read_text(encoding="utf-8").splitlines()
+                  if line.startswith("::: ")}
+    public = set()
+    for p in (ROOT / "vistrack").rglob("*.py"):
+        parts = p.relative_to(ROOT).with_suffix("").parts
+        parts = parts[:-1] if parts[-1] == "__init__" else parts
+        if not any(part.startswith("_") for part in parts):
+            public.add(".".join(parts))
+    assert len(public) > 150 and sorted(public - documented) == [], "run python tools/api_pages.py"
+    site = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
+    assert "experiments.md" not in site.split("nav:")[1] and "  experiments.md" in site.split("nav:")[0]

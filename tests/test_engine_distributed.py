@@ -1,7 +1,8 @@
 """The batch engine on a real Dask cluster with no filesystem in common (issue 36, item 1): a
 `dask scheduler` and two `dask worker` processes on 127.0.0.1, each in its own empty working folder
-and clip cache, run an eval whose --out only the client writes and whose clip is served over HTTP
-on 127.0.0.1; the results equal the local run's, and killing a worker mid-run changes nothing."""
+and clip cache, run an eval whose clip is served over HTTP on 127.0.0.1, started in a folder of the
+client's that no worker runs in, with --out relative to it: a worker that wrote --out would write it
+into its own folder. The results equal the local run's, and killing a worker mid-run changes nothing."""
 
 import json
 import os
@@ -69,9 +70,12 @@ def test_eval_on_a_cluster_without_a_shared_filesystem_equals_the_local_run(tmp_
         procs += workers
         url = f"http://127.0.0.1:{http_port}/sq/"
         client_env = {**env, "VISTRACK_CACHE": str(tmp_path / "client-cache")}
-        out = tmp_path / "client-only" / "out"
-        run = subprocess.Popen(eval_args(url, out, "--scheduler", f"tcp://127.0.0.1:{sched_port}", "--timeout", "60"),
-                               cwd=tmp_path, env=client_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        client = tmp_path / "client-only"  # the client's working folder, no worker's
+        client.mkdir()
+        out = client / "out"
+        run = subprocess.Popen(eval_args(url, "out", "--scheduler", f"tcp://127.0.0.1:{sched_port}", "--timeout",
+                                         "60"),
+                               cwd=client, env=client_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         # a worker killed mid-run: its task runs again elsewhere from its own seed stream
         wait_for(lambda: (out / "tasks").is_dir() and len(list((out / "tasks").glob("*.json"))) >= 2
                  or run.poll() is not None, 120, "no task finished")
@@ -80,7 +84,7 @@ def test_eval_on_a_cluster_without_a_shared_filesystem_equals_the_local_run(tmp_
         workers[0].send_signal(signal.SIGKILL)
         _, err = run.communicate(timeout=300)
         assert run.returncode == 0, err
-        for k in range(2):  # the workers wrote nothing where they ran; one fetched the clip into its cache
+        for k in range(2):  # the workers wrote nothing where they ran (no "out"); one fetched the clip into its cache
             assert sorted(p.name for p in (tmp_path / f"worker{k}").iterdir()) in ([], ["cache"])
         assert (tmp_path / "worker1" / "cache").is_dir()
         local = tmp_path / "local"

@@ -162,7 +162,7 @@ def test_demo_skips_a_missing_real_clip(tmp_path, capsys, monkeypatch):
     import importlib
 
     demo_module = importlib.import_module("vistrack.cli.demo")  # the package's `demo` is the command
-    monkeypatch.setattr(demo_module, "DEMO_ALGOS", (("bootstrap", 20),))  # the skip is what is tested
+    monkeypatch.setattr(demo_module, "DEMO_ENTRIES", (("bootstrap", 20),))  # the skip is what is tested
     out = tmp_path / "demo"
     code, stdout, err = run(["demo", "--out", str(out), "--frames", "10", "--runs", "1", "--real-clip",
                              str(tmp_path / "nowhere")], capsys)

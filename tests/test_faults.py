@@ -103,7 +103,7 @@ class _no_warnings:
 
 
 def test_particle_memory_check_known_answer():
-    from vistrack.core.runtime import check_particle_memory
+    from vistrack.registry import check_particle_memory
 
     assert check_particle_memory(1000, 32_000, "lis", available=2**30) == 32_000_000
     with pytest.raises(ValueError, match="use at most 2097"):  # half of 1 GiB / (32 KB x 8 for LLS)
@@ -139,7 +139,7 @@ def test_truncated_and_empty_videos_are_clear_errors(tmp_path, capsys):
 def test_one_experiment_per_out_folder(tmp_path):
     """A second eval into a folder that a live process holds refuses with one line; a lock left by
     a dead process is taken over; the lock is gone after."""
-    from vistrack.engine.evaluation import OutLocked, lock_out
+    from vistrack.engine.tasks import OutLocked, lock_out
 
     holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
     try:
@@ -159,7 +159,7 @@ def test_one_experiment_per_out_folder(tmp_path):
 
 
 def test_write_atomic_leaves_the_old_file_on_failure(tmp_path):
-    from vistrack.engine.evaluation import write_atomic
+    from vistrack.engine.tasks import write_atomic
 
     p = tmp_path / "results.json"
     write_atomic(p, "old")
@@ -328,10 +328,11 @@ def test_a_task_that_cannot_finish_is_one_error_line(tmp_path, runner, message):
     line naming the task, the finished task files kept for --resume."""
     import click
 
-    from vistrack.cli.eval import run_tasks
+    from vistrack.cli.grid import progress
+    from vistrack.engine.grid import run_grid
 
-    with pytest.raises(click.ClickException) as e:
-        run_tasks([{"name": "t1"}], tmp_path, workers=1, in_process=True, quiet=True, runner=runner)
+    with pytest.raises(click.ClickException) as e, progress("tasks", quiet=True) as hooks:
+        run_grid([{"name": "t1"}], tmp_path, workers=1, in_process=True, runner=runner, **hooks)
     assert message in e.value.message and "--resume runs the rest" in e.value.message
     assert not (tmp_path / ".vistrack.lock").exists()
 
@@ -343,24 +344,22 @@ class _FakeClient:
     def __init__(self, hidden):
         self.hidden = hidden
 
-    def run(self, fn, probe, clips):
-        missing = fn(probe, clips)
-        return {"tcp://a:1": missing, "tcp://b:1": missing + [p for p in [probe, *clips] if self.hidden(p)]}
+    def run(self, fn, clips):
+        missing = fn(clips)
+        return {"tcp://a:1": missing, "tcp://b:1": missing + [p for p in clips if self.hidden(p)]}
 
 
-def test_workers_must_see_out_and_the_clips(tmp_path):
-    """With a scheduler elsewhere, workers write into --out and read the clips at the tasks' paths:
-    checked before the grid, one line naming what a worker cannot see; the probe file is removed."""
+def test_workers_must_see_the_clips(tmp_path):
+    """With a scheduler elsewhere, workers read the clips at the tasks' paths: checked before the grid,
+    one line naming what a worker cannot see (they need no --out: the results come back through Dask)."""
     from vistrack.engine.tasks import TaskFailed, check_shared
 
     clip = tmp_path / "clip"
     clip.mkdir()
     tasks = [{"name": "t", "clip": str(clip)}]
-    check_shared(_FakeClient(lambda p: False), tasks, tmp_path)
+    check_shared(_FakeClient(lambda p: False), tasks)
     with pytest.raises(TaskFailed, match=f"1 worker.s. of the scheduler .e.g. tcp://b:1. cannot see clip {clip}: "):
-        check_shared(_FakeClient(lambda p: p == str(clip)), tasks, tmp_path)
-    with pytest.raises(TaskFailed, match=f"cannot see --out {tmp_path}: --out and the clips must be on a filesystem"):
-        check_shared(_FakeClient(lambda p: True), tasks, tmp_path)
+        check_shared(_FakeClient(lambda p: p == str(clip)), tasks)
     assert [p.name for p in tmp_path.iterdir()] == ["clip"]
 
 
@@ -395,7 +394,7 @@ def test_a_failed_synth_leaves_the_old_clip_whole(tmp_path, monkeypatch):
     """The writer fails mid-clip (disk full) while a clip is overwritten: the old clip is intact,
     no partial folder is left, the user's own files in the folder survive a successful overwrite."""
     import vistrack.data_synth.contour as contour
-    from vistrack.engine.evaluation import find_clips
+    from vistrack.io.clips import find_clips
 
     clip = tmp_path / "suite" / "c1"
     kw = dict(frames=4, size=(96, 72), clutter="low", distractor=False)
@@ -428,7 +427,7 @@ def test_synth_killed_mid_clip_leaves_the_old_clip_and_no_clip_eval_takes(tmp_pa
     """kill -9 of ``vistrack synth`` overwriting a clip: the old video and ground truth are there, as
     they were; the partial render is a hidden folder that eval does not take for a clip, and the next
     synth into that folder removes it."""
-    from vistrack.engine.evaluation import find_clips
+    from vistrack.io.clips import find_clips
 
     clip = tmp_path / "c1"
     synth = ["synth", "contour", "--size", "96x72", "--clutter", "low", "--no-distractor", "-q"]

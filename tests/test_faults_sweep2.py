@@ -318,9 +318,10 @@ def test_13_demo_says_how_many_real_frames_it_took(tmp_path, capsys, monkeypatch
 
     demo = sys.modules["vistrack.cli.demo"]  # the package's ``demo`` is the command
     calls = []
-    monkeypatch.setattr(demo, "compare", lambda clip, entries, model, runs, seed, out: calls.append(clip) or "table")
-    monkeypatch.setattr(demo, "make_contour_clip", lambda *a, **k: None)
-    monkeypatch.setattr(demo, "DEMO_ALGOS", ())
+    monkeypatch.setattr(demo, "compare",
+                        lambda clip, entries, model, runs, seed, out, **hooks: calls.append(clip) or "table")
+    monkeypatch.setattr(demo, "make_demo_clip", lambda *a, **k: None)
+    monkeypatch.setattr(demo, "DEMO_ENTRIES", ())
     image_folder(tmp_path / "real", 12)
     code, out, err = run(["demo", "--out", str(tmp_path / "d"), "--real-clip", str(tmp_path / "real"),
                           "--real-frames", "60", "--runs", "1"], capsys)
@@ -357,12 +358,12 @@ def test_14_binary_bom_and_nan_input_files(tmp_path, capsys):
 
 
 def test_14_eval_out_with_a_file_where_tasks_go_fails_before_the_grid(tmp_path, capsys, monkeypatch):
-    import vistrack.cli.eval as ev
+    import vistrack.engine.grid as grid
 
     image_folder(tmp_path / "c", 3)
     (tmp_path / "E").mkdir()
     (tmp_path / "E" / "tasks").write_text("a file")
-    monkeypatch.setattr(ev, "run_tasks", lambda *a, **k: pytest.fail("the grid ran"))
+    monkeypatch.setattr(grid, "run_grid", lambda *a, **k: pytest.fail("the grid ran"))
     code, _, err = run(["eval", str(tmp_path / "c"), "--algos", "lis", "--particles", "10", "--runs", "1",
                         "--out", str(tmp_path / "E")], capsys)
     one_error(code, err, "tasks is a file")
@@ -433,7 +434,7 @@ def test_8_a_signal_between_the_track_row_and_the_video_frame(tmp_path, names, r
 
     from vistrack.filters import make_filter
     from vistrack.io.clips import load_clip
-    from vistrack.models.builders import build_model
+    from vistrack.registry.builders import build_model
     from vistrack.track.run import stop_on_signals, track_video
 
     image_folder(tmp_path / "c", 10)
@@ -466,7 +467,7 @@ def test_8_a_second_signal_while_the_outputs_close_is_waited_for(tmp_path):
 
     from vistrack.filters import make_filter
     from vistrack.io.clips import load_clip
-    from vistrack.models.builders import build_model
+    from vistrack.registry.builders import build_model
     from vistrack.track.run import TrackCSV, track_video
 
     image_folder(tmp_path / "c", 6)

@@ -20,7 +20,7 @@ from vistrack import kernels
 from vistrack.core.features import FeatureMaps, bin_integrals, colour_bins, remap_points
 from vistrack.filters import make_filter
 from vistrack.io.clips import load_clip
-from vistrack.models.builders import build_model
+from vistrack.registry.builders import build_model
 from vistrack.track.loop import FrameStepper, warm_up
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")

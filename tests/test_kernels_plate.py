@@ -15,7 +15,7 @@ from kernel_helpers import both
 from vistrack import kernels
 from vistrack.core.features import FeatureMaps
 from vistrack.io.clips import load_clip
-from vistrack.models.builders import build_model
+from vistrack.registry.builders import build_model
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 

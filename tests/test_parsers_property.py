@@ -199,7 +199,7 @@ def test_meta_json_is_an_object_or_one_line(text):
                  st.lists(st.tuples(NUMBER, NUMBER), max_size=6).map(lambda ps: "\n".join(f"{a} {b}" for a, b in ps))),
        st.sampled_from([".txt", ".json"]))
 def test_template_files_are_finite_points_or_one_line(text, suffix):
-    from vistrack.models.builders import read_support_points
+    from vistrack.registry.builders import read_support_points
 
     p = ROOT / f"template{suffix}"
     p.write_text(text)

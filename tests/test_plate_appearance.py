@@ -9,7 +9,7 @@ import pytest
 
 import vistrack
 from vistrack.core.features import FeatureMaps
-from vistrack.models.builders import model_from_box
+from vistrack.registry.builders import model_from_box
 
 H, W = 240, 320
 PW, PH = 64, 14  # a single-row plate: aspect about 4.6

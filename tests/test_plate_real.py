@@ -8,8 +8,8 @@ import pytest
 
 from vistrack.core.features import FeatureMaps
 from vistrack.io.video import open_video, read_rects
-from vistrack.models.builders import model_from_box
 from vistrack.models.plate.detect import PlateDetector
+from vistrack.registry.builders import model_from_box
 
 CLIP = Path(__file__).resolve().parents[2] / "shared" / "data" / "real" / "plate_in_polo_dashcam"
 

@@ -7,7 +7,7 @@ import pytest
 
 from test_box import clip_frames, obj_box, path
 from vistrack.filters import make_filter
-from vistrack.models.builders import model_from_box
+from vistrack.registry.builders import model_from_box
 from vistrack.track.profiling import Timer
 from vistrack.track.run import track_video
 

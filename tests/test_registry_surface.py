@@ -2,13 +2,16 @@
 
 import json
 
+import numpy as np
+import pytest
+
 from cli_helpers import run
 from clip_helpers import square_clip
 from vistrack.cli.eval import eval_cmd
 from vistrack.cli.run import RUN_ALGOS
 from vistrack.data_synth.contour import make_contour_clip
 from vistrack.engine.evaluation import check_algos
-from vistrack.models.registry import DEFAULT_MODEL, MODELS, all_algos
+from vistrack.registry import DEFAULT_MODEL, MODELS, all_algos
 
 
 def test_every_algorithm_run_offers_is_one_eval_accepts():
@@ -41,3 +44,76 @@ def test_eval_without_model_takes_the_model_the_clips_name(tmp_path, capsys):
     code, _, err = run(["eval", str(tmp_path / "s"), "--algos", "lis", "--out", str(tmp_path / "e2")], capsys)
     assert code == 1
     assert err.strip() == "Error: the clips name different models in meta.json (box, contour): give --model"
+
+
+def test_eval_of_an_algorithm_the_model_does_not_run_is_one_line_naming_those_it_does(tmp_path, capsys):
+    """eval --algos pf-eis-mt on box clips: refused before any task, as run refuses it, with the box
+    model's algorithms (the registry derives them from the protocols the box model offers)."""
+    clip = tmp_path / "sq"
+    square_clip(clip)
+    code, out, err = run(["eval", str(clip), "--algos", "lis,pf-eis-mt", "--particles", "20", "--runs", "1",
+                          "--in-process", "--out", str(tmp_path / "e"), "-q"], capsys)
+    box = MODELS["box"].algos
+    assert code != 0 and err.strip() == ("Error: --algos pf-eis-mt does not run on the box model; choose from "
+                                         + ", ".join(box))
+    assert box[:2] == ("lis", "bootstrap") and "pf-eis-mt" not in box and "Traceback" not in out + err
+    assert not (tmp_path / "e" / "tasks").exists()
+
+
+def test_every_algorithm_a_model_lists_builds_on_it_and_no_other_does():
+    """The derived lists are the truth: each algorithm listed for the box model builds a filter on a
+    box model, and every registered one not listed (under any name of it) fails with one line."""
+    from vistrack.filters import FILTERS, make_filter
+    from vistrack.registry import model_from_box
+
+    frame = np.full((72, 96, 3), 40, np.uint8)
+    frame[20:40, 20:40] = (40, 60, 220)
+    model = model_from_box("box", frame, (20, 20, 20, 20))
+    listed = set(MODELS["box"].algos)
+    for name, spec in FILTERS.items():
+        if name in listed or (spec.alias_of or name) in listed:
+            make_filter(name, model)
+        else:
+            with pytest.raises(ValueError, match=f"^{name}( [(].*[)])? needs a model with .*; Box does not supply"):
+                make_filter(name, model)
+
+
+def test_a_model_registered_without_algorithms_runs_what_its_protocols_offer():
+    """A model class that gains a protocol gains its filters: nothing lists them by hand. The default
+    is the first in the filter registry's order that runs on it."""
+    from vistrack.models.protocol import VideoModelBase
+    from vistrack.registry import ModelSpec, register
+
+    class Walk(VideoModelBase):
+        dim = 2
+
+        def sample_prior(self, n, rng): ...
+        def prior_logpdf(self, states): ...
+        def predict(self, states, rng): ...
+        def transition_logpdf(self, new, old): ...
+        def loglik(self, obs, states): ...
+
+    class WalkWithProposal(Walk):
+        def lis_proposal(self, kernel=None): ...
+
+    try:
+        walk = register(ModelSpec("walk", description="a random walk", model_class=Walk))
+        assert walk.algos == ("bootstrap", "condensation", "avpf") and walk.default_algo == "bootstrap"
+        assert walk.multi_algos == ()
+        lis = register(ModelSpec("walk-lis", description="a random walk", model_class=WalkWithProposal))
+        assert lis.algos == ("lis", "bootstrap", "condensation", "avpf")
+        with pytest.raises(ValueError, match="model 'walk': lis does not run on Walk"):
+            register(ModelSpec("walk", ("lis",), "a random walk", model_class=Walk))
+    finally:
+        MODELS.pop("walk", None)
+        MODELS.pop("walk-lis", None)
+
+
+def test_a_filter_s_options_come_from_its_class():
+    from vistrack.filters import FILTERS
+
+    opts = {o.name: o for o in FILTERS["pf-eis-mt"].options}
+    assert list(opts)[:2] == ["mt_dims", "mt_weight"] and opts["mt_weight"].default == "sampled"
+    assert opts["mt_dims"].default is None and opts["mt_dims"].help.startswith("Number of trailing entries of")
+    assert opts["resample"].default == "systematic" and opts["ess_threshold"].help.startswith("Resample every step")
+    assert [o.name for o in FILTERS["avpf"].options][:2] == ["first_stage", "point"]

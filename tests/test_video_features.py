@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-from vistrack.core.features import FeatureMaps, box_dog
+from vistrack.core.features import FeatureMaps, box_dog, box_sums
 from vistrack.io.video import VideoDecodeWarning, VideoError, VideoWriter, find_groundtruth, open_video, read_rects
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
@@ -87,14 +87,17 @@ def test_smoothed_gradient_keeps_a_ramp_and_evens_out_blurred_edges():
     y, x = np.mgrid[5:8, 20:24].astype(np.float32)
     assert fm.sample_gradient(x, y, 1.5) == pytest.approx(g[5:8, 20:24])
 
-def test_box_means_from_integral_images_match_direct_means(rng):
+def test_box_sums_from_integral_images_match_direct_sums(rng):
+    """:func:`~vistrack.core.features.box_sums` (what the box model's colour maps read) against direct
+    sums: boxes clipped to the map, an empty box summing to 0."""
     fm = FeatureMaps(rng.integers(0, 255, (50, 70, 3)).astype(np.uint8))
+    ii = fm.integral("abs_gx")
     x0, y0 = rng.integers(0, 30, 20), rng.integers(0, 20, 20)
-    x1, y1 = x0 + rng.integers(1, 30, 20), y0 + rng.integers(1, 25, 20)
-    got = fm.box_mean("abs_gx", x0, y0, x1, y1)
-    direct = [np.abs(fm.gx[b:d, a:c]).mean() for a, b, c, d in zip(x0, y0, x1, y1)]
+    x1, y1 = x0 + rng.integers(1, 50, 20), y0 + rng.integers(1, 40, 20)
+    got = box_sums(ii, x0, y0, x1, y1)
+    direct = [np.abs(fm.gx[b:d, a:c]).sum() for a, b, c, d in zip(x0, y0, x1, y1)]
     assert got == pytest.approx(direct, rel=1e-5)
-    assert np.isnan(fm.box_mean("gray", 5, 5, 5, 9))
+    assert box_sums(ii, 5, 5, 5, 9) == 0.0
 
 
 # -- video --------------------------------------------------------------------

@@ -5,6 +5,12 @@ reference in the repository (code, tests, benchmarks, docs, pyproject). Relative
 package are recomputed from each file's new place. It was run once, from the repository root, on
 the commit before the move; it is kept as the record of that change (running it again does nothing
 useful: the old names are gone).
+
+The next commits moved by hand: ``vistrack.models.builders`` -> ``vistrack.registry.builders``,
+``vistrack.models.registry`` -> ``vistrack.registry.catalog`` (``vistrack.registry`` re-exports both),
+``vistrack.reproduce.multi_plate``'s tasks and scores -> ``vistrack.engine.multi_target``,
+``vistrack.cli.demo``'s clips and comparisons -> ``vistrack.engine.demo``, ``vistrack.filters.ALGORITHMS``
+-> ``vistrack.filters.registry`` (re-exported), ``check_particle_memory`` -> ``vistrack.registry``.
 """
 
 from __future__ import annotations

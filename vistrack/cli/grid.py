@@ -1,5 +1,5 @@
-"""The command line's side of the batch engine (:mod:`vistrack.engine.grid`): a progress bar, its notes on
-stderr and its refusals as one error line, for ``eval``, ``reproduce`` and ``demo``."""
+"""The command line's side of the batch engine (:mod:`vistrack.engine.grid`): a progress bar and the
+engine's notes on stderr, for ``eval``, ``reproduce`` and ``demo``."""
 
 from __future__ import annotations
 
@@ -8,37 +8,27 @@ from contextlib import contextmanager
 import click
 from tqdm import tqdm
 
-from vistrack.engine.evaluation import OutLocked, TaskFailed, lock_out
-from vistrack.engine.grid import EngineError, run_grid
+from .errors import one_line
 
-__all__ = ["run_tasks"]
+__all__ = ["progress"]
 
 
 @contextmanager
-def _locked(out):
-    """:func:`vistrack.engine.tasks.lock_out` with its refusal as one error line."""
+def progress(desc, quiet=False):
+    """The engine's hooks (``progress``, ``on_ready``, ``notify``: a progress bar ``desc`` for each grid, shown
+    once the workers are there, unless ``quiet``, and the notes on stderr even then) for the block, whose
+    refusals are one error line (:func:`~vistrack.cli.errors.one_line`)."""
+    bar = []
+
+    def ready(total):  # a new grid in the block: a new bar
+        for b in bar:
+            b.close()
+        bar.append(tqdm(total=total, unit="task", desc=desc, disable=quiet))
+
+    hooks = {"progress": lambda k: bar[-1].update(k), "notify": lambda m: click.echo(m, err=True), "on_ready": ready}
     try:
-        with lock_out(out):
-            yield
-    except OutLocked as e:
-        raise click.ClickException(str(e)) from None
-
-
-def run_tasks(tasks, out, *, scheduler=None, workers=0, timeout=10, in_process=False, resume=False, quiet=False,
-              desc="tasks", runner=None):
-    """:func:`vistrack.engine.grid.run_grid` with a progress bar, its refusals and failures as one error line
-    and its notes on stderr (even with ``quiet``)."""
-    bar = []  # the progress bar, shown once the workers are there
-
-    def progress(k):
-        bar[0].update(k)
-
-    try:
-        run_grid(tasks, out, scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process,
-                 resume=resume, progress=progress, runner=runner, notify=lambda m: click.echo(m, err=True),
-                 on_ready=lambda: bar.append(tqdm(total=len(tasks), unit="task", desc=desc, disable=quiet)))
-    except (OutLocked, EngineError, TaskFailed) as e:
-        raise click.ClickException(str(e)) from None
+        with one_line():
+            yield hooks
     finally:
         for b in bar:
             b.close()

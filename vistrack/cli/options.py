@@ -6,6 +6,9 @@ import os
 
 import click
 
+from vistrack.io.outputs import check_writable as writable
+from vistrack.io.video_errors import quoted
+
 __all__ = ["Ratio",
            "IntList", "FloatList", "StrList", "Box", "Size", "Fraction", "SEED", "check_writable", "check_outputs"]
 
@@ -25,7 +28,7 @@ class IntList(click.ParamType):
         try:
             out = [int(v) for v in str(value).split(",") if v.strip()]
         except ValueError:
-            self.fail(f"expected comma-separated integers, got {_short(value)}", param, ctx)
+            self.fail(f"expected comma-separated integers, got {quoted(value)}", param, ctx)
         return _no_repeats(out, self, param, ctx)
 
 
@@ -43,7 +46,7 @@ class FloatList(click.ParamType):
         except ValueError:
             out = None
         if out is None or not all(v == v and abs(v) != float("inf") for v in out):
-            self.fail(f"expected comma-separated finite numbers, got {_short(value)}", param, ctx)
+            self.fail(f"expected comma-separated finite numbers, got {quoted(value)}", param, ctx)
         return out
 
 
@@ -59,18 +62,12 @@ class StrList(click.ParamType):
         return _no_repeats([v.strip() for v in str(value).split(",") if v.strip()], self, param, ctx)
 
 
-def _short(value, most=60):
-    """``value`` quoted, cut to ``most`` characters (an error stays one short line)."""
-    text = str(value)
-    return repr(text if len(text) <= most else text[:most] + "...")
-
-
 def _no_repeats(values, ptype, param, ctx):
     """``values``, failing with one line when one is listed twice (its runs would be counted twice)."""
     seen = set()
     for v in values:
         if v in seen:
-            ptype.fail(f"{v if isinstance(v, int) or v.isprintable() else _short(v)} is listed twice (each is run "
+            ptype.fail(f"{v if isinstance(v, int) or v.isprintable() else quoted(v)} is listed twice (each is run "
                        "once: list it once)", param, ctx)
         seen.add(v)
     return values
@@ -89,11 +86,11 @@ class Box(click.ParamType):
         try:
             v = tuple(float(s) for s in str(value).split(","))
         except ValueError:
-            self.fail(f"expected four numbers x,y,w,h, got {_short(value)}", param, ctx)
+            self.fail(f"expected four numbers x,y,w,h, got {quoted(value)}", param, ctx)
         if len(v) != 4:
             self.fail(f"expected four numbers x,y,w,h, got {len(v)}", param, ctx)
         if not all(abs(x) < float("inf") for x in v):  # also false for NaN
-            self.fail(f"expected four finite numbers x,y,w,h, got {_short(value)}", param, ctx)
+            self.fail(f"expected four finite numbers x,y,w,h, got {quoted(value)}", param, ctx)
         if v[2] <= 0 or v[3] <= 0:
             self.fail(f"width and height must be positive, got {v[2]:g}x{v[3]:g}", param, ctx)
         return v
@@ -125,7 +122,7 @@ class Size(click.ParamType):
         try:
             w, h = (int(v) for v in str(value).lower().split("x"))
         except ValueError:
-            self.fail(f"expected WIDTHxHEIGHT such as 320x240, got {_short(value)}", param, ctx)
+            self.fail(f"expected WIDTHxHEIGHT such as 320x240, got {quoted(value)}", param, ctx)
         if w < 64 or h < 48:
             self.fail(f"frame size {w}x{h} is too small (at least 64x48)", param, ctx)
         if max(w, h) > 8192 or w * h > 4096 * 4096:
@@ -134,17 +131,12 @@ class Size(click.ParamType):
 
 
 def check_writable(path, what):
-    """Raise ``click.ClickException`` unless ``path`` can be written as a file."""
-    if path is None:
-        return
-    path = os.path.abspath(path)
-    parent = os.path.dirname(path)
-    if os.path.isdir(path):
-        raise click.ClickException(f"{what} {path} is a directory, not a file")
-    if not os.path.isdir(parent):
-        raise click.ClickException(f"cannot write {what} {path}: folder {parent} does not exist")
-    if not os.access(parent, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
-        raise click.ClickException(f"cannot write {what} {path}: permission denied")
+    """Raise ``click.ClickException`` unless ``path`` can be written as a file
+    (:func:`vistrack.io.outputs.check_writable`)."""
+    try:
+        writable(path, what)
+    except ValueError as e:
+        raise click.ClickException(str(e)) from None
 
 
 #: files of a clip folder that ``run`` reads (besides the frames of ``img/``, ``color/`` or the folder itself)

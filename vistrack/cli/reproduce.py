@@ -2,20 +2,32 @@
 
 from __future__ import annotations
 
-
 import click
+from click.core import ParameterSource
 
-from vistrack.reproduce.bearings import (DEFAULT_ALGOS, BearingsConfig, bearing_results, bearing_tasks,
-                                         equal_time_pairs, format_ship_table, run_bearing_task)
-from vistrack.reproduce.landmarks import (LANDMARK_ALGOS, LandmarksConfig, landmark_results, landmark_tasks,
-                                          run_landmark_task)
-from vistrack.reproduce.plate import PlateConfig, plate_results, plate_tasks, run_plate_task
-from vistrack.engine.evaluation import entries_config
-from vistrack.reproduce.contour import ContourConfig, contour_results, contour_tasks
+from vistrack.models.bearings.model import Bearings
+from vistrack.registry import algos_for, derived_algos
+from vistrack.reproduce.bearings import BearingsConfig, format_ship_table
+from vistrack.reproduce.contour import ContourConfig
+from vistrack.reproduce.landmarks import STREAMS, LandmarksConfig
+from vistrack.reproduce.multi_plate import PlatesConfig
+from vistrack.reproduce.pipeline import reproduce as run_reproduction
+from vistrack.reproduce.plate import PlateConfig
+from vistrack.reproduce.suite import experiment_clips
 
-from .options import SEED, Fraction, IntList, StrList, check_writable
-from .reproduce_common import (_check_entries, _clip_suite, _plots_dir, _report, _run, engine_options,
-                               output_options, suite_options)
+from .errors import one_line
+from .grid import progress
+from .options import SEED, Fraction, IntList, Size, StrList
+from .reproduce_common import (
+    config_default,
+    default_entries,
+    engine_options,
+    equal_time_line,
+    making_clips,
+    output_options,
+    results_lines,
+    suite_options,
+)
 
 __all__ = ["reproduce"]
 
@@ -30,8 +42,8 @@ def reproduce():
 @click.option("--sequences", default=10, show_default=True, type=int, help="Fixed state/observation sequences.")
 @click.option("--runs", default=100, show_default=True, type=int, help="Filter runs per sequence.")
 @click.option("--steps", default=10, show_default=True, type=int, help="Time steps per sequence.")
-@click.option("--algos", default=",".join(DEFAULT_ALGOS), show_default=True, type=StrList(),
-              help="Algorithms, comma-separated (bootstrap, avpf, lis, lls, partitioned, branched-partitioned, ...).")
+@click.option("--algos", default=",".join(config_default(BearingsConfig, "algos")), show_default=True, type=StrList(),
+              help="Algorithms, comma-separated (" + ", ".join(derived_algos(Bearings)) + ").")
 @click.option("--particles", default="100,500,3000", show_default=True, type=IntList(),
               help="Particle counts N, comma-separated.")
 @click.option("--equal-time", is_flag=True, help="Run the first algorithm at each N and every other at the N that "
@@ -64,29 +76,21 @@ def bearings(ships, sequences, runs, steps, algos, particles, equal_time, seed, 
     cfg = BearingsConfig(ships=ships, sequences=sequences, runs=runs, steps=steps, algos=algos,
                          particles=particles, seed=seed, resample=resample, ess_threshold=ess_threshold,
                          proposal=lis_proposal)
-    try:
-        cfg.validate()
-    except ValueError as e:
-        raise click.ClickException(str(e)) from None
-    _plots_dir(plots_dir, "error_vs_time.png")
-    check_writable(json_path, "--json file")
-    if equal_time:
-        cfg.entries, times = equal_time_pairs(cfg)
-        click.echo("equal time: " + ", ".join(f"{a}:{n}" for a, n in cfg.entries) + " ("
-                   + ", ".join(f"{k} {v:.1f} ms/run" for k, v in times.items()) + ")")
-    tasks = bearing_tasks(cfg)
-    out_path = _run(tasks, out_dir, "bearings", runner=run_bearing_task, scheduler=scheduler, workers=workers,
-                    in_process=in_process, resume=resume, quiet=quiet)
-    out = bearing_results(cfg, tasks, out_path)
-    _report("bearings", out, out["config"], json_path, plots_dir, title=f"Bearings-only, {ships} ship(s)")
+    with progress("bearings", quiet) as hooks:
+        done = run_reproduction(cfg, out_dir, json_path=json_path, plots_dir=plots_dir,
+                                title=f"Bearings-only, {ships} ship(s)", equal_time=equal_time,
+                                on_equal_time=equal_time_line("run"), scheduler=scheduler, workers=workers,
+                                in_process=in_process, resume=resume, **hooks)
+    click.echo(results_lines("bearings", done))
     if ships > 1:
-        click.echo(format_ship_table(out["results"]))
+        click.echo(format_ship_table(done.out["results"]))
 
 
 @reproduce.command()
 @suite_options("Folder of contour clip folders (each with video.mp4, groundtruth.csv, meta.json); "
-               "made there with --make if missing.", "320x240", "ls-n-ips:30,bootstrap:2000",
-               "ALGO:N pairs (bootstrap, ls-n-ips, lls, lis, avpf).", 10)
+               "made there with --make if missing.", "320x240", default_entries(ContourConfig),
+               "ALGO:N pairs (" + ", ".join(algos_for(ContourConfig.model)) + ").",
+               config_default(ContourConfig, "runs"))
 @engine_options("contour-results")
 @output_options("Write P(lost) vs frame and error vs frame PNGs here.")
 def contour(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler, in_process, out_dir, resume,
@@ -99,19 +103,14 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
     scaled) at the last frame and averaged over frames, the mean error of
     runs not lost, and the filter's time per frame.
     """
-    from vistrack.data_synth.contour import make_contour_clip
-
-    _check_entries(entries)
-    check_writable(json_path, "--json file")
-    _plots_dir(plots_dir, "p_lost_vs_frame.png")
-    clips = _clip_suite(clips_dir, "contour-clips", make, frames, size, make_contour_clip, "contour", quiet,
-                        clutter="high", distractor=True)
+    with making_clips(make, frames, quiet) as made, one_line():
+        clips = experiment_clips("contour", clips_dir, make, frames, Size().convert(size, None, None), made)
     cfg = ContourConfig(clips=clips, entries=entries, runs=runs, seed=seed)
-    tasks = contour_tasks(cfg)
-    out = _run(tasks, out_dir, "contour", scheduler=scheduler, workers=workers,
-               in_process=in_process, resume=resume, quiet=quiet)
+    with progress("contour", quiet) as hooks:
+        done = run_reproduction(cfg, out_dir, json_path=json_path, plots_dir=plots_dir, scheduler=scheduler,
+                                workers=workers, in_process=in_process, resume=resume, **hooks)
     click.echo(f"{len(clips)} clips x {runs} runs")
-    _report("contour", {"results": contour_results(tasks, out)}, entries_config(cfg), json_path, plots_dir)
+    click.echo(results_lines("contour", done))
 
 
 @reproduce.command()
@@ -123,7 +122,7 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
 @click.option("--seed", default=0, show_default=True, type=SEED,
               help="Random seed: the same seed gives the same output, bit for bit.")
 @click.option("--algos", default=None, type=StrList(),
-              help=f"Algorithms, comma-separated ({', '.join(LANDMARK_ALGOS)}) [default: the paper's for K].")
+              help=f"Algorithms, comma-separated ({', '.join(STREAMS)}) [default: the paper's for K].")
 @click.option("-n", "--particles", default=None, type=click.IntRange(min=1),
               help="Particles N [default: the paper's, 50 for K=5 and 20 for K=8].")
 @click.option("--mt-dims", default=None, type=click.IntRange(min=0),
@@ -142,29 +141,23 @@ def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, schedule
     file per run in OUT/tasks, --resume continues an interrupted reproduction;
     run r draws from SeedSequence(seed).spawn(runs)[r] whatever the workers).
     """
-    try:
+    with one_line():
         cfg = LandmarksConfig(k=int(k), runs=runs, steps=steps, seed=seed, particles=particles,
                               algos=list(algos or []), mt_dims=mt_dims)
-        cfg.validate()
-        cfg.model()
-    except ValueError as e:
-        raise click.ClickException(str(e)) from None
-    check_writable(json_path, "--json file")
-    _plots_dir(plots_dir, "mse_vs_time.png")
-    tasks = landmark_tasks(cfg)
-    out_path = _run(tasks, out_dir, f"landmarks K={k}", runner=run_landmark_task, scheduler=scheduler, workers=workers,
-                    in_process=in_process, resume=resume, quiet=quiet)
-    out = landmark_results(cfg, tasks, out_path)
+    with progress(f"landmarks K={k}", quiet) as hooks:
+        done = run_reproduction(cfg, out_dir, json_path=json_path, plots_dir=plots_dir,
+                                title=f"Landmark shape tracking, K = {k}", scheduler=scheduler, workers=workers,
+                                in_process=in_process, resume=resume, **hooks)
     click.echo(f"K = {k}, {runs} runs x {steps} steps")
-    _report("landmarks", out, out["config"], json_path, plots_dir, title=f"Landmark shape tracking, K = {k}")
+    click.echo(results_lines("landmarks", done))
 
 
 @reproduce.command()
 @suite_options("Folder of plate clip folders; made there with --make if missing [default: plate-clips; "
-               "plate-overlap-clips with --overlap].", "640x480", "lis:100,bootstrap:750",
-               "ALGO:N pairs (lis, bootstrap, lls, avpf; with --overlap: partitioned-lis, partitioned, "
-               "branched-partitioned(-lis), lis, bootstrap) [default with --overlap: "
-               "partitioned-lis:100,bootstrap:2000].", 20)
+               "plate-overlap-clips with --overlap].", "640x480", default_entries(PlateConfig),
+               "ALGO:N pairs (" + ", ".join(algos_for(PlateConfig.model)) + "; with --overlap: "
+               + ", ".join(algos_for(PlatesConfig.model, targets=True)) + ") [default with --overlap: "
+               + default_entries(PlatesConfig) + "].", config_default(PlateConfig, "runs"))
 @click.option("--overlap", is_flag=True,
               help="Several plates at once: clips with up to three plates in view (6 cars, synth plate --overlap), "
                    "tracked with --targets slots and scored by MOTA and IDF1 against objects.csv.")
@@ -192,31 +185,24 @@ def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targ
     MOTA and IDF1 over runs, identity switches, false positives and misses per
     run, the plates reported in frames without any, and the time per frame.
     """
-    from vistrack.data_synth.plate import make_plate_clip
-
-    if overlap:
-        if plots_dir:
-            raise click.UsageError("--plots is not for --overlap (its scores are one table)")
-        if ctx.get_parameter_source("entries") == click.core.ParameterSource.DEFAULT:
-            entries = [("partitioned-lis", 100), ("bootstrap", 2000)]
-        from .reproduce_plates import overlap
-
-        return overlap(clips_dir, make, frames, size, entries, runs, seed, targets, equal_time, quiet, json_path,
-                       dict(scheduler=scheduler, workers=workers, in_process=in_process, resume=resume, quiet=quiet),
-                       out_dir if ctx.get_parameter_source("out_dir") != click.core.ParameterSource.DEFAULT
-                       else "plate-overlap-results")
-    if equal_time or ctx.get_parameter_source("targets") != click.core.ParameterSource.DEFAULT:
+    given = {n for n in ("entries", "targets", "out_dir") if ctx.get_parameter_source(n) != ParameterSource.DEFAULT}
+    if overlap and plots_dir:
+        raise click.UsageError("--plots is not for --overlap (its scores are one table)")
+    if not overlap and (equal_time or "targets" in given):
         raise click.UsageError("--targets and --equal-time are for --overlap")
-    _check_entries(entries)
-    check_writable(json_path, "--json file")
-    _plots_dir(plots_dir, "p_lost_vs_frame.png")
-    clips = _clip_suite(clips_dir, "plate-clips", make, frames, size, make_plate_clip, "plate", quiet)
-    cfg = PlateConfig(clips=clips, entries=entries, runs=runs, seed=seed)
-    tasks = plate_tasks(cfg)
-    out = _run(tasks, out_dir, "plate", runner=run_plate_task, scheduler=scheduler, workers=workers,
-               in_process=in_process, resume=resume, quiet=quiet)
-    click.echo(f"{len(clips)} clips x {runs} runs")
-    _report("plate", {"results": plate_results(cfg, tasks, out)}, entries_config(cfg), json_path, plots_dir)
+    experiment = "plates" if overlap else "plate"
+    with making_clips(make, frames, quiet) as made, one_line():
+        clips = experiment_clips(experiment, clips_dir, make, frames, Size().convert(size, None, None), made)
+    chosen = {"entries": entries} if "entries" in given or not overlap else {}  # else the experiment's own
+    cfg = PlatesConfig(clips, runs=runs, seed=seed, targets=targets, **chosen) if overlap else \
+        PlateConfig(clips, runs=runs, seed=seed, **chosen)
+    out = out_dir if "out_dir" in given or not overlap else "plate-overlap-results"
+    with progress(experiment, quiet) as hooks:
+        done = run_reproduction(cfg, out, json_path=json_path, plots_dir=plots_dir, equal_time=equal_time,
+                                on_equal_time=equal_time_line("frame"), scheduler=scheduler, workers=workers,
+                                in_process=in_process, resume=resume, **hooks)
+    click.echo(f"{len(clips)} clips x {runs} runs" + (f", K = {targets} plate slots" if overlap else ""))
+    click.echo(results_lines(experiment, done))
 
 
 from .reproduce_hs_sir import hs_sir  # noqa: E402

@@ -1,21 +1,22 @@
-"""Shared by the ``vistrack reproduce`` commands: their options, the clip suites, the engine call
-and the reports (kept apart from the command group so that each command's module imports it
-without importing the group: no import circle)."""
+"""Shared by the ``vistrack reproduce`` commands: their options, the progress bar of making clips and
+what they print (kept apart from the command group so that each command's module imports it without
+importing the group: no import circle)."""
 
 from __future__ import annotations
 
-import json
-import os
+import dataclasses
+from contextlib import contextmanager
 
 import click
 from tqdm import tqdm
 
-from vistrack.engine.evaluation import write_atomic
-from vistrack.reproduce.tables import format_table, write_plots
+from vistrack.filters.registry import get_filter_spec
+from vistrack.reproduce.tables import format_table
 
-from .options import SEED, check_writable
+from .options import SEED
 
-__all__ = ["Entries", "engine_options", "suite_options", "output_options"]
+__all__ = ["Entries", "engine_options", "suite_options", "output_options", "making_clips", "equal_time_line",
+           "results_lines", "default_entries", "config_default"]
 
 
 def _stacked(opts):
@@ -71,7 +72,8 @@ def output_options(plots_help):
 
 
 class Entries(click.ParamType):
-    """``algo:N`` pairs, comma-separated, e.g. ``ls-n-ips:30,bootstrap:2000``."""
+    """``algo:N`` pairs, comma-separated, e.g. ``ls-n-ips:30,bootstrap:2000``: registered algorithms
+    (:func:`vistrack.filters.registry.get_filter_spec`), positive counts."""
 
     name = "ALGO:N,..."
 
@@ -88,63 +90,47 @@ class Entries(click.ParamType):
                 self.fail(f"expected ALGO:N pairs such as ls-n-ips:30, got {item!r}", param, ctx)
             if n < 1:
                 self.fail(f"number of particles must be positive in {item!r}", param, ctx)
+            try:
+                get_filter_spec(algo)
+            except ValueError as e:
+                self.fail(str(e), param, ctx)
             out.append((algo, n))
         return out
 
 
-def _report(experiment, out, config, json_path, plots_dir, title=""):
-    """Print the experiment's table; write ``--json`` and ``--plots``."""
-    click.echo(format_table(experiment, out["results"]))
-    if json_path:
-        write_atomic(json_path, json.dumps({"config": config, "results": out["results"]}, indent=2))
-        click.echo(f"results written to {json_path}")
-    if plots_dir:
-        paths = write_plots(experiment, out, plots_dir, title=title)
-        click.echo(f"plot{'s' if len(paths) > 1 else ''} written to {' and '.join(paths)}")
+def default_entries(config):
+    """A config's default ``(algo, N)`` entries as ``--algos`` takes them: ``ls-n-ips:30,bootstrap:2000``."""
+    entries = {f.name: f for f in dataclasses.fields(config)}["entries"].default_factory()
+    return ",".join(f"{a}:{n}" for a, n in entries)
 
 
-def _plots_dir(plots_dir, first_png):
-    """Create ``--plots`` and check it is writable before any work."""
-    if plots_dir:
-        try:
-            os.makedirs(plots_dir, exist_ok=True)
-        except OSError as e:
-            raise click.ClickException(f"cannot create --plots folder {plots_dir}: {e.strerror}") from None
-        check_writable(os.path.join(plots_dir, first_png), "plot")
+def config_default(config, name):
+    """A config's default value of field ``name``."""
+    f = {f.name: f for f in dataclasses.fields(config)}[name]
+    return f.default if f.default is not dataclasses.MISSING else f.default_factory()
 
 
-def _check_entries(entries):
-    from vistrack.filters import ALGORITHMS
-
-    for algo, _ in entries:
-        if algo not in ALGORITHMS:
-            raise click.ClickException(f"unknown algorithm {algo!r}; choose from {', '.join(sorted(ALGORITHMS))}")
-
-
-def _clip_suite(clips_dir, default, make, frames, size, maker, prefix, quiet, **kw):
-    """:func:`vistrack.reproduce.suite.clip_suite` in ``clips_dir`` (or ``default``), with a progress bar."""
-    from vistrack.reproduce.suite import clip_suite
-
-    from .options import Size
-
+@contextmanager
+def making_clips(make, frames, quiet):
+    """A progress bar over the frames of ``make`` clips of ``frames`` frames being made (unless ``quiet``):
+    yields its ``update``."""
     with tqdm(total=make * frames, unit="frame", desc="making clips", disable=quiet, leave=False) as bar:
-        return clip_suite(clips_dir or default, make, frames, Size().convert(size, None, None), maker, prefix,
-                          progress=bar.update, **kw)
+        yield bar.update
 
 
-def _run(tasks, out_dir, desc, runner=None, **engine):
-    """Run ``tasks`` on the evaluation engine into ``out_dir`` (created; see
-    :func:`vistrack.cli.eval.run_tasks`: nothing in it is removed, each task file is replaced
-    whole when its task finishes, and ``--resume`` keeps only files of the very same task);
-    returns the folder."""
-    from pathlib import Path
+def equal_time_line(unit):
+    """``on_equal_time(entries, times)``: the entries of equal time and their times on one line."""
+    return lambda entries, times: click.echo(
+        "equal time: " + ", ".join(f"{a}:{n}" for a, n in entries) + " ("
+        + ", ".join(f"{k} {v:.1f} ms/{unit}" for k, v in times.items()) + ")")
 
-    from .grid import run_tasks
 
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise click.ClickException(f"cannot create --out folder {out_dir}: {e.strerror}") from None
-    run_tasks(tasks, out, desc=desc, runner=runner, **engine)
-    return out
+def results_lines(experiment, done):
+    """What a reproduction prints: its table, the JSON file and the plots written
+    (:class:`~vistrack.reproduce.pipeline.Reproduction`)."""
+    lines = [format_table(experiment, done.out["results"])]
+    if done.json_path:
+        lines.append(f"results written to {done.json_path}")
+    if done.plots:
+        lines.append(f"plot{'s' if len(done.plots) > 1 else ''} written to {' and '.join(done.plots)}")
+    return "\n".join(lines)

@@ -4,12 +4,23 @@ from __future__ import annotations
 
 import click
 
-from vistrack.engine.evaluation import entries_config
-from vistrack.reproduce.hs_sir import HSConfig, equal_time_entries, hs_results, hs_tasks, likelihood_params
+from vistrack.registry import algos_for
+from vistrack.reproduce.hs_sir import HSConfig, likelihood_params
+from vistrack.reproduce.pipeline import reproduce
+from vistrack.reproduce.suite import experiment_clips
 
-from .options import check_writable
-from .reproduce_common import (_check_entries, _clip_suite, _plots_dir, _report, _run, engine_options,
-                               output_options, suite_options)
+from .errors import one_line
+from .grid import progress
+from .options import Size
+from .reproduce_common import (
+    default_entries,
+    engine_options,
+    equal_time_line,
+    making_clips,
+    output_options,
+    results_lines,
+    suite_options,
+)
 
 __all__ = ["Likelihood", "hs_sir"]
 
@@ -29,11 +40,10 @@ class Likelihood(click.ParamType):
             self.fail(str(e), param, ctx)
 
 
-
 @click.command("hs-sir")
 @suite_options("Folder of colour contour clip folders; made there with --make if missing "
-               "[default: hs-sir-clips].", "240x180", "basic-sir:3000,rb-ss-hs-sir:400",
-               "ALGO:N pairs: basic-sir, hs-sir, rb-hs-sir, rb-ss-hs-sir (and bootstrap, ls-n-ips, lis, ...).",
+               "[default: hs-sir-clips].", "240x180", default_entries(HSConfig),
+               "ALGO:N pairs, any that runs on the contour model (" + ", ".join(algos_for(HSConfig.model)) + ").",
                10, frames=150)
 @click.option("--equal-time", is_flag=True,
               help="Set every N after the first so that its time per frame matches the first entry's (timed on "
@@ -64,21 +74,12 @@ def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, likel
     prints P(lost) (centre error > 50 px at 240-px width) at the last frame and
     averaged, the mean error of runs not lost and the time per frame.
     """
-    from vistrack.data_synth.contour import make_contour_clip
-
-    _check_entries(entries)
-    check_writable(json_path, "--json file")
-    _plots_dir(plots_dir, "p_lost_vs_frame.png")
-    clips = _clip_suite(clips_dir, "hs-sir-clips", make, frames, size, make_contour_clip, "contour-color", quiet,
-                        clutter="high", distractor=True, color=True)
-    if equal_time:
-        entries, times = equal_time_entries(clips[0], entries, likelihood=likelihood)
-        click.echo("equal time: " + ", ".join(f"{a}:{n}" for a, n in entries) + " ("
-                   + ", ".join(f"{k} {v:.1f} ms/frame" for k, v in times.items()) + ")")
+    with making_clips(make, frames, quiet) as made, one_line():
+        clips = experiment_clips("hs-sir", clips_dir, make, frames, Size().convert(size, None, None), made)
     cfg = HSConfig(clips=clips, entries=entries, runs=runs, seed=seed, likelihood=likelihood)
-    tasks = hs_tasks(cfg)
-    out = _run(tasks, out_dir, "hs-sir", scheduler=scheduler, workers=workers, in_process=in_process, resume=resume,
-               quiet=quiet)
+    with progress("hs-sir", quiet) as hooks:
+        done = reproduce(cfg, out_dir, json_path=json_path, plots_dir=plots_dir, equal_time=equal_time,
+                         on_equal_time=equal_time_line("frame"), scheduler=scheduler, workers=workers,
+                         in_process=in_process, resume=resume, **hooks)
     click.echo(f"{len(clips)} clips x {runs} runs")
-    _report("hs-sir", {"results": hs_results(tasks, out)}, entries_config(cfg), json_path, plots_dir)
-
+    click.echo(results_lines("hs-sir", done))

@@ -2,29 +2,24 @@
 
 from __future__ import annotations
 
-import itertools
 import os
 import sys
-import warnings
 
 import click
-import numpy as np
 from tqdm import tqdm
 
-from vistrack.models.builders import MODELS, PLATES_ALGOS, build_model, read_support_points, start_frame
-from vistrack.io.clips import load_clip
-from vistrack.filters import make_filter
-from vistrack.models.registry import MODELS as MODEL_REGISTRY
-from vistrack.models.contour.nn import network_for
-from vistrack.models.plate.detect import PlateSearch
-from vistrack.engine.evaluation import sequence_name
+from vistrack.core.resampling import SCHEMES
+from vistrack.filters import FILTERS, SIR, ParticleFilter
+from vistrack.filters.history import HistorySampling
+from vistrack.filters.registry import filter_options
+from vistrack.io.clips import sequence_name
 from vistrack.io.results_format import FORMATS, result_paths
-from vistrack.models.registry import DEFAULT_MODEL, all_algos, get_model_spec
-from vistrack.core.runtime import check_particle_memory
-from vistrack.track.run import stop_on_signals, summary_lines, track_video
-from vistrack.io.outputs import OutputBusy
-from vistrack.io.video import is_stream, VideoDecodeWarning, VideoError, prefetch
+from vistrack.io.video import is_stream
+from vistrack.registry import DEFAULT_MODEL, DEFAULT_PARTICLES, MODELS, SEARCH_MODEL, all_algos, get_model_spec
+from vistrack.track.plan import plan_run, run_plan
+from vistrack.track.summary import summary_lines
 
+from .errors import one_line
 from .options import SEED, Box, Fraction, check_outputs, check_writable
 
 __all__ = ["run"]
@@ -42,31 +37,29 @@ class _Video(click.Path):
             return value
         return super().convert(value, param, ctx)
 
+
+#: the options every filter takes, with their defaults (:attr:`vistrack.filters.registry.FilterSpec.options`)
+_FILTER_DEFAULTS = {o.name: o.default for o in filter_options(ParticleFilter)}
 #: every algorithm a registered model runs (the registry is the one list: ``eval --algos`` takes the same)
 RUN_ALGOS = all_algos()
 
 
-def model_options(name, *, layout, no_colour, template, targets=None):
-    """The model-specific options of ``run`` as builder parameters; a usage error where they do
-    not apply to model ``name``."""
-    opts = {}
-    if targets is not None:
-        if name != "plate":
-            raise click.UsageError("--targets is for the plate model")
-        opts["targets"] = targets
-    if template is not None:
-        if name in ("plate", "box"):
-            raise click.UsageError("--template is for the contour and landmarks models")
-        opts["template"] = template
-    if layout not in (None, "auto"):
-        if name != "plate":
-            raise click.UsageError("--layout is for the plate model")
-        opts["layout"] = layout
-    if no_colour:
-        if name not in ("contour", "plate"):
-            raise click.UsageError("--no-colour is for the contour and plate models")
-        opts["colour" if name == "contour" else "appearance"] = False
-    return opts
+def _defaults():
+    """``lis; pf-eis-mt for landmarks``: the models' default algorithms, the default model's first."""
+    by_algo = {get_model_spec(DEFAULT_MODEL).default_algo: []}
+    for spec in MODELS.values():
+        by_algo.setdefault(spec.default_algo, []).append(spec.name)
+    first, *others = by_algo
+    return first + "".join(f"; {a} for {' and '.join(by_algo[a])}" for a in others)
+
+
+def _history():
+    """``Box and contour also run sir and the history-sampling family of thesis §3.2 (basic-sir, ...)``."""
+    family = [n for n, f in FILTERS.items() if issubclass(f.cls, HistorySampling) and f.alias_of is None]
+    sir = next(n for n, f in FILTERS.items() if f.cls is SIR)
+    models = [s.name for s in MODELS.values() if sir in s.algos]
+    return (" and ".join(models).capitalize() + f" also run {sir} and the history-sampling family of thesis §3.2 ("
+            + ", ".join(family) + ")")
 
 
 def lost_notice(most=5):
@@ -83,24 +76,28 @@ def lost_notice(most=5):
     return notify
 
 
+def _say(line):
+    """A line on stderr."""
+    click.echo(line, err=True)
+
+
 @click.command()
 @click.argument("video", type=_Video())
 @click.option("--model", "model_name", default=None, metavar="[" + "|".join(MODELS) + "]",
-              help="Tracking model, any registered one [default: the clip's meta.json model; else box when --init or --init-gt "
-                   "is given (any object: colour and template learned from the first frame); else plate, "
-                   "which finds plates by itself].")
+              help="Tracking model, any registered one [default: the clip's meta.json model; else " + DEFAULT_MODEL
+                   + " when --init or --init-gt is given (any object: colour and template learned from the first "
+                   "frame); else " + SEARCH_MODEL + ", which finds plates by itself].")
 @click.option("--layout", type=click.Choice(["auto", "jp", "single-row"]), default="auto", show_default=True,
               help="Plate layout: auto decides between the two-row Japanese (jp) and the single-row layout from "
                    "the clip, the --init box's aspect ratio or the plate found.")
 @click.option("--algo", default=None, type=click.Choice(RUN_ALGOS),
-              help="Particle filter [default: lis; pf-eis-mt for landmarks]. Contour and box also run sir and "
-                   "the history-sampling family of thesis §3.2 (basic-sir, hs-sir, rb-hs-sir, rb-ss-hs-sir), "
-                   "whose innovations come from the image only: the colour-blob proposal (the target's "
-                   "Gaussian colour learned from the first frame, drawn over a grid of cells).")
+              help="Particle filter [default: " + _defaults() + "]. " + _history() + ", whose innovations come "
+                   "from the image only: the colour-blob proposal (the target's Gaussian colour learned from the "
+                   "first frame, drawn over a grid of cells).")
 @click.option("--search", type=click.Choice(["lms", "nn"]), default=None,
               help="LS-N-IPS on contour: the local search, LMS or the neural network trained on simulated "
                    "measurements (thesis §4.3.1; trained on first use, cached; see train-search) [default: lms].")
-@click.option("-n", "--particles", default=100, show_default=True, type=click.IntRange(min=1),
+@click.option("-n", "--particles", default=DEFAULT_PARTICLES, show_default=True, type=click.IntRange(min=1),
               help="Number of particles N.")
 @click.option("--seed", default=0, show_default=True, type=SEED, help="Random seed (same seed, same track).")
 @click.option("--init", type=Box(), help="Start from this box (x,y,w,h) in the first frame; the contour is the "
@@ -114,7 +111,8 @@ def lost_notice(most=5):
                    "Landmarks: the first frame's landmark positions.")
 @click.option("--track", "track_path", type=click.Path(dir_okay=False), help="Write the track CSV here.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False),
-              help="Write the annotated video here: .mp4 (H.264, index first: plays in browsers while loading), .mkv, .mov, or .avi (Motion JPEG).")
+              help="Write the annotated video here: .mp4 (H.264, index first: plays in browsers while loading), .mkv, "
+                   ".mov, or .avi (Motion JPEG).")
 @click.option("--results", "results_path", type=click.Path(),
               help="Write the track as the tracking toolkits' result file: x,y,w,h per frame (0,0,0,0 where the "
                    "object is not reported). otb: this file, 1-based pixels as the OTB toolkit and pytracking "
@@ -124,14 +122,15 @@ def lost_notice(most=5):
               help="Format of --results (OTB is 1-based; GOT-10k and VOT 0-based).")
 @click.option("--show-particles", default=10, show_default=True, type=click.IntRange(min=0),
               help="Draw the K highest-weight particles in the annotated video.")
-@click.option("--resample", default="systematic", show_default=True,
-              type=click.Choice(["multinomial", "residual", "stratified", "systematic"]),
+@click.option("--resample", default=_FILTER_DEFAULTS["resample"], show_default=True,
+              type=click.Choice(list(SCHEMES)),
               help="Resampling scheme of the particle filter.")
 @click.option("--ess-threshold", default=None, type=Fraction(),
               help="Resample when ESS < threshold·N [default: every frame].")
 @click.option("--targets", type=click.IntRange(min=1), default=None,
               help="Plate: track up to K plates at once, one slot each (found by themselves, no --init); the track "
-                   "CSV has a row per frame and plate with its id. Default algorithm: partitioned-lis.")
+                   "CSV has a row per frame and plate with its id. Default algorithm: "
+                   + get_model_spec(SEARCH_MODEL).multi_algos[0] + ".")
 @click.option("--max-frames", type=click.IntRange(min=1), help="Stop after this many frames.")
 @click.option("--no-colour", "no_colour", is_flag=True,
               help="Contour: edges only (no colour term, which is on for colour video). Plate: the plate "
@@ -172,25 +171,21 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     Landmarks (seed 000): vistrack synth landmarks --out lm && vistrack run lm --algo pf-eis-mt --out lm.mp4
     """
     _check_output_paths(video, track_path, out_path, results_path, results_format, (template_path, init_gt or None))
-    if init is not None and init_gt is not None:
-        raise click.UsageError("give either --init or --init-gt, not both")
     if targets is not None and results_path:
         raise click.UsageError("--results writes one box per frame: not with --targets (use --track)")
-    clip, name, algo, model = _setup(video, model_name, algo, search, particles, init, init_gt, quiet,
-                                     layout=layout, no_colour=no_colour, template_path=template_path, targets=targets)
-    frames, lead = _frames(clip.source, max_frames), ()
-    if isinstance(model, PlateSearch):  # real footage without a box: find the plate first
-        model, frames, lead = _find_plate(model, frames, video, quiet)
-    try:
-        filt = make_filter(algo, model, resample=resample, ess_threshold=ess_threshold)
-    except ValueError as e:
-        raise click.ClickException(str(e)) from None
+    with one_line():
+        plan = plan_run(video, model=model_name, algo=algo, particles=particles, init=init, init_gt=init_gt,
+                        template=template_path, layout=None if layout == "auto" else layout, no_colour=no_colour,
+                        targets=targets, search=search, resample=resample, ess_threshold=ess_threshold,
+                        max_frames=max_frames, notify=None if quiet else _say)
+    if plan.start:
+        _say(f"note: the ground truth has no box before frame {plan.start}: tracking starts there (frames 0-"
+             f"{plan.start - 1} get rows with visible=0, lost_reason \"not started\"; scores count from frame "
+             f"{plan.start})")
     outputs = {"track_path": track_path, "out_path": out_path, "results_path": results_path,
                "results_format": results_format, "sequence": sequence_name(video)}
-    start = _start(clip, init, init_gt, max_frames)
-    done = _track(clip, frames, model, filt, particles, seed, max_frames, show_particles, quiet,
-                  f"{algo} N={particles}", outputs, lead, start=start)
-    _report(video, clip, done, name, model, particles, quiet, outputs)
+    done = _track(plan, particles, seed, show_particles, quiet, outputs)
+    _report(video, plan, done, particles, quiet, outputs)
 
 
 def _check_output_paths(video, track_path, out_path, results_path, results_format, inputs):
@@ -205,126 +200,33 @@ def _check_output_paths(video, track_path, out_path, results_path, results_forma
     check_outputs({"--track": track_path, "--out": out_path, "--results": results_path}, video, inputs=inputs)
 
 
-def _find_plate(search, frames, video, quiet):
-    """``(model, frames, lead)``: the plate model built where :class:`PlateSearch` finds a plate in the
-    first frames, the frames from that one on, and the frames searched before it; one error line with
-    the ``--init`` hint where it finds none."""
-    if not quiet:  # which model and why, on one line (the error below is the one line with -q)
-        click.echo("no --init and no model in meta.json: looking for a license plate (the plate model) in the "
-                   "first 30 frames; to track any other object give --init x,y,w,h", err=True)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", VideoDecodeWarning)
-            model, found, lead = search.start(frames)
-    except VideoError as e:
-        raise click.ClickException(str(e)) from None
-    if model is None:
-        raise click.ClickException(f"no license plate found in the first {len(lead)} frames of {video}; give its "
-                                   f"box: vistrack run {video} --init x,y,w,h")
-    if not quiet:
-        b = found[2].box
-        click.echo(f"plate found in frame {found[0]} at {b[0]:.0f},{b[1]:.0f},{b[2]:.0f},{b[3]:.0f} "
-                   f"({found[2].layout} layout)", err=True)
-    return model, itertools.chain([found[:2]], frames), lead
-
-
-def _setup(video, model_name, algo, search, particles, init, init_gt, quiet, *, layout, no_colour, template_path,
-           targets=None):
-    """``(clip, model name, algorithm, model)`` of a run, checked; one error line for bad input."""
-    try:
-        clip = load_clip(video)
-        if init is not None:
-            x, y, w, h = init
-            fw, fh = clip.source.size
-            if x >= fw or y >= fh or x + w <= 0 or y + h <= 0:
-                raise click.UsageError(f"--init box {x:g},{y:g},{w:g},{h:g} lies outside the {fw}x{fh} frame")
-        name = model_name or clip.model_name or (DEFAULT_MODEL if init is not None or init_gt is not None else "plate")
-        if model_name is None and name not in MODEL_REGISTRY:
-            raise click.ClickException(f"{video}: meta.json names model {name!r}, which this version cannot track")
-        spec = get_model_spec(name)
-        extra = model_options(name, layout=layout, no_colour=no_colour,
-                              template=read_support_points(template_path) if template_path else None, targets=targets)
-        algo = algo or ("partitioned-lis" if targets is not None else spec.default_algo)
-        if search is not None:
-            if algo != "ls-n-ips" or name != "contour":
-                raise click.UsageError("--search is for --algo ls-n-ips on the contour model")
-            extra["search"] = search
-        allowed = PLATES_ALGOS if targets is not None else spec.algos
-        if algo not in allowed:
-            hint = "; partitioned sampling tracks several plates: add --targets K" \
-                if name == "plate" and algo in PLATES_ALGOS else ""
-            raise click.UsageError(f"--algo {algo} does not run on the {name} model"
-                                   f"{' with --targets' if targets is not None else ''}; "
-                                   f"choose from {', '.join(allowed)}{hint}")
-        check_particle_memory(particles, spec.bytes_per_particle, algo)
-        model = build_model(name, clip, init=init, init_gt=init_gt, **extra)
-        if search == "nn":  # train (once per template) or load before the progress bar starts
-            network_for(model, notify=None if quiet else lambda m: click.echo(m, err=True))
-    except (VideoError, ValueError) as e:
-        raise click.ClickException(str(e)) from None
-    return clip, name, algo, model
-
-
-def _frames(src, max_frames):
-    """The ``(index, frame)`` pairs of ``src`` (decoded ahead), up to ``max_frames``."""
-    for i, f in prefetch(src):
-        if max_frames is not None and i >= max_frames:
-            return
-        yield i, f
-
-
-def _start(clip, init, init_gt, max_frames):
-    """The start frame (:func:`~vistrack.models.builders.start_frame`), said on stderr when it is not 0."""
-    try:
-        start = start_frame(clip, init, init_gt)
-    except (VideoError, ValueError) as e:
-        raise click.ClickException(str(e)) from None
-    if start and max_frames is not None and start >= max_frames:
-        raise click.ClickException(f"--init-gt: the ground truth's first box is at frame {start}, past --max-frames "
-                                   f"{max_frames}")
-    if start:
-        click.echo(f"note: the ground truth has no box before frame {start}: tracking starts there (frames 0-"
-                   f"{start - 1} get rows with visible=0, lost_reason \"not started\"; scores count from frame "
-                   f"{start})", err=True)
-    return start
-
-
-def _track(clip, frames, model, filt, particles, seed, max_frames, show_particles, quiet, label, outputs, lead=(),
-           start=0):
-    """:func:`~vistrack.track.run.track_video` over ``frames`` from ``start`` with a progress bar (``lead``:
-    the frames searched before them); stops cleanly on SIGINT/SIGTERM after the frame in hand (the
-    outputs so far kept, holding the same frames)."""
-    src = clip.source
-    total = src.frame_count if max_frames is None else min(max_frames, src.frame_count or max_frames)
-    # an image folder's frame count is exact: frames after the last decodable one get rows too
-    exact = total if src.exact_count else None
-    frames = ((i, f) for i, f in frames if i >= start)
-    bar = tqdm(total=total, unit="frame", disable=quiet, dynamic_ncols=True, desc=label, initial=len(lead))
+def _track(plan, particles, seed, show_particles, quiet, outputs):
+    """:func:`~vistrack.track.plan.run_plan` with a progress bar (its length the frames to expect, the
+    frames searched before the first counted)."""
+    label = f"{plan.algo} N={particles}"
+    bar = tqdm(total=plan.total, unit="frame", disable=quiet, dynamic_ncols=True, desc=label, initial=len(plan.lead))
 
     def progress(ess):
         bar.update(1)
         bar.set_postfix(ess=f"{ess:.1f}", refresh=False)
 
-    try:  # skipped frames: one line below, not the decoder's warning too
-        with stop_on_signals(), warnings.catch_warnings():
-            warnings.simplefilter("ignore", VideoDecodeWarning)
-            return track_video(frames, model, filt, particles, np.random.default_rng(seed),
-                               video_info=(src.fps, src.size), show_particles=show_particles, label=label,
-                               progress=progress, notify=None if quiet else lost_notice(), frame_count=exact,
-                               start=start, lead=lead, **outputs)
-    except (VideoError, OSError, OutputBusy) as e:
+    try:
+        with one_line():
+            return run_plan(plan, particles, seed, label=label, show_particles=show_particles, progress=progress,
+                            notify=None if quiet else lost_notice(), **outputs)
+    except OSError as e:  # a full disk, an output that cannot be opened: the line names it
         raise click.ClickException(str(e)) from None
     finally:
         bar.close()
 
 
-def _report(video, clip, done, name, model, particles, quiet, outputs):
+def _report(video, plan, done, particles, quiet, outputs):
     """Print what happened (interrupts, skipped frames, the summary, the files written); exit 130/143
     after an interrupt."""
     track_path, out_path, results_path = outputs["track_path"], outputs["out_path"], outputs["results_path"]
     if results_path and outputs["results_format"] != "otb":
         results_path = result_paths(results_path, outputs["results_format"], outputs["sequence"])[0]
-    src = clip.source
+    clip, src = plan.clip, plan.clip.source
     if not done.rows:
         if done.stopped:
             raise click.exceptions.Exit(done.exit_code)
@@ -342,7 +244,7 @@ def _report(video, clip, done, name, model, particles, quiet, outputs):
                    f"{src.frame_count} its header announces (frames {src.ended_at}-{src.frame_count - 1} have no row)",
                    err=True)
     if not quiet:
-        for line in summary_lines(done, particles, model_name=name, model=model, truth=clip.truth,
+        for line in summary_lines(done, particles, model_name=plan.model_name, model=plan.model, truth=clip.truth,
                                   frame_width=src.size[0], objects=clip.objects):
             click.echo(line)
         if track_path:

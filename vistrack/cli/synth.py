@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import click
 from tqdm import tqdm
 
@@ -13,7 +11,8 @@ from vistrack.data_synth.longterm import make_longterm_clip
 from vistrack.data_synth.perturb import LIGHTS, Perturbation, perturb_clip, read_clip
 from vistrack.data_synth.plate import make_plate_clip
 from vistrack.data_synth.plate_composite import composite_plate_clip
-from vistrack.data_synth.render import prepare_suite
+from vistrack.data_synth.render import out_folder
+from vistrack.data_synth.suite import SUITES, make_suite
 
 from .options import SEED, Fraction, Ratio, Size
 
@@ -21,19 +20,14 @@ __all__ = ["synth"]
 
 
 def _out_dir(out, clip=True):
-    """``out`` as a path, its folder created (a suite's folder, or a clip's parent: the clip itself
-    is rendered beside it and renamed into place, :func:`~vistrack.data_synth.render.atomic_clip`)."""
-    p = Path(out)
-    if p.exists() and not p.is_dir():
-        raise click.ClickException(f"--out {p} exists and is not a folder")
-    if clip and p.is_dir() and (p / "video.mp4").exists():
-        click.echo(f"note: overwriting the clip in {p}", err=True)
+    """``--out`` ready (:func:`vistrack.data_synth.render.out_folder`), with a note on stderr where a clip
+    there is overwritten."""
     try:
-        (p.parent if clip else p).mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        blocked = next((q for q in [p, *p.parents] if q.exists() and not q.is_dir()), None)
-        raise click.ClickException(f"cannot create {p}: " + (f"{blocked} is not a folder" if blocked else e.strerror)) \
-            from None
+        p, there = out_folder(out, clip)
+    except ValueError as e:
+        raise click.ClickException(str(e)) from None
+    if there:
+        click.echo(f"note: overwriting the clip in {p}", err=True)
     return p
 
 
@@ -52,7 +46,8 @@ def _clip_options(size, frames):
     opts = [click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write."),
             click.option("--frames", default=frames, show_default=True, type=click.IntRange(min=1),
                          help="Number of frames to generate."),
-            click.option("--size", default=size, show_default=True, type=Size(), help="Frame size WIDTHxHEIGHT in pixels."),
+            click.option("--size", default=size, show_default=True, type=Size(),
+                         help="Frame size WIDTHxHEIGHT in pixels."),
             click.option("--seed", default=0, show_default=True, type=SEED,
                          help="Random seed: the same seed gives the same output, bit for bit.")]
 
@@ -240,13 +235,8 @@ def plate_on_car(clip, out, layout, width, upscale, blur, noise, seed, quiet):
         click.echo(f"wrote {out} ({layout} plate on the car, {n} frames, exact ground truth)")
 
 
-#: per kind: clip maker, default frames, default size
-SUITES = {"contour": (make_contour_clip, 300, (320, 240)), "plate": (make_plate_clip, 300, (640, 480)),
-          "landmarks": (make_landmark_clip, 200, (640, 480))}
-
-
 @click.command("synth-suite")
-@click.option("--kind", required=True, type=click.Choice(["contour", "plate", "landmarks"]),
+@click.option("--kind", required=True, type=click.Choice(list(SUITES)),
               help="Which synthetic clips to make: contour, plate or landmarks (as vistrack synth KIND).")
 @click.option("--clips", "n_clips", default=10, show_default=True, type=click.IntRange(min=1),
               help="Number of clips in the suite.")
@@ -260,16 +250,9 @@ SUITES = {"contour": (make_contour_clip, 300, (320, 240)), "plate": (make_plate_
 def synth_suite(kind, n_clips, seed, frames, size, out, quiet):
     """A suite of clips for `vistrack eval` (OUT/<kind>-<seed>/ each), with each kind's defaults
     (contour: high clutter and a distractor; plate: 3 cars, JP layout; landmarks: K = 5)."""
-    make, frames_default, size_default = SUITES[kind]
-    frames = frames or frames_default
-    size = size or size_default
+    frames = frames or SUITES[kind][1]
     out = _out_dir(out, clip=False)
-    try:  # the folder holds this suite alone: an earlier suite's other clips go (issue 38)
-        prepare_suite(out, [f"{kind}-{s:02d}" for s in range(seed, seed + n_clips)])
-    except ValueError as e:
-        raise click.ClickException(str(e)) from None
     with tqdm(total=n_clips * frames, unit="frame", disable=quiet, desc=f"synth-suite {kind}") as bar:
-        for s in range(seed, seed + n_clips):
-            _make(make, out / f"{kind}-{s:02d}", frames=frames, size=size, seed=s, progress=bar.update)
+        _make(make_suite, out, kind=kind, clips=n_clips, seed=seed, frames=frames, size=size, progress=bar.update)
     if not quiet:
         click.echo(f"wrote {n_clips} {kind} clips into {out}")

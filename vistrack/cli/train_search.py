@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import click
 
-from vistrack.io.video import VideoError
-from vistrack.models.builders import read_support_points
-from vistrack.models.contour.model import Contour
-from vistrack.models.contour.nn import NNSearchConfig, load_or_train
+from vistrack.models.contour import builder as contour
+from vistrack.models.contour.nn import NNSearchConfig
+from vistrack.registry import read_support_points
 
+from .errors import one_line
 from .options import SEED, Size
 
 __all__ = ["train_search"]
@@ -33,12 +33,9 @@ def train_search(template_path, size, samples, seed, out_path):
     Example:
       vistrack train-search --template clip/meta.json --size 320x240
     """
-    try:
-        model = Contour(read_support_points(template_path), (0.0, 0.0, 0.0, 0.0), size)
-    except (VideoError, ValueError) as e:
-        raise click.ClickException(str(e)) from None
-    cfg = NNSearchConfig(samples=samples, seed=seed)
-    net, info = load_or_train(model, cfg, path=out_path, notify=lambda m: click.echo(m, err=True))
+    with one_line():
+        _, info = contour.train_search(read_support_points(template_path), size, samples=samples, seed=seed,
+                                       path=out_path, notify=lambda m: click.echo(m, err=True))
     if info["trained"]:
         click.echo(f"trained in {info['seconds']:.1f} s ({info['cpu_seconds']:.1f} s CPU): {info['path']}")
     else:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from vistrack.models.registry import DEFAULT_MODEL
+from vistrack.registry import DEFAULT_MODEL, DEFAULT_PARTICLES
 
 from .options import SEED
 
@@ -14,7 +14,7 @@ __all__ = ["trax"]
 @click.command()
 @click.option("--model", default=DEFAULT_MODEL, show_default=True, help="Tracking model (any that starts from a box).")
 @click.option("--algo", default=None, help="Particle filter [default: the model's].")
-@click.option("-n", "--particles", default=100, show_default=True, type=click.IntRange(min=1),
+@click.option("-n", "--particles", default=DEFAULT_PARTICLES, show_default=True, type=click.IntRange(min=1),
               help="Number of particles N.")
 @click.option("--seed", default=0, show_default=True, type=SEED, help="Random seed (same seed, same boxes).")
 def trax(model, algo, particles, seed):

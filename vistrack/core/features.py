@@ -320,7 +320,8 @@ class FeatureMaps:
 
     def integral(self, name):
         """Integral image (float64, shape ``(H+1, W+1)``) of the map ``name``
-        (``gray``, ``gx``, ``abs_gx``, ``abs_gy``, ``mag``, ``abs_dog_small``, ...)."""
+        (``gray``, ``gx``, ``abs_gx``, ``abs_gy``, ``mag``, ``abs_dog_small``, ...): its sums over boxes are
+        :func:`box_sums`'s."""
         if name not in self._integrals:
             if name.startswith("abs_"):
                 src = np.abs(getattr(self, name[4:]))
@@ -328,19 +329,3 @@ class FeatureMaps:
                 src = getattr(self, name)
             self._integrals[name] = cv2.integral(src, sdepth=cv2.CV_64F)
         return self._integrals[name]
-
-    def box_mean(self, name, x0, y0, x1, y1):
-        """Mean of map ``name`` over the pixel boxes ``[x0, x1) x [y0, y1)`` (arrays broadcast).
-
-        Boxes are clipped to the frame; an empty box gives NaN.
-        """
-        ii = self.integral(name)
-        h, w = self.shape
-        x0 = np.clip(np.asarray(x0, int), 0, w)
-        x1 = np.clip(np.asarray(x1, int), 0, w)
-        y0 = np.clip(np.asarray(y0, int), 0, h)
-        y1 = np.clip(np.asarray(y1, int), 0, h)
-        s = ii[y1, x1] - ii[y0, x1] - ii[y1, x0] + ii[y0, x0]
-        area = (x1 - x0) * (y1 - y0)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(area > 0, s / np.maximum(area, 1), np.nan)

@@ -8,8 +8,8 @@ from __future__ import annotations
 import functools
 from typing import Protocol, runtime_checkable
 
-__all__ = ["offers", "require", "missing_parts", "LookAhead", "FusedPropose", "FusedLISStep", "ProposalMap",
-           "Redetects"]
+__all__ = ["offers", "class_offers", "require", "missing_parts", "LookAhead", "FusedPropose", "FusedLISStep",
+           "ProposalMap", "Redetects"]
 
 
 @functools.cache
@@ -27,6 +27,13 @@ def missing_parts(model, protocol):
 def offers(model, protocol):
     """Whether ``model`` offers every part of ``protocol``."""
     return not missing_parts(model, protocol)
+
+
+def class_offers(cls, protocol):
+    """Whether the instances of class ``cls`` offer the methods of ``protocol`` (its attributes, such
+    as a model's ``dim``, are the instances' own: :func:`require` checks them on an instance)."""
+    methods = [n for n, v in vars(protocol).items() if not n.startswith("_") and callable(v)]
+    return all(callable(getattr(cls, n, None)) for n in methods)
 
 
 def require(model, protocols, who):

@@ -24,13 +24,15 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 __all__ = ["center_error", "contour_lost_threshold", "plate_frame_measures", "lost_frames", "summarize_runs",
            "landmark_error", "iou", "success_auc", "success_curve", "precision", "precision_curve", "IOU_THRESHOLDS",
            "PRECISION_THRESHOLDS", "box_scores", "summarize", "pooled_summary", "reported_ious", "lt_thresholds",
            "lt_curves", "lt_scores", "lt_pooled",
-           "equal_time_n", "equal_time_search"]
+           "equal_time", "best_ms", "equal_time_n", "equal_time_search"]
 
 #: IoU thresholds of the success plot (OTB protocol)
 IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
@@ -400,6 +402,42 @@ def pooled_summary(results):
 
 
 # -- equal-time particle counts (thesis Tables 3.1, 4.1, 4.3) ---------------------------------------
+def best_ms(run, repeats=2, clock=time.perf_counter):
+    """The least time of ``repeats`` calls of ``run()``, in ms by ``clock`` (the timing of every
+    equal-time comparison: the fastest run is the one least disturbed by the machine's other work)."""
+    best = np.inf
+    for _ in range(repeats):
+        t0 = clock()
+        run()
+        best = min(best, (clock() - t0) * 1e3)
+    return best
+
+
+def equal_time(ms, entries, *, search_steps=None, doubled=False, **line):
+    """``entries`` (``(algo, N)`` pairs) with every N after the first set so that its time ``ms(algo, N)``
+    matches the first entry's (thesis Tables 3.1, 4.1, 4.3: the particle counts of equal CPU time).
+
+    Each N is solved by a straight line through N and 2N (:func:`equal_time_n`, with the options
+    ``line``), or with ``search_steps`` by the secant search (:func:`equal_time_search`). Returns
+    ``(entries, times)``: ``times`` maps ``"algo:N"`` to ``ms(algo, N)`` for the first entry and, for
+    each other, at its given N (and with ``doubled`` at 2N) or, searched, at the N found.
+    """
+    (ref_algo, ref_n), *rest = entries
+    budget = ms(ref_algo, ref_n)
+    out, times = [(ref_algo, ref_n)], {f"{ref_algo}:{ref_n}": budget}
+    for algo, n in rest:
+        if search_steps is not None:
+            m, t = equal_time_search(lambda k: ms(algo, k), n, budget, search_steps)
+            times[f"{algo}:{m}"] = t
+        else:
+            m, t1, t2 = equal_time_n(lambda k: ms(algo, k), n, budget, **line)
+            times[f"{algo}:{n}"] = t1
+            if doubled:
+                times[f"{algo}:{2 * n}"] = t2
+        out.append((algo, m))
+    return out, times
+
+
 def equal_time_n(t, n, budget, *, min_slope=0.0, checks=0, tolerance=1.25):
     """The particle count whose time ``t(N)`` matches ``budget``: a straight line through ``t(n)`` and
     ``t(2n)`` (time per particle ``(t(2n) - t(n)) / n``, at least ``min_slope · t(n) / n`` so that a

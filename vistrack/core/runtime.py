@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["keep_freed_memory", "available_memory", "check_particle_memory"]
+__all__ = ["keep_freed_memory", "available_memory", "prepare_worker"]
 
 #: glibc ``mallopt`` parameters
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
@@ -49,20 +49,10 @@ def available_memory():
         return None
 
 
-#: working memory per particle and frame is ``bytes_per_particle`` of the model times this for
-#: LLS, which evaluates the likelihood on a grid of the window for every particle
-ALGO_MEMORY_FACTOR = {"lls": 8}
+def prepare_worker():
+    """Prepare an engine worker before its task: one worker per core, so keep OpenCV from starting threads
+    of its own; and let ``malloc`` reuse freed memory (:func:`keep_freed_memory`)."""
+    import cv2
 
-
-def check_particle_memory(n, bytes_per_particle, algo="", share=0.5, available=None):
-    """Raise ``ValueError`` (one line) when ``n`` particles would need more than ``share`` of the
-    available memory per frame (the peak working memory of one step, measured with tracemalloc:
-    about 23 KB per particle for the box model, 16–39 KB for the contour, 37 KB for the plate,
-    8x that for LLS). Returns the estimate in bytes."""
-    need = int(n) * int(bytes_per_particle) * ALGO_MEMORY_FACTOR.get(algo, 1)
-    avail = available_memory() if available is None else available
-    if avail is not None and need > share * avail:
-        most = int(share * avail // (bytes_per_particle * ALGO_MEMORY_FACTOR.get(algo, 1)))
-        raise ValueError(f"{n} particles need about {need / 2**30:.1f} GiB per frame, more than half of the "
-                         f"{avail / 2**30:.1f} GiB available; use at most {most}")
-    return need
+    cv2.setNumThreads(1)
+    keep_freed_memory()

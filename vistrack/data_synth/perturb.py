@@ -83,7 +83,7 @@ class Perturbation:
         return "+".join(parts) or "none"
 
 
-#: the stresses the real-clip benchmark reports beside each original clip (issue 34)
+#: the stresses the real-clip benchmark reports beside each original clip
 STRESS_PRESETS = {
     "ramp": Perturbation(light="ramp"),
     "blur": Perturbation(blur=9),

@@ -1,4 +1,4 @@
-"""A rendered plate composited onto the car of a real clip, with exact ground truth (issue 35).
+"""A rendered plate composited onto the car of a real clip, with exact ground truth.
 
 The car's ground-truth box (e.g. ``car4_otb_first100``: a car seen from behind) gives where: the
 plate's centre sits at ``centre`` (shares of the car box's width and height) and its width is

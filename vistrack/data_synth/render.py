@@ -14,7 +14,7 @@ import numpy as np
 from vistrack.io.clips import write_track_csv
 
 __all__ = ["smooth_noise", "clutter_background", "motion_blur", "lighting", "add_noise", "write_clip_files",
-           "atomic_clip", "is_synth_clip", "prepare_suite", "check_video_size"]
+           "atomic_clip", "is_synth_clip", "out_folder", "prepare_suite", "check_video_size"]
 
 #: names in a clip folder that a run reads as part of the clip: never carried from an old folder into a new clip
 CLIP_NAMES = {"video.mp4", "groundtruth.csv", "groundtruth_rect.txt", "groundtruth.txt", "meta.json", "objects.csv",
@@ -160,6 +160,22 @@ def _check_clip_out(out):
     if clip:
         raise ValueError(f"{out} holds {', '.join(clip[:3])}{', ...' if len(clip) > 3 else ''}, not a clip vistrack "
                          "synth wrote: the new clip would be mixed with them; give an empty or new folder")
+
+
+def out_folder(out, clip=True):
+    """``synth``'s ``--out`` ready: a clip's folder, its parent made (the clip itself is rendered beside
+    it and renamed into place, :func:`atomic_clip`), or with ``clip=False`` a suite's folder, made.
+    Returns ``(path, whether a clip is there already)``; a one-line ``ValueError`` where it cannot be."""
+    p = Path(out)
+    if p.exists() and not p.is_dir():
+        raise ValueError(f"--out {p} exists and is not a folder")
+    there = clip and p.is_dir() and (p / "video.mp4").exists()
+    try:
+        (p.parent if clip else p).mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        blocked = next((q for q in [p, *p.parents] if q.exists() and not q.is_dir()), None)
+        raise ValueError(f"cannot create {p}: " + (f"{blocked} is not a folder" if blocked else e.strerror)) from None
+    return p, there
 
 
 def prepare_suite(out, names):

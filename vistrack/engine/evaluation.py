@@ -29,26 +29,21 @@ from pathlib import Path
 
 import numpy as np
 
-from ..models.builders import build_model, start_frame
-from ..io.clips import GroundTruthWarning, find_clips, load_clip, sequence_name  # noqa: F401  (find_clips: re-exported)
-from ..io.results_format import find_result_file, read_result_file
-from ..filters import ALGORITHMS, make_filter
-from ..core.metrics import (PRECISION_THRESHOLDS, center_error, iou, lost_frames, pooled_summary, precision,  # noqa: F401
-                      precision_curve, success_auc, success_curve)
+from ..core.metrics import center_error, iou, lost_frames
 from ..core.metrics import summarize as metrics_summarize
-from ..models.registry import get_model_spec
-from ..core.runtime import keep_freed_memory
-from .tasks import (OutLocked, TaskFailed, check_shared, load_task_results, lock_out, stale_tasks, task_done,
-                    task_fingerprint, write_atomic, write_task_result)
-from ..track.loop import track
+from ..core.runtime import prepare_worker
+from ..filters import ALGORITHMS, make_filter
+from ..io.clips import GroundTruthWarning, load_clip, sequence_name
+from ..io.results_format import find_result_file, read_result_file
 from ..io.video import VideoError
+from ..registry import DEFAULT_MODEL, build_model, check_algo, default_comparison, get_model_spec
+from ..registry.builders import start_frame
+from ..track.loop import track
+from .multi_target import run_plates_task, score_plates_tasks
+from .tasks import load_task_results, save_result
 
-__all__ = ["EvalConfig", "find_clips", "task_list", "entry_tasks", "entries_config", "run_task", "summarize",
-           "pooled_summary", "OPENCV_TRACKERS", "check_algos", "sequence_name",
-           "score_boxes", "score_result_file", "result_files",
-           # the engine's task files (vistrack.engine.tasks), re-exported
-           "task_fingerprint", "task_done", "stale_tasks", "write_task_result", "write_atomic", "OutLocked",
-           "lock_out", "load_task_results", "TaskFailed", "check_shared", "dask_setup"]
+__all__ = ["EvalConfig", "task_list", "entry_tasks", "entries_config", "run_task", "summarize", "OPENCV_TRACKERS",
+           "check_algos", "score_boxes", "score_result_file", "result_files", "ResultsLengthWarning", "dask_setup"]
 
 
 #: OpenCV trackers by name -> constructor attribute (contrib ones may be missing)
@@ -73,23 +68,49 @@ class EvalConfig:
     seed : int
         Root seed: run ``r`` on clip ``c`` draws from ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]``.
     model : str
-        A registered model (:mod:`vistrack.models.registry`).
+        A registered model (:mod:`vistrack.registry`).
     entries : list of (str, int) or None
         Explicit ``(algo, N)`` pairs instead of the ``algos × particles`` grid.
+    targets : int or None
+        Several targets at once: the plate model's ``targets`` slots, scored against each clip's
+        ``objects.csv`` (:mod:`vistrack.engine.multi_target`).
+
+    An :class:`~vistrack.engine.grid.Experiment`: :meth:`tasks`, :attr:`runner`, :meth:`results`.
     """
 
     clips: list
-    algos: list = field(default_factory=lambda: ["lis", "bootstrap"])
+    algos: list = field(default_factory=lambda: list(default_comparison()))
     particles: list = field(default_factory=lambda: [100, 750])
     runs: int = 20
     seed: int = 0
-    model: str = "contour"
+    model: str = DEFAULT_MODEL
     #: explicit (algo, N) pairs instead of the algos × particles grid
     entries: list | None = None
+    targets: int | None = None
+
+    def tasks(self):
+        """:func:`task_list` of the clips, each with ``targets`` when tracking several."""
+        tasks = task_list(self, self.clips)
+        if self.targets is not None:
+            for t in tasks:
+                t["targets"] = self.targets
+        return tasks
+
+    @property
+    def runner(self):
+        """:func:`run_task`, or with ``targets`` :func:`~vistrack.engine.multi_target.run_plates_task`."""
+        return run_task if self.targets is None else run_plates_task
+
+    def results(self, tasks, out_dir):
+        """The task results (:func:`~vistrack.engine.tasks.load_task_results`); with ``targets`` their
+        scores (:func:`~vistrack.engine.multi_target.score_plates_tasks`)."""
+        return load_task_results(tasks, out_dir) if self.targets is None else score_plates_tasks(tasks, out_dir)
 
 
-def check_algos(algos):
-    """Raise ``ValueError`` for unknown algorithms or OpenCV trackers this OpenCV lacks."""
+def check_algos(algos, model=None, targets=False):
+    """Raise ``ValueError`` (one line) for an unknown algorithm, an OpenCV tracker this OpenCV lacks, or
+    (given ``model``) an algorithm that does not run on that model (with ``targets``: on its several-target
+    form; the line names those that do, :func:`vistrack.registry.check_algo`)."""
     import cv2
 
     for a in algos:
@@ -100,6 +121,8 @@ def check_algos(algos):
         elif a not in ALGORITHMS:
             known = sorted(set(ALGORITHMS) | set(OPENCV_TRACKERS))
             raise ValueError(f"unknown algorithm {a!r}; choose from {', '.join(known)}")
+        elif model is not None:
+            check_algo(model, a, targets, who=f"--algos {a}")
 
 
 def _name(clip):
@@ -182,15 +205,6 @@ def _track_opencv(algo, clip, frames):
     return _by_index(np.array(boxes, float), index), np.array(ms), np.full(max(index) + 1, np.nan)
 
 
-def prepare_worker():
-    """Prepare an engine worker: one worker per core, so keep OpenCV from starting threads of its
-    own; and let ``malloc`` reuse freed memory (:func:`keep_freed_memory`)."""
-    import cv2
-
-    cv2.setNumThreads(1)
-    keep_freed_memory()
-
-
 def dask_setup(worker):
     """Dask preload hook of the LocalCluster's worker processes (``preload=["vistrack.engine.evaluation"]``).
 
@@ -206,9 +220,9 @@ def dask_setup(worker):
 
 
 def run_task(task, out_dir):
-    """Track one clip once; write ``out_dir/tasks/<name>.json``; return its path."""
+    """Engine runner: track one clip once; write its result under ``out_dir``
+    (:func:`~vistrack.engine.tasks.save_result`); return its path."""
     prepare_worker()
-    out = Path(out_dir) / "tasks" / f"{task['name']}.json"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", GroundTruthWarning)  # said once, when eval found the clips
         clip = load_clip(task["clip"])
@@ -252,7 +266,7 @@ def run_task(task, out_dir):
     result.update({"clip": task["clip"], "algo": algo, "particles": n, "run": task["run"],
                    "ms": [float(v) for v in ms[:result["frames"]]],
                    "ess": [None if not np.isfinite(v) else float(v) for v in ess[:result["frames"]]]})
-    return write_task_result(out, result, task)
+    return save_result(out_dir, task, result)
 
 
 def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=None, shown=None, confidence=None):

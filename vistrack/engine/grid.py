@@ -1,7 +1,8 @@
 """The batch engine: a grid of tasks on Dask, with the ``--out`` lock, resume and task files.
 
-``vistrack eval``, ``vistrack reproduce`` and ``vistrack demo`` hand their tasks to
-:func:`run_grid`; the CLI only parses options and prints. A task is a JSON-ready dict; a runner
+An :class:`Experiment` (``eval``'s :class:`~vistrack.engine.evaluation.EvalConfig`, each reproduction's
+config) gives its tasks, the runner that does one and its results from the task files;
+:func:`run_experiment` runs it: the tasks on :func:`run_grid`, then the results. A task is a JSON-ready dict; a runner
 ``runner(task, out_dir) -> path`` tracks it on a worker and writes its result JSON under
 ``out_dir/tasks`` (:func:`vistrack.engine.evaluation.run_task` by default). The runner runs on the worker
 in a scratch folder of the worker's own and the result travels back to this process through
@@ -22,10 +23,27 @@ import os
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Callable, Protocol
 
-from .tasks import OutLocked, TaskFailed, check_shared, lock_out, stale_tasks, task_done, write_atomic
+from .tasks import OutLocked, TaskFailed, check_shared, lock_out, stale_tasks, task_done, task_path, write_atomic
 
-__all__ = ["EngineError", "open_client", "dask_quiet", "run_grid", "run_on_worker", "OutLocked", "TaskFailed"]
+__all__ = ["Experiment", "run_experiment", "EngineError", "open_client", "dask_quiet", "run_grid", "run_on_worker",
+           "OutLocked", "TaskFailed"]
+
+
+class Experiment(Protocol):
+    """What :func:`run_experiment` runs: ``eval``'s evaluation and each reproduction."""
+
+    #: ``runner(task, out_dir) -> path``: one task on a worker, its result written under ``out_dir``
+    #: (:func:`~vistrack.engine.tasks.save_result`); a module-level function (it travels to the workers)
+    runner: Callable
+
+    def tasks(self):
+        """The experiment's tasks: JSON-ready dicts, each with its unique ``name``."""
+
+    def results(self, tasks, out_dir):
+        """The experiment's results from the task files of ``tasks`` in ``out_dir``
+        (:func:`~vistrack.engine.tasks.load_task_results`)."""
 
 
 class EngineError(RuntimeError):
@@ -117,7 +135,7 @@ def execute(tasks, out_dir, client, *, resume=False, progress=None, key_prefix="
         progress(len(tasks) - len(pending))
     if runner is None:
         from .evaluation import run_task as runner
-    (Path(out_dir) / "tasks").mkdir(parents=True, exist_ok=True)
+    task_path(out_dir).mkdir(parents=True, exist_ok=True)
     futs = {client.submit(run_on_worker, runner, t, key=f"{key_prefix}-{t['name']}", retries=2, pure=False): t
             for t in pending}
     for f in as_completed(list(futs)):
@@ -135,7 +153,7 @@ def execute(tasks, out_dir, client, *, resume=False, progress=None, key_prefix="
         except ValueError:
             raise TaskFailed(f"task {name} returned a damaged result; the finished task files are kept: "
                              "--resume runs the rest") from None
-        write_atomic(Path(out_dir) / "tasks" / f"{name}.json", text)
+        write_atomic(task_path(out_dir, futs[f]), text)
         if progress:
             progress(1)
     return len(pending)
@@ -146,7 +164,7 @@ def run_grid(tasks, out, *, scheduler=None, workers=0, timeout=10, in_process=Fa
     """Execute ``tasks`` on Dask (a LocalCluster unless ``scheduler``), holding the ``out`` lock
     (:func:`~vistrack.engine.tasks.lock_out`); the task files are written into ``out/tasks`` here.
 
-    ``on_ready()`` once the workers are there; ``progress(k)`` as tasks finish; ``notify(line)`` for
+    ``on_ready(number of tasks)`` once the workers are there; ``progress(k)`` as tasks finish; ``notify(line)`` for
     what the user should hear even when quiet
     (stale task files on resume, workers that died and were replaced). Raises :class:`OutLocked`,
     :class:`EngineError` or :class:`TaskFailed` with one line each; the files finished so far are kept.
@@ -166,7 +184,7 @@ def run_grid(tasks, out, *, scheduler=None, workers=0, timeout=10, in_process=Fa
                 if scheduler:  # local clip paths must be the workers' too (URLs each worker fetches)
                     check_shared(client, tasks)
                 if on_ready:
-                    on_ready()
+                    on_ready(len(tasks))
                 execute(tasks, out, client, resume=resume, progress=progress, runner=runner)
             finally:
                 client.close()
@@ -175,3 +193,21 @@ def run_grid(tasks, out, *, scheduler=None, workers=0, timeout=10, in_process=Fa
         if deaths.count:
             notify(f"note: {deaths.count} worker process(es) died and were replaced; their tasks ran again from "
                    "their own seeds (the results are those of an uninterrupted run)")
+
+
+def run_experiment(experiment, out, **engine):
+    """``experiment``'s tasks on the grid (:func:`run_grid` with its runner and the ``engine`` options:
+    ``scheduler``, ``workers``, ``timeout``, ``in_process``, ``resume``, ``progress``, ``notify``,
+    ``on_ready``) into the folder ``out`` (made), then its results from the task files
+    (``experiment.results``), all under the ``out`` lock. Raises ``ValueError`` for a folder that cannot
+    be made, and what :func:`run_grid` raises."""
+    out = Path(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ValueError(f"cannot create --out folder {out}: {e.strerror}") from None
+    tasks = experiment.tasks()
+    with lock_out(out):
+        if tasks:
+            run_grid(tasks, out, runner=experiment.runner, **engine)
+        return experiment.results(tasks, out)

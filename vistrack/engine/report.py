@@ -12,13 +12,21 @@ from pathlib import Path
 
 import numpy as np
 
-from .evaluation import OPENCV_TRACKERS, write_atomic
+from .evaluation import OPENCV_TRACKERS, summarize
+from .tasks import write_atomic
 
-__all__ = ["CSV_COLUMNS", "task_row", "write_eval_outputs"]
+__all__ = ["CSV_COLUMNS", "task_row", "write_eval_outputs", "averages"]
 
 CSV_COLUMNS = ["clip", "algo", "particles", "run", "frames", "mean_error", "mean_error_all", "p_lost", "success_auc",
                "precision_20px", "frames_per_s", "mean_ess", "reported_lost", "success_auc_lost_empty", "lt_precision",
                "lt_recall", "lt_f"]
+
+
+def averages(out):
+    """The table of averages over clips of the report in folder ``out`` (``report.md``, as
+    :func:`write_eval_outputs` and :func:`~vistrack.engine.mot_report.write_mot_outputs` write it): what
+    ``eval`` and ``demo`` print."""
+    return (Path(out) / "report.md").read_text().split("\n\n## Per clip")[0].split("## Averages over clips\n\n")[-1]
 
 
 def task_row(r):
@@ -27,8 +35,6 @@ def task_row(r):
     truth has no object (OTB/VOT absent frames) count in neither. ``mean_error`` is over the
     frames not lost, ``mean_error_all`` over every frame with the object in view and an estimate;
     empty where there is none."""
-    from .evaluation import summarize
-
     s = summarize([r])[0]
     row = {"clip": r["clip"], "algo": r["algo"], "particles": r["particles"], "run": r["run"], "frames": r["frames"]}
     row.update({k: "" if s[k] is None else s[k] for k in CSV_COLUMNS[5:]})

@@ -11,8 +11,15 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["task_fingerprint", "write_task_result", "write_atomic", "task_done", "stale_tasks", "load_task_results",
-           "TaskFailed", "check_shared", "OutLocked", "lock_out"]
+__all__ = ["task_path", "task_fingerprint", "write_task_result", "save_result", "write_atomic", "task_done",
+           "stale_tasks", "load_task_results", "TaskFailed", "check_shared", "OutLocked", "lock_out"]
+
+
+def task_path(out_dir, task=None):
+    """``out_dir/tasks/<name>.json``, the file of ``task`` (a dict with its ``name``); without ``task``,
+    the folder ``out_dir/tasks`` that holds them."""
+    folder = Path(out_dir) / "tasks"
+    return folder if task is None else folder / f"{task['name']}.json"
 
 
 def _clip_signature(clip):
@@ -94,6 +101,12 @@ def write_task_result(path, result, task=None):
     return str(path)
 
 
+def save_result(out_dir, task, result):
+    """A runner's result of ``task`` written to its file under ``out_dir`` (:func:`task_path`), with the
+    task's fingerprint (:func:`write_task_result`); returns the path."""
+    return write_task_result(task_path(out_dir, task), result, task)
+
+
 def write_atomic(path, text):
     """Write ``text`` to ``path`` whole or not at all: a temporary file beside it, then a rename
     (a crash leaves the old file or none, never half of the new one). A device or pipe such as
@@ -109,11 +122,12 @@ def write_atomic(path, text):
     finally:
         tmp.unlink(missing_ok=True)
 
+
 def task_done(task, out_dir):
     """Whether ``task``'s result file exists, parses, and was computed by this very task (its
     :func:`task_fingerprint`: same clip content, options, seed stream, version and code) — what
     ``--resume`` may reuse."""
-    p = Path(out_dir) / "tasks" / f"{task['name']}.json"
+    p = task_path(out_dir, task)
     if not p.is_file():
         return False
     try:
@@ -125,14 +139,13 @@ def task_done(task, out_dir):
 
 def stale_tasks(tasks, out_dir):
     """The tasks whose result file exists but cannot be reused (another configuration, or damaged)."""
-    return [t for t in tasks if (Path(out_dir) / "tasks" / f"{t['name']}.json").is_file()
-            and not task_done(t, out_dir)]
+    return [t for t in tasks if task_path(out_dir, t).is_file() and not task_done(t, out_dir)]
 
 
 def load_task_results(tasks, out_dir):
-    """The result dicts of ``tasks`` (list of task dicts), read from ``out_dir/tasks/<name>.json``, in the tasks'
-    order."""
-    return [json.loads((Path(out_dir) / "tasks" / f"{t['name']}.json").read_text()) for t in tasks]
+    """The result dicts of ``tasks`` (list of task dicts), read from their files (:func:`task_path`), in the
+    tasks' order: what every experiment's results are computed from."""
+    return [json.loads(task_path(out_dir, t).read_text()) for t in tasks]
 
 
 class TaskFailed(RuntimeError):
@@ -140,35 +153,21 @@ class TaskFailed(RuntimeError):
     task files finished so far are kept, so ``--resume`` runs only the rest."""
 
 
-def _sees(probe, paths):
-    """On a worker: which of ``probe`` (``None``: none) and ``paths`` it cannot see (the paths as the
-    tasks give them)."""
-    return [p for p in ([probe] if probe else []) + list(paths) if not os.path.exists(p)]
+def _unseen(paths):
+    """On a worker: the ``paths`` (as the tasks give them) it cannot see."""
+    return [p for p in paths if not os.path.exists(p)]
 
 
-def check_shared(client, tasks, out_dir=None):
+def check_shared(client, tasks):
     """Raise ``TaskFailed`` unless every worker of ``client`` sees the tasks' clips at the paths the
-    tasks give (clips given as URLs are fetched by each worker and not checked) and, with
-    ``out_dir``, that folder (a file written there now)."""
-    import uuid
-
-    probe = None
-    if out_dir is not None:
-        probe = Path(out_dir) / f".vistrack-probe-{uuid.uuid4().hex[:12]}"
-        probe.write_text("")
-    try:
-        clips = sorted({t["clip"] for t in tasks if "clip" in t and "://" not in str(t["clip"])})
-        missing = {w: m for w, m in client.run(_sees, str(probe) if probe else None, clips).items() if m}
-    finally:
-        if probe is not None:
-            probe.unlink(missing_ok=True)
+    tasks give (clips given as URLs are fetched by each worker and not checked; the results come back
+    through Dask, so no worker needs ``--out``)."""
+    clips = sorted({t["clip"] for t in tasks if "clip" in t and "://" not in str(t["clip"])})
+    missing = {w: m for w, m in client.run(_unseen, clips).items() if m}
     if missing:
         worker, paths = next(iter(missing.items()))
-        what = f"--out {out_dir}" if probe is not None and paths[0] == str(probe) else f"clip {paths[0]}"
-        raise TaskFailed(f"{len(missing)} worker(s) of the scheduler (e.g. {worker}) cannot see {what}: --out and "
-                         "the clips must be on a filesystem the workers share, at the same paths" if probe else
-                         f"{len(missing)} worker(s) of the scheduler (e.g. {worker}) cannot see {what}: give the "
-                         "clips at paths the workers share, or as URLs they can fetch (http://, s3://, ...)")
+        raise TaskFailed(f"{len(missing)} worker(s) of the scheduler (e.g. {worker}) cannot see clip {paths[0]}: give "
+                         "the clips at paths the workers share, or as URLs they can fetch (http://, s3://, ...)")
 
 
 class OutLocked(RuntimeError):

@@ -1,6 +1,6 @@
 """Particle filters, one module per algorithm, all with ``step(particles, obs, rng)``.
 
-See the algorithm table of README.md and docs/architecture.md; aliases follow the literature's names.
+:mod:`.registry` names them (:data:`FILTERS`, :func:`make_filter`); aliases follow the literature's names.
 """
 
 from .avpf import AVPF
@@ -19,6 +19,7 @@ from .pf_eis import PFEIS
 from .pf_eis_mt import PFEISMT
 from .rb_hs_sir import RBHSSIR
 from .rb_ss_hs_sir import RBSSHSSIR
+from .registry import ALGORITHMS, FILTERS, FilterSpec, make_filter
 from .sir import SIR
 
 __all__ = [
@@ -46,40 +47,7 @@ __all__ = [
     "BranchedPartitioned",
     "BranchedPartitionedLIS",
     "ALGORITHMS",
+    "FILTERS",
+    "FilterSpec",
     "make_filter",
 ]
-
-ALGORITHMS = {
-    "bootstrap": Bootstrap,
-    "condensation": Bootstrap,
-    "n-ips": Bootstrap,
-    "pf-gordon": Bootstrap,
-    "sir": SIR,
-    "basic-sir": BasicSIR,
-    "hs-sir": HSSIR,
-    "rb-hs-sir": RBHSSIR,
-    "rb-ss-hs-sir": RBSSHSSIR,
-    "avpf": AVPF,
-    "lls": LLS,
-    "lis": LIS,
-    "ls-n-ips": LSNIPS,
-    "ls-n-ips-nn": LSNIPSNN,
-    "pf-doucet": PFDoucet,
-    "pf-eis": PFEIS,
-    "pf-eis-mt": PFEISMT,
-    "partitioned": Partitioned,
-    "partitioned-lis": PartitionedLIS,
-    "branched-partitioned": BranchedPartitioned,
-    "branched-partitioned-lis": BranchedPartitionedLIS,
-}
-
-
-def make_filter(name, model, **kwargs):
-    """The filter registered as ``name`` on ``model``; a clear ``ValueError`` if unknown."""
-    try:
-        cls = ALGORITHMS[name]
-    except KeyError:
-        raise ValueError(
-            f"unknown algorithm {name!r}; choose from {', '.join(sorted(ALGORITHMS))}"
-        ) from None
-    return cls(model, **kwargs)

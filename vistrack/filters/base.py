@@ -60,6 +60,11 @@ class ParticleFilter:
     model_parts = {}
     #: the local proposal in use (filters with one set it from the model or the caller)
     proposal = None
+    #: protocols a part the caller may pass in needs of the model when none is passed (LS-N-IPS's
+    #: search)
+    part_needs = ()
+    #: the working memory of a step per particle, in units of the model's (its ``bytes_per_particle``)
+    memory_factor = 1
 
     def __init__(self, model, *, resample="systematic", ess_threshold=None, birth_reserve=None):
         require(model, self.needs, self.name)
@@ -69,6 +74,14 @@ class ParticleFilter:
         self.prior_kernel = PriorKernel(model)
         self._given = {}  # parts passed in: attribute -> value (None: the model builds it)
         self._built = {}  # (attribute, first) -> the part the model built for that kernel
+
+    @classmethod
+    def required(cls):
+        """Every protocol the filter needs of a model that builds all its parts: :attr:`needs`, the
+        protocols of :attr:`model_parts` and :attr:`part_needs` (what the registry checks a model
+        class against, :mod:`vistrack.filters.registry`)."""
+        parts = (protocol for protocol, _ in cls.model_parts.values())
+        return tuple(dict.fromkeys((*cls.needs, *parts, *cls.part_needs)))
 
     @property
     def ess_threshold(self):

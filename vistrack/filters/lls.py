@@ -38,6 +38,8 @@ class LLS(ParticleFilter):
 
     name = "lls"
     needs = (StateSpaceModel, LocalMoves)
+    #: the likelihood on a grid of the window for every particle
+    memory_factor = 8
     model_parts = {"window": (LLSModel, "lls_window")}
 
     def __init__(self, model, window=None, **kwargs):

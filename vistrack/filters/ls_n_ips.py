@@ -29,6 +29,7 @@ class LSNIPS(ParticleFilter):
 
     name = "ls-n-ips"
     needs = (StateSpaceModel,)
+    part_needs = (LocalSearch,)
 
     def __init__(self, model, local_search=None, **kwargs):
         super().__init__(model, **kwargs)
@@ -58,6 +59,7 @@ class LSNIPSNN(LSNIPS):
     model's neural network, §4.3.1 Fig. 4.5), whatever the model's default search."""
 
     name = "ls-n-ips-nn"
+    part_needs = (LearnedSearch,)
 
     def __init__(self, model, **kwargs):
         require(model, (LearnedSearch,), f"{self.name} (a learned local search)")

@@ -2,6 +2,7 @@
 
 * :func:`same_file`: two names of one file, by identity (``st_dev``, ``st_ino``), not by
   spelling: a hard link, a symbolic link or ``./x`` against ``x``.
+* :func:`check_writable`: whether a file can be written at a path, before any work.
 * :func:`input_files`: the files a run reads from a video, clip or image folder (what an output
   must never be).
 * :class:`OutputLock`: one live writer per output. A lock file ``.NAME.lock`` beside the output,
@@ -18,7 +19,8 @@ import errno
 import os
 from pathlib import Path
 
-__all__ = ["OutputBusy", "same_file", "file_id", "input_files", "OutputLock", "temporary_name", "is_device"]
+__all__ = ["OutputBusy", "same_file", "file_id", "check_writable", "input_files", "OutputLock", "temporary_name",
+           "is_device"]
 
 
 class OutputBusy(RuntimeError):
@@ -32,6 +34,21 @@ def file_id(path):
     except OSError:
         return None
     return (st.st_dev, st.st_ino)
+
+
+def check_writable(path, what):
+    """Raise ``ValueError`` (one line, naming it ``what``) unless a file can be written at ``path``: not a
+    folder, in a folder that exists, with permission. ``None`` passes."""
+    if path is None:
+        return
+    path = os.path.abspath(path)
+    parent = os.path.dirname(path)
+    if os.path.isdir(path):
+        raise ValueError(f"{what} {path} is a directory, not a file")
+    if not os.path.isdir(parent):
+        raise ValueError(f"cannot write {what} {path}: folder {parent} does not exist")
+    if not os.access(parent, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
+        raise ValueError(f"cannot write {what} {path}: permission denied")
 
 
 def same_file(a, b):

@@ -1,6 +1,6 @@
 """Where a run starts: the start box and frame from the user's ``--init`` / ``--init-gt`` and the clip.
 
-Shared by :mod:`vistrack.models.builders` and the model packages' builders (``vistrack.models.*.builder``).
+Shared by :mod:`vistrack.registry.builders` and the model packages' builders (``vistrack.models.*.builder``).
 """
 
 from __future__ import annotations

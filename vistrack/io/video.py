@@ -51,7 +51,7 @@ VIDEO_EXT = {".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", "
 TEXT_EXT = {".txt", ".csv", ".json", ".md", ".rst", ".xml", ".yaml", ".yml", ".log", ".py", ".html", ".srt"}
 
 
-from .video_errors import FrameOrderWarning, VideoDecodeWarning, VideoError  # noqa: E402
+from .video_errors import FrameOrderWarning, VideoDecodeWarning, VideoError, quoted  # noqa: E402
 from .video_writer import CONTAINERS, VideoWriter  # noqa: E402,F401  (the writer's home; re-exported)
 
 
@@ -278,10 +278,10 @@ def read_rects(path, origin=0):
             v = np.array([float(x) for x in parts])
         except ValueError:
             raise VideoError(f"{path}, line {k}: expected numbers (x,y,w,h or a 4-corner polygon), "
-                             f"got {_short(line)}") from None
+                             f"got {quoted(line)}") from None
         if np.any(np.abs(v[np.isfinite(v)]) > MAX_COORD):
             raise VideoError(f"{path}, line {k}: a value beyond {MAX_COORD:.0e} px is not a pixel coordinate, "
-                             f"got {_short(line)}")
+                             f"got {quoted(line)}")
         if len(v) == 8:
             xs, ys = v[0::2], v[1::2]
             v = np.array([xs.min(), ys.min(), xs.max() - xs.min(), ys.max() - ys.min()])
@@ -297,11 +297,6 @@ def read_rects(path, origin=0):
 
 #: the largest pixel coordinate or size a ground-truth or results file may give
 MAX_COORD = 1e6
-
-
-def _short(text, most=60):
-    """``text`` quoted, cut to ``most`` characters (an error line stays one short line)."""
-    return repr(text if len(text) <= most else text[:most] + "...")
 
 
 def read_text_lines(path):

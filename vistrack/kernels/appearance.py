@@ -18,7 +18,7 @@ from numba import njit
 
 from .sampling import NONFINITE, corner_float, fma_lerp, inside, lerp_fma, pairwise_sum
 
-__all__ = ["colour_labels", "bin_integrals", "ncc", "colour_loglik"]
+__all__ = ["colour_labels", "bin_integrals", "ncc", "colour_loglik", "box_count"]
 
 #: as :mod:`vistrack.core.features`: hue x saturation bins, value bins, and the chroma thresholds
 _HUE, _SAT, _VALUE, _MIN_S, _MIN_V = 8, 3, 4, 48, 40
@@ -112,7 +112,7 @@ def ncc(texture, boxes, gx, gy, x0, y0, f, template, out):
 
 
 @njit(cache=True, forceinline=True, error_model="numpy")
-def _box_count(ii, x0, y0, x1, y1, b):
+def box_count(ii, x0, y0, x1, y1, b):
     """Bin ``b``'s count in the box ``[x0, x1) x [y0, y1)`` (rounded corners) clipped to the map
     (:func:`~vistrack.core.features.box_sums`)."""
     h, w = ii.shape[0] - 1, ii.shape[1] - 1
@@ -151,8 +151,8 @@ def colour_loglik(ii, x0, y0, f, boxes, ring, bg_weight, q, bp, lam, kappa, out)
         ox0, oy0 = int(np.rint(u - hw - g)), int(np.rint(v - hh - g))
         ox1, oy1 = int(np.rint(u + hw + g)), int(np.rint(v + hh + g))
         for b in range(n_bins):
-            inner[b] = _box_count(ii, ix0, iy0, ix1, iy1, b)
-            outer[b] = _box_count(ii, ox0, oy0, ox1, oy1, b) - inner[b]
+            inner[b] = box_count(ii, ix0, iy0, ix1, iy1, b)
+            outer[b] = box_count(ii, ox0, oy0, ox1, oy1, b) - inner[b]
         d = _d2(inner, bg_weight, q, scratch) + kappa * (1.0 - _d2(outer, bg_weight, q, scratch))
         dot_in = dot_out = 0.0
         for b in range(n_bins):

@@ -1,7 +1,8 @@
 """What a video model offers ``run``, ``eval`` and ``vistrack.Tracker``: its registry entry's form.
 
-Each model package's ``builder`` module defines one :class:`ModelSpec` (``SPEC``);
-:mod:`vistrack.models.registry` holds them.
+Each model package's ``builder`` module defines one :class:`ModelSpec` (``SPEC``); the registry
+(:mod:`vistrack.registry`) holds them and derives from :attr:`ModelSpec.model_class` which algorithms
+run on each.
 """
 
 from __future__ import annotations
@@ -9,12 +10,34 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-__all__ = ["ModelSpec", "THESIS_ALGOS", "HISTORY_ALGOS"]
+__all__ = ["ModelSpec", "ModelOption"]
 
-#: the thesis's filters (001 §4) that run on any model with a transition kernel and a local proposal
-THESIS_ALGOS = ("lis", "bootstrap", "condensation", "ls-n-ips", "lls", "avpf")
-#: SIR and the history-sampling family (§3.2) with the colour-blob proposal: models with an innovation split
-HISTORY_ALGOS = ("sir", "basic-sir", "hs-sir", "rb-hs-sir", "rb-ss-hs-sir")
+
+@dataclass(frozen=True)
+class ModelOption:
+    """A keyword option of a model's builder.
+
+    Attributes
+    ----------
+    name : str
+        The builder's keyword (``colour``, ``layout``, ...).
+    default : object
+    help : str
+    flag : str or None
+        The ``vistrack run`` option that sets it (``--no-colour``, ...).
+    value : object
+        What the flag passes (``None``: the option's own value; ``False`` for ``--no-colour``).
+    needs : Protocol or None
+        It is for the algorithms that need this protocol of the model (``--search``: those of
+        :class:`~vistrack.models.protocol.LocalSearch`); ``None``: for all.
+    """
+
+    name: str
+    default: object
+    help: str
+    flag: str | None = None
+    value: object = None
+    needs: type | None = None
 
 
 @dataclass(frozen=True)
@@ -24,8 +47,10 @@ class ModelSpec:
     Attributes
     ----------
     name : str
-    algos : tuple of str
-        Algorithms that run on it, the default first.
+    algos : tuple of str or None
+        Algorithms that run on it, the default first; ``None``: every algorithm whose protocols
+        :attr:`model_class` offers, in the filter registry's order
+        (:func:`vistrack.registry.algos_for`). A tuple given here is the model's choice among them.
     description : str
     box_init : bool
         Whether it can start from an ``(x, y, w, h)`` box.
@@ -40,21 +65,40 @@ class ModelSpec:
         How ``eval`` decides a frame is lost (:func:`vistrack.core.metrics.lost_frames`).
     bytes_per_particle : int
         Peak working memory of one step per particle (bytes; measured, rounded up), for
-        :func:`vistrack.core.runtime.check_particle_memory`.
+        :func:`vistrack.registry.catalog.check_particle_memory`.
+    multi_algos : tuple of str or None
+        Algorithms that track several targets at once (``run``/``eval --targets K``), the default
+        first; ``None``: derived from :attr:`targets_class` (none without one).
+    model_class : type or None
+        The class of the models it builds: the protocols it offers decide which filters run on it.
+    targets_class : type or None
+        The class of its several-target form (the plate model's :class:`~vistrack.models.plate.plates.Plates`).
+    seed : str
+        The seed it comes from (``"001"``: the thesis, ``"000"``: the PF-EIS paper): the names its
+        algorithms are listed under (``condensation`` on the thesis's models, ``pf-gordon`` on the paper's).
+    options : tuple of ModelOption
+        Its builder's options that ``run`` sets (with their flags).
     """
 
     name: str
-    algos: tuple
-    description: str
+    algos: tuple | None = None
+    description: str = ""
     box_init: bool = True
     from_box: Callable | None = None
     from_clip: Callable | None = None
     lost_rule: str = "centre"
     bytes_per_particle: int = 64_000
-    #: algorithms that track several targets at once (``run``/``eval --targets K``), the default first
-    multi_algos: tuple = ()
+    multi_algos: tuple | None = None
+    model_class: type | None = None
+    targets_class: type | None = None
+    seed: str = "001"
+    options: tuple = ()
 
     @property
     def default_algo(self):
         """The default algorithm: the first of :attr:`algos`."""
         return self.algos[0]
+
+    def option(self, flag):
+        """Its option that ``run``'s ``flag`` sets, or ``None``."""
+        return next((o for o in self.options if o.flag == flag), None)

@@ -175,23 +175,3 @@ class AR2Toy(ARInnovation, GaussMixtureToy):
     def innovation_proposal(self, kernel=None):
         """The innovation's image-only proposal: a fixed Gaussian (:class:`GaussProposal`)."""
         return self.proposal
-
-    def exact_moments(self, prev=None, weights=None):
-        """``∫ h(X_t) r K_1(. | X_{t-1}) p(dX_{t-1})`` for ``p = Σ_l weights_l δ(prev_l)`` (``prev``
-        ``None``: ``∫ h r p_0``, the first step) and ``h = 1, u_t, u_t², u_{t-1}, u_t u_{t-1}`` and (``rest``)
-        ``v_t, v_t u_{t-1}``; a dict."""
-        if prev is None:
-            m, var, weights = self.init_pose[None], self.prior_var, np.ones(1)
-        else:
-            m, var = self.predict_mean(np.asarray(prev, float))[:, :self.k], self.q  # (C, k)
-        mu, cov, log_c = gaussian_product(self.mu[:, None, None], self.var[:, None, None, None],
-                                          m[None, :, :1], np.full((1, len(m), 1, 1), var))
-        c = np.exp(self.log_p[:, None] + log_c) * np.asarray(weights)[None]  # (I, C)
-        mean_u, mean_u2 = mu[..., 0], mu[..., 0] ** 2 + cov[..., 0, 0]
-        u1 = mean_u if prev is None else np.asarray(prev)[None, :, 0]  # p_0 starts at rest
-        out = {"1": c.sum(), "u": np.sum(c * mean_u), "u2": np.sum(c * mean_u2), "hist": np.sum(c * u1),
-               "u_hist": np.sum(c * (mean_u2 if prev is None else mean_u * u1))}
-        if self.k == 2:
-            out["v"] = np.sum(c * m[:, 1])
-            out["v_hist"] = np.sum(c * m[:, 1] * u1)
-        return out

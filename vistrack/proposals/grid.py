@@ -12,8 +12,8 @@ inside it, so the sampling density is ``h(Z) = q(c_j) g(σ o_j) / alpha_hat`` wi
 however coarse the grid or rough the map.
 
 The cell is drawn by inversion of each row's cumulative ``q g`` with one uniform per particle
-(``rng.random((N, 3))``: the cell, then the point in it; before the third pass of issue 22,
-Gumbel-max with one draw per cell: the same distribution, 81 times the ``log`` pairs).
+(``rng.random((N, 3))``: the cell, then the point in it; the same distribution as Gumbel-max with
+one draw per cell, with 81 times fewer ``log`` pairs).
 
 With the compiled kernels (:mod:`vistrack.kernels`), a model whose ``q`` is a map read
 bilinearly (``proposal_work``, ``proposal_qmap`` and ``proposal_tempering``, as the box model's)

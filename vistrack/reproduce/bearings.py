@@ -4,7 +4,7 @@
 each; the error is the Euclidean distance of the weighted-mean position to the
 truth (averaged over ships: the joint error; each ship's is kept too). With
 ``entries`` the (algorithm, N) pairs are given instead of the grid, e.g. the
-equal-time counts of :func:`equal_time_pairs`. Randomness: ``SeedSequence(seed)`` spawns one
+equal-time counts of :meth:`BearingsConfig.equal_time`. Randomness: ``SeedSequence(seed)`` spawns one
 stream for the sequences and one per (sequence, run); a run's stream is the
 same for every algorithm and N (common random numbers), so results do not
 depend on the order the grid is evaluated in.
@@ -12,23 +12,25 @@ depend on the order the grid is evaluated in.
 
 from __future__ import annotations
 
-import json
 import time
 import warnings
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from ..core.metrics import equal_time_search
+from ..core.metrics import best_ms, equal_time
 from ..core.particles import DegenerateWeightsWarning
-from ..filters import ALGORITHMS, filter_steps, make_filter
+from ..core.runtime import prepare_worker
+from ..engine.tasks import load_task_results, save_result
+from ..filters import FILTERS, filter_steps, make_filter
 from ..models.bearings.model import LIS_PROPOSALS, Bearings, simulate
+from ..registry import derived_algos
+from ..registry.comparisons import BEARINGS
 
-__all__ = ["BearingsConfig", "run_bearings", "bearing_tasks", "run_bearing_task", "bearing_results", "DEFAULT_ALGOS",
-           "equal_time_pairs", "format_ship_table"]
+__all__ = ["BearingsConfig", "run_bearings", "run_bearing_task", "sequence", "DEFAULT_ALGOS", "format_ship_table"]
 
-DEFAULT_ALGOS = ("bootstrap", "avpf", "lis")
+#: Tables 4.3 and 4.4's algorithms
+DEFAULT_ALGOS = BEARINGS
 
 
 @dataclass
@@ -48,6 +50,8 @@ class BearingsConfig:
     ess_threshold: float | None = None
     #: ``[[algo, N], ...]`` run instead of ``algos`` x ``particles`` (``None``: the grid)
     entries: list | None = None
+
+    table = "bearings"
 
     def pairs(self):
         """The ``(algo, N)`` pairs to run: :attr:`entries`, else every algorithm at every N."""
@@ -74,10 +78,54 @@ class BearingsConfig:
             raise ValueError("--algos needs at least one algorithm")
         model = Bearings(self.ships, proposal=self.proposal)
         for a in dict.fromkeys(a for a, _ in self.pairs()):
-            if a not in ALGORITHMS or a == "sir":
-                choices = ", ".join(sorted(k for k in ALGORITHMS if k != "sir"))
-                raise ValueError(f"unknown algorithm {a!r} for bearings; choose from {choices}")
+            if a not in FILTERS:
+                runs = ", ".join(derived_algos(Bearings))
+                raise ValueError(f"unknown algorithm {a!r} for bearings; choose from {runs}")
             make_filter(a, model)  # a filter whose model parts bearings lacks: its one-line ValueError
+
+    def tasks(self):
+        """One engine task per fixed sequence (all its runs, algorithms and N inside)."""
+        self.validate()
+        tag = f"M{self.ships}_T{self.steps}_R{self.runs}_S{self.sequences}_s{self.seed}"
+        return [{"name": f"bearings_{tag}_seq{s:03d}", "sequence": s, "config": asdict(self)}
+                for s in range(self.sequences)]
+
+    @property
+    def runner(self):
+        """:func:`run_bearing_task`."""
+        return run_bearing_task
+
+    def results(self, tasks, out_dir):
+        """``{"config", "results", "curves"}`` from the task files of :meth:`tasks`."""
+        per = {}
+        for data in load_task_results(tasks, out_dir):
+            for e in data["entries"]:
+                per.setdefault((e["algo"], e["particles"]), []).append((np.array(e["ship_errors"]), e["seconds"],
+                                                                        e["degenerate"]))
+        return _summarize(self, per)
+
+    def equal_time(self, runs=3, repeats=3, steps=4):
+        """``(algo, N)`` pairs at equal time per run (as ``eval --equal-time``): for every N of
+        :attr:`particles`, the first algorithm at N and every other at the N whose time per run is
+        closest to it (:func:`~vistrack.core.metrics.equal_time` with the secant search, ``steps``
+        steps). Times are the best of ``repeats`` timings (:func:`~vistrack.core.metrics.best_ms`), in
+        CPU time of this thread, of ``runs`` runs on the first sequence. Returns ``(pairs, {"algo:N": ms
+        per run})``, the times at the answers."""
+        model = Bearings(self.ships, proposal=self.proposal)
+        _, obs, seeds = sequence(self, model, 0)
+        seeds = seeds[:runs]
+
+        def ms(algo, n):
+            filt = make_filter(algo, model, resample=self.resample, ess_threshold=self.ess_threshold)
+            return best_ms(lambda: [_timed_run(filt, obs, n, ss) for ss in seeds], repeats, time.thread_time) \
+                / len(seeds)
+
+        pairs, times = [], {}
+        for n in self.particles:
+            found, t = equal_time(ms, [(a, int(n)) for a in self.algos], search_steps=steps)
+            pairs += found
+            times.update(t)
+        return pairs, times
 
 
 def _sequence_runs(cfg, model, s):
@@ -87,7 +135,7 @@ def _sequence_runs(cfg, model, s):
     position error. Run ``r`` draws from ``SeedSequence(seed).spawn(2)[1].spawn(sequences *
     runs)[s * runs + r]`` for every algorithm and N (common random numbers).
     """
-    truth, obs, run_seeds = _sequence(cfg, model, s)
+    truth, obs, run_seeds = sequence(cfg, model, s)
     out = {}
     for algo, n in cfg.pairs():
         filt = make_filter(algo, model, resample=cfg.resample, ess_threshold=cfg.ess_threshold)
@@ -104,7 +152,7 @@ def _sequence_runs(cfg, model, s):
     return out
 
 
-def _sequence(cfg, model, s):
+def sequence(cfg, model, s):
     """Sequence ``s``'s ``(truth (steps, d), obs (steps, M), run seeds (runs,))``."""
     seq_ss, run_ss = np.random.SeedSequence(cfg.seed).spawn(2)
     truth, obs = simulate(model, cfg.steps, np.random.default_rng(seq_ss.spawn(cfg.sequences)[s]))
@@ -120,63 +168,16 @@ def _timed_run(filt, obs, n, seed):
     return means, time.thread_time() - t0
 
 
-def equal_time_pairs(cfg, runs=3, repeats=3, steps=4):
-    """``(algo, N)`` pairs at equal time per run (as ``eval --equal-time``): for every N of
-    ``cfg.particles``, the first algorithm at N and every other at the N whose time per run
-    is closest to it. Times are the best of ``repeats`` timings, in CPU time, of ``runs`` runs
-    on the first sequence in this process; the N tried are
-    :func:`~vistrack.core.metrics.equal_time_search`'s. Returns ``(pairs, {"algo:N": ms per run})``, the
-    times at the answers."""
-    model = Bearings(cfg.ships, proposal=cfg.proposal)
-    _, obs, seeds = _sequence(cfg, model, 0)
-    seeds = seeds[:runs]
-
-    def ms(algo, n):
-        filt = make_filter(algo, model, resample=cfg.resample, ess_threshold=cfg.ess_threshold)
-        return 1e3 * min(sum(_timed_run(filt, obs, n, ss)[1] for ss in seeds) for _ in range(repeats)) / len(seeds)
-
-    pairs, times = [], {}
-    for n in cfg.particles:
-        budget = times[f"{cfg.algos[0]}:{n}"] = ms(cfg.algos[0], n)
-        pairs.append((cfg.algos[0], int(n)))
-        for algo in cfg.algos[1:]:
-            m, t = equal_time_search(lambda k: ms(algo, k), int(n), budget, steps)
-            pairs.append((algo, m))
-            times[f"{algo}:{m}"] = t
-    return pairs, times
-
-
-def bearing_tasks(cfg):
-    """One engine task per fixed sequence (all its runs, algorithms and N inside)."""
-    cfg.validate()
-    tag = f"M{cfg.ships}_T{cfg.steps}_R{cfg.runs}_S{cfg.sequences}_s{cfg.seed}"
-    return [{"name": f"bearings_{tag}_seq{s:03d}", "sequence": s, "config": asdict(cfg)}
-            for s in range(cfg.sequences)]
-
-
 def run_bearing_task(task, out_dir):
-    """Engine runner: sequence ``task["sequence"]``, written to ``out_dir/tasks/<name>.json``."""
-    from ..engine.evaluation import prepare_worker, write_task_result
-
+    """Engine runner: sequence ``task["sequence"]``, its result written under ``out_dir``
+    (:func:`~vistrack.engine.tasks.save_result`)."""
     prepare_worker()
-
     cfg = BearingsConfig(**task["config"])
     res = _sequence_runs(cfg, Bearings(cfg.ships, proposal=cfg.proposal), task["sequence"])
     result = {"sequence": task["sequence"],
               "entries": [{"algo": a, "particles": n, "ship_errors": e.tolist(), "seconds": sec, "degenerate": deg}
                           for (a, n), (e, sec, deg) in res.items()]}
-    return write_task_result(Path(out_dir) / "tasks" / f"{task['name']}.json", result, task)
-
-
-def bearing_results(cfg, tasks, out_dir):
-    """``{"config", "results", "curves"}`` from the task files of :func:`bearing_tasks`."""
-    per = {}
-    for t in tasks:
-        data = json.loads((Path(out_dir) / "tasks" / f"{t['name']}.json").read_text())
-        for e in data["entries"]:
-            per.setdefault((e["algo"], e["particles"]), []).append((np.array(e["ship_errors"]), e["seconds"],
-                                                                    e["degenerate"]))
-    return _summarize(cfg, per)
+    return save_result(out_dir, task, result)
 
 
 def _summarize(cfg, per):
@@ -217,7 +218,7 @@ def format_ship_table(results):
 
 def run_bearings(cfg, progress=None):
     """Run the grid in this process; return ``{"config", "results", "curves"}`` (the same numbers
-    as the engine path, :func:`bearing_tasks`).
+    as the engine path, :meth:`BearingsConfig.tasks`).
 
     ``results`` rows carry ``algo, particles, ships, mean_error_final,
     std_error_final, mean_error, ms_per_run`` (plus ``degenerate_steps``);

@@ -11,14 +11,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..engine.evaluation import entry_tasks, load_task_results, pooled_summary
+from ..core.metrics import pooled_summary
+from ..engine.evaluation import entries_config, entry_tasks, run_task
+from ..engine.tasks import load_task_results
+from ..registry import check_algo, get_filter_spec
+from ..registry.comparisons import CONTOUR
 
-__all__ = ["ContourConfig", "contour_tasks", "contour_results"]
+__all__ = ["ContourConfig"]
 
 
 @dataclass
 class ContourConfig:
     """The contour experiment (Table 4.1): ``runs`` per clip and ``(algo, N)`` entry, root ``seed``.
+    An :class:`~vistrack.engine.grid.Experiment` (:meth:`tasks`, :attr:`runner`, :meth:`results`).
 
     Attributes
     ----------
@@ -31,17 +36,34 @@ class ContourConfig:
     """
 
     clips: list
-    entries: list = field(default_factory=lambda: [("ls-n-ips", 30), ("bootstrap", 2000)])
+    entries: list = field(default_factory=lambda: list(CONTOUR))
     runs: int = 10
     seed: int = 0
 
+    #: the experiment's table and figures (:mod:`vistrack.reproduce.tables`)
+    table = "contour"
+    #: the registered model its tasks build (:mod:`vistrack.registry`)
+    model = "contour"
+    #: whether it tracks several targets (the model's several-target form)
+    several = False
 
-def contour_tasks(cfg):
-    """The experiment's tasks (see :func:`vistrack.engine.evaluation.task_list`)."""
-    return entry_tasks(cfg, "contour")
+    def validate(self):
+        """A one-line ``ValueError`` for an unknown algorithm or one that does not run on the model."""
+        for algo, _ in self.entries:
+            get_filter_spec(algo)
+            check_algo(self.model, algo, self.several)
 
+    def tasks(self):
+        """The experiment's tasks (:func:`~vistrack.engine.evaluation.entry_tasks`)."""
+        return entry_tasks(self, self.model)
 
-def contour_results(tasks, out_dir):
-    """Pooled summaries per (algo, N) over clips and runs, in the order of the entries."""
-    return pooled_summary(load_task_results(tasks, out_dir))
+    @property
+    def runner(self):
+        """:func:`~vistrack.engine.evaluation.run_task`: a task of ``eval`` with the thesis's lost rule."""
+        return run_task
+
+    def results(self, tasks, out_dir):
+        """``{"config", "results"}``: pooled summaries per (algo, N) over clips and runs, in the order of the
+        entries (:func:`~vistrack.core.metrics.pooled_summary`)."""
+        return {"config": entries_config(self), "results": pooled_summary(load_task_results(tasks, out_dir))}
 

@@ -15,19 +15,19 @@ empty: the contour model's defaults).
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 
-import numpy as np
+from ..core.metrics import equal_time
+from ..io.clips import load_clip
+from ..registry import build_model
+from ..registry.comparisons import HISTORY_SAMPLING
+from ..track.loop import ms_per_frame
+from .contour import ContourConfig
 
-from ..core.metrics import equal_time_n
-from .contour import ContourConfig, contour_results, contour_tasks
+__all__ = ["HSConfig", "DEFAULT_ENTRIES", "LIKELIHOOD_KEYS", "hs_tasks", "equal_time_entries", "likelihood_params"]
 
-__all__ = ["HSConfig", "DEFAULT_ENTRIES", "LIKELIHOOD_KEYS", "hs_tasks", "hs_results", "equal_time_entries",
-           "likelihood_params"]
-
-#: Table 3.1's particle counts
-DEFAULT_ENTRIES = [("basic-sir", 3000), ("rb-ss-hs-sir", 400)]
+#: Table 3.1's algorithms and particle counts
+DEFAULT_ENTRIES = list(HISTORY_SAMPLING)
 
 
 @dataclass
@@ -38,6 +38,16 @@ class HSConfig(ContourConfig):
     entries: list = field(default_factory=lambda: list(DEFAULT_ENTRIES))
     #: the contour model's likelihood parameters for every task (:data:`LIKELIHOOD_KEYS`)
     likelihood: dict = field(default_factory=dict)
+
+    table = "hs-sir"
+
+    def tasks(self):
+        """:func:`hs_tasks`."""
+        return hs_tasks(self)
+
+    def equal_time(self, frames=20):
+        """:func:`equal_time_entries` on the first clip: ``(entries, {"algo:N": ms per frame})``."""
+        return equal_time_entries(self.clips[0], self.entries, frames, self.likelihood)
 
 
 #: the edge likelihood's parameters that ``likelihood`` may set, with their types
@@ -65,40 +75,20 @@ def likelihood_params(text):
 
 
 def hs_tasks(cfg):
-    """The contour experiment's tasks, each building its model with ``cfg.likelihood``."""
-    tasks = contour_tasks(cfg)
-    if cfg.likelihood:  # absent by default, so the default tasks (and their --resume files) stay as they were
+    """The contour experiment's tasks of ``cfg`` (an :class:`HSConfig`), each building its model with
+    ``cfg.likelihood``."""
+    tasks = ContourConfig.tasks(cfg)
+    if cfg.likelihood:  # absent by default, so the default tasks (and their --resume files) stay as they are
         for t in tasks:
             t["model_params"] = dict(cfg.likelihood)
     return tasks
 
 
-#: the pooled summaries are the contour experiment's
-hs_results = contour_results
-
-
-def _ms_per_frame(frames, model, algo, n, repeats=2):
-    """The best of ``repeats`` runs' filter time per frame (ms) over ``frames``."""
-    from ..filters import make_filter
-    from ..track.loop import track
-
-    best = np.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in track(frames, make_filter(algo, model), n, np.random.default_rng(0)):
-            pass
-        best = min(best, (time.perf_counter() - t0) * 1e3 / len(frames))
-    return best
-
-
 def equal_time_entries(clip_path, entries, frames=20, likelihood=None):
     """``entries`` with every N after the first set so that its time per frame matches the first
-    entry's (time taken on the first ``frames`` frames of ``clip_path``, the model built with
-    ``likelihood``; linear in N between N and 2N), as Table 3.1's counts were chosen. Returns
-    ``(entries, {algo: ms per frame})``."""
-    from ..io.clips import load_clip
-    from ..models.builders import build_model
-
+    entry's (:func:`~vistrack.core.metrics.equal_time`: a line through N and 2N), timed on the first
+    ``frames`` frames of ``clip_path`` with the model built with ``likelihood``, as Table 3.1's counts
+    were chosen. Returns ``(entries, {"algo:N": ms per frame})`` at the given N."""
     clip = load_clip(clip_path)
     fr = []
     for i, f in clip.source:
@@ -106,11 +96,4 @@ def equal_time_entries(clip_path, entries, frames=20, likelihood=None):
             break
         fr.append((i, f))
     model = build_model("contour", clip, init_gt="", **(likelihood or {}))
-    ref_algo, ref_n = entries[0]
-    budget = _ms_per_frame(fr, model, ref_algo, ref_n)
-    out, times = [(ref_algo, ref_n)], {f"{ref_algo}:{ref_n}": budget}
-    for algo, n in entries[1:]:
-        m, t1, _ = equal_time_n(lambda k: _ms_per_frame(fr, model, algo, k), n, budget)
-        out.append((algo, m))
-        times[f"{algo}:{n}"] = t1
-    return out, times
+    return equal_time(lambda algo, n: ms_per_frame(fr, model, algo, n), entries)

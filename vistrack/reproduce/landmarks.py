@@ -15,31 +15,35 @@ runs are evaluated in or on which algorithms are chosen.
 
 from __future__ import annotations
 
-import json
 import time
 import warnings
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from ..core.particles import DegenerateWeightsWarning, ParticleSet
+from ..core.runtime import prepare_worker
+from ..engine.tasks import load_task_results, save_result
 from ..filters import make_filter
+from ..filters.registry import get_filter_spec
 from ..models.landmarks.model import Landmarks, simulate
+from ..registry.comparisons import LANDMARKS, SEED_000_ORDER
 
-__all__ = ["LandmarksConfig", "PAPER", "run_landmarks", "landmarks_run", "landmark_tasks", "run_landmark_task",
-           "landmark_results"]
+__all__ = ["LandmarksConfig", "PAPER", "STREAMS", "run_landmarks", "landmarks_run", "run_landmark_task"]
 
-LANDMARK_ALGOS = ("pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt")
+#: the filters of §4, each with its random stream within a run in the order the paper introduces them
+#: (:data:`~vistrack.registry.comparisons.SEED_000_ORDER`): fixed, so that a run's draws do not depend on
+#: which filters are chosen
+STREAMS = SEED_000_ORDER
 
 #: the two experiments of §4: model parameters, N, algorithms
 PAPER = {
     5: {"model": dict(sigma_c=0.0025, sigma2_s=1e-4, sigma2_theta=0.25, a_c=0.6, alpha_s=0.9, alpha_theta=0.9,
                       sigma2_o=0.04, p=0.2),
-        "particles": 50, "algos": ["pf-eis", "pf-doucet", "pf-gordon"], "mt_dims": None},
+        "particles": 50, "algos": list(LANDMARKS[5]), "mt_dims": None},
     8: {"model": dict(sigma_c=[0.0004] * 2 + [0.000025] * 10, sigma2_s=1e-4, sigma2_theta=0.16, a_c=0.6,
                       alpha_s=0.9, alpha_theta=0.9, sigma2_o=0.01, p=0.2),
-        "particles": 20, "algos": ["pf-eis-mt", "pf-eis", "pf-gordon"], "mt_dims": 10},
+        "particles": 20, "algos": list(LANDMARKS[8]), "mt_dims": 10},
 }
 
 
@@ -55,6 +59,8 @@ class LandmarksConfig:
     algos: list = field(default_factory=list)
     mt_dims: int | None = None
     resample: str = "systematic"
+
+    table = "landmarks"
 
     def __post_init__(self):
         paper = PAPER.get(self.k)
@@ -74,16 +80,38 @@ class LandmarksConfig:
             if v < 1:
                 raise ValueError(f"--{name} must be a positive integer, got {v}")
         for a in self.algos:
-            if a not in LANDMARK_ALGOS:
-                raise ValueError(f"unknown algorithm {a!r} for landmarks; choose from {', '.join(LANDMARK_ALGOS)}")
+            if a not in STREAMS:
+                raise ValueError(f"unknown algorithm {a!r} for landmarks; choose from {', '.join(STREAMS)}")
 
     def model(self):
         """The :class:`~vistrack.models.landmarks.Landmarks` model of the paper's experiment for ``k`` (seed 000 §4)."""
         return Landmarks(self.k, **PAPER[self.k]["model"])
 
+    def tasks(self):
+        """One engine task per Monte-Carlo run (every algorithm inside, common random numbers)."""
+        self.validate()
+        seeds = np.random.SeedSequence(self.seed).spawn(self.runs)
+        tag = f"k{self.k}_N{self.particles}_T{self.steps}_s{self.seed}_mt{self.mt_dims}"
+        return [{"name": f"landmarks_{tag}_r{r:03d}", "run": r, "seed_seq": seeds[r], "config": asdict(self)}
+                for r in range(self.runs)]
+
+    @property
+    def runner(self):
+        """:func:`run_landmark_task`."""
+        return run_landmark_task
+
+    def results(self, tasks, out_dir):
+        """``{"config", "results", "curves"}`` from the task files of :meth:`tasks`."""
+        runs = load_task_results(tasks, out_dir)
+        per = {a: [(np.array(r["algos"][a]["sq_error"]), r["algos"][a]["seconds"], r["algos"][a]["degenerate"])
+                   for r in runs] for a in self.algos}
+        return _summarize(self, per)
+
 
 def _filter(cfg, algo, model):
-    kw = {"mt_dims": cfg.mt_dims} if algo == "pf-eis-mt" else {}
+    """``algo`` on ``model`` with the config's resampling and, for a filter that takes it
+    (:attr:`~vistrack.filters.registry.FilterSpec.options`), its ``mt_dims``."""
+    kw = {"mt_dims": cfg.mt_dims} if any(o.name == "mt_dims" for o in get_filter_spec(algo).options) else {}
     return make_filter(algo, model, resample=cfg.resample, **kw)
 
 
@@ -102,12 +130,12 @@ def _one_run(cfg, model, r, seed_seq):
 
     Returns ``{algo: (squared error per step, seconds, degenerate steps)}``.
     """
-    seq_ss, *algo_ss = seed_seq.spawn(1 + len(LANDMARK_ALGOS))
+    seq_ss, *algo_ss = seed_seq.spawn(1 + len(STREAMS))
     states, obs = simulate(model, cfg.steps, np.random.default_rng(seq_ss))
     truth = model.configuration(states[1:])
     out = {}
     for a in cfg.algos:
-        rng = np.random.default_rng(algo_ss[LANDMARK_ALGOS.index(a)])
+        rng = np.random.default_rng(algo_ss[STREAMS.index(a)])
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", DegenerateWeightsWarning)
             t0 = time.perf_counter()
@@ -118,34 +146,14 @@ def _one_run(cfg, model, r, seed_seq):
     return out
 
 
-def landmark_tasks(cfg):
-    """One engine task per Monte-Carlo run (every algorithm inside, common random numbers)."""
-    cfg.validate()
-    seeds = np.random.SeedSequence(cfg.seed).spawn(cfg.runs)
-    tag = f"k{cfg.k}_N{cfg.particles}_T{cfg.steps}_s{cfg.seed}_mt{cfg.mt_dims}"
-    return [{"name": f"landmarks_{tag}_r{r:03d}", "run": r, "seed_seq": seeds[r], "config": asdict(cfg)}
-            for r in range(cfg.runs)]
-
-
 def run_landmark_task(task, out_dir):
-    """Engine runner: one run, written to ``out_dir/tasks/<name>.json``."""
-    from ..engine.evaluation import prepare_worker, write_task_result
-
+    """Engine runner: one run, its result written under ``out_dir`` (:func:`~vistrack.engine.tasks.save_result`)."""
     prepare_worker()
-
     cfg = LandmarksConfig(**task["config"])
     res = _one_run(cfg, cfg.model(), task["run"], task["seed_seq"])
     result = {"run": task["run"], "algos": {a: {"sq_error": [float(v) for v in sq], "seconds": sec, "degenerate": deg}
                                             for a, (sq, sec, deg) in res.items()}}
-    return write_task_result(Path(out_dir) / "tasks" / f"{task['name']}.json", result, task)
-
-
-def landmark_results(cfg, tasks, out_dir):
-    """``{"config", "results", "curves"}`` from the task files of :func:`landmark_tasks`."""
-    runs = [json.loads((Path(out_dir) / "tasks" / f"{t['name']}.json").read_text()) for t in tasks]
-    per = {a: [(np.array(r["algos"][a]["sq_error"]), r["algos"][a]["seconds"], r["algos"][a]["degenerate"])
-               for r in runs] for a in cfg.algos}
-    return _summarize(cfg, per)
+    return save_result(out_dir, task, result)
 
 
 def _summarize(cfg, per):
@@ -168,12 +176,12 @@ def run_landmarks(cfg, progress=None):
     ``results`` rows: ``algo, particles, k, mse_per_step, mean_mse, ms_per_run``
     (plus ``final_mse``, ``median_run_mse``, ``degenerate_steps``);
     ``curves[(algo, N)]`` is the MSE per step. ``progress(1)`` is called after
-    every run. The same numbers as the engine path (:func:`landmark_tasks`).
+    every run. The same numbers as the engine path (:meth:`LandmarksConfig.tasks`).
     """
     cfg.validate()
     model = cfg.model()
     per = {a: [] for a in cfg.algos}
-    for task in landmark_tasks(cfg):
+    for task in cfg.tasks():
         for a, v in _one_run(cfg, model, task["run"], task["seed_seq"]).items():
             per[a].append(v)
         if progress:

@@ -18,23 +18,24 @@ visible frame to the first frame the tracker is not lost on it.
 
 from __future__ import annotations
 
-import json
 import warnings
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from ..core.metrics import plate_frame_measures
 from ..core.particles import DegenerateWeightsWarning
-from ..engine.evaluation import entry_tasks, prepare_worker, write_task_result
+from ..core.runtime import prepare_worker
+from ..engine.evaluation import entries_config
+from ..engine.tasks import load_task_results, save_result
 from ..filters import make_filter
 from ..io.clips import load_clip
-from ..models.builders import build_model
+from ..registry import build_model
+from ..registry.comparisons import PLATE
 from ..track.loop import track
 from .contour import ContourConfig
 
-__all__ = ["PlateConfig", "plate_tasks", "run_plate_task", "plate_results"]
+__all__ = ["PlateConfig", "run_plate_task", "plate_results"]
 
 
 @dataclass
@@ -43,14 +44,21 @@ class PlateConfig(ContourConfig):
     (:class:`~vistrack.reproduce.contour.ContourConfig`), and ``acquire_within``: a plate counts
     as acquired in time when the tracker is on it within this many frames."""
 
-    entries: list = field(default_factory=lambda: [("lis", 100), ("bootstrap", 750)])
+    entries: list = field(default_factory=lambda: list(PLATE))
     runs: int = 20
     acquire_within: int = 10
 
+    table = "plate"
+    model = "plate"
 
-def plate_tasks(cfg):
-    """The experiment's tasks (see :func:`vistrack.engine.evaluation.task_list`)."""
-    return entry_tasks(cfg, "plate")
+    @property
+    def runner(self):
+        """:func:`run_plate_task`."""
+        return run_plate_task
+
+    def results(self, tasks, out_dir):
+        """``{"config", "results"}``: :func:`plate_results`."""
+        return {"config": entries_config(self), "results": plate_results(self, tasks, out_dir)}
 
 
 def run_plate_task(task, out_dir):
@@ -71,7 +79,7 @@ def run_plate_task(task, out_dir):
             ess.append(round(res.ess, 3))
     result = {"clip": task["clip"], "algo": task["algo"], "particles": task["particles"], "run": task["run"],
               "reported": reported, "vertices": verts, "loglik": ll, "ms": ms, "ess": ess}
-    return write_task_result(Path(out_dir) / "tasks" / f"{task['name']}.json", result, task)
+    return save_result(out_dir, task, result)
 
 
 def _acquisition_delays(has, lost, ids):
@@ -94,8 +102,7 @@ def plate_results(cfg, tasks, out_dir):
     """Pooled results per (algo, N), in the order of the entries, plus per-frame curves."""
     truths, aspects = {}, {}
     by_entry = {}
-    for t in tasks:
-        r = json.loads((Path(out_dir) / "tasks" / f"{t['name']}.json").read_text())
+    for t, r in zip(tasks, load_task_results(tasks, out_dir)):
         if t["clip"] not in truths:
             clip = load_clip(t["clip"])
             truths[t["clip"]] = clip.truth

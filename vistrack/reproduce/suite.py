@@ -1,10 +1,29 @@
-"""The synthetic clip suites the contour and plate experiments run on."""
+"""The synthetic clip suites the contour, history-sampling and plate experiments run on."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["clip_suite"]
+from ..data_synth.contour import make_contour_clip
+from ..data_synth.plate import make_plate_clip
+
+__all__ = ["SUITES", "clip_suite", "experiment_clips"]
+
+#: per experiment: the folder of its clips by default, their names' prefix, the clip maker and its options
+SUITES = {
+    "contour": ("contour-clips", "contour", make_contour_clip, {"clutter": "high", "distractor": True}),
+    "hs-sir": ("hs-sir-clips", "contour-color", make_contour_clip, {"clutter": "high", "distractor": True,
+                                                                     "color": True}),
+    "plate": ("plate-clips", "plate", make_plate_clip, {}),
+    "plates": ("plate-overlap-clips", "plate-overlap", make_plate_clip, {"overlap": True, "cars": 6}),
+}
+
+
+def experiment_clips(experiment, clips_dir, make, frames, size, progress=None):
+    """The clips of ``experiment`` (:data:`SUITES`) in ``clips_dir`` (``None``: its default folder), made
+    there first when it holds none (:func:`clip_suite`)."""
+    folder, prefix, maker, kw = SUITES[experiment]
+    return clip_suite(clips_dir or folder, make, frames, size, maker, prefix, progress=progress, **kw)
 
 
 def clip_suite(base, make, frames, size, maker, prefix, progress=None, **kw):

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["TABLES", "format_table", "write_plots"]
+__all__ = ["TABLES", "FIRST_PLOT", "format_table", "write_plots"]
 
 #: per experiment: (header, key, format) of every column; the first column is left-aligned
 TABLES = {
@@ -39,6 +39,11 @@ TABLES = {
               ("mean acq", "mean_acquisition_delay", ">8.1f"), ("ms/frame", "ms_per_frame", ">9.2f"),
               ("frames/s", "frames_per_s", ">9.0f"), ("ESS", "mean_ess", ">6.1f")],
 }
+
+
+#: per experiment: the file name of its first figure (:func:`write_plots`)
+FIRST_PLOT = {"bearings": "error_vs_time.png", "landmarks": "mse_vs_time.png", "contour": "p_lost_vs_frame.png",
+              "hs-sir": "p_lost_vs_frame.png", "plate": "p_lost_vs_frame.png", "plates": "p_lost_vs_frame.png"}
 
 
 def format_table(experiment, results):

@@ -13,10 +13,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.features import FeatureMaps
+from ..core.metrics import best_ms
 from ..core.particles import ParticleSet
+from ..filters import make_filter
 from ..models.protocol import Confidence, Redetects, VideoModel, offers, require
 
-__all__ = ["FrameResult", "FrameStepper", "track", "top_particles", "warm_up"]
+__all__ = ["FrameResult", "FrameStepper", "track", "top_particles", "warm_up", "ms_per_frame"]
 
 
 @dataclass
@@ -88,8 +90,8 @@ class FrameStepper:
     ``estimator`` is given), ``check_lost(obs, estimate)`` whether the object is reported
     there (:mod:`vistrack.models.collapse`) and ``adapt(obs, estimate)`` is told each
     frame's estimate after the step (the box model's appearance); a model with a
-    :class:`~vistrack.models.protocol.Confidence` is asked for it before ``check_lost``. The feature maps of a frame live in
-    buffers that the next frame overwrites: use them before stepping again.
+    :class:`~vistrack.models.protocol.Confidence` is asked for it before ``check_lost``. The feature
+    maps of a frame live in buffers that the next frame overwrites: use them before stepping again.
     """
 
     def __init__(self, filt, n, rng, *, estimator=None):
@@ -163,3 +165,14 @@ def track(frames, filt, n, rng, *, estimator=None):
     stepper = FrameStepper(filt, n, rng, estimator=estimator)
     for i, frame in frames:
         yield stepper.step(i, frame)
+
+
+def ms_per_frame(frames, model, algo, n, repeats=2):
+    """The time per frame (ms) of filter ``algo`` with ``n`` particles tracking ``frames`` (a list of
+    ``(index, frame)``) on ``model``: a new filter each run from seed 0, the best of ``repeats``
+    (:func:`~vistrack.core.metrics.best_ms`); what equal-time comparisons measure."""
+    def run():
+        for _ in track(frames, make_filter(algo, model), n, np.random.default_rng(0)):
+            pass
+
+    return best_ms(run, repeats) / len(frames)

@@ -28,14 +28,14 @@ import numpy as np
 
 from ..core.hooks import Redetects, offers
 from ..core.particles import DegenerateWeightsWarning
-from .profiling import STAGES, Timer, profile_stages
 from ..io.render import annotate, annotate_targets
 from ..io.results_format import result_paths
-from .summary import summary_lines
-from .signals import HARD_STOP, Terminated, deferred_signals, stop_on_signals, stop_reason
 from ..io.track_files import TrackCSV
-from .loop import top_particles, track, warm_up
 from ..io.video_writer import VideoWriter
+from .loop import top_particles, track, warm_up
+from .profiling import STAGES, Timer, profile_stages
+from .signals import HARD_STOP, Terminated, deferred_signals, stop_on_signals, stop_reason
+from .summary import summary_lines
 
 # TrackCSV, summary_lines and the signal handling live in track_files, run_summary and signals (re-exported)
 __all__ = ["TrackCSV", "VideoRun", "track_row", "target_rows", "track_video", "summary_lines", "Terminated",

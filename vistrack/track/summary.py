@@ -5,8 +5,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.metrics import (center_error, iou, landmark_error, lost_frames, lt_scores, plate_frame_measures, precision,
-                            success_auc)
+from ..core.metrics import (
+    center_error,
+    iou,
+    landmark_error,
+    lost_frames,
+    lt_scores,
+    plate_frame_measures,
+    precision,
+    success_auc,
+)
 from .profiling import STAGES
 
 __all__ = ["summary_lines"]

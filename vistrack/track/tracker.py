@@ -6,7 +6,7 @@
 
 Frames are numpy BGR (or grey) arrays, as ``cv2.VideoCapture`` gives them, so it drops into
 code written for ``cv2.TrackerMIL``. It runs the same code as ``vistrack run``
-(:func:`~vistrack.models.builders.model_from_box`, :class:`~vistrack.track.loop.FrameStepper`): the
+(:func:`~vistrack.registry.builders.model_from_box`, :class:`~vistrack.track.loop.FrameStepper`): the
 same options and seed give the same track.
 """
 
@@ -14,10 +14,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.runtime import check_particle_memory
 from ..filters import make_filter
-from ..models.builders import model_from_box
-from ..models.registry import get_model_spec
+from ..registry import (
+    DEFAULT_MODEL,
+    DEFAULT_PARTICLES,
+    check_algo,
+    check_particle_memory,
+    get_model_spec,
+    model_from_box,
+)
 from .loop import FrameStepper
 
 __all__ = ["Tracker"]
@@ -28,13 +33,14 @@ class Tracker:
 
     Parameters
     ----------
-    model : {"box", "contour", "plate"}
-        What to track (``box``: any object, appearance learned from the first frame).
+    model : str
+        What to track: a registered model that starts from a box (:mod:`vistrack.registry`; default
+        ``box``: any object, appearance learned from the first frame).
     algo : str or None
-        Particle filter (``lis``, ``bootstrap``, ``ls-n-ips``, ``lls``, ``avpf``); ``None``:
-        the model's default.
+        Particle filter, any that runs on the model (:func:`vistrack.registry.algos_for`: ``lis``,
+        ``bootstrap``, ``ls-n-ips``, ``lls``, ``avpf``, ... on a box); ``None``: the model's default.
     particles : int
-        Number of particles ``N``.
+        Number of particles ``N`` (default :data:`~vistrack.registry.catalog.DEFAULT_PARTICLES`).
     seed : int or numpy.random.Generator
         Random seed: the same seed gives the same track.
     resample : str
@@ -52,15 +58,13 @@ class Tracker:
         The last frame's result (estimate, ESS, milliseconds).
     """
 
-    def __init__(self, model="box", algo=None, particles=100, seed=0, *, resample="systematic",
+    def __init__(self, model=DEFAULT_MODEL, algo=None, particles=DEFAULT_PARTICLES, seed=0, *, resample="systematic",
                  ess_threshold=None, **model_options):
         spec = get_model_spec(model)
         if not spec.box_init:
             raise ValueError(f"the {model} model does not start from a box")
         self.algo = algo or spec.default_algo
-        if self.algo not in spec.algos:
-            raise ValueError(f"algorithm {self.algo!r} does not run on the {model} model; "
-                             f"choose from {', '.join(spec.algos)}")
+        check_algo(model, self.algo, who=f"algorithm {self.algo!r}")
         if int(particles) < 1:
             raise ValueError(f"particles must be a positive integer, got {particles}")
         check_particle_memory(int(particles), spec.bytes_per_particle, self.algo)

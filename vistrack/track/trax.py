@@ -21,6 +21,8 @@ import sys
 
 import cv2
 
+from ..registry import DEFAULT_MODEL, DEFAULT_PARTICLES
+
 __all__ = ["serve", "main"]
 
 
@@ -35,7 +37,7 @@ def _box(region):
     return tuple(region.bounds())
 
 
-def serve(model="box", algo=None, particles=100, seed=0, **model_options):
+def serve(model=DEFAULT_MODEL, algo=None, particles=DEFAULT_PARTICLES, seed=0, **model_options):
     """Answer one TraX session on standard input and output (or the socket in ``TRAX_SOCKET``) until
     the client quits. Raises ``ImportError`` without ``vot-trax``."""
     from trax import TraxStatus
@@ -71,9 +73,9 @@ def main(argv=None):
     import argparse
 
     ap = argparse.ArgumentParser(prog="python -m vistrack.track.trax", description=__doc__.splitlines()[0])
-    ap.add_argument("--model", default="box")
+    ap.add_argument("--model", default=DEFAULT_MODEL)
     ap.add_argument("--algo", default=None)
-    ap.add_argument("-n", "--particles", type=int, default=100)
+    ap.add_argument("-n", "--particles", type=int, default=DEFAULT_PARTICLES)
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
     try:

@@ -2,18 +2,16 @@
 
 from __future__ import annotations
 
-from ..spec import HISTORY_ALGOS, THESIS_ALGOS, ModelSpec
+from ..spec import ModelSpec
+from .model import Box
 
 __all__ = ["SPEC"]
 
 
 def from_box(frame, box, **params):
     """:class:`~vistrack.models.box.Box` started from ``box`` ``(x, y, w, h)`` in ``frame``."""
-    from .model import Box
-
     return Box(frame, box, **params)
 
 
-SPEC = ModelSpec("box", THESIS_ALGOS + HISTORY_ALGOS,
-                 "any object from a box: colour + template appearance learned from the first frame",
-                 from_box=from_box, bytes_per_particle=32_000)
+SPEC = ModelSpec("box", description="any object from a box: colour + template appearance learned from the first frame",
+                 from_box=from_box, bytes_per_particle=32_000, model_class=Box)

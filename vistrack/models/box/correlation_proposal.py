@@ -1,4 +1,4 @@
-"""LIS's importance function from a correlation filter's response (thesis 001, §4.5; issue 34).
+"""LIS's importance function from a correlation filter's response (thesis 001, §4.5).
 
 The observation goes into the proposal: with probability ``β`` a particle's new pose is drawn from
 the correlation filter's response over the search region (:class:`~vistrack.models.box.correlation.DCFResponse`,

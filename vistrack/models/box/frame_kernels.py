@@ -28,7 +28,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ...kernels.appearance import _box_count, colour_labels
+from ...kernels.appearance import box_count, colour_labels
 from ...kernels.sampling import NONFINITE, corner_float, fma_lerp, inside, lerp_fma, pairwise_sum
 
 __all__ = ["predicted_roi", "adapt_template", "window_texture", "window_labels", "shrink_area", "boxes_window",
@@ -123,7 +123,7 @@ def adapt_template(texture, ii, box, gx, gy, x0, y0, f, template, rate, min_ncc,
     hw, hh = 0.5 * f * box[2], 0.5 * f * box[3]
     ix0, iy0, ix1, iy1 = int(np.rint(u - hw)), int(np.rint(w - hh)), int(np.rint(u + hw)), int(np.rint(w + hh))
     for b in range(ii.shape[2]):
-        counts[b] = _box_count(ii, ix0, iy0, ix1, iy1, b)
+        counts[b] = box_count(ii, ix0, iy0, ix1, iy1, b)
     return ncc
 
 

@@ -13,7 +13,7 @@ Likelihood
     around the box (Bhattacharyya; the ring's weight ``κ`` 0.5 with the filter, 1 without)
     + normalised cross-correlation with a grey template,
     learned from the first frame and adapted on confident frames; with the correlation filter
-    (``dcf``, the default since issue 34), plus ``λ_dcf`` times its response at the state
+    (``dcf``, on by default), plus ``λ_dcf`` times its response at the state
     (:class:`~vistrack.models.box.correlation.CorrelationFilter`: gradient-orientation and
     brightness-normalised grey features, a 3-scale search about the dynamics' prediction,
     adapted on frames where the object is reported, anchored to the first frame's filter).
@@ -45,18 +45,19 @@ import numpy as np
 from ... import kernels
 from ...core.gaussian import diag_logpdf
 from ...core.particles import ParticleSet
+from ...core.transition import is_prior
 from ...proposals import MapProposal
-from .correlation_proposal import CorrelationProposal
-from .moves import BoxMoves
 from ...proposals.translation import TranslationMoves
-from .appearance import Appearance
 from ..collapse import CollapseCheck
+from ..innovation import ARInnovation
+from ..protocol import VideoModelBase
+from .appearance import Appearance
+from .bacf import BackgroundAwareFilter
 from .confidence import BoxConfidence, Calibration
 from .correlation import CorrelationFilter
+from .correlation_proposal import CorrelationProposal
+from .moves import BoxMoves
 from .scale_filter import ScaleFilter
-from ..innovation import ARInnovation
-from ...core.transition import is_prior
-from ..protocol import VideoModelBase
 
 __all__ = ["Box"]
 
@@ -85,13 +86,13 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         LIS/LLS window std as a multiple of the innovation's std.
     map_stride : int
         The LIS proposal map's step in working pixels (:meth:`Appearance.proposal_map`): 2 makes
-        ``cv2.matchTemplate`` about 4x cheaper (0.46 -> 0.12 ms on girl_otb) but lowered the success
-        AUC on the real clips (girl 0.650 -> 0.632, 12 seeds; hand 0.44 -> 0.39, 24 and 36 seeds; car4
-        0.819 -> 0.813): 1 by default (``docs/experiments.md``, speed, third pass).
+        ``cv2.matchTemplate`` about 4x cheaper (0.12 against 0.46 ms on girl_otb) but lowers the success
+        AUC on the real clips (girl 0.632 against 0.650, 12 seeds; hand 0.39 against 0.44, 24 and 36 seeds;
+        car4 0.813 against 0.819): 1 by default (``docs/experiments.md``, speed).
     dcf : bool
         Learn a correlation filter (:class:`~vistrack.models.box.correlation.CorrelationFilter`) whose
         response is LIS's proposal (:class:`~vistrack.models.box.correlation_proposal.CorrelationProposal`) and a
-        term ``λ_dcf y`` of ``log r``; ``False``: the colour/template map proposal alone (before issue 34).
+        term ``λ_dcf y`` of ``log r``; ``False``: the colour/template map proposal alone.
     lambda_dcf : float
         ``λ_dcf``, the weight of the response ``y`` (about 1 at the object) in ``log r``.
     dcf_share : float
@@ -109,9 +110,9 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         That share.
     collapse_drop : float
         With the filter, the collapse test's ``drop`` (:attr:`collapse_options`: 55 without it): ``log r``
-        at the estimate fell by 43-47 on the synthetic clip of ``tests/test_box_dcf.py`` when the object
-        vanished; 28 (was 35; 7-clip mean 0.685 -> 0.690, and with the filter's rate 0.004 0.695 and the
-        hand held on 6 of 6 seeds: ``docs/experiments.md``, issue 34).
+        at the estimate falls by 43-47 on the synthetic clip of ``tests/test_box_dcf.py`` when the object
+        vanishes; 28 (the 7-clip mean AUC 0.690 against 0.685 with 35, and with the filter's rate 0.004
+        0.695 and the hand held on 6 of 6 seeds: ``docs/experiments.md``).
     confidence : bool, tuple or path
         With the filter, the estimate's confidence on each frame (:mod:`~vistrack.models.box.confidence`):
         ``True`` the calibrations shipped with the package, a pair of
@@ -145,16 +146,17 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
                  window=2.5, map_stride=1, dcf=True, lambda_dcf=60.0, dcf_share=0.5, dcf_tempering=(60.0, 0.05),
                  dcf_scale_std=0.02, redetect=0.5, reentry=0.05, collapse_drop=28.0,
                  dcf_options=None, dcf_scale_read="interp", scale_filter=None, lambda_scale=0.0,
-                 scale_proposal="dcf", confidence=True, lost_confidence=None, redetect_after=3, search_crop=1.0,
-                 search_peaks=3, **appearance):
+                 scale_proposal="dcf", estimator="mean", frame_bound=False, bacf_term=None, lambda_bacf=0.0,
+                 confidence=True, lost_confidence=None, redetect_after=3, search_crop=1.0, search_peaks=3,
+                 **appearance):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
             raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
         self.frame_size = (frame.shape[1], frame.shape[0])
         self.size0 = np.array([w, h])
         if dcf:  # the colour and template terms weaker beside the filter's, and the colour ring's pull to larger
-            # boxes halved (κ 1 -> 0.5: the estimate's scale was 10-14 % too large on car4 and blurred girl;
-            # 7-clip mean 0.670 -> 0.685, blur 0.588 -> 0.639; docs/experiments.md, issue 34)
+            # boxes halved (κ 0.5, not 1: with 1 the estimate's scale is 10-14 % too large on car4 and blurred
+            # girl; 7-clip mean AUC 0.685 against 0.670, blur 0.639 against 0.588; docs/experiments.md)
             appearance = {"lambda_colour": 12.0, "lambda_template": 8.0, "kappa": 0.5, **appearance}
         self.app = Appearance(frame, (x, y, w, h), **appearance)
         if sigma_xy is None:
@@ -172,10 +174,17 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         self.blob_cell = 0.25 * side  # the colour-blob proposal's cell (frame px)
         self.learn_blob(frame, _inner_ellipse(frame.shape[:2], (x, y, w, h)))
         # the search region: the box grown by 4 innovation stds of the centre on each side, about the prediction
-        dcf_options = {"padding": 4.0 * sigma_xy, **(dcf_options or {})}
-        self.cf = CorrelationFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
+        dcf_options = dict(dcf_options or {})
+        kind = dcf_options.pop("kind", "dcf")
+        if kind == "bacf":
+            self.cf = BackgroundAwareFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
+        else:
+            dcf_options = {"padding": 4.0 * sigma_xy, **dcf_options}
+            if dcf_options.pop("colour", False):
+                dcf_options.update(colour_lut=self.app.colour.backprojection, colour_grey=self.app.grey)
+            self.cf = CorrelationFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
         self._reach = 1.0 if dcf else 1.0 + self.window  # the observed region's reach, in 4 innovation stds
-        if dcf:  # log r's scale with the filter's term: lost 28 below the running level (issue 34)
+        if dcf:  # log r's scale with the filter's term: lost 28 below the running level
             self.collapse_options = {"drop": float(collapse_drop)}
         self.lambda_dcf, self.dcf_share, self.dcf_scale_std = float(lambda_dcf), float(dcf_share), float(dcf_scale_std)
         self.dcf_tempering = tuple(float(v) for v in dcf_tempering)
@@ -190,6 +199,10 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         self.sf = ScaleFilter(frame, (x, y, w, h), **scale_filter) if (dcf and scale_filter is not None) else None
         self.lambda_scale = float(lambda_scale)
         self.scale_proposal = scale_proposal
+        self.estimator = estimator
+        self.cf2 = BackgroundAwareFilter(frame, (x, y, w, h), **bacf_term) if bacf_term is not None else None
+        self.lambda_bacf = float(lambda_bacf)
+        self.frame_bound = bool(frame_bound)
         # -- the confidence and what it decides (issue 44; vistrack/models/box/confidence.py) --
         self.conf = None
         if dcf and confidence is not False:
@@ -343,6 +356,7 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         obs = self.app.frame(frame, roi)
         obs.dcf, obs.dcf_share, obs.redetected, obs.frame_image = resp, share, redetected, frame
         obs.scale = None if self.sf is None else self.sf.detect(frame, resp.peak_xy, float(centre[2]))
+        obs.dcf2 = None if self.cf2 is None else self.cf2.detect(frame, centre[:2], float(centre[2]))
         if self.scale_proposal == "filter" and obs.scale is not None:
             obs.scale_centre = obs.scale.peak_log_scale
         elif self.scale_proposal == "prediction":
@@ -376,9 +390,10 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
     def search_whole(self, frame):
         """A whole-frame search with the filter (:meth:`CorrelationFilter.search`: its taps over the object's
         box, ``search_crop``) at the last reported frame's scale, and at the first frame's where they differ
-        by more than 10 %: for each of its :attr:`search_peaks` best places at each scale, the observation about it (the filter's response there, ``β`` at least 0.9, marked a
-        re-detection) and the pose ``(cx, cy, l) (3,)`` at that response's peak. Changes nothing the tracking
-        reads (``benchmarks/fit_confidence.py`` calls it on any frame)."""
+        by more than 10 %: for each of its :attr:`search_peaks` best places at each scale, the observation
+        about it (the filter's response there, ``β`` at least 0.9, marked a re-detection) and the pose
+        ``(cx, cy, l) (3,)`` at that response's peak. Changes nothing the tracking reads
+        (``benchmarks/fit_confidence.py`` calls it on any frame)."""
         out = []
         # the estimate's scale drifts while the object is lost, and may shrink as it leaves the frame
         scales = (self._last_scale,) if abs(self._last_scale) < 0.1 else (self._last_scale, 0.0)
@@ -419,10 +434,27 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
             out = out + self.lambda_dcf * resp.read(s)
         if obs.scale is not None and self.lambda_scale:
             out = out + self.lambda_scale * obs.scale.read(np.atleast_2d(states)[:, 2])
+        if self.cf2 is not None and self.lambda_bacf and obs.dcf2 is not None:
+            s = np.atleast_2d(states).copy()
+            s[:, 2] = obs.dcf2.log_scales[0]
+            out = out + self.lambda_bacf * obs.dcf2.read(s)
+        if self.frame_bound:
+            s = np.atleast_2d(states)
+            w, h = self.frame_size
+            out = np.where((s[:, 0] >= 0) & (s[:, 0] < w) & (s[:, 1] >= 0) & (s[:, 1] < h), out, out - 1e3)
         return out
 
     def estimate(self, particles):
-        """The weighted mean state."""
+        """The weighted mean state (``estimator="mode"``: the weighted mean of the particles whose centre is
+        within a third of the box's side of the heaviest particle's)."""
+        if self.estimator == "mode":
+            s = particles.states
+            w = particles.weights
+            k = int(np.argmax(w))
+            side = np.sqrt(np.prod(self.size0)) * np.exp(s[k, 2])
+            near = np.hypot(s[:, 0] - s[k, 0], s[:, 1] - s[k, 1]) <= side / 3
+            wn = w * near
+            return wn @ s / wn.sum()
         return particles.mean()
 
     def adapt(self, obs, estimate):
@@ -438,6 +470,8 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
             self.cf.adapt(obs.frame_image, e[:2], float(e[2]))
             if self.sf is not None:
                 self.sf.adapt(obs.frame_image, e[:2], float(e[2]))
+            if self.cf2 is not None:
+                self.cf2.adapt(obs.frame_image, e[:2], float(e[2]))
         return done
 
     def check_lost(self, obs, state):

@@ -32,6 +32,7 @@ import cv2
 import numpy as np
 
 from ... import kernels
+from .patches import patch
 
 __all__ = ["ScaleFilter", "ScaleResponse"]
 
@@ -99,7 +100,7 @@ class ScaleFilter:
     """
 
     def __init__(self, frame, box, *, n_scales=17, scale_step=1.03, model_area=512.0, cell=4, lam=1e-2,
-                 rate=0.01, anchor=0.0, sigma=0.75, n_orient=6):
+                 rate=0.01, anchor=0.0, sigma=0.75, n_orient=6, window=True):
         x, y, w, h = (float(v) for v in box)
         self.size0 = np.array([w, h])
         n_scales = int(n_scales) | 1
@@ -113,13 +114,13 @@ class ScaleFilter:
         self.px = np.array([self.cells[0] * self.cell / w, self.cells[1] * self.cell / h])
         # the patch: the largest sample's box, a cell of gradient support and two cells to move the estimate
         reach = np.exp(self.log_steps[-1])
-        self.shape = tuple(int(np.ceil(reach * (n * self.cell + 2) + 4 * self.cell)) for n in self.cells[::-1])
+        self.shape = tuple(int(np.ceil(reach * n * self.cell + 4 * self.cell)) for n in self.cells[::-1])
         self.anchor_px = np.array([self.shape[1] / 2, self.shape[0] / 2])
         self.n_orient = int(n_orient)
         self.lam, self.rate, self.anchor = float(lam), float(rate), float(anchor)
-        g = np.exp(-0.5 * (steps / float(sigma)) ** 2)
-        self._conj_g = np.conj(np.fft.fft(g))
-        self.window = np.hanning(n_scales + 2)[1:-1]
+        self.sigma = float(sigma)
+        self._conj_g = self._label(0.0)
+        self.window = np.hanning(n_scales + 2)[1:-1] if window else np.ones(n_scales)
         self._last = None
         centre = np.array([x + w / 2, y + h / 2])
         F = np.fft.fft(self.samples(self.feature_map(np.asarray(frame), centre, 0.0), centre, 0.0), axis=1)
@@ -128,78 +129,66 @@ class ScaleFilter:
         self.A0, self.B0 = self.A.copy(), self.B.copy()
 
     def feature_map(self, frame, centre, log_scale):
-        """The grey patch about ``centre`` (frame px) at ``log_scale`` that every sample is read from
-        (:class:`_FeatureMap`; ``feat``: ``(H, W) float32``)."""
-        s = self.px * np.exp(-log_scale)
+        """The summed-area tables of the per-pixel channels of the grey patch about ``centre`` (frame px) at
+        ``log_scale`` that every sample is read from (:class:`_FeatureMap`; ``feat``:
+        :func:`~vistrack.models.box.scale_kernels.pixel_channels`)."""
         ph, pw = self.shape
-        if s.max() < 0.5:  # shrinking much: average the frame's pixels (warpAffine would alias)
-            patch = _shrunk_patch(frame, centre, s, (pw, ph), self.anchor_px)
+        img = patch(frame, centre, self.px * np.exp(-log_scale), (pw, ph), self.anchor_px)
+        grey = (cv2.cvtColor(img, cv2.COLOR_BGR2GRAY) if img.ndim == 3 else img).astype(np.float32)
+        if kernels.use():
+            from .scale_kernels import N_EXTRA, pixel_channels
+
+            ii = pixel_channels(grey, self.n_orient, np.empty((ph + 1, pw + 1, N_EXTRA + self.n_orient)))
         else:
-            m = np.array([[1 / s[0], 0, centre[0] - self.anchor_px[0] / s[0]],
-                          [0, 1 / s[1], centre[1] - self.anchor_px[1] / s[1]]], np.float64)
-            patch = cv2.warpAffine(frame, m, (pw, ph), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                                   borderMode=cv2.BORDER_REPLICATE)
-        grey = (cv2.cvtColor(patch, cv2.COLOR_BGR2GRAY) if patch.ndim == 3 else patch).astype(np.float32)
-        return _FeatureMap(grey, np.asarray(centre, float).copy(), float(log_scale), self.anchor_px, self.px)
+            ii = grey
+        return _FeatureMap(ii, np.asarray(centre, float).copy(), float(log_scale), self.anchor_px, self.px)
 
     def samples(self, fmap, centre, log_scale):
         """The descriptors ``(d, S)`` of the boxes about ``centre`` at ``log_scale + log_steps``, read from
-        ``fmap``'s patch (:func:`~vistrack.models.box.scale_kernels.scale_samples`), each times the scales'
-        Hann window."""
-        scale = np.exp(log_scale + self.log_steps - fmap.log_scale)  # patch px per sample px
-        ax, ay = fmap.anchor + (np.asarray(centre, float) - fmap.centre) * fmap.px * np.exp(-fmap.log_scale)
+        ``fmap`` (:func:`~vistrack.models.box.scale_kernels.scale_samples`), each times the scales' Hann window."""
+        rel = np.exp(log_scale + self.log_steps - fmap.log_scale)
         nx, ny = self.cells
+        widths, heights = nx * self.cell * rel, ny * self.cell * rel  # patch px
+        # the point in the tables' coordinates (a pixel's left edge at its index): patch coordinates + 0.5
+        ax, ay = fmap.anchor + (np.asarray(centre, float) - fmap.centre) * fmap.px * np.exp(-fmap.log_scale) + 0.5
         if kernels.use():
             from .scale_kernels import scale_samples
 
-            vals = scale_samples(fmap.feat, float(ax), float(ay), scale, nx, ny, self.cell, self.n_orient,
-                                 np.empty((len(scale), self.n_orient + 1, ny, nx), np.float32))
+            vals = scale_samples(fmap.feat, float(ax), float(ay), widths, heights, nx, ny, self.n_orient,
+                                 np.empty((len(rel), self.n_orient + 1, ny, nx), np.float32))
         else:
             from .scale_kernels import scale_samples_numpy
 
-            vals = scale_samples_numpy(fmap.feat, float(ax), float(ay), scale, nx, ny, self.cell, self.n_orient)
-        return vals.reshape(len(scale), -1).T * self.window
+            vals = scale_samples_numpy(fmap.feat, float(ax), float(ay), widths, heights, nx, ny, self.n_orient)
+        return vals.reshape(len(rel), -1).T * self.window
+
+    def _label(self, shift):
+        """``conj(G)``: the DFT's conjugate of the Gaussian label over the samples, peaked ``shift`` samples
+        after the middle one."""
+        k = np.arange(len(self.log_steps)) - len(self.log_steps) // 2 - shift
+        return np.conj(np.fft.fft(np.exp(-0.5 * (k / self.sigma) ** 2)))
 
     def detect(self, frame, centre, log_scale):
         """The :class:`ScaleResponse` of the boxes about ``centre`` at the scales about ``log_scale``."""
         fmap = self.feature_map(frame, centre, log_scale)
-        self._last = fmap
         Z = np.fft.fft(self.samples(fmap, centre, log_scale), axis=1)
+        self._last = (Z, float(log_scale))
         g = self.anchor
         A, B = (1 - g) * self.A + g * self.A0, (1 - g) * self.B + g * self.B0
         y = np.fft.ifft(np.sum(np.conj(A) * Z, axis=0) / (B + self.lam)).real
         return ScaleResponse(log_scale + self.log_steps, y)
 
     def adapt(self, frame, centre, log_scale):
-        """Adapt ``A, B`` towards the samples about the estimate ``centre`` at ``log_scale`` (read from the
-        last detection's feature map where it holds them)."""
-        fmap, self._last = self._last, None
-        if fmap is None or not self._holds(fmap, centre, log_scale):
-            fmap = self.feature_map(frame, centre, log_scale)
-        F = np.fft.fft(self.samples(fmap, centre, log_scale), axis=1)
+        """Adapt ``A, B`` towards the samples about the estimate at ``log_scale``: the last detection's samples
+        with the label moved to ``log_scale`` (within two samples of where they were taken; else samples
+        about ``centre`` anew)."""
+        last, self._last = self._last, None
+        step = self.log_steps[1] - self.log_steps[0]
+        if last is not None and abs(log_scale - last[1]) <= 2 * step:
+            F, conj_g = last[0], self._label((log_scale - last[1]) / step)
+        else:
+            F = np.fft.fft(self.samples(self.feature_map(frame, centre, log_scale), centre, log_scale), axis=1)
+            conj_g = self._conj_g
         r = self.rate
-        self.A = (1 - r) * self.A + r * (self._conj_g * F)
+        self.A = (1 - r) * self.A + r * (conj_g * F)
         self.B = (1 - r) * self.B + r * np.sum((F * np.conj(F)).real, axis=0)
-
-    def _holds(self, fmap, centre, log_scale):
-        """Whether ``fmap`` holds every sample about ``centre`` at ``log_scale``."""
-        if abs(log_scale - fmap.log_scale) > 0.5 * (self.log_steps[1] - self.log_steps[0]) * 2:
-            return False
-        d = np.abs(np.asarray(centre, float) - fmap.centre) * fmap.px * np.exp(-fmap.log_scale)
-        return bool(np.all(d <= 2 * self.cell))
-
-
-def _shrunk_patch(frame, centre, s, size, anchor):
-    """The patch of :meth:`ScaleFilter.feature_map` by area averaging: the frame's pixels it covers (edge
-    pixels repeated beyond the frame), resized to ``size`` ``(W, H)``."""
-    W, H = size
-    x0, y0 = centre[0] - anchor[0] / s[0], centre[1] - anchor[1] / s[1]
-    x1, y1 = x0 + W / s[0], y0 + H / s[1]
-    ix0, iy0, ix1, iy1 = int(np.floor(x0)), int(np.floor(y0)), int(np.ceil(x1)), int(np.ceil(y1))
-    fh, fw = frame.shape[:2]
-    cx0, cy0, cx1, cy1 = min(max(ix0, 0), fw - 1), min(max(iy0, 0), fh - 1), max(min(ix1, fw), 1), max(min(iy1, fh), 1)
-    region = frame[cy0:cy1, cx0:cx1]
-    if (cx0, cy0, cx1, cy1) != (ix0, iy0, ix1, iy1):
-        region = cv2.copyMakeBorder(region, max(cy0 - iy0, 0), max(iy1 - cy1, 0), max(cx0 - ix0, 0),
-                                    max(ix1 - cx1, 0), cv2.BORDER_REPLICATE)
-    return cv2.resize(region, (W, H), interpolation=cv2.INTER_AREA)

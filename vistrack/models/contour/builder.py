@@ -7,10 +7,12 @@ import numpy as np
 from ...core.features import FeatureMaps, is_grey
 from ...io.starts import first_frame, initial_truth, start_frame
 from ...io.video import VideoError
-from ..spec import HISTORY_ALGOS, THESIS_ALGOS, ModelSpec
+from ..protocol import LocalSearch
+from ..spec import ModelOption, ModelSpec
 from .model import Contour
+from .nn import NNSearchConfig, load_or_train
 
-__all__ = ["SPEC"]
+__all__ = ["SPEC", "train_search"]
 
 
 def _contour_from_box(frame, box, *, polarity="auto", colour="auto", template=None, **params):
@@ -80,6 +82,21 @@ def _contour(clip, size, init, init_gt, template, params):
 
 
 
-SPEC = ModelSpec("contour", THESIS_ALGOS + HISTORY_ALGOS + ("ls-n-ips-nn",),
-                 "B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
-                 from_box=_contour_from_box, from_clip=_contour_from_clip, bytes_per_particle=48_000)
+def train_search(points, size, *, samples=NNSearchConfig.samples, seed=0, path=None, notify=None):
+    """The neural-network local search of LS-N-IPS (thesis 001 §4.3.1, Fig. 4.5) for the contour of support
+    points ``points`` (``(n, 2)`` pixels as tracked) on frames of ``size``: trained on ``samples`` simulated
+    poses from ``seed`` and cached (``path``, else the cache), or loaded where it is there; ``(network,
+    info)`` of :func:`~vistrack.models.contour.nn.load_or_train`."""
+    model = Contour(points, (0.0, 0.0, 0.0, 0.0), size)
+    return load_or_train(model, NNSearchConfig(samples=samples, seed=seed), path=path, notify=notify)
+
+
+SPEC = ModelSpec("contour", description="B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
+                 from_box=_contour_from_box, from_clip=_contour_from_clip, bytes_per_particle=48_000,
+                 model_class=Contour, options=(
+                     ModelOption("template", None, "support points (n, 2) in pixels instead of the ellipse",
+                                 flag="--template"),
+                     ModelOption("colour", "auto", "the colour term: on for colour video (auto), True or False",
+                                 flag="--no-colour", value=False),
+                     ModelOption("search", None, "LS-N-IPS's local search: lms or nn (the neural network)",
+                                 flag="--search", needs=LocalSearch)))

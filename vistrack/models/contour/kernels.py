@@ -28,7 +28,8 @@ from numba import njit
 
 from ...kernels.sampling import corner, lerp4, pairwise_sum
 
-__all__ = ["profiles", "loglik", "loglik_profiles", "grid", "nearest_edge", "place"]
+__all__ = ["profiles", "loglik", "loglik_profiles", "grid", "nearest_edge", "place", "pose_profiles", "one_feature",
+           "line_sums", "grid_pose"]
 
 _ZERO = np.float32(0.0)
 
@@ -56,8 +57,8 @@ def _edge(g0, g1, nx, ny, polarity, cos2):
     return gn
 
 
-@njit(cache=True)
-def _pose(gxy, q, nrm, n, off, polarity, cos2, out):
+@njit(cache=True, nogil=True)
+def pose_profiles(gxy, q, nrm, n, off, polarity, cos2, out):
     """Pose ``n``'s edge strengths ``out (M, L)`` along its lines (``Contour.edge_profiles``). A line
     whose two ends read inside the map reads inside everywhere (the corners are monotone along
     it) and takes the unchecked loop (no array passed to a function per sample: numba would
@@ -94,7 +95,7 @@ def _pose(gxy, q, nrm, n, off, polarity, cos2, out):
 def profiles(gxy, q, nrm, off, polarity, cos2, out):
     """Edge strengths ``out (N, M, L)`` float32 along the lines (module docstring)."""
     for n in range(q.shape[0]):
-        _pose(gxy, q, nrm, n, off[n] if off.shape[0] > 1 else off[0], polarity, cos2, out[n])
+        pose_profiles(gxy, q, nrm, n, off[n] if off.shape[0] > 1 else off[0], polarity, cos2, out[n])
     return out
 
 
@@ -105,8 +106,8 @@ def _is_peak(v, prev, nxt, k, n, thresh):
     return v > thresh and (k == 0 or v >= prev) and (k == n - 1 or v > nxt)
 
 
-@njit(cache=True)
-def _one_feature(kern, c):
+@njit(cache=True, nogil=True)
+def one_feature(kern, c):
     """``log(1 + c kern[k])`` for every ``k``: a line's term when its one edge feature is at ``k``."""
     out = np.empty(kern.shape[0])
     for k in range(kern.shape[0]):
@@ -114,10 +115,10 @@ def _one_feature(kern, c):
     return out
 
 
-@njit(cache=True)
-def _line_sums(g, lo, n, thresh, kern, c, single, out):
+@njit(cache=True, nogil=True)
+def line_sums(g, lo, n, thresh, kern, c, single, out):
     """``out[m] = log(1 + c Σ kern[k])`` over the edge features ``k`` of ``g[m, lo:lo + n]``
-    (``g (M, L)``); the kernel summed in index order; ``single`` is :func:`_one_feature`."""
+    (``g (M, L)``); the kernel summed in index order; ``single`` is :func:`one_feature`."""
     for m in range(g.shape[0]):
         s, nf, at = 0.0, 0, 0
         for k in range(n):
@@ -134,10 +135,10 @@ def loglik(gxy, q, nrm, off, polarity, cos2, thresh, kern, c, out):
     """``log r (N,)`` of the lines at ``off (L,)``: ``Σ_lines log(1 + c Σ_features kern)``."""
     prof = np.empty((q.shape[1], off.shape[0]), np.float32)
     v = np.empty(q.shape[1])
-    single = _one_feature(kern, c)
+    single = one_feature(kern, c)
     for n in range(q.shape[0]):
-        _pose(gxy, q, nrm, n, off, polarity, cos2, prof)
-        _line_sums(prof, 0, off.shape[0], thresh, kern, c, single, v)
+        pose_profiles(gxy, q, nrm, n, off, polarity, cos2, prof)
+        line_sums(prof, 0, off.shape[0], thresh, kern, c, single, v)
         out[n] = pairwise_sum(v, 0, v.shape[0])
     return out
 
@@ -146,15 +147,15 @@ def loglik(gxy, q, nrm, off, polarity, cos2, thresh, kern, c, out):
 def loglik_profiles(gn, lo, n_samples, thresh, kern, c, out):
     """``log r (N,)`` from the samples ``lo .. lo + n_samples`` of the profiles ``gn (N, M, L)``."""
     v = np.empty(gn.shape[1])
-    single = _one_feature(kern, c)
+    single = one_feature(kern, c)
     for n in range(gn.shape[0]):
-        _line_sums(gn[n], lo, n_samples, thresh, kern, c, single, v)
+        line_sums(gn[n], lo, n_samples, thresh, kern, c, single, v)
         out[n] = pairwise_sum(v, 0, v.shape[0])
     return out
 
 
-@njit(cache=True)
-def _grid_pose(g, thresh, start, nrm, offsets, kern, c, single, pairs, feats, nfeat, idx, table, stamp, line, out):
+@njit(cache=True, nogil=True)
+def grid_pose(g, thresh, start, nrm, offsets, kern, c, single, pairs, feats, nfeat, idx, table, stamp, line, out):
     """:func:`grid` for one pose: edge strengths ``g (M, L)``, normals ``nrm (M, 2)``, into ``out (G,)``;
     each line's features into ``feats (M, L)`` (their sample indices, ``nfeat (M,)`` of them); returns
     the last line number used in ``stamp``. ``pairs (L, L)``: the term of a line with two features at
@@ -220,7 +221,7 @@ def grid(gn, thresh, start, nrm, offsets, kern, c, out):
     pairs = np.full((n_samples, n_samples), np.nan, np.float32)
     line = 0
     for n in range(gn.shape[0]):
-        line = _grid_pose(gn[n], thresh, start, nrm[n], offsets, kern, c, single, pairs, feats, nfeat, idx, table,
+        line = grid_pose(gn[n], thresh, start, nrm[n], offsets, kern, c, single, pairs, feats, nfeat, idx, table,
                           stamp, line, out[n])
     return out
 

@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from ...kernels.sampling import pairwise_sum
-from .kernels import _grid_pose, _line_sums, _one_feature, _pose
+from .kernels import grid_pose, line_sums, one_feature, pose_profiles
 
 __all__ = ["search_lines", "accept"]
 
@@ -98,13 +98,13 @@ def search_lines(gxy, z, pts0, n0, off, line, polarity, cos2, thresh, grid, grid
     for k in range(n_samples):
         single[k] = np.log1p((np.float32(0.0) + kern[0, k]) * c)
     lo, lkern, lc = line
-    lsingle, v = _one_feature(lkern, lc), np.empty(n_lines)
+    lsingle, v = one_feature(lkern, lc), np.empty(n_lines)
     vals = np.empty(grid.shape[0], np.float32)
     used = 0
     for n in range(z.shape[0]):
         _place_one(z, n, pts0, n0, q, nrm, q32, nrm32)
-        _pose(gxy, q32, nrm32, 0, off32, polarity, cos2, gn[n])
-        used = _grid_pose(gn[n], thresh, start, nrm32[0], grid32, kern, c, single, pairs, feats, nfeat, idx, table,
+        pose_profiles(gxy, q32, nrm32, 0, off32, polarity, cos2, gn[n])
+        used = grid_pose(gn[n], thresh, start, nrm32[0], grid32, kern, c, single, pairs, feats, nfeat, idx, table,
                           stamp, used, vals)
         best = _argmax(vals)
         dx, dy = grid[best, 0], grid[best, 1]
@@ -116,7 +116,7 @@ def search_lines(gxy, z, pts0, n0, off, line, polarity, cos2, thresh, grid, grid
             nu = _nearest(feats[m], nfeat[m], off, nrm[m, 0] * dx + nrm[m, 1] * dy, reach)
             d[n, m] = ((q[m, 0] + dx) + nu * nrm[m, 0]) - pts0[m, 0]
             d[n, n_lines + m] = ((q[m, 1] + dy) + nu * nrm[m, 1]) - pts0[m, 1]
-        _line_sums(gn[n], lo, lkern.shape[0], thresh, lkern, lc, lsingle, v)
+        line_sums(gn[n], lo, lkern.shape[0], thresh, lkern, lc, lsingle, v)
         ll_x[n] = pairwise_sum(v, 0, n_lines)
     return d
 
@@ -131,7 +131,7 @@ def accept(gxy, states, z_hat, z_else, lam, pts0, n0, off, polarity, cos2, thres
     q, nrm = np.empty((n_lines, 2)), np.empty((n_lines, 2))
     q32, nrm32 = np.empty((1, n_lines, 2), np.float32), np.empty((1, n_lines, 2), np.float32)
     prof = np.empty((n_lines, off.shape[0]), np.float32)
-    single, v = _one_feature(kern, c), np.empty(n_lines)
+    single, v = one_feature(kern, c), np.empty(n_lines)
     for n in range(states.shape[0]):
         near = True
         for a in range(4):
@@ -139,8 +139,8 @@ def accept(gxy, states, z_hat, z_else, lam, pts0, n0, off, polarity, cos2, thres
         for a in range(4):
             cand[n, a] = z_hat[n, a] if near else z_else[n, a]
         _place_one(cand, n, pts0, n0, q, nrm, q32, nrm32)
-        _pose(gxy, q32, nrm32, 0, off, polarity, cos2, prof)
-        _line_sums(prof, 0, off.shape[0], thresh, kern, c, single, v)
+        pose_profiles(gxy, q32, nrm32, 0, off, polarity, cos2, prof)
+        line_sums(prof, 0, off.shape[0], thresh, kern, c, single, v)
         ll[n] = pairwise_sum(v, 0, n_lines)
         if check and ll[n] < ll_x[n]:
             for a in range(states.shape[1]):

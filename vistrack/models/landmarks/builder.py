@@ -6,7 +6,8 @@ import numpy as np
 
 from ...io.starts import initial_truth
 from ...io.video import VideoError
-from ..spec import ModelSpec
+from ..spec import ModelOption, ModelSpec
+from .video import LandmarkVideo
 
 __all__ = ["SPEC"]
 
@@ -21,8 +22,6 @@ def _landmarks(clip, size, init_gt, template, params):
     """Landmark model started from the first frame's landmarks: ``--template FILE`` (x y per
     line), ``--init-gt`` (lx0.., ly0.. columns), or the clip's meta.json; the clip's centre,
     scale and dynamics when meta.json has them."""
-    from .video import LandmarkVideo
-
     meta = clip.meta or {}
     if template is not None:
         first = np.asarray(template, float)
@@ -50,5 +49,7 @@ def _landmarks(clip, size, init_gt, template, params):
 
 
 
-SPEC = ModelSpec("landmarks", ("pf-eis-mt", "pf-eis", "pf-doucet", "pf-gordon", "bootstrap"),
-                 "landmark shape (seed 000 §3)", box_init=False, from_clip=_landmarks_from_clip)
+SPEC = ModelSpec("landmarks", description="landmark shape (seed 000 §3)", box_init=False,
+                 from_clip=_landmarks_from_clip, model_class=LandmarkVideo, seed="000",
+                 options=(ModelOption("template", None, "the first frame's landmark positions (K, 2) in pixels",
+                                      flag="--template"),))

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .shape_space import _diag, initial_basis, regular_polygon, shape_step, tangent_basis
+from .shape_space import initial_basis, per_entry, regular_polygon, shape_step, tangent_basis
 from .sim import sample_observations, simulate
 
 __all__ = ["Landmarks", "VIDEO_DYNAMICS", "regular_polygon", "tangent_basis", "shape_step",
@@ -87,8 +87,8 @@ class Landmarks:
         self.s0, self.theta0 = float(s0), float(theta0)
         self.alpha_s, self.alpha_theta = float(alpha_s), float(alpha_theta)
         self.sigma2_s, self.sigma2_theta = float(sigma2_s), float(sigma2_theta)
-        self.a_c = _diag(a_c, self.dc)
-        self.sigma_c = _diag(sigma_c, self.dc)
+        self.a_c = per_entry(a_c, self.dc)
+        self.sigma_c = per_entry(sigma_c, self.dc)
         self.sigma2_o, self.p = float(sigma2_o), float(p)
         self.clutter_var = 100.0 * self.sigma2_o if clutter_var is None else float(clutter_var)
         self.newton_iters = int(newton_iters)
@@ -210,8 +210,9 @@ class Landmarks:
     def _take(ctx, idx):
         return {k: v[idx] for k, v in ctx.items()}
 
-    def objective(self, obs, prev, x, *, free="c", motion=None, u=None, derivs=True):
-        """``L = -log p*`` of eq. (8) up to a constant, with gradient and Hessians.
+    def objective(self, obs, prev, x, *, free="c", motion=None, u=None, derivs=True, context=None):
+        """``L = -log p*`` of eq. (8) up to a constant, with gradient and Hessians (what
+        :meth:`laplace`'s Newton steps minimise).
 
         Parameters
         ----------
@@ -221,15 +222,19 @@ class Landmarks:
             ``(s, θ, c)`` (``free="all"``, PF-Doucet)
         motion : ``(s, θ)`` arrays, the sampled motion when ``free="c"``
         u : (N, K, K-2) ``U_t = g(U_{t-1}, z_{t-1})`` (computed if not given)
+        context : dict or None
+            What eq. (8) needs of ``prev`` (``z_{t-1}``, ``U_t``, the prior means), computed once by
+            :meth:`laplace` for its Newton steps (``prev`` and ``u`` are then not read).
 
         Returns
         -------
         L (N,), and with ``derivs``: grad (N, D), hess (N, D, D) exact, gn (N, D, D)
         a positive definite Gauss–Newton part (the terms with ``dℓ/dq ≥ 0``, prior).
         """
-        return self._objective(obs, self._context(prev, u), x, free, motion, derivs)
+        return self._loss(obs, self._context(prev, u) if context is None else context, x, free, motion, derivs)
 
-    def _objective(self, obs, ctx, x, free, motion, derivs):
+    def _loss(self, obs, ctx, x, free, motion, derivs):
+        """:meth:`objective` given the context ``ctx`` of ``X_{t-1}``."""
         if free == "c":
             s, th = motion
             c = x
@@ -310,10 +315,10 @@ class Landmarks:
             sub = self._take(ctx, active)
             mot = None if motion is None else (motion[0][active], motion[1][active])
             xa = x[active]
-            big_l, grad, hess, gn = self._objective(obs, sub, xa, free, mot, True)
+            big_l, grad, hess, gn = self.objective(obs, None, xa, free=free, motion=mot, context=sub)
             dx = -np.linalg.solve(_pd_or(hess, gn), grad[:, :, None])[:, :, 0]
             trial = xa + dx
-            l_new = self._objective(obs, sub, trial, free, mot, False)
+            l_new = self.objective(obs, None, trial, free=free, motion=mot, derivs=False, context=sub)
             bad = ~(l_new <= big_l)
             if bad.any():  # backtracking, all halvings of the failed particles at once
                 b = np.flatnonzero(bad)
@@ -321,7 +326,8 @@ class Landmarks:
                 tb = (xa[b, None, :] + halvings[None, :, None] * dx[b, None, :]).reshape(-1, xa.shape[1])
                 rep = np.repeat(b, m)
                 mot_b = None if mot is None else (mot[0][rep], mot[1][rep])
-                lt = self._objective(obs, self._take(sub, rep), tb, free, mot_b, False).reshape(len(b), m)
+                lt = self.objective(obs, None, tb, free=free, motion=mot_b, derivs=False,
+                                    context=self._take(sub, rep)).reshape(len(b), m)
                 better = lt < big_l[b, None]
                 first = np.argmax(better, axis=1)
                 ok = better[np.arange(len(b)), first]
@@ -331,7 +337,7 @@ class Landmarks:
             active = active[np.max(np.abs(dx), axis=1) > tol]
             if not len(active):
                 break
-        _, _, hess, gn = self._objective(obs, ctx, x, free, motion, True)
+        _, _, hess, gn = self.objective(obs, None, x, free=free, motion=motion, context=ctx)
         return x, _pd_or(hess, gn), ctx["u"]
 
     # ------------------------------------------------------------------ estimates

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["regular_polygon", "tangent_basis", "shape_step", "initial_basis"]
+__all__ = ["regular_polygon", "tangent_basis", "shape_step", "initial_basis", "per_entry"]
 
 
 def regular_polygon(k, phase=0.0):
@@ -55,6 +55,7 @@ def initial_basis(z0):
     return tangent_basis(f, np.asarray(z0, complex))
 
 
-def _diag(v, d):
+def per_entry(v, d):
+    """``v`` (a number, or ``(d,)``) as ``d`` entries ``(d,)``: a number repeated, an array copied."""
     v = np.asarray(v, float)
     return np.full(d, float(v)) if v.ndim == 0 else v.copy()

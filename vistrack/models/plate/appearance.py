@@ -1,4 +1,4 @@
-"""The plate model's learned appearance on real footage (issue 35): the box model's colour and template
+"""The plate model's learned appearance on real footage: the box model's colour and template
 terms and its correlation filter on the plate's box, learned from a start box or a detection, and the
 plate searched for again while it is not reported. A mixin of :class:`~vistrack.models.plate.model.Plate`."""
 
@@ -52,9 +52,9 @@ class PlateAppearance:
     anchor_min_ncc = 0.5
     #: the learned appearance's adaptation rate (:class:`~vistrack.models.box.appearance.Appearance`'s
     #: ``adapt_rate``): 0, the first view kept. The template reads the parallelogram's axis-aligned
-    #: box, which grows with the angle; adapted (0.1, the box model's rate), it learned the taller box
-    #: of a slightly tilted estimate and the angle drifted to 2 degrees on the dashcam clip (the
-    #: reported box 12 % too high; docs/experiments.md, issue 35). The correlation filter
+    #: box, which grows with the angle; adapted (0.1, the box model's rate), it learns the taller box
+    #: of a slightly tilted estimate and the angle drifts to 2 degrees on the dashcam clip (the
+    #: reported box 12 % too high; docs/experiments.md). The correlation filter
     #: (:attr:`lambda_dcf`) is the part that adapts.
     adapt_rate = 0.0
 

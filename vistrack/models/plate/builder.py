@@ -6,9 +6,11 @@ import numpy as np
 
 from ...io.starts import first_frame, initial_truth, start_frame
 from ...io.video import VideoError
-from ..spec import ModelSpec
+from ..spec import ModelOption, ModelSpec
+from .model import Plate
+from .plates import Plates
 
-__all__ = ["SPEC", "PLATES_ALGOS"]
+__all__ = ["SPEC"]
 
 
 def _plate_from_frame_box(frame, box, *, appearance=True, layout=None, **params):
@@ -21,8 +23,6 @@ def _plate_from_clip(clip, *, init, init_gt, template, targets=None, **params):
     if targets is not None:  # several plates at once: acquired by the slots' births
         if init is not None or init_gt is not None:
             raise VideoError("--targets finds the plates by itself: give no --init or --init-gt")
-        from .plates import Plates
-
         params.pop("appearance", None)
         layout = _layout(params) or (clip.meta or {}).get("layout") or "jp"
         return Plates(clip.source.size, targets, layout, **params)
@@ -47,11 +47,11 @@ def _plate(clip, size, init, init_gt, params):
         from .detect import PlateSearch
 
         def build(frame, det):
-            # the angle's random walk 0.003 rad/frame, not 0.01: started from a detection, the angle
-            # wandered 3 -> 9 degrees on the dashcam clip blurred 7 px (the learned appearance reads the
-            # parallelogram's axis-aligned box and hardly holds it): no box, seeds 1-3, AUC 0.70 / 0.68
-            # / 0.47 -> 0.77 / 0.75 / 0.77, mean of the 10 plate clips 0.832 -> 0.850. From a box 0.01
-            # stays: 0.003 lowered every clip there (dashcam 0.877 -> 0.861; docs/experiments.md, issue 35)
+            # the angle's random walk 0.003 rad/frame, not 0.01: started from a detection, with 0.01 the
+            # angle wanders 3 -> 9 degrees on the dashcam clip blurred 7 px (the learned appearance reads the
+            # parallelogram's axis-aligned box and hardly holds it): no box, seeds 1-3, AUC 0.77 / 0.75 /
+            # 0.77 against 0.70 / 0.68 / 0.47, mean of the 10 plate clips 0.850 against 0.832. From a box
+            # 0.01: 0.003 lowers every clip there (dashcam 0.861 against 0.877; docs/experiments.md)
             return _plate_from_box(size, det.box, layout or det.layout, params, frame, angle_sigma=0.003)
 
         return PlateSearch(build)
@@ -71,8 +71,6 @@ def _plate_from_box(size, box, layout, params, frame=None, angle_sigma=None):
     the appearance of the plate in the box is learned too (:meth:`Plate.learn_appearance`) and the
     detector kept for :meth:`Plate.redetect`; ``angle_sigma``: the angle's random walk (rad/frame)
     instead of the model's, unless ``sigma`` is given."""
-    from .model import Plate
-
     if layout is None and box is not None:  # the layout whose aspect ratio is nearest the box's
         from .layout import LAYOUTS
 
@@ -81,7 +79,7 @@ def _plate_from_box(size, box, layout, params, frame=None, angle_sigma=None):
     if frame is not None and box is not None:
         # one plate, its appearance learned: no entering-car births (they take the track to other
         # plate-like structure: dashcam from the first box, LIS-100 seeds 1-3, AUC 0.35 / 0.85 /
-        # 0.48 with the births; docs/experiments.md, issue 35)
+        # 0.48 with the births; docs/experiments.md)
         params = {"enter_weight": 0.0, "birth_reserve": 0.0, **params}
     model = Plate(size, layout=layout or "jp", **params)
     if box is not None:
@@ -100,10 +98,11 @@ def _plate_from_box(size, box, layout, params, frame=None, angle_sigma=None):
 
 
 
-#: with ``targets`` (several plates at once, :class:`~vistrack.models.plate.plates.Plates`): partitioned sampling too
-PLATES_ALGOS = ("partitioned-lis", "partitioned", "branched-partitioned-lis", "branched-partitioned", "lis",
-                "bootstrap", "condensation")
-SPEC = ModelSpec("plate", ("lis", "bootstrap", "condensation", "lls", "avpf"),
-                 "license-plate template (thesis 001 §1.3.2); acquires plates without a box",
+SPEC = ModelSpec("plate", description="license-plate template (thesis 001 §1.3.2); acquires plates without a box",
                  from_box=_plate_from_frame_box, from_clip=_plate_from_clip, lost_rule="plate",
-                 bytes_per_particle=48_000, multi_algos=PLATES_ALGOS)
+                 bytes_per_particle=48_000, model_class=Plate, targets_class=Plates, options=(
+                     ModelOption("targets", None, "track up to K plates at once, one slot each", flag="--targets"),
+                     ModelOption("layout", None, "jp or single-row; None: from the clip, the box or the plate found",
+                                 flag="--layout"),
+                     ModelOption("appearance", "auto", "learn the plate's appearance from the start box (auto: on "
+                                 "real footage)", flag="--no-colour", value=False)))

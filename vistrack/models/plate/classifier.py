@@ -1,4 +1,4 @@
-"""A small learned plate/non-plate test for the detector's rectangle candidates (issue 35).
+"""A small learned plate/non-plate test for the detector's rectangle candidates.
 
 Candidates
     :func:`rectangle_candidates`: the closed outlines of the grey frame's Canny edges whose

@@ -30,10 +30,10 @@ from pathlib import Path
 import numpy as np
 from scipy import optimize
 
-from ...io.clips import load_clip
 from ...core.features import FeatureMaps
-from .model import PlateLikelihood, scale_band
+from ...io.clips import load_clip
 from .layout import LAYOUTS
+from .model import PlateLikelihood, scale_band
 
 __all__ = ["feature_likelihood", "truth_poses", "training_samples", "scan_poses", "design", "split_weights",
            "fit_logistic", "fit_weights"]

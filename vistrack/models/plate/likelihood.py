@@ -1,4 +1,4 @@
-"""License-plate template likelihood (thesis 001, §1.3.2, Table 1.1) — issue 6 groundwork.
+"""License-plate template likelihood (thesis 001, §1.3.2, Table 1.1).
 
 ``r = r^h · r^v · r^c`` with (Table 1.1's pixel sets from a
 :class:`~vistrack.models.plate.layout.PlateLayout`)
@@ -45,8 +45,10 @@ def plate_map(maps):
         f = maps.frame
         g8 = f if f.ndim == 2 else cv2.cvtColor(f, cv2.COLOR_BGR2GRAY, dst=maps.buffer("gray8", f.shape[:2], np.uint8))
         h, w = g8.shape
-        gx = cv2.Sobel(g8, cv2.CV_32F, 1, 0, dst=maps.buffer("plate_gx", (h, w)), ksize=3, borderType=cv2.BORDER_REFLECT)
-        gy = cv2.Sobel(g8, cv2.CV_32F, 0, 1, dst=maps.buffer("plate_gy", (h, w)), ksize=3, borderType=cv2.BORDER_REFLECT)
+        gx = cv2.Sobel(g8, cv2.CV_32F, 1, 0, dst=maps.buffer("plate_gx", (h, w)), ksize=3,
+                       borderType=cv2.BORDER_REFLECT)
+        gy = cv2.Sobel(g8, cv2.CV_32F, 0, 1, dst=maps.buffer("plate_gy", (h, w)), ksize=3,
+                       borderType=cv2.BORDER_REFLECT)
         sizes = maps.dog_sizes["small"] + maps.dog_sizes["large"]
         sums = maps.buffer("plate_box", (4, h, w), np.int32)
         for k, size in enumerate(sizes):
@@ -269,8 +271,8 @@ class PlateLikelihood:
 
         pts, sets, feats = self.kernel_table(points, cols)
         out = np.empty(offsets.shape[:2] + (len(feats),), np.float32)
-        return set_means(self.maps(obs), np.ascontiguousarray(pose, float), np.tan(pose[:, 2]), float(self.layout.aspect),
-                         pts, sets, feats, np.ascontiguousarray(offsets, float), BORDER, out)
+        return set_means(self.maps(obs), np.ascontiguousarray(pose, float), np.tan(pose[:, 2]),
+                         float(self.layout.aspect), pts, sets, feats, np.ascontiguousarray(offsets, float), BORDER, out)
 
     def kernel_table(self, points, cols=None):
         """The compiled path's ``(points (P, 2), sets (S, 2), features (F, 2))`` of the features

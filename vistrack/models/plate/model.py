@@ -8,10 +8,10 @@ import numpy as np
 
 from ...core.gaussian import diag_logpdf
 from ...proposals import Window
-from .likelihood import LEARNT_WEIGHTS, PlateLikelihood, PlateObservation, scale_band, thesis_weights
-from .appearance import PlateAppearance
-from .proposal import PlateLISProposal
 from ..protocol import VideoModelBase
+from .appearance import PlateAppearance
+from .likelihood import LEARNT_WEIGHTS, PlateLikelihood, PlateObservation, scale_band, thesis_weights
+from .proposal import PlateLISProposal
 
 __all__ = ["Plate", "PlateLikelihood", "PlateObservation", "PlateLISProposal", "thesis_weights", "scale_band",
            "LEARNT_WEIGHTS"]
@@ -44,12 +44,12 @@ class Plate(PlateAppearance, VideoModelBase):
         sd 0.35 W); ``w``, ``θ``, ``s`` from the plates of the 16 training clips
         (:mod:`~vistrack.models.plate.fit`'s seeds): their mean ``w`` 0.69 H and ``s`` 0.125 W,
         with twice their spread (sd 0.025 H and 0.010 W there: 0.05 H and 0.02 W) and ``θ`` sd
-        0.1 rad (0.06 there). The earlier hand-set 0.1 H and 0.03 W left most births 20–50 %
-        off the entering plate's scale, where the entering search does not reach it (births
-        at the suite's entering frames ended within a third of the plate height 9.4 % of the
-        time, 16 % now); on 10 clips × 10 runs LIS-100 P(lost) 0.055 → 0.038, mean acquisition
-        delay 2.1 → 1.4 frames. A scene where plates appear elsewhere or at other sizes needs
-        its own values.
+        0.1 rad (0.06 there). With these, births at the suite's entering frames end within a third
+        of the plate height 16 % of the time, against 9.4 % with 0.1 H and 0.03 W, which leave most
+        births 20–50 % off the entering plate's scale, where the entering search does not reach it;
+        on 10 clips × 10 runs LIS-100's P(lost) is 0.038 against 0.055 and its mean acquisition
+        delay 1.4 frames against 2.1 (docs/experiments.md). A scene where plates appear elsewhere or
+        at other sizes needs its own values.
     enter_sides : float
         Share of the entering component placed where cars come in — Gaussians at the
         left and right borders (``u`` at 0.1 W and 0.9 W, sd 0.07 W), the rest the broad
@@ -76,8 +76,8 @@ class Plate(PlateAppearance, VideoModelBase):
         on the plate's box, about 1 at the plate) in ``log r``, read at the state's centre and width
         (:meth:`dcf_states`; the angle is the plate likelihood's and the template's). 0: no filter.
         20: on the 10 plate clips of ``benchmarks/bench_plate_real.py`` from the first box (with the
-        first view kept, :attr:`adapt_rate`) the mean AUC 0.911 -> 0.916, the 6-px shaken dashcam
-        0.846 -> 0.903; 60 lowered the shaken clips (docs/experiments.md, issue 35).
+        first view kept, :attr:`adapt_rate`) the mean AUC is 0.916 against 0.911 without the filter,
+        the 6-px shaken dashcam's 0.903 against 0.846; 60 lowers the shaken clips (docs/experiments.md).
     dcf_options : dict or None
         Passed to :class:`~vistrack.models.box.correlation.CorrelationFilter` (the box model's defaults).
     """

@@ -37,8 +37,8 @@ from __future__ import annotations
 import numpy as np
 
 from ...core.gaussian import diag_logpdf
-from .model import Plate
 from ..protocol import VideoModelBase
+from .model import Plate
 
 __all__ = ["Plates", "SLOT"]
 

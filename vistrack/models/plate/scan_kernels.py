@@ -22,8 +22,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .kernels import means_at, place, set_index
 from ...kernels.sampling import pairwise_sum
+from .kernels import means_at, place, set_index
 
 __all__ = ["draw_cells", "line_scans", "sparse_draw"]
 

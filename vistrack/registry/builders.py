@@ -2,7 +2,7 @@
 
 Kept out of the CLI so that evaluation code builds models the same way. Each model's own
 construction is in its package's ``builder`` module (its registry entry,
-:mod:`vistrack.models.registry`); this module dispatches on the registry.
+:mod:`vistrack.registry.catalog`); this module dispatches on the registry.
 """
 
 from __future__ import annotations
@@ -12,13 +12,12 @@ from pathlib import Path
 import numpy as np
 
 from ..io.starts import MAX_BOX_FACTOR, check_start_box, first_frame, initial_truth, start_box, start_frame
-from ..io.video import VideoError, _short
-from .plate.builder import PLATES_ALGOS
-from .registry import MODELS as _REGISTRY
-from .registry import get_model_spec
+from ..io.video import VideoError
+from ..io.video_errors import quoted
+from .catalog import MODELS, get_model_spec
 
-__all__ = ["MODELS", "PLATES_ALGOS", "MAX_BOX_FACTOR", "initial_truth", "start_frame", "check_start_box", "build_model",
-           "model_from_box", "read_support_points"]
+__all__ = ["MAX_BOX_FACTOR", "initial_truth", "start_frame", "check_start_box", "build_model", "model_from_box",
+           "read_support_points"]
 
 
 def read_support_points(path):
@@ -55,7 +54,7 @@ def read_support_points(path):
             try:
                 rows.append([float(v) for v in parts])
             except ValueError:
-                raise VideoError(f"{p}, line {k}: expected two numbers x y, got {_short(line)}") from None
+                raise VideoError(f"{p}, line {k}: expected two numbers x y, got {quoted(line)}") from None
             if len(parts) != 2:
                 raise VideoError(f"{p}, line {k}: expected two numbers x y, got {len(parts)}")
         pts = np.asarray(rows, dtype=float).reshape(-1, 2)
@@ -82,7 +81,7 @@ def model_from_box(name, frame, box, **params):
     """
     spec = _spec(name)
     if spec.from_box is None:
-        starts = ", ".join(k for k, v in _REGISTRY.items() if v.from_box is not None)
+        starts = ", ".join(k for k, v in MODELS.items() if v.from_box is not None)
         raise VideoError(f"model {name!r} does not start from a box; choose from {starts}")
     frame = np.asarray(frame)
     check_start_box(box, (frame.shape[1], frame.shape[0]), "start box")
@@ -106,7 +105,7 @@ def build_model(name, clip, *, init=None, init_gt=None, template=None, **params)
     where it lies in the first frame. ``polarity="auto"`` learns the edge polarity from
     the first frame (:meth:`Contour.learn_polarity`); ``None`` keeps edges unsigned.
 
-    Dispatches on the registry (:mod:`vistrack.models.registry`): the model's ``from_clip``,
+    Dispatches on the registry (:mod:`vistrack.registry.catalog`): the model's ``from_clip``,
     or without one its ``from_box`` at the start box in the clip's first frame.
     """
     spec = _spec(name)
@@ -120,8 +119,3 @@ def build_model(name, clip, *, init=None, init_gt=None, template=None, **params)
         raise VideoError(f"--template is not for the {name} model")
     box = start_box(clip, init, init_gt)
     return spec.from_box(first_frame(clip, start_frame(clip, init, init_gt)), box, **params)
-
-
-
-#: the registered models' names (the registry may hold more: :func:`~vistrack.models.registry.register`)
-MODELS = tuple(_REGISTRY)

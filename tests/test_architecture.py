@@ -1,0 +1,111 @@
+"""The shape of the code (docs/architecture.md): the command line parses, calls the library and prints;
+every module sits in a package; no module imports another's private names; the task-file path, the
+equal-time timing and the algorithm names each live in one place."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+from vistrack.filters import FILTERS
+from vistrack.registry import comparisons
+from vistrack.reproduce.tables import TABLES
+
+ROOT = Path(__file__).resolve().parents[1] / "vistrack"
+MAX_COMMAND_LINES = 25
+
+
+def _modules():
+    for p in sorted(ROOT.rglob("*.py")):
+        yield p.relative_to(ROOT).as_posix(), ast.parse(p.read_text(encoding="utf-8"))
+
+
+def _is_command(fn):
+    """A click command or group: decorated by ``click.command``, ``<group>.command`` or ``.group``."""
+    for d in fn.decorator_list:
+        f = d.func if isinstance(d, ast.Call) else d
+        if isinstance(f, ast.Attribute) and f.attr in ("command", "group"):
+            return True
+    return False
+
+
+def test_each_command_body_is_at_most_25_lines():
+    """Below its option decorators and its help (the docstring), a command parses, calls the library and
+    prints: at most 25 lines."""
+    long = []
+    for name, tree in _modules():
+        if not name.startswith("cli/"):
+            continue
+        for fn in ast.walk(tree):
+            if isinstance(fn, ast.FunctionDef) and _is_command(fn):
+                body = fn.body[1:] if ast.get_docstring(fn) is not None else fn.body
+                lines = body[-1].end_lineno - body[0].lineno + 1 if body else 0
+                if lines > MAX_COMMAND_LINES:
+                    long.append(f"{name}:{fn.name} {lines} lines")
+    assert long == []
+
+
+def test_every_module_sits_in_a_package():
+    assert sorted(p.name for p in ROOT.glob("*.py")) == ["__init__.py"]
+
+
+def test_no_module_imports_a_private_name_of_another():
+    found = []
+    for name, tree in _modules():
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.module != "__future__":
+                found += [f"{name}:{node.lineno} {a.name}" for a in node.names
+                          if a.name.startswith("_") and not a.name.startswith("__")]
+    assert found == []
+
+
+def _constants(tree, value):
+    return [n.lineno for n in ast.walk(tree) if isinstance(n, ast.Constant) and n.value == value]
+
+
+def test_the_task_file_path_is_built_in_one_function():
+    """``OUT/tasks/<name>.json`` is :func:`vistrack.engine.tasks.task_path`'s alone: every runner, the
+    engine and every results loader go through it."""
+    where = {name: lines for name, tree in _modules() if (lines := _constants(tree, "tasks"))}
+    assert list(where) == ["engine/tasks.py"] and len(where["engine/tasks.py"]) == 1
+    tree = dict(_modules())["engine/tasks.py"]
+    fn = next(f for f in tree.body if isinstance(f, ast.FunctionDef) and f.name == "task_path")
+    assert fn.lineno <= where["engine/tasks.py"][0] <= fn.end_lineno
+
+
+def test_the_equal_time_timing_and_solving_are_one_function_each():
+    """Every equal-time comparison (eval, the history-sampling, several-plate and bearings reproductions)
+    goes through :func:`vistrack.core.metrics.equal_time`, which alone solves for N, and times with
+    :func:`~vistrack.core.metrics.best_ms`, the one timing loop."""
+    solvers, timers = {}, {}
+    for name, tree in _modules():
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Call):
+                f = node.func.id if isinstance(node.func, ast.Name) else getattr(node.func, "attr", "")
+                if f in ("equal_time_n", "equal_time_search"):
+                    solvers.setdefault(name, []).append(node.lineno)
+                if f == "best_ms":
+                    timers.setdefault(name, []).append(node.lineno)
+    assert list(solvers) == ["core/metrics.py"]
+    assert set(timers) == {"track/loop.py", "engine/multi_target.py", "reproduce/bearings.py"}
+    callers = {name for name, tree in _modules() for n in ast.walk(tree)
+               if isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == "equal_time"}
+    assert callers == {"engine/pipeline.py", "engine/multi_target.py", "reproduce/hs_sir.py", "reproduce/bearings.py"}
+
+
+def test_no_algorithm_list_outside_the_registry():
+    """Algorithm names appear in the filter registry, each filter's own module (its ``name``) and the
+    registry's comparisons of the seeds, nowhere else (a reproduction's name such as ``hs-sir`` aside)."""
+    names = set(FILTERS) - set(TABLES)
+    found = [f"{name}:{line}" for name, tree in _modules()
+             if not name.startswith(("filters/", "registry/")) for a in names for line in _constants(tree, a)]
+    assert found == []
+
+
+def test_the_seeds_comparisons_name_registered_algorithms():
+    entries = [*comparisons.CONTOUR, *comparisons.HISTORY_SAMPLING, *comparisons.PLATE, *comparisons.PLATES,
+               *comparisons.DEMO]
+    algos = [a for a, _ in entries] + list(comparisons.BEARINGS) + list(comparisons.SEED_000_ORDER)
+    algos += [a for k in comparisons.LANDMARKS.values() for a in k]
+    assert set(algos) <= set(FILTERS)
+    assert all(isinstance(n, int) and n > 0 for _, n in entries)
