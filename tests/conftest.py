@@ -27,3 +27,17 @@ def synth_clip(tmp_path_factory):
         return made[key]
 
     return make
+
+
+@pytest.fixture
+def ctrl_c_reaches_python():
+    """SIGINT raises ``KeyboardInterrupt`` in this process for the test, as in a terminal: a test run
+    started as a background job (as CI runners may start it) inherits SIGINT ignored, which the
+    code under test rightly keeps (it leaves an ignored SIGINT ignored)."""
+    import signal
+
+    saved = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, saved)

@@ -11,12 +11,12 @@ import signal
 import socket
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
 
 from clip_helpers import square_clip
+from process_helpers import PATIENCE, TaskGate, listening, wait_until
 
 DASK = shutil.which("dask") or str(Path(sys.executable).with_name("dask"))
 pytestmark = pytest.mark.skipif(not Path(DASK).exists(), reason="the dask command is not installed")
@@ -26,14 +26,6 @@ def free_port():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
-
-
-def wait_for(predicate, timeout, what):
-    t0 = time.monotonic()
-    while not predicate():
-        if time.monotonic() - t0 > timeout:
-            raise TimeoutError(what)
-        time.sleep(0.2)
 
 
 def strip(results):
@@ -51,6 +43,7 @@ def test_eval_on_a_cluster_without_a_shared_filesystem_equals_the_local_run(tmp_
     square_clip(served / "sq", 20)
     procs = []
     env = {**os.environ, "PYTHONWARNINGS": "ignore"}
+    gate = TaskGate(tmp_path / "gate")  # the workers' tasks wait at their start until it opens
     try:
         http_port, sched_port = free_port(), free_port()
         procs.append(subprocess.Popen([sys.executable, "-m", "http.server", str(http_port), "--bind", "127.0.0.1"],
@@ -65,24 +58,23 @@ def test_eval_on_a_cluster_without_a_shared_filesystem_equals_the_local_run(tmp_
             workers.append(subprocess.Popen(
                 [DASK, "worker", f"tcp://127.0.0.1:{sched_port}", "--nthreads", "1", "--no-nanny",
                  "--no-dashboard", "--host", "127.0.0.1"], cwd=wd,
-                env={**env, "VISTRACK_CACHE": str(wd / "cache")}, stdout=subprocess.DEVNULL,
-                stderr=subprocess.DEVNULL))
+                env={**gate.env, **env, "PYTHONPATH": gate.env["PYTHONPATH"], "VISTRACK_CACHE": str(wd / "cache")},
+                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         procs += workers
+        wait_until(lambda: listening(http_port), "the HTTP server listening", proc=procs[0])
         url = f"http://127.0.0.1:{http_port}/sq/"
         client_env = {**env, "VISTRACK_CACHE": str(tmp_path / "client-cache")}
         client = tmp_path / "client-only"  # the client's working folder, no worker's
         client.mkdir()
         out = client / "out"
         run = subprocess.Popen(eval_args(url, "out", "--scheduler", f"tcp://127.0.0.1:{sched_port}", "--timeout",
-                                         "60"),
+                                         str(PATIENCE)),
                                cwd=client, env=client_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        # a worker killed mid-run: its task runs again elsewhere from its own seed stream
-        wait_for(lambda: (out / "tasks").is_dir() and len(list((out / "tasks").glob("*.json"))) >= 2
-                 or run.poll() is not None, 120, "no task finished")
-        done_at_kill = len(list((out / "tasks").glob("*.json")))
-        assert run.poll() is None and done_at_kill < 12, "the grid ended before the kill: give it more work"
+        # a worker killed mid-run, holding a task: the task runs again elsewhere from its own seed stream
+        wait_until(lambda: gate.started() >= 2, "both workers holding a task", proc=run)
         workers[0].send_signal(signal.SIGKILL)
-        _, err = run.communicate(timeout=300)
+        gate.open()
+        _, err = run.communicate(timeout=PATIENCE)
         assert run.returncode == 0, err
         for k in range(2):  # the workers wrote nothing where they ran (no "out"); one fetched the clip into its cache
             assert sorted(p.name for p in (tmp_path / f"worker{k}").iterdir()) in ([], ["cache"])
@@ -95,7 +87,8 @@ def test_eval_on_a_cluster_without_a_shared_filesystem_equals_the_local_run(tmp_
         want = json.loads((local / "results.json").read_text())["results"]
         assert len(got) == 2 and strip(got) == strip(want)
     finally:
+        gate.open()
         for p in procs:
             if p.poll() is None:
                 p.kill()
-            p.wait(timeout=30)
+            p.wait(timeout=PATIENCE)

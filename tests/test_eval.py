@@ -147,15 +147,20 @@ def test_demo_writes_videos_tracks_and_reports(tmp_path, capsys):
             rows = list(csv.DictReader(f))
         assert len(rows) == 12 and {"visible", "lost_reason"} <= set(rows[0])
     assert (out / "eval" / "report.md").is_file() and str(out) in stdout
+    # issue 46: the clip names the model the demo tracked it with; the file list has report.html
+    assert json.loads((out / "clips" / "jumps" / "meta.json").read_text())["model"] == "box"
+    assert f"  {out / 'eval' / 'report.html'} (the same in a browser" in stdout
+    assert f"  {out / 'eval-real' / 'report.html'} (the same in a browser" in stdout
+    assert "comparing them over 2 runs" in stdout and "beside OpenCV MIL, 2 runs each" in stdout
     res = json.loads((out / "eval" / "results.json").read_text())
     assert res["config"]["model"] == "box"
     assert [(r["algo"], r["particles"], r["runs"]) for r in res["results"]] == [
         ("ls-n-ips", 30, 2), ("lis", 30, 2), ("bootstrap", 150, 2)]
     real_res = json.loads((out / "eval-real" / "results.json").read_text())["results"]
-    assert [(r["algo"], r["particles"], r["runs"]) for r in real_res] == [("lis", 100, 2), ("opencv-mil", 1, 1)]
+    assert [(r["algo"], r["particles"], r["runs"]) for r in real_res] == [("lis", 100, 2), ("opencv-mil", 1, 2)]
     assert len(real_res[0]["p_lost_per_frame"]) == 10  # the excerpt: the first 10 frames
     # no N for a tracker without particles; its true run count (issue 37)
-    assert "| opencv-mil | – | 1 |" in stdout and "| lis | 100 | 2 |" in stdout
+    assert "| opencv-mil | – | 2 |" in stdout and "| lis | 100 | 2 |" in stdout
 
 
 def test_demo_skips_a_missing_real_clip(tmp_path, capsys, monkeypatch):

@@ -8,13 +8,13 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import cv2
 import numpy as np
 import pytest
 
 from cli_helpers import run
+from process_helpers import PATIENCE, TaskGate, gated_cli, wait_until
 
 H, W = 120, 160
 
@@ -41,28 +41,20 @@ def test_signal_mid_run_keeps_the_track_so_far(tmp_path, sig, code):
     """``run`` stopped by Ctrl-C or SIGTERM: exit 130 / 143, the track CSV holds every frame done as
     whole rows (no ``.part`` left), the annotated video plays those frames, one line says so."""
     video = tmp_path / "v.avi"
-    write_video(video, 300)
+    write_video(video, 40)
     track, out = tmp_path / "t.csv", tmp_path / "a.mp4"
-    cmd = [sys.executable, "-m", "vistrack.cli", "run", str(video), "--init", "48,51,24,18", "-n", "3000",
-           "--algo", "bootstrap", "--track", str(track), "--out", str(out), "-q"]
-    # from tmp_path: run from the repository root, ``-m`` would import the source tree's ``vistrack/``
-    # (which has no ``cli``: it is mapped from ``cli/`` at install) instead of the installed package
-    # a shell's background job starts with SIGINT ignored, which Python keeps: give the child the default
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    args = ["run", str(video), "--init", "48,51,24,18", "-n", "300", "--algo", "bootstrap", "--track", str(track),
+            "--out", str(out), "-q"]
+    # the decoder waits before frame 8 until the signal is sent: the run cannot end before it
+    proc = gated_cli(args, 8, tmp_path)
     part = tmp_path / "t.csv.part"
-    deadline = time.time() + 60
-    while time.time() < deadline and proc.poll() is None:
-        if part.is_file() and part.read_text().count("\n") >= 4:
-            break
-        time.sleep(0.05)
-    assert proc.poll() is None, proc.communicate()
+    wait_until(lambda: part.is_file() and part.read_text().count("\n") >= 4, "4 rows of the track", proc=proc)
     proc.send_signal(sig)
-    stdout, stderr = proc.communicate(timeout=60)
+    stdout, stderr = proc.communicate(timeout=PATIENCE)  # closes its stdin: the decoder goes on
     assert proc.returncode == code, stderr
     assert "Traceback" not in stderr and "after" in stderr and str(track) in stderr
     rows = read_rows(track)
-    assert 3 <= len(rows) < 300 and not part.exists()
+    assert 3 <= len(rows) < 40 and not part.exists()
     assert [int(r["frame"]) for r in rows] == list(range(len(rows)))
     assert all(np.isfinite(float(r["cx"])) for r in rows)
     cap = cv2.VideoCapture(str(out))
@@ -141,7 +133,7 @@ def test_one_experiment_per_out_folder(tmp_path):
     a dead process is taken over; the lock is gone after."""
     from vistrack.engine.tasks import OutLocked, lock_out
 
-    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    holder = subprocess.Popen([sys.executable, "-c", "import signal; signal.pause()"])  # alive until killed
     try:
         import socket
 
@@ -185,11 +177,12 @@ def test_prefetch_gives_the_same_frames_and_stops_cleanly(tmp_path):
     ahead = list(prefetch(src, size=3))
     assert [i for i, _ in ahead] == [i for i, _ in direct]
     assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(ahead, direct))
+    before = set(threading.enumerate())
     gen = prefetch(src, size=2)
     next(gen)
-    gen.close()  # stopping early ends the decoder thread
-    time.sleep(0.3)
-    assert not any(t.name == "vistrack-decode" for t in threading.enumerate())
+    (decoder,) = [t for t in threading.enumerate() if t.name == "vistrack-decode" and t not in before]
+    gen.close()  # stopping early ends the decoder thread: close() returns once it has ended
+    assert not decoder.is_alive()
 
     def broken():
         yield 0, direct[0][1]
@@ -285,22 +278,20 @@ def test_eval_worker_killed_mid_grid_gives_the_uninterrupted_results(tmp_path, c
     make_contour_clip(tmp_path / "clips" / "c1", frames=12, size=(128, 96), seed=1, clutter="low", distractor=False)
     grid = ["eval", str(tmp_path / "clips"), "--algos", "lis,bootstrap", "--particles", "60", "--runs", "3",
             "--seed", "4", "-q"]
-    proc = subprocess.Popen([sys.executable, "-m", "vistrack.cli", *grid, "--workers", "2", "--out", "killed"],
-                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        tasks, victim = tmp_path / "killed" / "tasks", None
-        deadline = time.time() + 120
-        while victim is None and proc.poll() is None and time.time() < deadline:
-            if tasks.is_dir() and any(tasks.iterdir()):  # both workers are busy now: one finished, 5 tasks left
-                victim = _workers(proc.pid)[0]
-                victim.kill()
-            time.sleep(0.02)
-        assert victim is not None and len(list(tasks.iterdir())) < 6
-        code, _, err = run([*grid, "--in-process", "--workers", "1", "--out", str(tmp_path / "whole")], capsys)
-        assert code == 0, err
-        _, err = proc.communicate(timeout=120)
-    finally:
-        proc.kill()
+    with TaskGate(tmp_path / "gate") as gate:  # the tasks wait at their start until the gate opens
+        proc = subprocess.Popen([sys.executable, "-m", "vistrack.cli", *grid, "--workers", "2", "--out", "killed"],
+                                cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=gate.env)
+        try:
+            wait_until(lambda: gate.started() >= 2, "both workers holding a task", proc=proc)
+            holder = int(next(p for p in gate.folder.iterdir() if p.name.startswith("started-")).name.rsplit("-", 1)[1])
+            victim = next(w for w in _workers(proc.pid) if w.pid == holder)
+            victim.kill()
+            gate.open()
+            code, _, err = run([*grid, "--in-process", "--workers", "1", "--out", str(tmp_path / "whole")], capsys)
+            assert code == 0, err
+            _, err = proc.communicate(timeout=PATIENCE)
+        finally:
+            proc.kill()
     assert proc.returncode == 0 and "Traceback" not in err, err
     assert "note: 1 worker process(es) died and were replaced" in err
     whole = json.loads((tmp_path / "whole" / "results.json").read_text())
@@ -437,9 +428,7 @@ def test_synth_killed_mid_clip_leaves_the_old_clip_and_no_clip_eval_takes(tmp_pa
     proc = subprocess.Popen([sys.executable, "-m", "vistrack.cli", *synth, "--frames", "100000", "--seed", "2",
                              "--out", "c1"], cwd=tmp_path, stderr=subprocess.PIPE, text=True)
     partial = tmp_path / f".c1.partial-{proc.pid}" / "video.mp4"
-    deadline = time.time() + 60
-    while proc.poll() is None and time.time() < deadline and not (partial.is_file() and partial.stat().st_size):
-        time.sleep(0.02)
+    wait_until(lambda: partial.is_file() and partial.stat().st_size, "a partial render", proc=proc)
     proc.kill()
     proc.communicate()
     assert partial.is_file() and _clip_bytes(clip) == old
@@ -635,7 +624,7 @@ def test_eval_refuses_a_folder_in_use_and_keeps_task_files_when_the_scheduler_is
     (out / "tasks").mkdir(parents=True)
     (out / "tasks" / "old.json").write_text('{"fingerprint": "x"}')
     grid = ["eval", str(tmp_path / "c1"), "--algos", "bootstrap", "--particles", "10", "--runs", "1", "--out", str(out)]
-    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    holder = subprocess.Popen([sys.executable, "-c", "import signal; signal.pause()"])  # alive until killed
     try:
         (out / ".vistrack.lock").write_text(f"{holder.pid}@{socket.gethostname()}")
         code, _, err = run(grid, capsys)
@@ -681,11 +670,9 @@ def test_synth_sigterm_stops_cleanly(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "vistrack.cli", "synth", "contour", "--out", "c1", "--frames",
                              "100000", "--size", "96x72", "-q"], cwd=tmp_path, stderr=subprocess.PIPE, text=True)
     partial = tmp_path / f".c1.partial-{proc.pid}" / "video.mp4"
-    deadline = time.time() + 60
-    while proc.poll() is None and time.time() < deadline and not partial.is_file():
-        time.sleep(0.02)
+    wait_until(partial.is_file, "a partial render", proc=proc)
     proc.terminate()
-    _, err = proc.communicate(timeout=60)
+    _, err = proc.communicate(timeout=PATIENCE)
     assert proc.returncode == 143 and err.strip().endswith("\nTerminated.") and "Traceback" not in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c1"] and _clip_bytes(tmp_path / "c1") == old
 

@@ -391,27 +391,22 @@ def test_8_after_any_interrupt_track_video_and_results_hold_the_same_frames(tmp_
     writer and exits 130 (SIGINT) / 143 (once a SIGTERM came); the track CSV, the
     ``--results`` file and the annotated video then hold the same frames, 0, 1, .., k-1."""
     import signal
-    import subprocess
-    import sys
-    import time
+
+    from process_helpers import PATIENCE, gated_cli, wait_until
 
     video = tmp_path / "v.avi"
-    avi(video, 200)
+    avi(video, 40)
     track, res, out = tmp_path / "t.csv", tmp_path / "r.txt", tmp_path / "a.mp4"
-    cmd = [sys.executable, "-m", "vistrack.cli", "run", str(video), "--init", "40,50,25,19", "-n", "2000",
-           "--algo", "bootstrap", "--track", str(track), "--results", str(res), "--out", str(out), "-q"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    args = ["run", str(video), "--init", "40,50,25,19", "-n", "300", "--algo", "bootstrap", "--track", str(track),
+            "--results", str(res), "--out", str(out), "-q"]
+    # the decoder waits before frame 8 until every signal is sent: the run cannot end before them
+    proc = gated_cli(args, 8, tmp_path)
     part = tmp_path / "t.csv.part"
     for name, rows in signals:
-        deadline = time.time() + 60
-        while time.time() < deadline and proc.poll() is None and rows:
-            if part.is_file() and part.read_text().count("\n") >= rows + 1:
-                break
-            time.sleep(0.01)
-        assert proc.poll() is None, proc.communicate()
+        wait_until(lambda: not rows or part.is_file() and part.read_text().count("\n") >= rows + 1,
+                   f"{rows} rows of the track", proc=proc)
         proc.send_signal(getattr(signal, f"SIG{name}"))
-    _, stderr = proc.communicate(timeout=60)
+    _, stderr = proc.communicate(timeout=PATIENCE)  # closes its stdin: the decoder goes on
     assert proc.returncode == code and "Traceback" not in stderr, stderr
     frames = [int(r["frame"]) for r in rows_of(track)]
     k = len(frames)
@@ -426,6 +421,7 @@ def test_8_after_any_interrupt_track_video_and_results_hold_the_same_frames(tmp_
     (("SIGINT",), "interrupt"), (("SIGINT", "SIGINT"), "interrupt"), (("SIGTERM",), "terminate"),
     (("SIGTERM", "SIGINT"), "terminate"),
 ], ids=["SIGINT", "SIGINT-twice", "SIGTERM", "SIGTERM-then-SIGINT"])
+@pytest.mark.usefixtures("ctrl_c_reaches_python")
 def test_8_a_signal_between_the_track_row_and_the_video_frame(tmp_path, names, reason):
     """The signals arrive at the worst moment, after frame 3's track row is written and before
     its annotated frame is: the frame in hand is finished, so the track, the results and the
@@ -460,6 +456,7 @@ def test_8_a_signal_between_the_track_row_and_the_video_frame(tmp_path, names, r
     assert _decoded_frames(out) == 4
 
 
+@pytest.mark.usefixtures("ctrl_c_reaches_python")
 def test_8_a_second_signal_while_the_outputs_close_is_waited_for(tmp_path):
     """Ctrl-C twice, the second while the files are being closed: the video and the track are
     closed whole all the same (before: the video was left unclosed, about 40 frames short)."""

@@ -114,6 +114,6 @@ def test_without_init_run_says_which_model_it_chose_and_why(capsys):
     """issue 37: a video without --init (and no meta.json model) is searched for a plate, said first."""
     code, out, err = run(["run", str(REAL / "girl_otb"), "--max-frames", "40"], capsys)
     lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert code != 0 and lines[0].startswith("no --init and no model in meta.json: looking for a license plate "
-                                             "(the plate model)") and "--init x,y,w,h" in lines[0]
+    assert code != 0 and lines[0].startswith("tracking with the plate model (no --init and no model in meta.json: "
+                                             "it looks for a license plate") and "--init x,y,w,h" in lines[0]
     assert "no license plate found" in lines[-1]

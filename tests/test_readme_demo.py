@@ -1,8 +1,8 @@
 """README's demo block is what `vistrack demo` prints (issue 37, item 4): every vistrack cell of
-both tables (they repeat exactly for the same seed); frames/s and OpenCV's MIL vary between runs
-and are given there as ranges, which the run's values must fall near."""
+both tables (they repeat exactly for the same seed). Frames/s and OpenCV's MIL vary between runs
+and are given there as ranges; frames/s depend on the machine and its load, so they are not checked
+here: `python benchmarks/readme_demo.py --check` compares them with README's."""
 
-import re
 import sys
 from pathlib import Path
 
@@ -35,6 +35,4 @@ def test_readme_demo_block_is_what_the_demo_prints(tmp_path, capsys, monkeypatch
         for gr, wr in zip(g[2:], w[2:]):
             if gr[0] == "opencv-mil":
                 continue  # randomised inside OpenCV
-            assert gr[:-1] == wr[:-1], (gr, wr)  # every score cell, exactly
-            lo, hi = (float(v) for v in re.findall(r"[0-9.]+", wr[-1])[:2] * (1 if "–" in wr[-1] else 2))
-            assert 0.2 * lo <= float(gr[-1]) <= 5 * hi  # frames/s: the machine's, near README's range
+            assert gr[:-1] == wr[:-1], (gr, wr)  # every score cell, exactly (not frames/s, the last)

@@ -1,22 +1,29 @@
-"""`vistrack run` on a stream (issue 37, item 5): a URL OpenCV reads itself, here an mp4 served over
-HTTP on 127.0.0.1, tracked like the file with --max-frames; a camera index that is not there is one line."""
+"""`vistrack run` on a URL and a camera (issue 37, item 5): an mp4 served over HTTP on 127.0.0.1 by
+`python -m http.server`, tracked like the file with --max-frames; a camera index that is not there is
+one line. What URLs do besides (range requests, the cache, errors): tests/test_urls.py."""
 
 import socket
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
 
 from cli_helpers import run
+from process_helpers import listening, wait_until
 from vistrack.io.clips import read_groundtruth_csv
 from vistrack.io.video import VideoWriter, is_stream
 
 
-def test_what_is_a_stream():
-    assert is_stream("0") and is_stream("rtsp://cam/live") and is_stream("http://h:8/v.mp4?x=1")
-    assert not is_stream("http://h:8/girl_otb/") and not is_stream("video.mp4") and not is_stream("clips/0a")
+def test_what_is_a_stream(tmp_path, monkeypatch):
+    """A camera or a live stream, read as it comes; a video's URL is a file (issue 46: read with seeking
+    or downloaded), and a file or folder named like a camera wins over it."""
+    monkeypatch.chdir(tmp_path)
+    assert is_stream("0") and is_stream("rtsp://cam/live") and is_stream("https://h/live/index.m3u8?t=1")
+    assert not is_stream("http://h:8/v.mp4?x=1") and not is_stream("http://h:8/girl_otb/")
+    assert not is_stream("video.mp4") and not is_stream("clips/0a")
+    (tmp_path / "0").mkdir()
+    assert not is_stream("0")
 
 
 @pytest.fixture
@@ -31,12 +38,7 @@ def served(tmp_path):
         port = s.getsockname()[1]
     server = subprocess.Popen([sys.executable, "-m", "http.server", str(port), "--bind", "127.0.0.1"], cwd=tmp_path,
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    for _ in range(50):
-        try:
-            socket.create_connection(("127.0.0.1", port), timeout=0.2).close()
-            break
-        except OSError:
-            time.sleep(0.1)
+    wait_until(lambda: listening(port), "the HTTP server listening", proc=server)
     yield f"http://127.0.0.1:{port}/v.mp4", tmp_path / "v.mp4"
     server.kill()
     server.wait()

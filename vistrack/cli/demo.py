@@ -41,14 +41,19 @@ def _step4(real, real_clip, real_frames, runs):
     took = f"the first {real_frames} frames" if real.frames >= real_frames else \
         f"all {real.frames} frames (fewer than --real-frames {real_frames})"
     return (f"4/4 {took} of {real.real} ({real.folder}): vistrack's default box tracker "
-            f"({REAL_ENTRIES[0][0].upper()} N={REAL_ENTRIES[0][1]}, {runs} runs) beside OpenCV MIL")
+            f"({REAL_ENTRIES[0][0].upper()} N={REAL_ENTRIES[0][1]}) beside OpenCV MIL, {_runs(runs)} each")
+
+
+def _runs(n):
+    """``1 run``, ``4 runs``."""
+    return f"{n} run{'' if n == 1 else 's'}"
 
 
 def _made(out, paths):
     """The closing lines: every file made."""
-    lines = ["", f"done. In {out}/:"]
-    return "\n".join(lines + [f"  {p}" + (" (tables and plots; results.json, results.csv beside it)"
-                                          if p.suffix == ".md" else "") for p in paths])
+    notes = {".md": " (tables and plots; results.json, results.csv beside it)",
+             ".html": " (the same in a browser, with an annotated video per tracker)"}
+    return "\n".join(["", f"done. In {out}/:"] + [f"  {p}{notes.get(p.suffix, '')}" for p in paths])
 
 
 @click.command()
@@ -86,12 +91,12 @@ def demo(ctx, out_dir, frames, runs, seed, real_clip, real_frames):
         click.echo(f"  {algo} N={n}:")
         ctx.invoke(run, video=str(clip), model_name=DEFAULT_MODEL, algo=algo, particles=n, seed=seed, init_gt="",
                    out_path=str(made[-2]), track_path=str(made[-1]), quiet=False, show_particles=10)
-    click.echo(f"3/4 comparing them over {runs} runs (as vistrack eval does): " + _entries(DEMO_ENTRIES))
+    click.echo(f"3/4 comparing them over {_runs(runs)} (as vistrack eval does): " + _entries(DEMO_ENTRIES))
     with progress("eval") as hooks:
         click.echo(compare(clip, DEMO_ENTRIES, DEFAULT_MODEL, runs, seed, out / "eval", **hooks))
         real = real_excerpt(real_clip, out / "clips", real_frames)
         click.echo(_step4(real, real_clip, real_frames, runs))
         if real is not None:
             click.echo(compare(real.folder, REAL_ENTRIES, DEFAULT_MODEL, runs, seed, out / "eval-real", **hooks))
-    reports = [out / "eval" / "report.md"] + ([out / "eval-real" / "report.md"] if real is not None else [])
+    reports = [out / e / f"report.{x}" for e in ("eval", "eval-real")[:1 + (real is not None)] for x in ("md", "html")]
     click.echo(_made(out, made + reports))

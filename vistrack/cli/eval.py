@@ -26,7 +26,29 @@ def _chosen(quiet):
     return lambda chosen: click.echo("equal time per frame: " + ", ".join(f"{a} N={n}" for a, n in chosen.items()))
 
 
-@click.command("eval")
+#: ``eval --help``
+EVAL_HELP = """Evaluate algorithms over CLIPS with ground truth: clip folders, videos or image folders (OTB, VOT,
+GOT-10k, LaSOT or vistrack's layout), folders of them, dataset roots (a LaSOT root, a GOT-10k split,
+a VOT workspace) or URLs of clip folders.
+
+\b
+Examples:
+  vistrack eval suite --algos ls-n-ips,lis,bootstrap,opencv-mil --particles 30,100 --runs 20 --out results
+  vistrack eval LaSOT/ --algos lis,opencv-csrt --runs 3 --out ev      # a dataset root
+  vistrack eval suite --algos lis,bootstrap --particles 100 --equal-time --out eq
+  vistrack eval suite --resume --out results ...                      # continue an interrupted run
+  vistrack eval clips/ --algos lis --results-dir other/ --out results # score another tracker's files too
+
+Every clip × algorithm × N × run is one Dask task writing its own file
+under OUT/tasks, so --resume continues an interrupted evaluation. Each
+run starts from the first ground-truth box. Writes OUT/report.md (tables
+and plots), OUT/report.html (the same with an annotated video per tracker,
+opened from the folder alone), OUT/results.json, OUT/results.csv (one row
+per task) and PNG plots.
+"""
+
+
+@click.command("eval", help=EVAL_HELP)
 @click.argument("clips", nargs=-1, required=True, type=click.Path())
 @click.option("--algos", default=",".join(default_comparison()), show_default=True, type=StrList(),
               help="Algorithms, any that run takes on the model (" + ", ".join(all_algos()) + ") and OpenCV "
@@ -34,7 +56,9 @@ def _chosen(quiet):
 @click.option("--particles", default="100,750", show_default=True, type=IntList(), help="Particle counts N.")
 @click.option("--runs", default=20, show_default=True, type=click.IntRange(min=1), help="Runs per clip × algo × N.")
 @click.option("--seed", default=0, show_default=True, type=SEED,
-              help="Random seed: the same seed gives the same output, bit for bit.")
+              help="Random seed: the same seed gives the same output, bit for bit. Run r of every clip tracks it "
+                   "as `vistrack run CLIP --init-gt --seed S --run r` does (run 0: as run --seed S), whatever the "
+                   "workers: eval --runs 1 --seed S gives run --seed S's track.")
 @click.option("--model", default=None, metavar="[" + "|".join(MODELS) + "]",
               help="Tracking model, any registered one, started from the first ground-truth box [default: as run: "
                    "the model the clips' meta.json names (synthetic clips), else " + DEFAULT_MODEL + ", any object, "
@@ -62,13 +86,7 @@ def _chosen(quiet):
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, scheduler, workers, timeout, in_process,
              resume, results_dirs, results_format, out_dir, quiet):
-    """Evaluate algorithms over CLIPS (clip folders, videos with ground truth, or folders of clip folders).
-
-    Every clip × algorithm × N × run is one Dask task writing its own file
-    under OUT/tasks, so --resume continues an interrupted evaluation. Writes
-    OUT/results.json, OUT/results.csv (one row per task), PNG plots and
-    OUT/report.md.
-    """
+    """``vistrack eval``: :data:`EVAL_HELP`."""
     with one_line():
         cfg = eval_config(clips, algos=algos, particles=particles, runs=runs, seed=seed, model=model, targets=targets,
                           results_dirs=results_dirs)

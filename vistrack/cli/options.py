@@ -130,11 +130,11 @@ class Size(click.ParamType):
         return (w, h)
 
 
-def check_writable(path, what):
-    """Raise ``click.ClickException`` unless ``path`` can be written as a file
-    (:func:`vistrack.io.outputs.check_writable`)."""
+def check_writable(path, what, create=False):
+    """Raise ``click.ClickException`` unless ``path`` can be written as a file (``create``: its missing
+    folders made first; :func:`vistrack.io.outputs.check_writable`)."""
     try:
-        writable(path, what)
+        writable(path, what, create)
     except ValueError as e:
         raise click.ClickException(str(e)) from None
 

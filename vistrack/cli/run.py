@@ -9,13 +9,16 @@ import click
 from tqdm import tqdm
 
 from vistrack.core.resampling import SCHEMES
+from vistrack.core.seeds import run_seed
 from vistrack.filters import FILTERS, SIR, ParticleFilter
 from vistrack.filters.history import HistorySampling
 from vistrack.filters.registry import filter_options
 from vistrack.io.clips import sequence_name
+from vistrack.io.remote import is_url
 from vistrack.io.results_format import FORMATS, result_paths
 from vistrack.io.video import is_stream
 from vistrack.registry import DEFAULT_MODEL, DEFAULT_PARTICLES, MODELS, SEARCH_MODEL, all_algos, get_model_spec
+from vistrack.track.compiling import compile_notice
 from vistrack.track.plan import plan_run, run_plan
 from vistrack.track.summary import summary_lines
 
@@ -26,14 +29,15 @@ __all__ = ["run"]
 
 
 class _Video(click.Path):
-    """A video file, image folder or clip folder that exists, a camera's index (``0``) or a stream URL."""
+    """A video file, image folder or clip folder that exists, a camera's index (``0``: a file or folder
+    of that name wins), a live stream or a URL."""
 
     def __init__(self):
         super().__init__(exists=True)
 
     def convert(self, value, param, ctx):
-        """The path checked as ``click.Path(exists=True)`` does, unless it names a camera or a stream."""
-        if is_stream(value) and not os.path.exists(value):
+        """The path checked as ``click.Path(exists=True)`` does, unless it names a camera, a stream or a URL."""
+        if is_stream(value) or is_url(value):
             return value
         return super().convert(value, param, ctx)
 
@@ -77,8 +81,8 @@ def lost_notice(most=5):
 
 
 def _say(line):
-    """A line on stderr."""
-    click.echo(line, err=True)
+    """A line on stderr (above a progress bar)."""
+    tqdm.write(line, file=sys.stderr)
 
 
 @click.command()
@@ -99,12 +103,19 @@ def _say(line):
                    "measurements (thesis §4.3.1; trained on first use, cached; see train-search) [default: lms].")
 @click.option("-n", "--particles", default=DEFAULT_PARTICLES, show_default=True, type=click.IntRange(min=1),
               help="Number of particles N.")
-@click.option("--seed", default=0, show_default=True, type=SEED, help="Random seed (same seed, same track).")
-@click.option("--init", type=Box(), help="Start from this box (x,y,w,h) in the first frame; the contour is the "
+@click.option("--seed", default=0, show_default=True, type=SEED,
+              help="Random seed: the same seed gives the same track, bit for bit. eval --seed S tracks a clip in "
+                   "its run 0 as run --seed S does (eval --runs 1 --seed S: this track), in its run r as "
+                   "--seed S --run r.")
+@click.option("--run", "run_no", default=0, show_default=True, type=SEED,
+              help="Track as eval's run R does under the same --seed (run 0 is --seed alone).")
+@click.option("--init", type=Box(), help="Start from this box in the first frame: x,y,w,h in 0-based pixels (the "
+                                        "top-left pixel is 0,0; OTB's and LaSOT's ground-truth files count from 1: "
+                                        "use --init-gt to start from them). The contour is the "
                                         "ellipse in it.")
 @click.option("--init-gt", "init_gt", is_flag=False, flag_value="", default=None, metavar="[FILE]",
-              help="Start from the first ground-truth frame: the clip's own (groundtruth.csv with meta.json "
-                   "template, or OTB groundtruth_rect.txt), or FILE.")
+              help="Start from the first ground-truth box, read in its dataset's own convention (OTB and LaSOT "
+                   "1-based, VOT, GOT-10k and vistrack's groundtruth.csv 0-based): the clip's own, or FILE.")
 @click.option("--template", "template_path", type=click.Path(dir_okay=False),
               help="Contour support points (x y per line, or JSON): used where they lie in the first "
                    "frame, or fitted to --init / --init-gt boxes. Default: an ellipse, or the clip's template. "
@@ -137,8 +148,12 @@ def _say(line):
                    "likelihood only (no appearance learned from the --init box).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar and no summary.")
 def run(video, model_name, layout, algo, search, particles, seed, init, init_gt, template_path, track_path, out_path,
-        results_path, results_format, show_particles, resample, ess_threshold, targets, max_frames, no_colour, quiet):
-    """Track the object in VIDEO (a video file, an image folder or a clip folder).
+        results_path, results_format, show_particles, resample, ess_threshold, targets, max_frames, no_colour, quiet,
+        run_no=0):
+    """Track the object in VIDEO: a video file, an image folder or a clip folder, a camera's index (0,
+    1, ...; a file or folder of that name wins), a live stream (rtsp://...) or the URL of a video or
+    clip folder (http(s)://, s3://, ...: read with seeking where the server allows it, else downloaded
+    into a cache checked against the server on every use).
 
     \b
     Examples:
@@ -173,18 +188,19 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     _check_output_paths(video, track_path, out_path, results_path, results_format, (template_path, init_gt or None))
     if targets is not None and results_path:
         raise click.UsageError("--results writes one box per frame: not with --targets (use --track)")
-    with one_line():
-        plan = plan_run(video, model=model_name, algo=algo, particles=particles, init=init, init_gt=init_gt,
-                        template=template_path, layout=None if layout == "auto" else layout, no_colour=no_colour,
-                        targets=targets, search=search, resample=resample, ess_threshold=ess_threshold,
-                        max_frames=max_frames, notify=None if quiet else _say)
-    if plan.start:
-        _say(f"note: the ground truth has no box before frame {plan.start}: tracking starts there (frames 0-"
-             f"{plan.start - 1} get rows with visible=0, lost_reason \"not started\"; scores count from frame "
-             f"{plan.start})")
-    outputs = {"track_path": track_path, "out_path": out_path, "results_path": results_path,
-               "results_format": results_format, "sequence": sequence_name(video)}
-    done = _track(plan, particles, seed, show_particles, quiet, outputs)
+    with compile_notice(None if quiet else _say) as watch:  # the first run after an install compiles the kernels
+        with one_line():
+            plan = plan_run(video, model=model_name, algo=algo, particles=particles, init=init, init_gt=init_gt,
+                            template=template_path, layout=None if layout == "auto" else layout, no_colour=no_colour,
+                            targets=targets, search=search, resample=resample, ess_threshold=ess_threshold,
+                            max_frames=max_frames, notify=None if quiet else _say, watch=watch)
+        if plan.start:
+            _say(f"note: the ground truth has no box before frame {plan.start}: tracking starts there (frames 0-"
+                 f"{plan.start - 1} get rows with visible=0, lost_reason \"not started\"; scores count from frame "
+                 f"{plan.start})")
+        outputs = {"track_path": track_path, "out_path": out_path, "results_path": results_path,
+                   "results_format": results_format, "sequence": sequence_name(video)}
+        done = _track(plan, particles, run_seed(seed, run_no), show_particles, quiet, outputs)
     _report(video, plan, done, particles, quiet, outputs)
 
 
@@ -192,8 +208,8 @@ def _check_output_paths(video, track_path, out_path, results_path, results_forma
     """One error line for an output ``run`` cannot write, or one that is an input or another output."""
     check_writable(track_path, "track file")
     check_writable(out_path, "annotated video")
-    if results_format == "otb":
-        check_writable(results_path, "results file")
+    if results_format == "otb":  # its folder is made as the GOT-10k and VOT layouts' are
+        check_writable(results_path, "results file", create=True)
     elif results_path is not None and os.path.exists(results_path) and not os.path.isdir(results_path):
         raise click.ClickException(f"--results {results_path}: the {results_format} layout is a folder "
                                    "(SEQ/SEQ_001.txt inside it), not a file")
@@ -213,7 +229,7 @@ def _track(plan, particles, seed, show_particles, quiet, outputs):
     try:
         with one_line():
             return run_plan(plan, particles, seed, label=label, show_particles=show_particles, progress=progress,
-                            notify=None if quiet else lost_notice(), **outputs)
+                            notify=None if quiet else lost_notice(), ready=bar.unpause, **outputs)
     except OSError as e:  # a full disk, an output that cannot be opened: the line names it
         raise click.ClickException(str(e)) from None
     finally:

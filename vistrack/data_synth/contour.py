@@ -162,8 +162,11 @@ def _contour_meta(frames, w, h, fps, seed, clutter, shape, color, template, dist
 @atomic_clip
 def make_contour_clip(out, *, frames=300, size=(320, 240), seed=0, clutter="high", distractor=True,
                       shape="hand", n_support=24, fps=30.0, jump_prob=0.02, jump_size=(0.025, 0.045),
-                      color=False, progress=None):
+                      color=False, model="contour", progress=None):
     """Render a contour clip into folder ``out`` (video.mp4, groundtruth.csv, meta.json).
+
+    ``model``: the model ``meta.json`` names, which ``run`` and ``eval`` track the clip with when
+    no ``--model`` is given (``vistrack demo``'s clip names the box model it tracked it with).
 
     ``jump_prob``: the chance of a sudden jump per frame; ``jump_size``: its length range as
     shares of the frame width. ``color``: the object (and the distractor, identical) has a
@@ -214,5 +217,6 @@ def make_contour_clip(out, *, frames=300, size=(320, 240), seed=0, clutter="high
                 progress(1)
     meta = _contour_meta(frames, w, h, fps, seed, clutter, shape, color, template, distractor_pose, jump_prob,
                          jump_size)
+    meta["model"] = model
     write_clip_files(out, rows, cols, meta)
     return meta

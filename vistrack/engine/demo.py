@@ -63,7 +63,8 @@ def make_demo_clip(out, frames, seed):
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise ValueError(f"cannot create {out}: {e.strerror}") from None
-    make_contour_clip(out / CLIP_FOLDER, frames=frames, seed=seed + 1, **CLIP)
+    # its meta.json names the model the demo tracks it with, which run and eval then take by default
+    make_contour_clip(out / CLIP_FOLDER, frames=frames, seed=seed + 1, model=DEFAULT_MODEL, **CLIP)
     return out / CLIP_FOLDER
 
 

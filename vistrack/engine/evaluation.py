@@ -3,10 +3,13 @@
 Every task tracks one clip once and writes its own result file
 ``tasks/<clip>__<algo>__N<n>__r<run>.json`` (written to a temporary name and
 renamed, so a file that exists is complete). Finished tasks are skipped on
-``resume``; a worker that dies loses only its own task. Run ``r`` on clip
-``c`` draws from ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]`` (the
-same stream for every algorithm and N: common random numbers), so results do
-not depend on the number of workers or the order in which tasks run.
+``resume``; a worker that dies loses only its own task. Run ``r`` draws from
+:func:`~vistrack.core.seeds.run_seed` ``(seed, r)`` on every clip (the same stream
+for every algorithm and N: common random numbers), the stream of ``vistrack run
+--seed S --run r``, so results do not depend on the number of workers or the order
+in which tasks run. The reproductions (:func:`entry_tasks`) keep the streams their
+published tables were computed with: run ``r`` on clip ``c`` draws from
+``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]``.
 
 Boxes are ``(cx ± w/2, cy ± h/2)`` with ``cx, cy`` the pose centre, as in
 groundtruth.csv. Per frame a task records the centre error, whether the tracker is lost
@@ -32,8 +35,10 @@ import numpy as np
 from ..core.metrics import center_error, iou, lost_frames
 from ..core.metrics import summarize as metrics_summarize
 from ..core.runtime import prepare_worker
+from ..core.seeds import run_seed
 from ..filters import ALGORITHMS, make_filter
 from ..io.clips import GroundTruthWarning, load_clip, sequence_name
+from ..io.remote import is_url, url_version
 from ..io.results_format import find_result_file, read_result_file
 from ..io.video import VideoError
 from ..registry import DEFAULT_MODEL, build_model, check_algo, default_comparison, get_model_spec
@@ -43,12 +48,16 @@ from .multi_target import run_plates_task, score_plates_tasks
 from .tasks import load_task_results, save_result
 
 __all__ = ["EvalConfig", "task_list", "entry_tasks", "entries_config", "run_task", "summarize", "OPENCV_TRACKERS",
-           "check_algos", "score_boxes", "score_result_file", "result_files", "ResultsLengthWarning", "dask_setup"]
+           "OPENCV_RANDOMISED", "check_algos", "score_boxes", "score_result_file", "result_files",
+           "ResultsLengthWarning", "dask_setup"]
 
 
 #: OpenCV trackers by name -> constructor attribute (contrib ones may be missing)
 OPENCV_TRACKERS = {"opencv-mil": "TrackerMIL_create", "opencv-kcf": "TrackerKCF_create",
                    "opencv-csrt": "TrackerCSRT_create"}
+#: the OpenCV trackers whose result varies from run to run (randomised inside OpenCV, which no seed
+#: reaches: MIL's samples); they run ``runs`` times like the particle filters, the others once
+OPENCV_RANDOMISED = {"opencv-mil"}
 
 
 @dataclass
@@ -66,7 +75,8 @@ class EvalConfig:
     runs : int
         Runs per clip, algorithm and ``N``.
     seed : int
-        Root seed: run ``r`` on clip ``c`` draws from ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]``.
+        Root seed: run ``r`` draws from :func:`~vistrack.core.seeds.run_seed` ``(seed, r)`` on every clip
+        (``vistrack run --seed seed --run r``'s stream).
     model : str
         A registered model (:mod:`vistrack.registry`).
     entries : list of (str, int) or None
@@ -130,20 +140,23 @@ def _name(clip):
 
 
 def task_list(cfg, clips):
-    """All tasks as dicts ``{clip, clip_index, algo, particles, run, seed_seq, name}``."""
-    streams = np.random.SeedSequence(cfg.seed).spawn(len(clips))
+    """All tasks as dicts ``{clip, clip_index, algo, particles, run, seed_seq, model, name}``: run ``r``
+    draws from :func:`~vistrack.core.seeds.run_seed` ``(cfg.seed, r)``; a deterministic OpenCV tracker
+    runs once (:data:`OPENCV_RANDOMISED`: as many runs as the filters)."""
     tasks = []
     for ci, clip in enumerate(clips):
-        seqs = streams[ci].spawn(cfg.runs)
         pairs = cfg.entries or [(a, n) for a in cfg.algos
                                  for n in ([1] if a in OPENCV_TRACKERS else cfg.particles)]
+        # a clip given as a URL: the server's version of it now (its validators), which every task's
+        # copy must match and which its fingerprint records (--resume after a change runs it again)
+        version = {"clip_version": url_version(clip)} if is_url(clip) else {}
         for algo, n in pairs:
             for r in range(cfg.runs):
-                if algo in OPENCV_TRACKERS and r > 0:
+                if algo in OPENCV_TRACKERS and algo not in OPENCV_RANDOMISED and r > 0:
                     continue  # deterministic: one run
                 tasks.append({"clip": str(clip), "clip_index": ci, "algo": algo, "particles": int(n), "run": r,
-                              "seed_seq": seqs[r], "model": cfg.model,
-                              "name": f"{ci:03d}_{_name(clip)}__{algo}__N{n}__r{r}"})
+                              "seed_seq": run_seed(cfg.seed, r), "model": cfg.model,
+                              "name": f"{ci:03d}_{_name(clip)}__{algo}__N{n}__r{r}", **version})
     return tasks
 
 
@@ -156,6 +169,8 @@ def entry_tasks(cfg, model):
     tasks = task_list(ev, list(cfg.clips))
     for t in tasks:
         t["lost_rule"] = "thesis"
+        # the published tables' streams: SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]
+        t["seed_seq"] = np.random.SeedSequence(cfg.seed, spawn_key=(t["clip_index"], t["run"]))
     return tasks
 
 
@@ -226,6 +241,7 @@ def run_task(task, out_dir):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", GroundTruthWarning)  # said once, when eval found the clips
         clip = load_clip(task["clip"])
+    source = _remote_source(clip, task)
     # the run starts at the first frame with a ground-truth box (earlier frames: no estimate, not scored)
     start = start_frame(clip, None, "")
     frames = [(i, f) for i, f in clip.source if i >= start]
@@ -265,8 +281,23 @@ def run_task(task, out_dir):
                          confidence=conf)
     result.update({"clip": task["clip"], "algo": algo, "particles": n, "run": task["run"],
                    "ms": [float(v) for v in ms[:result["frames"]]],
-                   "ess": [None if not np.isfinite(v) else float(v) for v in ess[:result["frames"]]]})
+                   "ess": [None if not np.isfinite(v) else float(v) for v in ess[:result["frames"]]], **source})
     return save_result(out_dir, task, result)
+
+
+def _remote_source(clip, task):
+    """``{"source": ...}`` for a task result on a clip given as a URL (:meth:`Remote.record`: the
+    server's version and whether a cached copy was used), ``{}`` for a local clip; a
+    :class:`VideoError` when the copy is not the version the evaluation started with (the clip
+    changed on the server while it ran)."""
+    remote = clip.remote
+    if remote is None:
+        return {}
+    want = task.get("clip_version")
+    if want is not None and remote.version != want:
+        raise VideoError(f"{task['clip']} changed on the server while the evaluation ran (its ETag, Last-Modified "
+                         "or length differ from those it had at the start): run the evaluation again")
+    return {"source": remote.record()}
 
 
 def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=None, shown=None, confidence=None):

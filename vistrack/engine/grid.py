@@ -8,7 +8,7 @@ config) gives its tasks, the runner that does one and its results from the task 
 in a scratch folder of the worker's own and the result travels back to this process through
 Dask, which writes ``OUT/tasks/<name>.json`` atomically: the workers need no filesystem in common
 with the client, only the clips, which may be given as URLs (``http://``, ``s3://``, ...: see
-:func:`vistrack.io.remote.local_clip`) that every worker fetches itself.
+:func:`vistrack.io.remote.fetch`) that every worker fetches itself.
 
 A worker that dies (killed, out of memory) is replaced and its task runs again from its own seed
 stream, so the results are those of an uninterrupted run; task files are only ever replaced whole,

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .evaluation import OPENCV_TRACKERS, summarize
+from .evaluation import OPENCV_RANDOMISED, OPENCV_TRACKERS, summarize
 from .tasks import write_atomic
 
 __all__ = ["CSV_COLUMNS", "task_row", "write_eval_outputs", "averages"]
@@ -89,13 +89,15 @@ def _label(s):
 
 
 def _runs_line(labels):
-    """``lis, N=100: 20 runs; opencv-mil: 1 run (deterministic)``: the true run count per tracker."""
+    """``lis, N=100: 20 runs; opencv-mil: 20 runs (randomised inside OpenCV, not seeded); opencv-kcf: 1 run
+    (deterministic)``: the true run count per tracker."""
     parts = []
     for k, ss in labels.items():
         n = sorted({s["runs"] for s in ss})
         runs = "/".join(str(v) for v in n)
-        note = " (deterministic)" if ss[0]["algo"] in OPENCV_TRACKERS else (
-            " (a result file)" if not ss[0].get("particle_filter", True) else "")
+        algo = ss[0]["algo"]
+        note = (" (randomised inside OpenCV, not seeded)" if algo in OPENCV_RANDOMISED else " (deterministic)"
+                if algo in OPENCV_TRACKERS else " (a result file)" if not ss[0].get("particle_filter", True) else "")
         parts.append(f"{k}: {runs} run{'s' if n != [1] else ''}{note}")
     return "; ".join(parts)
 
@@ -132,20 +134,44 @@ def write_eval_outputs(out, cfg, summaries, results, chosen=None):
     for clip, lab in by_clip.items():
         lines += [f"### {Path(clip).name}", "", _table(lab, first="algo | N"), ""]
     lines += [_lost_note(cfg)]
+    sources = _sources_note(results)
+    if sources:
+        lines += ["", sources]
     lines += ["", "Plots:", ""] + [f"![{Path(p).stem}]({Path(p).name})" for p in plots]
     videos = _annotated_videos(out, results)
     lines += ["", "Per-task rows: `results.csv`; everything: `results.json`; the table, plots and "
               + (f"annotated videos ({len(videos)}, one run per tracker on {Path(videos[0][2]).name}) "
                  if videos else "") + "in a browser: `report.html`."]
     write_atomic(out / "report.md", "\n".join(lines) + "\n")
-    write_atomic(out / "report.html", _html(head, labels, by_clip, plots, videos, _lost_note(cfg)))
+    write_atomic(out / "report.html", _html(head, labels, by_clip, plots, videos,
+                                            " ".join(t for t in (_lost_note(cfg), sources) if t)))
     return plots
 
 
-def _annotated_videos(out, results, max_trackers=8, width=480):
+def _sources_note(results):
+    """What the report says of the clips given as URLs: for each, the server's version its tasks read
+    and how many of them used a cached copy (checked against the server) or downloaded it; ``""``
+    without such clips."""
+    from ..io.remote import describe_version
+
+    by_url = {}
+    for r in results:
+        if r.get("source"):
+            by_url.setdefault(r["source"]["url"], []).append(r["source"])
+    parts = []
+    for url, seen in by_url.items():
+        cached = sum(bool(s["cached"]) for s in seen)
+        parts.append(f"{url} ({describe_version(seen[0]['version'])}): {cached} of {len(seen)} task(s) used a cached "
+                     f"copy checked against the server, {len(seen) - cached} downloaded it")
+    return ("Clips given as URLs, read as the server had them: " + "; ".join(parts) + ".") if parts else ""
+
+
+def _annotated_videos(out, results, max_trackers=8, width=480, least=320):
     """Run 0 of each tracker on the first clip drawn over its frames (the true box green, the
-    tracker's in its colour) as ``out/videos/<tracker>.mp4`` (H.264, index first); ``[(label, path,
-    clip)]``, empty where the task results carry no boxes (written by an older version)."""
+    tracker's in its colour) as ``out/videos/<tracker>.mp4`` (H.264, index first), at most ``width``
+    pixels wide and at least ``least`` (a small clip enlarged by a whole factor, pixels kept sharp, so
+    that a browser's player controls do not cover it); ``[(label, path, clip)]``, empty where the task
+    results carry no boxes (written by an older version)."""
     import cv2
 
     from ..io.clips import load_clip
@@ -171,8 +197,9 @@ def _annotated_videos(out, results, max_trackers=8, width=480):
             if i >= len(truth):
                 break
             f = frame if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
-            scale = min(1.0, width / f.shape[1])
-            small = cv2.resize(f, None, fx=scale, fy=scale) if scale < 1 else f  # once per frame
+            scale = min(1.0, width / f.shape[1]) if f.shape[1] >= least else float(-(-least // f.shape[1]))
+            small = f if scale == 1 else cv2.resize(f, None, fx=scale, fy=scale,  # once per frame
+                                                     interpolation=cv2.INTER_LINEAR if scale < 1 else cv2.INTER_NEAREST)
             for label, r, path, k in writers:
                 img = small.copy()
                 _draw(img, truth[i] * scale, (0, 200, 0))

@@ -22,7 +22,7 @@ from .video import VideoError, find_groundtruth, groundtruth_origin, open_video,
 
 __all__ = ["Clip", "load_clip", "excluded_frames",
            "read_meta", "read_groundtruth_csv", "write_track_csv", "format_value", "excerpt_clip",
-           "GroundTruthWarning", "find_clips", "sequence_name"]
+           "GroundTruthWarning", "SkippedFoldersWarning", "find_clips", "sequence_name"]
 
 
 @dataclass
@@ -44,6 +44,12 @@ class Clip:
     folder: Path
     meta: dict | None
     truth: dict | None
+
+    @property
+    def remote(self):
+        """How a clip given as a URL was read (:class:`~vistrack.io.remote.Remote`: from the server, a
+        fresh download or a cached copy checked against the server), or ``None``."""
+        return self.source.remote
 
     @property
     def objects(self):
@@ -107,16 +113,25 @@ def _rects_truth(rects):
             "cy": y + h / 2, "w": w, "h": h, "x": x, "y": y}
 
 
-def load_clip(path):
-    """Open a clip folder, a video file (with its folder's ground truth) or an image folder; a URL
-    (``http://``, ``s3://``, ...) is fetched once into a local cache (:func:`vistrack.io.remote.local_clip`)."""
-    from .remote import local_clip
+def load_clip(path, progress=False):
+    """Open a clip folder, a video file (with its folder's ground truth) or an image folder, a camera
+    or a live stream (no ground truth); a URL (``http://``, ``s3://``, ...) of a video or clip folder
+    is read from the server or from a copy in a local cache checked against the server on every use
+    (:func:`vistrack.io.remote.open_url`; ``progress``: a download's progress bar; ``Clip.remote``
+    says which)."""
+    from .remote import open_remote, open_url
     from .video import is_stream
 
-    if is_stream(path) and not Path(str(path)).exists():  # a camera or a live stream: no ground truth
+    if is_stream(path):  # a camera or a live stream: no ground truth
         return Clip(open_video(path), Path.cwd(), None, None)
-    p = local_clip(path)
-    source = open_video(p)
+    if is_url(path) and not str(path).startswith("file://"):
+        remote = open_url(str(path), progress=progress)
+        if remote.path is None:  # read from the server: a video alone
+            return Clip(open_remote(remote), Path.cwd(), None, None)
+        source, p = open_remote(remote), remote.path
+    else:
+        p = Path(str(path)[len("file://"):] if str(path).startswith("file://") else path)
+        source = open_video(p)
     folder = p if p.is_dir() else p.parent
     meta = None
     if (folder / "meta.json").is_file():
@@ -186,6 +201,10 @@ def read_meta(path):
 
 class GroundTruthWarning(UserWarning):
     """The ground truth and the video disagree (e.g. in length)."""
+
+
+class SkippedFoldersWarning(UserWarning):
+    """Folders of a dataset root that hold no clip were left out."""
 
 
 def write_track_csv(path, rows, columns=None):
@@ -270,9 +289,15 @@ def _dataset_clips(p):
     # hidden folders are not clips: synth renders into .NAME.partial-PID before renaming it
     subs = sorted(q for q in p.iterdir() if q.is_dir() and not q.name.startswith("."))
     clips = [q for q in subs if _is_clip(q)]
-    if clips:
-        return clips
-    return [r for q in subs for r in sorted(q.iterdir()) if r.is_dir() and not r.name.startswith(".") and _is_clip(r)]
+    if not clips:  # LaSOT: root/category/sequence
+        subs = [r for q in subs for r in sorted(q.iterdir()) if r.is_dir() and not r.name.startswith(".")]
+        clips = [r for r in subs if _is_clip(r)]
+    skipped = [q for q in subs if q not in clips]
+    if clips and skipped:
+        names = ", ".join(str(q.relative_to(p)) for q in skipped[:5]) + (", ..." if len(skipped) > 5 else "")
+        warnings.warn(f"{p}: {len(skipped)} folder(s) hold no clip (no video.mp4, img/ or color/ frames and no "
+                      f"ground truth) and were left out: {names}", SkippedFoldersWarning, stacklevel=3)
+    return clips
 
 
 def find_clips(paths):

@@ -36,15 +36,20 @@ def file_id(path):
     return (st.st_dev, st.st_ino)
 
 
-def check_writable(path, what):
+def check_writable(path, what, create=False):
     """Raise ``ValueError`` (one line, naming it ``what``) unless a file can be written at ``path``: not a
-    folder, in a folder that exists, with permission. ``None`` passes."""
+    folder, in a folder that exists (``create``: or can be made: the nearest existing one a folder), with
+    permission. ``None`` passes."""
     if path is None:
         return
     path = os.path.abspath(path)
     parent = os.path.dirname(path)
     if os.path.isdir(path):
         raise ValueError(f"{what} {path} is a directory, not a file")
+    while create and not os.path.exists(parent):
+        parent = os.path.dirname(parent)
+    if os.path.exists(parent) and not os.path.isdir(parent):
+        raise ValueError(f"cannot write {what} {path}: {parent} is a file, not a folder")
     if not os.path.isdir(parent):
         raise ValueError(f"cannot write {what} {path}: folder {parent} does not exist")
     if not os.access(parent, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):

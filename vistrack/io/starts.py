@@ -10,9 +10,10 @@ from pathlib import Path
 import numpy as np
 
 from .clips import read_groundtruth_csv
-from .video import VideoError, groundtruth_origin, read_rects
+from .video import VideoError, find_groundtruth, groundtruth_origin, read_rects
 
-__all__ = ["MAX_BOX_FACTOR", "initial_truth", "start_frame", "check_start_box", "first_frame", "start_box"]
+__all__ = ["MAX_BOX_FACTOR", "initial_truth", "start_frame", "check_start_box", "first_frame", "start_box",
+           "one_based_init_note"]
 
 
 def initial_truth(clip, init_gt):
@@ -102,3 +103,21 @@ def start_box(clip, init, init_gt):
         return tuple(float(v) for v in init)
     row = initial_truth(clip, init_gt)
     return (row["cx"] - row["w"] / 2, row["cy"] - row["h"] / 2, row["w"], row["h"])
+
+
+def one_based_init_note(clip, init):
+    """A note (one line) when the ``--init`` box ``init`` is the first box of the clip's ground-truth
+    file as the file writes it, in a convention that counts pixels from 1 (OTB, LaSOT: a first line
+    pasted as it is): ``--init`` is 0-based, so the box is off by a pixel each way, and ``--init-gt``
+    starts from the true one. ``None`` otherwise."""
+    gt = find_groundtruth(clip.folder) if clip.truth is not None else None
+    if init is None or gt is None or groundtruth_origin(gt) != 1:
+        return None
+    raw = read_rects(gt)  # as the file writes them
+    seen = np.flatnonzero((raw[:, 2] > 0) & (raw[:, 3] > 0))
+    if not len(seen) or not np.allclose(raw[seen[0]], np.asarray(init, float)):
+        return None
+    x, y, w, h = raw[seen[0]]
+    return (f"note: --init {x:g},{y:g},{w:g},{h:g} is the first box of {gt}, which counts pixels from 1 (OTB, "
+            f"LaSOT); --init is 0-based (the top-left pixel is 0,0), where that box is {x - 1:g},{y - 1:g},{w:g},"
+            f"{h:g}: --init-gt starts from it")

@@ -69,11 +69,13 @@ class VideoSource:
         ``(width, height)``.
     """
 
-    def __init__(self, path, *, _images=None):
+    def __init__(self, path, *, _images=None, remote=None):
         self.path = Path(path)
         self._images = _images
-        # what cv2.VideoCapture opens: the file, a stream URL (kept whole) or a camera's index
-        self._open_arg = stream_source(path) if is_stream(path) else str(self.path)
+        #: how a URL was read (:class:`~vistrack.io.remote.Remote`), or ``None``
+        self.remote = remote
+        # what cv2.VideoCapture opens: the file, a URL (kept whole) or a camera's index
+        self._open_arg = stream_source(path) if is_stream(path) or "://" in str(path) else str(self.path)
         #: indices of the frames the last iteration skipped (failed to decode)
         self.skipped = []
         #: where the last iteration of a video stopped decoding before the frame count its container
@@ -92,9 +94,12 @@ class VideoSource:
         try:
             ok, frame = cap.read() if cap.isOpened() else (False, None)
             if not ok or frame is None:
-                if is_stream(path):
-                    raise VideoError(f"cannot read {path}: no camera with that index, or a stream OpenCV cannot "
-                                     "open (or it sent no frame)")
+                if str(path).isdigit():
+                    raise VideoError(f"cannot read {path}: no camera with that index (and no file or folder "
+                                     f"named {path} here)")
+                if "://" in str(path):
+                    raise VideoError(f"cannot read {path}: not a video or stream OpenCV's FFmpeg can open, or it "
+                                     "sent no frame")
                 raise VideoError(f"{self.path} is not a video OpenCV can decode, or it has no frames")
             n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
             self.frame_count = n if n > 0 else None
@@ -199,23 +204,24 @@ def _image_files(folder):
     return files
 
 
-#: URL schemes read as live streams by OpenCV (FFmpeg); http(s) too when the name is a video's
+#: URL schemes of live streams, read by OpenCV (FFmpeg) as they come
 STREAM_SCHEMES = ("rtsp://", "rtsps://", "rtmp://", "udp://", "tcp://", "srt://")
+#: an HTTP(S) URL of one of these is a live playlist (HLS, DASH), read as a stream too
+PLAYLIST_EXT = {".m3u8", ".mpd"}
 
 
 def is_stream(path):
-    """Whether ``path`` is a camera (its index: ``"0"``, ``"1"``...) or a stream URL that OpenCV opens
-    itself: ``rtsp://``, ``rtmp://``, ``udp://``..., or an ``http(s)://`` URL of a video file or
-    playlist (``.mp4``, ``.m3u8``, ...)."""
+    """Whether ``path`` is a camera's index (``"0"``...; a file or folder of that name wins) or a live
+    stream (``rtsp://``, ``udp://``..., an HTTP(S) ``.m3u8``/``.mpd`` playlist), read as it comes."""
     s = str(path)
     if s.isdigit():
-        return True
+        return not os.path.exists(s)
     low = s.lower()
     if low.startswith(STREAM_SCHEMES):
         return True
     if low.startswith(("http://", "https://")):
         tail = low.split("?", 1)[0].rsplit("/", 1)[-1]
-        return os.path.splitext(tail)[1] in VIDEO_EXT | {".m3u8", ".mpd", ".ts", ".flv"}
+        return os.path.splitext(tail)[1] in PLAYLIST_EXT
     return False
 
 
@@ -227,10 +233,11 @@ def stream_source(path):
 
 def open_video(path):
     """Open a video file, an image-sequence folder or a clip folder (see module doc), a camera by its
-    index (``"0"``) or a stream URL (:func:`is_stream`)."""
-    if is_stream(path) and not Path(str(path)).exists():
+    index (``"0"``; a local path wins) or a live stream (:func:`is_stream`). URLs of files:
+    :func:`vistrack.io.clips.load_clip`."""
+    if is_stream(path):
         return VideoSource(str(path))
-    p = Path(path)
+    p = Path(str(path)[len("file://"):] if str(path).startswith("file://") else path)
     if not p.exists():
         raise VideoError(f"{p} does not exist")
     if not p.is_file() and not p.is_dir():

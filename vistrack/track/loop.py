@@ -133,11 +133,14 @@ class FrameStepper:
 
 def warm_up(filt, n, frame):
     """Run ``filt``'s first step and one more step with ``n`` particles on a blank frame shaped like
-    ``frame``, with a throwaway generator and no adaptation, and the model's likelihood at one
-    particle (what the collapse test computes at the estimate), so that the compiled kernels the
-    model and filter call (:mod:`vistrack.kernels`) are loaded before tracking starts: their loading
-    (0.1–1 s) is start-up, not tracking. The model and filter are left as they were (a model that
-    cannot track a blank frame just skips this: the real frames will say what is wrong)."""
+    ``frame``, with a throwaway generator, the model's likelihood at one particle (what the collapse
+    test computes at the estimate) and an adaptation of a copy of the model, so that the compiled
+    kernels the model and filter call (:mod:`vistrack.kernels`) are loaded before tracking starts:
+    their loading (0.1–1 s) is start-up, not tracking, and on the first run after an install, when
+    they compile (:mod:`vistrack.track.compiling`), nothing is left to compile mid-track. The model
+    and filter are left as they were (a model that cannot track a blank frame just skips this: the
+    real frames will say what is wrong)."""
+    import copy
     import warnings
 
     from .. import kernels
@@ -153,6 +156,8 @@ def warm_up(filt, n, frame):
             obs = model.observe(FeatureMaps(blank), particles)
             filt.step(particles, obs, rng)
             model.loglik(obs, np.array(particles.states[:1], float))
+            twin = copy.deepcopy(model)  # adapted instead of the model, which stays as it was
+            twin.adapt(twin.observe(FeatureMaps(blank), particles), model.estimate(particles))
         except Exception:  # noqa: BLE001 - best effort: tracking raises the real error itself
             pass
 

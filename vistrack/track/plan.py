@@ -16,15 +16,12 @@ import numpy as np
 
 from ..filters import make_filter
 from ..io.clips import load_clip
-from ..io.starts import start_frame
+from ..io.starts import one_based_init_note, start_frame
 from ..io.video import VideoDecodeWarning, prefetch
 from ..models.contour.nn import network_for
 from ..models.plate.detect import PlateSearch
 from ..registry import (
-    DEFAULT_MODEL,
     DEFAULT_PARTICLES,
-    MODELS,
-    SEARCH_MODEL,
     OptionError,
     build_model,
     check_algo,
@@ -33,6 +30,8 @@ from ..registry import (
     model_params,
     read_support_points,
 )
+from ..registry.choice import choose
+from .compiling import compile_message
 from .run import track_video
 from .signals import stop_on_signals
 
@@ -77,25 +76,31 @@ class RunPlan:
 
 def plan_run(video, *, model=None, algo=None, particles=DEFAULT_PARTICLES, init=None, init_gt=None, template=None,
              layout=None, no_colour=False, targets=None, search=None, resample="systematic", ess_threshold=None,
-             max_frames=None, notify=None):
+             max_frames=None, notify=None, watch=None):
     """Set up ``vistrack run VIDEO`` (module docstring): returns a :class:`RunPlan`.
 
     ``template`` is a file of support points (:func:`~vistrack.registry.builders.read_support_points`);
     ``layout``, ``no_colour``, ``targets`` and ``search`` are ``run``'s model options (``None``/``False``:
     not given; :func:`~vistrack.registry.catalog.model_params`). ``notify(line)`` hears what the user should
-    know on the way (the plate search and what it found, training the network search). Raises
+    know on the way (how a URL was read, the model and algorithm and why: :mod:`vistrack.registry.choice`, a
+    1-based box given as ``--init``, the plate search and what it found, training the network search; a
+    download's progress bar when given). ``watch`` (:class:`~vistrack.track.compiling.CompileWatch`) is told
+    the model chosen (the compile time it says). Raises
     :class:`~vistrack.registry.OptionError` for options that do not go together or do not apply to the
     model, ``ValueError`` (``VideoError``) for bad input; each one line.
     """
     if init is not None and init_gt is not None:
         raise OptionError("give either --init or --init-gt, not both")
-    clip = load_clip(video)
+    clip = load_clip(video, progress=notify is not None)
+    if clip.remote is not None and notify:  # read from the server, downloaded or a cached copy
+        notify(clip.remote.describe())
     _check_init(init, clip.source.size)
-    name = model or clip.model_name or (DEFAULT_MODEL if init is not None or init_gt is not None else SEARCH_MODEL)
-    if model is None and name not in MODELS:
-        raise ValueError(f"{video}: meta.json names model {name!r}, which this version cannot track")
-    spec = get_model_spec(name)
-    algo = algo or ((spec.multi_algos or spec.algos)[0] if targets is not None else spec.default_algo)
+    choice = choose(clip, model=model, algo=algo, init=init, init_gt=init_gt, targets=targets)
+    name, algo, spec = choice.model, choice.algo, get_model_spec(choice.model)
+    if notify:  # which model and algorithm, and why: one line
+        notify(choice.line(particles))
+    if watch is not None:
+        watch.message = compile_message(name)
     flags = {"--targets": targets, "--template": template and read_support_points(template),
              "--layout": layout, "--no-colour": no_colour or None, "--search": search}
     params = model_params(name, flags, algo)
@@ -111,6 +116,9 @@ def plan_run(video, *, model=None, algo=None, particles=DEFAULT_PARTICLES, init=
         _find_plate(plan, video, notify)
     plan.filt = make_filter(algo, plan.model, resample=resample, ess_threshold=ess_threshold)
     plan.start = start_frame(clip, init, init_gt)
+    note = one_based_init_note(clip, init)
+    if note and notify:
+        notify(note)
     if plan.start and max_frames is not None and plan.start >= max_frames:
         raise ValueError(f"--init-gt: the ground truth's first box is at frame {plan.start}, past --max-frames "
                          f"{max_frames}")
@@ -140,9 +148,6 @@ def _find_plate(plan, video, notify):
     plate in the first frames, the frames from that one on, and the frames searched before it; a
     ``ValueError`` with the ``--init`` hint where it finds none."""
     search = plan.model
-    if notify:
-        notify(f"no --init and no model in meta.json: looking for a license plate (the {plan.model_name} model) "
-               f"in the first {search.within} frames; to track any other object give --init x,y,w,h")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", VideoDecodeWarning)
         model, found, lead = search.start(plan.frames)
@@ -157,10 +162,11 @@ def _find_plate(plan, video, notify):
     plan.frames = itertools.chain([found[:2]], plan.frames)
 
 
-def run_plan(plan, particles, seed, *, label="", show_particles=10, progress=None, notify=None, **outputs):
-    """Track ``plan`` with ``particles`` particles from ``seed``: :func:`~vistrack.track.run.track_video`
-    over its frames from its start (``outputs``: ``track_path``, ``out_path``, ``results_path``,
-    ``results_format``, ``sequence``), the decoder's warnings for skipped frames left to the summary, and
+def run_plan(plan, particles, seed, *, label="", show_particles=10, progress=None, notify=None, ready=None, **outputs):
+    """Track ``plan`` with ``particles`` particles from ``seed`` (an integer or a ``SeedSequence``:
+    :func:`~vistrack.core.seeds.run_seed`): :func:`~vistrack.track.run.track_video` over its frames from its
+    start (``outputs``: ``track_path``, ``out_path``, ``results_path``, ``results_format``, ``sequence``;
+    ``ready()`` once the kernels are loaded), the decoder's warnings for skipped frames left to the summary, and
     Ctrl-C or SIGTERM honoured after the frame in hand (the outputs so far kept, holding the same frames).
     Returns the :class:`~vistrack.track.run.VideoRun`."""
     src = plan.clip.source
@@ -172,4 +178,4 @@ def run_plan(plan, particles, seed, *, label="", show_particles=10, progress=Non
         return track_video(frames, plan.model, plan.filt, particles, np.random.default_rng(seed),
                            video_info=(src.fps, src.size), show_particles=show_particles, label=label,
                            progress=progress, notify=notify, frame_count=exact, start=plan.start, lead=plan.lead,
-                           **outputs)
+                           ready=ready, **outputs)

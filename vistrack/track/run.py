@@ -119,7 +119,7 @@ def target_rows(model, res):
 
 def track_video(frames, model, filt, particles, rng, *, track_path=None, out_path=None, results_path=None,
                 video_info=None, show_particles=10, label="", progress=None, notify=None, profile=True,
-                frame_count=None, start=0, lead=(), results_format="otb", sequence="sequence"):
+                frame_count=None, start=0, lead=(), results_format="otb", sequence="sequence", ready=None):
     """Track ``frames`` (iterable of ``(index, frame)``), writing the track CSV and annotated video as
     it goes; every frame of the input accounted for and a signal honoured after the frame in hand
     (module docstring). Returns a :class:`VideoRun`.
@@ -128,8 +128,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     ----------
     frames : iterable of (int, ndarray)
     model, filt : the model and its filter
-    particles : int
-    rng : numpy.random.Generator
+    particles, rng : int, numpy.random.Generator
     track_path, out_path, results_path : path or None
         Track CSV (:class:`TrackCSV`), annotated mp4 and result file (``x,y,w,h``; for GOT-10k and
         VOT the results folder, :func:`~vistrack.io.results_format.result_paths`).
@@ -139,9 +138,10 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     video_info, show_particles, label : tuple or None, int, str
         ``(fps, (width, height))`` for the annotated video; draw this many highest-weight particles,
         and ``label`` after the frame number.
-    progress, notify : callable or None
+    progress, notify, ready : callable or None
         ``progress(ess)`` after every frame (a progress bar); ``notify(index, reason, detail)`` on the
-        first frame of every stretch where the object is lost (:mod:`vistrack.models.collapse`).
+        first frame of every stretch where the object is lost (:mod:`vistrack.models.collapse`);
+        ``ready()`` once the kernels are loaded, before the first frame (a progress bar's clock starts).
     profile : bool
         Time the stages (:mod:`vistrack.track.profiling`) into ``VideoRun.timer`` (the same tracks).
     lead : sequence of (int, ndarray)
@@ -154,7 +154,7 @@ def track_video(frames, model, filt, particles, rng, *, track_path=None, out_pat
     """
     run = VideoRun()
     run.timer = Timer() if profile else None
-    frames = _warmed(frames, filt, particles)
+    frames = _warmed(frames, filt, particles, ready)
     if profile:
         frames = run.timer.timed_iter(frames, "decode")
     with deferred_signals() as stop:  # from opening the outputs to closing them: a signal waits for the frame
@@ -244,15 +244,18 @@ def _close_all(outs, writer):
             writer.close()
 
 
-def _warmed(frames, filt, particles):
+def _warmed(frames, filt, particles, ready=None):
     """``frames`` with the filter's kernels loaded on a blank frame shaped like the first
-    (:func:`~vistrack.track.loop.warm_up`) before they are taken: start-up, not tracking time."""
+    (:func:`~vistrack.track.loop.warm_up`) before they are taken: start-up, not tracking time; then
+    ``ready()``."""
     frames = iter(frames)
     first = next(frames, None)
-    if first is None:
-        return frames
-    warm_up(filt, particles, first[1])
-    return itertools.chain([first], frames)
+    if first is not None:
+        warm_up(filt, particles, first[1])
+        frames = itertools.chain([first], frames)
+    if ready:
+        ready()
+    return frames
 
 
 def _record(run, res, model, outs, writer, show_particles, label, notify=None):
