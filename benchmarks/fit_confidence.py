@@ -31,7 +31,7 @@ Check (``--check``)
     the shipped model (its confidence acted on) on every clip and seed: per clip, the frames in zero-IoU
     runs of at least 5 frames and the share of them reported lost (``visible=0``), the frames with
     IoU >= 0.5 and the share reported lost, the success AUC, the AUC with reported-lost frames scored
-    as empty boxes, and VOT-LT's precision, recall and F-score (:func:`vistrack.core.metrics.lt_scores`);
+    as empty boxes, and VOT-LT's precision, recall and F-score (:func:`vistrack.core.longterm.lt_scores`);
     with ``--opencv`` OpenCV's trackers beside it (NanoTrack, CSRT: "visible" is ``update``'s first value).
 
 Runs are cached under ``--cache`` (keyed by vistrack's code and calibration, the clip, start, seed and
@@ -47,10 +47,11 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from real_corpus import DATA, ROOT, find_clips, lost_runs, run_jobs
+from real_corpus import DATA, ROOT, find_clips, iter_jobs, lost_runs
 from tqdm import tqdm
 
-from vistrack.core.metrics import iou, lt_scores, success_auc
+from vistrack.core.longterm import lt_scores
+from vistrack.core.metrics import iou, success_auc
 from vistrack.models.box.confidence import CALIBRATION, FEATURES, MONOTONE, SEEN, Calibration
 
 CACHE = Path.home() / ".cache" / "vistrack" / "fit_confidence"
@@ -96,10 +97,11 @@ def gather(clips, seeds, tracker="vistrack", options=None, *, cache=CACHE, worke
                 todo.append(((c.name, s), p, (c.folder, tracker, c.user_box, s, options or {})))
     if todo:
         bar = tqdm(total=len(todo), desc=f"runs ({tracker})", unit="run", file=sys.stderr)
-        for (_, p, _), (_, run) in zip(todo, run_jobs([j for _, _, j in todo], workers, progress=bar.update)):
+        for (_, p, _), (_, run) in zip(todo, iter_jobs([j for _, _, j in todo], workers)):
             tmp = p.with_suffix(".tmp.npz")
             _save_run(tmp, run)
-            tmp.replace(p)
+            tmp.replace(p)  # each run kept as it finishes: a stopped check resumes
+            bar.update()
         bar.close()
     out = {}
     for k, p in paths.items():
@@ -233,7 +235,8 @@ def leave_one_clip_out(clips, runs, *, C=1.0, max_lost=0.03):
 def _weights_table(cal, names):
     lines = []
     for n in names:
-        lines.append(f"  {n:<12} " + (f"{cal.coef[cal.names.index(n)]:+.3f}" if n in cal.names else "dropped (negative)"))
+        w = f"{cal.coef[cal.names.index(n)]:+.3f}" if n in cal.names else "dropped (negative)"
+        lines.append(f"  {n:<12} {w}")
     return "\n".join(lines + [f"  intercept    {cal.intercept:+.3f}"])
 
 
@@ -252,7 +255,8 @@ def check_rows(clips, runs, name):
             vis = r["visible"].astype(bool)
             z = lost_runs(r["boxes"], truth)
             g = present & (v >= 0.5)
-            zero, zlost, good, glost = zero + z.sum(), zlost + (z & ~vis).sum(), good + g.sum(), glost + (g & ~vis).sum()
+            zero, zlost = zero + z.sum(), zlost + (z & ~vis).sum()
+            good, glost = good + g.sum(), glost + (g & ~vis).sum()
             auc.append(success_auc(v[present]))
             auc_lt.append(success_auc(np.where(vis, v, 0.0)[present]))
             conf = r["confidence"] if np.isfinite(r["confidence"][1:]).all() else None
@@ -267,7 +271,8 @@ def check_rows(clips, runs, name):
     pooled = {k: int(v) for k, v in pooled.items()}
     rows.append({"clip": "all", "tracker": name, "zero_run_frames": pooled["zero"],
                  "zero_run_lost": pooled["zero_lost"] / pooled["zero"] if pooled["zero"] else None,
-                 "good_frames": pooled["good"], "good_lost": pooled["good_lost"] / pooled["good"] if pooled["good"] else None,
+                 "good_frames": pooled["good"],
+                 "good_lost": pooled["good_lost"] / pooled["good"] if pooled["good"] else None,
                  "auc": float(np.mean([r["auc"] for r in rows])),
                  "auc_lost_empty": float(np.mean([r["auc_lost_empty"] for r in rows]))})
     return rows
@@ -297,6 +302,9 @@ def main(argv=None):
                     help="the threshold's bar: this share of the frames with IoU >= 0.5 below it (default 0.03)")
     ap.add_argument("--acting", action="store_true", help="fit on runs of the shipped model (its confidence acted on)")
     ap.add_argument("--check", action="store_true", help="issue 44's checks of the shipped model instead of a fit")
+    ap.add_argument("--options", default="{}", type=json.loads,
+                    help='with --check: vistrack.Tracker options as JSON, e.g. \'{"confidence": false}\' (the '
+                         'confidence not acted on)')
     ap.add_argument("--opencv", default="", help="with --check: OpenCV's trackers beside it, e.g. Nano,CSRT")
     ap.add_argument("--dry-run", action="store_true", help="fit and validate, but write no calibration")
     ap.add_argument("--workers", type=int, default=2)
@@ -308,7 +316,8 @@ def main(argv=None):
         sys.exit(f"no clip with groundtruth_rect.txt under {args.data}")
     seeds = list(range(1, args.seeds + 1))
     if args.check:
-        rows = check_rows(clips, gather(clips, seeds, cache=args.cache, workers=args.workers), "vistrack")
+        runs = gather(clips, seeds, options=args.options or None, cache=args.cache, workers=args.workers)
+        rows = check_rows(clips, runs, "vistrack")
         for name in (n for n in args.opencv.split(",") if n):
             rows += check_rows(clips, gather(clips, seeds, name, cache=args.cache, workers=args.workers), name)
         print_check(rows)
@@ -322,15 +331,18 @@ def main(argv=None):
     cal = fit_with_threshold(X, y, ious, groups, C=args.C, max_lost=args.max_lost)
     cand, (_, cy, *_rest) = fit_candidates(runs, clips, cal, C=args.C)
     loo = leave_one_clip_out(clips, runs, C=args.C, max_lost=args.max_lost)
-    print(f"{len(y)} frames of {len(clips)} clips x {len(seeds)} seeds, {100 * y.mean():.1f} % on the object (IoU > 0)")
-    print(f"the estimate's cues, weights (standardised):\n{_weights_table(cal, FEATURES)}\nthreshold {cal.threshold:.3f}")
-    print(f"\n{len(cy)} candidates of whole-frame searches on the low-confidence frames, {100 * cy.mean():.1f} % on the "
-          f"object; their cues, weights:\n{_weights_table(cand, SEEN)}")
+    print(f"{len(y)} frames of {len(clips)} clips x {len(seeds)} seeds, {100 * y.mean():.1f} % on the object "
+          "(IoU > 0)")
+    print(f"the estimate's cues, weights (standardised):\n{_weights_table(cal, FEATURES)}\n"
+          f"threshold {cal.threshold:.3f}")
+    print(f"\n{len(cy)} candidates of whole-frame searches on the low-confidence frames, {100 * cy.mean():.1f} % "
+          f"on the object; their cues, weights:\n{_weights_table(cand, SEEN)}")
     print(f"\nleave-one-clip-out (fitted on the other clips):\n{'clip':<32} {'frames':>6} {'IoU>0':>6} {'ROC AUC':>7} "
           f"{'logloss':>7} {'thresh':>6} {'IoU-0 run fr':>12} {'low':>6} {'IoU>=.5 fr':>10} {'low':>6} "
           f"{'cands':>6} {'on':>5} {'taken on':>8} {'off':>4}")
     for r in loo:
-        print(f"{r['clip']:<32} {r['frames']:>6} {_pct(r['overlap_share']):>6} {r['roc_auc']:7.3f} {r['log_loss']:7.3f} "
+        print(f"{r['clip']:<32} {r['frames']:>6} {_pct(r['overlap_share']):>6} {r['roc_auc']:7.3f} "
+              f"{r['log_loss']:7.3f} "
               f"{r['threshold']:6.3f} {r['zero_run_frames']:>12} {_pct(r['zero_run_low']):>6} {r['good_frames']:>10} "
               f"{_pct(r['good_low']):>6} {r['candidates']:>6} {r['candidates_on']:>5} {r['taken_on']:>8} "
               f"{r['taken_off']:>4}")

@@ -237,22 +237,24 @@ def _job(args):
     return box_scores(run.boxes, clip.truth[: len(run.boxes)]), run
 
 
+def iter_jobs(jobs, workers=2):
+    """``(scores, Run)`` of each of ``jobs`` (see :func:`_job`), in order, as each finishes, over ``workers``
+    processes."""
+    if workers <= 1:
+        yield from map(_job, jobs)
+        return
+    with ProcessPoolExecutor(workers) as ex:
+        yield from ex.map(_job, jobs, chunksize=1)
+
+
 def run_jobs(jobs, workers=2, progress=None):
     """``[(scores, Run)]`` of ``jobs`` (see :func:`_job`), in order, over ``workers`` processes."""
-    if workers <= 1:
-        out = []
-        for j in jobs:
-            out.append(_job(j))
-            if progress:
-                progress()
-        return out
-    with ProcessPoolExecutor(workers) as ex:
-        out = []
-        for r in ex.map(_job, jobs, chunksize=1):
-            out.append(r)
-            if progress:
-                progress()
-        return out
+    out = []
+    for r in iter_jobs(jobs, workers):
+        out.append(r)
+        if progress:
+            progress()
+    return out
 
 
 def lost_runs(boxes, truth, min_len=5):

@@ -175,7 +175,7 @@ def test_track_csv_has_the_redetected_column(tmp_path, capsys):
     assert code == 0, err
     with open(track, newline="") as f:
         rows = list(csv.DictReader(f))
-    assert list(rows[0])[-4:] == ["redetected", "ess", "ms", "lost_reason"]
+    assert list(rows[0])[-5:] == ["redetected", "ess", "ms", "lost_reason", "confidence"]
     found = [int(r["frame"]) for r in rows if r["redetected"] == "1"]
     assert len(found) == 1 and BACK <= found[0] <= BACK + 5
     assert rows[found[0]]["visible"] == "1" and rows[found[0]]["lost_reason"] == ""
@@ -293,7 +293,7 @@ def test_compiled_correlation_draws_equal_the_numpy_path():
                             rng.normal(0, 0.1, 500), np.zeros((500, 3))])
     x = prev + rng.normal(0, 1.0, prev.shape)
     for beta in (0.0, 0.5, 1.0):
-        obs = SimpleNamespace(dcf=resp, dcf_share=beta)
+        obs = SimpleNamespace(dcf=resp, dcf_share=beta, scale_centre=None)
         got = both(lambda: prop._sample(x, obs, np.random.default_rng(15), prev))
         for p, k in zip(*got):
             np.testing.assert_array_equal(p, k)

@@ -9,7 +9,7 @@ import functools
 from typing import Protocol, runtime_checkable
 
 __all__ = ["offers", "class_offers", "require", "missing_parts", "LookAhead", "FusedPropose", "FusedLISStep",
-           "ProposalMap", "Redetects"]
+           "ProposalMap", "Redetects", "Confidence"]
 
 
 @functools.cache
@@ -98,3 +98,16 @@ class Redetects(Protocol):
     def redetected(self, obs): ...
 
     def reseed(self, obs, particles, rng): ...
+
+
+@runtime_checkable
+class Confidence(Protocol):
+    """A calibrated confidence in the frame's estimate (the box model's,
+    :mod:`vistrack.models.box.confidence`; the track CSV's ``confidence``, ``vistrack.Tracker.confidence``):
+    asked once per frame, in order, by the frame loop after the step and before the model's ``check_lost``
+    (which may report the object lost when it is low)."""
+
+    def confidence(self, obs, state, particles):
+        """The probability in ``[0, 1]`` that the estimate ``state (d,)`` lies on the object in the frame
+        observed as ``obs``, with the frame's weighted :class:`~vistrack.core.particles.ParticleSet`
+        ``particles``; ``None`` where the model has none this time."""

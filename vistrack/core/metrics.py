@@ -11,15 +11,7 @@
   frame without a plate is a false report (:func:`plate_frame_measures`);
 - P(lost) per frame is the fraction of runs lost; the mean error is over
   runs (and frames) not lost;
-- long-term scores (VOT-LT; Lukežič et al. 2018, "Now you see me: evaluating performance in
-  long-term visual tracking"): a frame is *predicted* when the tracker reports the object there
-  with a confidence at least ``τ``; the tracking precision ``Pr(τ)`` is the mean IoU over the
-  predicted frames (0 where the truth has no object), the recall ``Re(τ)`` the IoU summed over the
-  predicted frames over the number of frames with the object; ``F(τ) = 2 Pr Re / (Pr + Re)``, and
-  the scores are ``Pr``, ``Re`` and ``F`` at the ``τ`` that maximises ``F`` (:func:`lt_scores`);
-  for a tracker without a confidence, at its own threshold: the frames it reports visible. The
-  OTB success AUC of a long-term tracker scores the frames it reports lost as empty boxes (IoU 0,
-  :func:`reported_ious`).
+- what the tracker reported: the long-term scores of :mod:`vistrack.core.longterm`.
 """
 
 from __future__ import annotations
@@ -30,8 +22,7 @@ import numpy as np
 
 __all__ = ["center_error", "contour_lost_threshold", "plate_frame_measures", "lost_frames", "summarize_runs",
            "landmark_error", "iou", "success_auc", "success_curve", "precision", "precision_curve", "IOU_THRESHOLDS",
-           "PRECISION_THRESHOLDS", "box_scores", "summarize", "pooled_summary", "reported_ious", "lt_thresholds",
-           "lt_curves", "lt_scores", "lt_pooled",
+           "PRECISION_THRESHOLDS", "box_scores", "summarize", "pooled_summary",
            "equal_time", "best_ms", "equal_time_n", "equal_time_search"]
 
 #: IoU thresholds of the success plot (OTB protocol)
@@ -152,125 +143,6 @@ def box_scores(boxes, truth, precision_px=20.0):
     return success_auc(iou(b, g)), precision(err, precision_px), float(np.mean(err))
 
 
-def reported_ious(boxes, truth, visible):
-    """IoUs ``(T,)`` of ``boxes`` with ``truth`` (``(T, 4)`` ``x, y, w, h``) where the tracker reports the
-    object (``visible (T,)`` true) and 0 where it reports it lost: an empty box. Frames whose true box
-    has no area get 0 too (the callers score only frames with the object, as OTB does)."""
-    v = np.nan_to_num(iou(boxes, truth), nan=0.0)
-    return np.where(np.asarray(visible, bool), v, 0.0)
-
-
-def lt_thresholds(confidences, resolution=100):
-    """VOT-LT's confidence thresholds: ``resolution - 2`` values spread evenly over the sorted finite
-    ``confidences`` (all of them, when fewer), from the highest down, between ``+inf`` and ``-inf``."""
-    c = np.asarray(confidences, float)
-    c = np.sort(c[np.isfinite(c)])[::-1]
-    if len(c) > resolution - 2:
-        delta = len(c) // (resolution - 2)
-        c = c[np.round(np.linspace(delta, len(c) - delta, resolution - 2)).astype(int)]
-    return np.concatenate([[np.inf], c, [-np.inf]])
-
-
-def lt_curves(overlap, present, confidence, thresholds):
-    """Tracking precision and recall ``(K,)`` at each of ``thresholds (K,)`` (module docstring).
-
-    Parameters
-    ----------
-    overlap : ndarray, shape (T,)
-        The IoU of the tracker's box with the true box per frame (NaN counts as 0).
-    present : ndarray, shape (T,)
-        Whether the object is in view (a true box); a frame without it scores 0 where predicted.
-    confidence : ndarray, shape (T,)
-        The tracker's confidence per frame (the frame is predicted at ``τ`` where it is at least ``τ``;
-        NaN: never); ``visible`` as 0/1 for a tracker without one.
-    thresholds : ndarray, shape (K,)
-
-    Returns
-    -------
-    precision, recall : ndarray, shape (K,)
-        Precision is 1 and recall 0 at a threshold with no frame predicted (as VOT's toolkit).
-    """
-    present = np.asarray(present, bool)
-    overlap = np.where(present, np.nan_to_num(np.asarray(overlap, float), nan=0.0), 0.0)
-    conf = np.nan_to_num(np.asarray(confidence, float), nan=-np.inf)
-    pred = conf[None, :] >= np.asarray(thresholds, float)[:, None]  # (K, T)
-    n_pred = pred.sum(axis=1)
-    hit = pred @ overlap
-    precision = np.where(n_pred > 0, hit / np.maximum(n_pred, 1), 1.0)
-    recall = hit / present.sum() if present.any() else np.zeros(len(hit))
-    return precision, recall
-
-
-def _f_max(precision, recall):
-    """``(Pr, Re, F, k)`` at the index ``k`` of the highest ``F = 2 Pr Re / (Pr + Re)`` (the first of equals)."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        f = np.where(precision + recall > 0, 2 * precision * recall / (precision + recall), 0.0)
-    k = int(np.argmax(f))
-    return float(precision[k]), float(recall[k]), float(f[k]), k
-
-
-def lt_scores(boxes, truth, visible, confidence=None, resolution=100):
-    """VOT-LT's long-term scores of one track (module docstring).
-
-    Parameters
-    ----------
-    boxes, truth : ndarray, shape (T, 4)
-        Predicted and true ``x, y, w, h`` (a true box without area: the object absent).
-    visible : ndarray, shape (T,)
-        Whether the tracker reports the object on each frame.
-    confidence : ndarray of shape (T,) or None
-        The tracker's confidence; ``None`` for a tracker without one (the scores at its own threshold).
-    resolution : int
-        Thresholds over the confidences (:func:`lt_thresholds`).
-
-    Returns
-    -------
-    dict
-        ``precision``, ``recall``, ``f_score`` and ``threshold`` at the best threshold (at the tracker's own:
-        ``threshold`` NaN, where it has no confidence), and ``precision_own``, ``recall_own``, ``f_own``
-        over the frames it reports visible.
-    """
-    truth = np.asarray(truth, float)
-    present = (truth[:, 2] > 0) & (truth[:, 3] > 0)
-    return lt_pooled([("", iou(boxes, truth), present, visible, confidence)], resolution)
-
-
-def lt_pooled(tracks, resolution=100):
-    """VOT-LT's scores over several runs and sequences: the thresholds from every run's confidences
-    (:func:`lt_thresholds`), each sequence's precision and recall curves averaged over its runs, those
-    averaged over the sequences, and ``Pr``, ``Re``, ``F`` at the threshold that maximises the mean
-    curves' ``F``; and the same at the trackers' own threshold (the frames reported visible).
-
-    Parameters
-    ----------
-    tracks : list of (str, overlap, present, visible, confidence)
-        One per run: its sequence's name, the IoU per frame ``(T,)``, whether the object is in view
-        ``(T,)``, whether the tracker reports it ``(T,)`` and its confidence ``(T,)`` or ``None``.
-
-    Returns
-    -------
-    dict
-        ``precision``, ``recall``, ``f_score``, ``threshold`` (at the own threshold, and ``threshold`` NaN,
-        where no run has a confidence), ``precision_own``, ``recall_own``, ``f_own``.
-    """
-    def mean_curves(confs, th):
-        seqs = {}
-        for (name, overlap, present, _, _), conf in zip(tracks, confs):
-            seqs.setdefault(name, []).append(lt_curves(overlap, present, conf, th))
-        return (np.mean([np.mean([c[0] for c in cs], axis=0) for cs in seqs.values()], axis=0),
-                np.mean([np.mean([c[1] for c in cs], axis=0) for cs in seqs.values()], axis=0))
-
-    shown = [np.asarray(v, bool).astype(float) for _, _, _, v, _ in tracks]
-    p, r, f, _ = _f_max(*mean_curves(shown, np.array([1.0])))
-    out = {"precision_own": p, "recall_own": r, "f_own": f}
-    if all(c is None for *_, c in tracks):
-        return {"precision": p, "recall": r, "f_score": f, "threshold": float("nan"), **out}
-    confs = [v if c is None else np.asarray(c, float) for v, (*_, c) in zip(shown, tracks)]
-    th = lt_thresholds(np.concatenate(confs), resolution)
-    p, r, f, k = _f_max(*mean_curves(confs, th))
-    return {"precision": p, "recall": r, "f_score": f, "threshold": float(th[k]), **out}
-
-
 def plate_frame_measures(result, truth, aspect):
     """Per-frame ``(has_plate, vertex_error, lost, false_report)`` of one task against the truth."""
     m = min(len(result["reported"]), len(truth["frame"]))
@@ -319,10 +191,9 @@ def summarize(results, not_filters=()):
     their ``N`` means nothing), besides results read from other trackers' files (``external``).
 
     Beside OTB's scores and P(lost) (lost by the ground truth), each summary has what the tracker
-    reported: ``reported_lost`` (the share of the frames with the object it reported lost),
-    ``success_auc_lost_empty`` (the success AUC with those frames as empty boxes, :func:`reported_ious`),
-    and VOT-LT's ``lt_precision``, ``lt_recall``, ``lt_f`` over the runs (:func:`lt_pooled`; at the
-    tracker's own threshold where it has no confidence) and ``lt_f_own`` (at its own threshold)."""
+    reported (:func:`~vistrack.core.longterm.reported_summary`)."""
+    from .longterm import reported_summary  # longterm scores with this module's IoU and success curve
+
     groups = {}
     for r in results:
         groups.setdefault((r["clip"], r["algo"], r["particles"]), []).append(r)
@@ -336,13 +207,7 @@ def summarize(results, not_filters=()):
         p_lost = lost.mean(axis=0)
         with np.errstate(invalid="ignore"):
             err_frame = np.where(ok.any(axis=0), np.sum(np.where(ok, err, 0), axis=0) / ok.sum(axis=0), np.nan)
-        iou_all = np.array([r["iou"] for r in rs])
-        ious = iou_all[:, vis]
-        # what each run reported (results written before issue 44 carry no flags: every frame reported)
-        shown = np.array([r.get("reported") or [1] * len(r["iou"]) for r in rs], bool)
-        conf = [None if r.get("confidence") is None else np.array([np.nan if v is None else v for v in r["confidence"]])
-                for r in rs]
-        lt = lt_pooled([(clip, v, vis, s, c) for v, s, c in zip(iou_all, shown, conf)])
+        ious = np.array([r["iou"] for r in rs])[:, vis]
         # the scores: over runs × frames, and per run
         success = success_curve(ious)
         precision20 = precision(err[:, vis])
@@ -368,10 +233,7 @@ def summarize(results, not_filters=()):
             "error_per_frame": [None if not np.isfinite(v) else float(v) for v in err_frame],
             "success_auc": float(np.mean(success)),
             "success_curve": success,
-            "reported_lost": float((~shown[:, vis]).mean()) if vis.any() else 0.0,
-            "success_auc_lost_empty": float(np.mean(success_curve(np.where(shown, iou_all, 0.0)[:, vis]))),
-            "lt_precision": lt["precision"], "lt_recall": lt["recall"], "lt_f": lt["f_score"],
-            "lt_f_own": lt["f_own"],
+            **reported_summary(clip, rs, vis),
             "precision_20px": precision20,
             "precision_curve": prec_curve,
             "frames_per_s": float(1e3 / ms.mean()) if np.all(np.isfinite(ms)) else None,

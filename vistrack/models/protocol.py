@@ -21,8 +21,8 @@ local coordinates; each method's docstring gives its arguments and results.
   (for LIS inside each partition) local proposals ``q_j``.
 * :class:`InnovationSplit`: the history-sampling family (§3.2): innovation, history and the
   1a/1b subspace split, with the image-only proposal of the innovation.
-* :class:`Confidence`: a model's calibrated confidence in its estimate (the track CSV's ``confidence``,
-  ``vistrack.Tracker.confidence``); a model without one reports none (the column left empty).
+* :class:`~vistrack.core.hooks.Confidence`: a calibrated confidence in the estimate (the track CSV's
+  ``confidence``, ``vistrack.Tracker.confidence``).
 * :class:`VideoModel`: the frame loop, ``run``, ``eval`` and ``vistrack.Tracker``. Subclass
   :class:`VideoModelBase` for the defaults (the maps are the observation, no adaptation,
   the weighted mean, always visible, lost where ``visible`` says no; ``check_lost``
@@ -39,7 +39,7 @@ from ..core.hooks import FusedLISStep, FusedPropose, LookAhead, ProposalMap, Red
 
 __all__ = ["StateSpaceModel", "PredictMean", "LocalSearch", "LearnedSearch", "LocalMoves", "LLSModel", "GridLikelihood",
            "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "InnovationSplit",
-           "VideoModel", "VideoModelBase", "Confidence", "require", "offers", "missing_parts"]
+           "VideoModel", "VideoModelBase", "require", "offers", "missing_parts"]
 __all__ += ["LocalMixture", "MapLogQ", "Partitions", "PartitionLIS", "LookAhead", "FusedPropose", "FusedLISStep",
             "ProposalMap", "Redetects"]
 
@@ -368,18 +368,6 @@ class VideoModel(Protocol):
     def describe(self, state):
         """The track-file columns of one ``state (d,)``: a dict with ``cx, cy, w, h, angle_deg,
         scale`` and the model's own columns (e.g. support points or plate vertices)."""
-
-@runtime_checkable
-class Confidence(Protocol):
-    """A calibrated confidence in the frame's estimate (the box model's,
-    :mod:`vistrack.models.box.confidence`): asked once per frame, in order, by the frame loop after the
-    step and before :meth:`VideoModel.check_lost` (which may report the object lost when it is low)."""
-
-    def confidence(self, obs, state, particles):
-        """The probability in ``[0, 1]`` that the estimate ``state (d,)`` lies on the object in the frame
-        observed as ``obs``, with the frame's weighted :class:`~vistrack.core.particles.ParticleSet`
-        ``particles``; ``None`` where the model has none this time."""
-
 
 class VideoModelBase:
     """Defaults of the :class:`VideoModel` parts that most models share."""

@@ -13,10 +13,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.features import FeatureMaps
+from ..core.hooks import Confidence
 from ..core.metrics import best_ms
 from ..core.particles import ParticleSet
 from ..filters import make_filter
-from ..models.protocol import Confidence, Redetects, VideoModel, offers, require
+from ..models.protocol import Redetects, VideoModel, offers, require
 
 __all__ = ["FrameResult", "FrameStepper", "track", "top_particles", "warm_up", "ms_per_frame"]
 
@@ -45,7 +46,7 @@ class FrameResult:
     #: ``redetect``) and reports it here (the track CSV's ``redetected``)
     redetected: bool = False
     #: the model's calibrated confidence in the estimate, in ``[0, 1]``
-    #: (:class:`~vistrack.models.protocol.Confidence`; the track CSV's ``confidence``), ``None`` without one
+    #: (:class:`~vistrack.core.hooks.Confidence`; the track CSV's ``confidence``), ``None`` without one
     confidence: float | None = None
 
     @property
@@ -90,7 +91,7 @@ class FrameStepper:
     ``estimator`` is given), ``check_lost(obs, estimate)`` whether the object is reported
     there (:mod:`vistrack.models.collapse`) and ``adapt(obs, estimate)`` is told each
     frame's estimate after the step (the box model's appearance); a model with a
-    :class:`~vistrack.models.protocol.Confidence` is asked for it before ``check_lost``. The feature
+    :class:`~vistrack.core.hooks.Confidence` is asked for it before ``check_lost``. The feature
     maps of a frame live in buffers that the next frame overwrites: use them before stepping again.
     """
 

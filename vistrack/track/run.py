@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.hooks import Redetects, offers
+from ..core.hooks import Confidence, Redetects, offers
 from ..core.particles import DegenerateWeightsWarning
 from ..io.render import annotate, annotate_targets
 from ..io.results_format import result_paths
@@ -90,15 +90,16 @@ class VideoRun:
 def track_row(model, res):
     """The track-CSV row of a :class:`~vistrack.track.loop.FrameResult`: ``frame, visible``, the
     model's :meth:`describe` columns, ``redetected`` (a model that re-detects a lost object, the box
-    model's: 1 on the frame it is re-found), ``ess, ms, lost_reason`` and ``confidence`` (the model's
-    calibrated confidence in ``[0, 1]``, :class:`~vistrack.models.protocol.Confidence`; empty for a model
-    without one)."""
+    model's: 1 on the frame it is re-found), ``ess, ms, lost_reason`` and, for a model with a
+    calibrated confidence (:class:`~vistrack.core.hooks.Confidence`, the box model's),
+    ``confidence`` in ``[0, 1]`` (empty on a frame it gives none)."""
     row = {"frame": res.index, "visible": int(res.visible)}
     row.update(model.describe(res.estimate))
     if offers(model, Redetects):
         row["redetected"] = int(res.redetected)
     row["ess"], row["ms"], row["lost_reason"] = res.ess, res.ms, res.lost_reason
-    row["confidence"] = "" if res.confidence is None else float(res.confidence)
+    if offers(model, Confidence):
+        row["confidence"] = "" if res.confidence is None else float(res.confidence)
     return row
 
 

@@ -28,14 +28,9 @@ Local moves (thesis 001, §4.3–4.5)
     ``lls``: the exact ``r`` on a grid of the window (:class:`~vistrack.proposals.Window`).
     With the correlation filter, ``lis``'s proposal is its response mixed with ``K``
     (:class:`~vistrack.models.box.correlation_proposal.CorrelationProposal`, exact density, proper weights).
-Lost
-    ``visible=0`` where ``log r`` at the estimate falls far below its running level, the
-    scale below a floor or the centre leaves the frame (:mod:`~vistrack.models.collapse`), and,
-    with the filter, where the estimate's calibrated confidence falls below its threshold
-    (:mod:`~vistrack.models.box.confidence`; ``low-confidence``). The model does not adapt on a
-    frame reported lost. After ``redetect_after`` frames reported lost in a row, each frame is
-    searched whole (:meth:`Box._redetect`); a place found there whose confidence clears the
-    threshold re-seeds the particles (:meth:`Box.reseed`; the track CSV's ``redetected``).
+Lost and found
+    ``visible=0`` where the collapse test fires or, with the filter, the estimate's calibrated
+    confidence is low; a whole-frame search after a few such frames (:mod:`~vistrack.models.box.lost`).
 """
 
 from __future__ import annotations
@@ -44,7 +39,6 @@ import numpy as np
 
 from ... import kernels
 from ...core.gaussian import diag_logpdf
-from ...core.particles import ParticleSet
 from ...core.transition import is_prior
 from ...proposals import MapProposal
 from ...proposals.translation import TranslationMoves
@@ -53,16 +47,16 @@ from ..innovation import ARInnovation
 from ..protocol import VideoModelBase
 from .appearance import Appearance
 from .bacf import BackgroundAwareFilter
-from .confidence import BoxConfidence, Calibration
 from .correlation import CorrelationFilter
 from .correlation_proposal import CorrelationProposal
+from .lost import LostAndFound
 from .moves import BoxMoves
 from .scale_filter import ScaleFilter
 
 __all__ = ["Box"]
 
 
-class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
+class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
     """Box tracking model with appearance learned from the first frame.
 
     Parameters
@@ -101,33 +95,13 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         ``(t, s)``: the response's cells drawn ``∝ (1 - s) exp(t (y - max y)) / Σ + s / C``.
     dcf_scale_std : float
         ``σ_l`` of the proposal's log-scale about the best scale of the search.
-    redetect : float or None
-        While the object is reported lost, search the whole frame with the filter and centre the search
-        region at the best place when ``log r`` there is within ``redetect`` times the collapse test's
-        ``drop`` of its running level (``None``: never); the dynamics then has a share ``reentry`` of a
-        pose uniform over the frame (:meth:`predict`).
-    reentry : float
-        That share.
     collapse_drop : float
         With the filter, the collapse test's ``drop`` (:attr:`collapse_options`: 55 without it): ``log r``
         at the estimate falls by 43-47 on the synthetic clip of ``tests/test_box_dcf.py`` when the object
         vanishes; 28 (the 7-clip mean AUC 0.690 against 0.685 with 35, and with the filter's rate 0.004
         0.695 and the hand held on 6 of 6 seeds: ``docs/experiments.md``).
-    confidence : bool, tuple or path
-        With the filter, the estimate's confidence on each frame (:mod:`~vistrack.models.box.confidence`):
-        ``True`` the calibrations shipped with the package, a pair of
-        :class:`~vistrack.models.box.confidence.Calibration` (an estimate's, a candidate's) or the path of an
-        ``.npz`` holding them; ``False``: none (nor without the filter).
-    lost_confidence : float or None
-        The object is reported lost (``low-confidence``) on a frame whose confidence is below this
-        (``None``: the calibration's threshold; 0: never).
-    redetect_after : int
-        Frames reported lost in a row before each frame is searched whole (:meth:`_redetect`).
-    search_crop : float or None
-        That search correlates the filter's taps over the object's box grown this many times
-        (:meth:`CorrelationFilter.search`; ``None``: all its taps, the surroundings learnt with it too).
-    search_peaks : int
-        The best places of that search whose confidence is computed; the most confident is the candidate.
+    confidence, lost_confidence, redetect, reentry, redetect_after, search_crop, search_peaks
+        What is reported lost and how it is found again: :meth:`~vistrack.models.box.lost.LostAndFound.init_lost`.
     dcf_options : dict or None
         Passed to :class:`~vistrack.models.box.correlation.CorrelationFilter` (its ``padding``: ``4 sigma_xy``
         unless given, so that the search region about the dynamics' prediction holds 4 innovation stds).
@@ -188,13 +162,7 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
             self.collapse_options = {"drop": float(collapse_drop)}
         self.lambda_dcf, self.dcf_share, self.dcf_scale_std = float(lambda_dcf), float(dcf_share), float(dcf_scale_std)
         self.dcf_tempering = tuple(float(v) for v in dcf_tempering)
-        self.redetect = None if redetect is None else float(redetect)
-        self.reentry = float(reentry)
-        self._lost = False  # the last frame's collapse test said lost
-        self._last_scale = 0.0  # the log-scale of the last frame reported
         self._d = self.damping  # this frame's damping: 0 on the frame after a re-detection (no velocity)
-        self._found = False  # this frame is a re-detection
-        self._reentry = False  # this frame's dynamics has the re-entry share
         self.dcf_scale_read = dcf_scale_read
         self.sf = ScaleFilter(frame, (x, y, w, h), **scale_filter) if (dcf and scale_filter is not None) else None
         self.lambda_scale = float(lambda_scale)
@@ -203,18 +171,7 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         self.cf2 = BackgroundAwareFilter(frame, (x, y, w, h), **bacf_term) if bacf_term is not None else None
         self.lambda_bacf = float(lambda_bacf)
         self.frame_bound = bool(frame_bound)
-        # -- the confidence and what it decides (issue 44; vistrack/models/box/confidence.py) --
-        self.conf = None
-        if dcf and confidence is not False:
-            cal = None if confidence is True else tuple(confidence) if isinstance(confidence, (tuple, list)) \
-                else (Calibration.load(confidence), Calibration.load(confidence, "candidate"))
-            self.conf = BoxConfidence(self, cal)
-        self.lost_confidence = lost_confidence
-        self.redetect_after = int(redetect_after)
-        self.search_crop, self.search_peaks = search_crop, int(search_peaks)
-        self._lost_run = 0  # frames reported lost in a row
-        self._pred = None  # this frame's mean prediction (cx, cy, l), the motion cue's reference
-        self._conf_obs = None  # the observation the last confidence was computed on
+        self.init_lost(dcf, confidence, lost_confidence, redetect, reentry, redetect_after, search_crop, search_peaks)
 
     # -- geometry ---------------------------------------------------------------------
     def boxes(self, states):
@@ -363,61 +320,6 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
             obs.scale_centre = float(centre[2])
         return obs
 
-    def _redetect(self, frame):
-        """While the track is lost (:attr:`redetect_after` frames in a row): of the best places of a whole-frame
-        search (:meth:`search_whole`), the most confident (:meth:`BoxConfidence.candidate`; without a
-        confidence, the best), taken (the observation about it, the particles re-seeded there by
-        :meth:`reseed`, the dynamics' re-entry share on, and no velocity carried into the next frame's
-        prediction: ``d = 0`` there) when its confidence (:meth:`BoxConfidence.candidate`) clears
-        :attr:`threshold` (without a confidence: when ``log r`` of the pose there is within ``redetect``
-        times the collapse test's ``drop`` of its running level); ``None`` otherwise."""
-        found = self.search_whole(frame)
-        if self.conf is not None and self.conf.candidate_calibration is not None:
-            c, k = max((self.conf.candidate(self, o, p), -k) for k, (o, p) in enumerate(found))
-            obs, cand = found[-k][0], found[-k][1][None]
-            if not c >= self.threshold:
-                return None
-        else:
-            obs, cand = found[0][0], found[0][1][None]
-            level, drop = self._collapse.level, self._collapse.drop
-            if level is None or drop is None or not self.loglik(obs, cand)[0] >= level - self.redetect * drop:
-                return None
-        self._reentry = self.reentry > 0
-        self._found = True
-        obs.found = cand[0]
-        return obs
-
-    def search_whole(self, frame):
-        """A whole-frame search with the filter (:meth:`CorrelationFilter.search`: its taps over the object's
-        box, ``search_crop``) at the last reported frame's scale, and at the first frame's where they differ
-        by more than 10 %: for each of its :attr:`search_peaks` best places at each scale, the observation
-        about it (the filter's response there, ``β`` at least 0.9, marked a re-detection) and the pose
-        ``(cx, cy, l) (3,)`` at that response's peak. Changes nothing the tracking reads
-        (``benchmarks/fit_confidence.py`` calls it on any frame)."""
-        out = []
-        # the estimate's scale drifts while the object is lost, and may shrink as it leaves the frame
-        scales = (self._last_scale,) if abs(self._last_scale) < 0.1 else (self._last_scale, 0.0)
-        for scale in scales:
-            for x, y, _ in self.cf.search(frame, scale, crop=self.search_crop, peaks=self.search_peaks):
-                roi = self.app.roi(self.boxes(np.array([[x, y, scale]])), 0.0)
-                obs = self._dcf_frame(frame, roi, np.array([x, y, scale]), max(self.dcf_share, 0.9), True)
-                r = obs.dcf
-                out.append((obs, np.array([*r.peak_xy, r.log_scales[r.best]])))
-        return out
-
-    def reseed(self, obs, particles, rng):
-        """On a frame whose whole-frame search found the object (:meth:`_redetect`): the previous particles
-        replaced by ``N`` equally weighted draws about the place found (the prior's spread ``p_0`` about it,
-        no velocity); ``None`` on any other frame (the particles stay)."""
-        if not obs.redetected:
-            return None
-        z = obs.found + self.prior_std * rng.standard_normal((particles.n, 3))
-        return ParticleSet(np.concatenate([z, z], axis=1), np.zeros(particles.n))
-
-    def redetected(self, obs):
-        """Whether this frame's observation is a whole-frame search's find (:meth:`_redetect`)."""
-        return bool(obs.redetected)
-
     def loglik(self, obs, states):
         """``log r`` of ``states (N, 6)``, shape ``(N,)``: the colour and template terms, plus
         ``λ_dcf`` times the correlation filter's response where the frame has one."""
@@ -473,43 +375,6 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
             if self.cf2 is not None:
                 self.cf2.adapt(obs.frame_image, e[:2], float(e[2]))
         return done
-
-    def check_lost(self, obs, state):
-        """The collapse test (:class:`~vistrack.models.collapse.CollapseCheck`) and the confidence's
-        (``low-confidence`` below :attr:`threshold`, when :meth:`confidence` was computed on ``obs``),
-        remembered for the next frame's re-detection."""
-        c, low = self.conf.value if self.conf is not None and obs is self._conf_obs else None, ""
-        if c is not None and c < self.threshold:
-            low = f"confidence {c:.3f}, below the threshold {self.threshold:.3f}"
-        out = super().check_lost(obs, state, low)
-        self._lost = bool(out[0])
-        self._lost_run = self._lost_run + 1 if self._lost else 0
-        if not self._lost:
-            self._last_scale = float(np.ravel(state)[2])
-        return out
-
-    # -- the confidence (issue 44; :mod:`~vistrack.models.box.confidence`) ------------------------
-    @property
-    def threshold(self):
-        """The confidence below which the object is reported lost (``lost_confidence``, else the
-        calibration's); 0 without a confidence."""
-        if self.conf is None or self.conf.calibration is None:
-            return 0.0
-        return self.conf.calibration.threshold if self.lost_confidence is None else float(self.lost_confidence)
-
-    def confidence(self, obs, state, particles):
-        """The calibrated confidence in ``[0, 1]`` that the estimate ``state (6,)`` lies on the object, on
-        the frame observed as ``obs`` with the weighted ``particles`` (1 on the first frame); ``None``
-        without one (no correlation filter, or ``confidence=False``)."""
-        if self.conf is None:
-            return None
-        self._conf_obs = obs
-        return self.conf.update(self, obs, state, None if obs.dcf is None else particles)
-
-    def predicted_pose(self):
-        """This frame's mean prediction ``(cx, cy, l)`` (the weighted mean of ``K``'s means), ``None`` on the
-        first frame."""
-        return self._pred
 
     # -- local moves (and :class:`~vistrack.models.box.moves.BoxMoves`) ------------------------
     def lis_proposal(self, kernel=None):
