@@ -9,7 +9,7 @@ import functools
 from typing import Protocol, runtime_checkable
 
 __all__ = ["offers", "class_offers", "require", "missing_parts", "LookAhead", "FusedPropose", "FusedLISStep",
-           "ProposalMap", "Redetects", "Confidence"]
+           "ProposalMap", "Redetects", "Reseeds", "Confidence"]
 
 
 @functools.cache
@@ -88,14 +88,19 @@ class ProposalMap(Protocol):
 @runtime_checkable
 class Redetects(Protocol):
     """A model that searches the frame again for a lost object (the box model: the track CSV's
-    ``redetected`` column); ``redetect`` is its acceptance level (``None``: off),
-    ``redetected(obs)`` whether the frame observed as ``obs`` found it again and
-    ``reseed(obs, particles, rng)`` the particle set re-seeded where it was found (``None``: kept), which
-    the frame loop steps from."""
+    ``redetected`` column); ``redetect`` is its acceptance level (``None``: off) and
+    ``redetected(obs)`` whether the frame observed as ``obs`` found it again."""
 
     redetect: float
 
     def redetected(self, obs): ...
+
+
+@runtime_checkable
+class Reseeds(Protocol):
+    """A model that re-seeds the particles where a whole-frame search found a lost object (the box
+    model's): ``reseed(obs, particles, rng)`` is the particle set the frame loop steps from on the frame
+    observed as ``obs`` (``None``: ``particles`` kept)."""
 
     def reseed(self, obs, particles, rng): ...
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.features import FeatureMaps
-from ..core.hooks import Confidence
+from ..core.hooks import Confidence, Reseeds
 from ..core.metrics import best_ms
 from ..core.particles import ParticleSet
 from ..filters import make_filter
@@ -111,7 +111,7 @@ class FrameStepper:
         t0 = time.perf_counter()
         maps = FeatureMaps(frame, buffers=self._buffers)
         obs = self.model.observe(maps, self.particles)
-        if self.particles is not None and offers(self.model, Redetects):  # a lost object found again: re-seeded
+        if self.particles is not None and offers(self.model, Reseeds):  # a lost object found again: re-seeded
             seeded = self.model.reseed(obs, self.particles, self.rng)
             self.particles = self.particles if seeded is None else seeded
         if self.particles is None:
