@@ -9,7 +9,7 @@ behind a pillar and comes out on its other side) is tracked by vistrack's defaul
 (``vistrack.Tracker(seed=S)``) from the first ground-truth box. Per seed: the share of the frames without the
 object that the tracker reports lost (``visible=0``; target >= 90 %), and for each return of the object the
 frames until the tracker reports it again with a box overlapping the truth (IoU > 0; target <= 10 on every
-seed), VOT-LT's F-score (:func:`vistrack.core.longterm.lt_scores`) and the frames re-detected.
+seed), VOT-LT's F-score (:func:`vistrack.core.metrics.lt_scores`) and the frames re-detected.
 """
 
 from __future__ import annotations
@@ -22,8 +22,7 @@ from pathlib import Path
 import numpy as np
 
 import vistrack
-from vistrack.core.longterm import lt_scores
-from vistrack.core.metrics import iou
+from vistrack.core.metrics import iou, lt_scores
 from vistrack.data_synth.longterm import make_longterm_clip
 from vistrack.io.clips import load_clip
 

@@ -8,7 +8,8 @@ from test_collapse import BOX, vanishing_frames
 
 import vistrack
 from cli_helpers import run
-from vistrack.core.longterm import lt_pooled, lt_scores, reported_ious
+from vistrack.core.longterm import lt_pooled
+from vistrack.core.metrics import lt_scores, reported_ious
 from vistrack.io.clips import read_groundtruth_csv
 from vistrack.models.box.confidence import FEATURES, MONOTONE, Calibration, apce, psr
 

@@ -5,26 +5,17 @@ a frame is *predicted* when the tracker reports the object there with a confiden
 the tracking precision ``Pr(τ)`` is the mean IoU over the predicted frames (0 where the truth has no
 object), the recall ``Re(τ)`` the IoU summed over the predicted frames over the number of frames with
 the object; ``F(τ) = 2 Pr Re / (Pr + Re)``, and the scores are ``Pr``, ``Re`` and ``F`` at the ``τ``
-that maximises ``F`` (:func:`lt_scores`); for a tracker without a confidence, at its own threshold:
-the frames it reports visible. The OTB success AUC of a long-term tracker scores the frames it reports
-lost as empty boxes (IoU 0, :func:`reported_ious`).
+that maximises ``F`` (:func:`vistrack.core.metrics.lt_scores`); for a tracker without a confidence, at
+its own threshold: the frames it reports visible. The OTB success AUC of a long-term tracker scores the
+frames it reports lost as empty boxes (IoU 0, :func:`vistrack.core.metrics.reported_ious`). One track's scores from its
+boxes: :func:`vistrack.core.metrics.lt_scores`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .metrics import iou, success_curve
-
-__all__ = ["reported_ious", "lt_thresholds", "lt_curves", "lt_scores", "lt_pooled", "reported_summary"]
-
-
-def reported_ious(boxes, truth, visible):
-    """IoUs ``(T,)`` of ``boxes`` with ``truth`` (``(T, 4)`` ``x, y, w, h``) where the tracker reports the
-    object (``visible (T,)`` true) and 0 where it reports it lost: an empty box. Frames whose true box
-    has no area get 0 too (the callers score only frames with the object, as OTB does)."""
-    v = np.nan_to_num(iou(boxes, truth), nan=0.0)
-    return np.where(np.asarray(visible, bool), v, 0.0)
+__all__ = ["lt_thresholds", "lt_curves", "lt_pooled", "reported_summary"]
 
 
 def lt_thresholds(confidences, resolution=100):
@@ -76,32 +67,6 @@ def _f_max(precision, recall):
     return float(precision[k]), float(recall[k]), float(f[k]), k
 
 
-def lt_scores(boxes, truth, visible, confidence=None, resolution=100):
-    """VOT-LT's long-term scores of one track (module docstring).
-
-    Parameters
-    ----------
-    boxes, truth : ndarray, shape (T, 4)
-        Predicted and true ``x, y, w, h`` (a true box without area: the object absent).
-    visible : ndarray, shape (T,)
-        Whether the tracker reports the object on each frame.
-    confidence : ndarray of shape (T,) or None
-        The tracker's confidence; ``None`` for a tracker without one (the scores at its own threshold).
-    resolution : int
-        Thresholds over the confidences (:func:`lt_thresholds`).
-
-    Returns
-    -------
-    dict
-        ``precision``, ``recall``, ``f_score`` and ``threshold`` at the best threshold (at the tracker's own:
-        ``threshold`` NaN, where it has no confidence), and ``precision_own``, ``recall_own``, ``f_own``
-        over the frames it reports visible.
-    """
-    truth = np.asarray(truth, float)
-    present = (truth[:, 2] > 0) & (truth[:, 3] > 0)
-    return lt_pooled([("", iou(boxes, truth), present, visible, confidence)], resolution)
-
-
 def lt_pooled(tracks, resolution=100):
     """VOT-LT's scores over several runs and sequences: the thresholds from every run's confidences
     (:func:`lt_thresholds`), each sequence's precision and recall curves averaged over its runs, those
@@ -141,15 +106,16 @@ def lt_pooled(tracks, resolution=100):
 def reported_summary(clip, results, vis):
     """What the tracker reported over ``results`` (one clip's task results, each with ``iou`` and, from a
     tracker that reports, ``reported`` and ``confidence``; ``vis (frames,)``: the frames with the object):
-    ``reported_lost`` (the share of the frames with the object it reported lost), ``success_auc_lost_empty``
-    (the success AUC with those frames as empty boxes), and VOT-LT's ``lt_precision``, ``lt_recall``,
-    ``lt_f`` over the runs (:func:`lt_pooled`; at the tracker's own threshold where it has no confidence) and
-    ``lt_f_own`` (at its own threshold). A result without ``reported`` reported every frame."""
-    ious = np.array([r["iou"] for r in results])
+    ``reported_lost`` (the share of the frames with the object it reported lost), ``lost_empty`` (the IoUs
+    ``(runs, frames with the object)`` with those frames as empty boxes, for the success AUC), and VOT-LT's
+    ``lt_precision``, ``lt_recall``, ``lt_f`` over the runs (:func:`lt_pooled`; at the tracker's own
+    threshold where it has no confidence) and ``lt_f_own`` (at its own threshold). A result without
+    ``reported`` reported every frame."""
+    ious = np.array([r["iou"] for r in results], float)
     shown = np.array([r.get("reported") or [1] * len(r["iou"]) for r in results], bool)
     conf = [None if r.get("confidence") is None else np.array([np.nan if v is None else v for v in r["confidence"]])
             for r in results]
     lt = lt_pooled([(clip, v, vis, s, c) for v, s, c in zip(ious, shown, conf)])
     return {"reported_lost": float((~shown[:, vis]).mean()) if vis.any() else 0.0,
-            "success_auc_lost_empty": float(np.mean(success_curve(np.where(shown, ious, 0.0)[:, vis]))),
+            "lost_empty": np.where(shown, np.nan_to_num(ious, nan=0.0), 0.0)[:, vis],
             "lt_precision": lt["precision"], "lt_recall": lt["recall"], "lt_f": lt["f_score"], "lt_f_own": lt["f_own"]}

@@ -1,6 +1,6 @@
 """Synthetic long-term clips: an object that leaves the frame and hides behind a pillar, and comes back
 elsewhere, with exact ground truth that marks it absent (issue 44; for a tracker's ``visible`` and
-VOT-LT's long-term scores, :func:`vistrack.core.longterm.lt_scores`).
+VOT-LT's long-term scores, :func:`vistrack.core.metrics.lt_scores`).
 
 Scene
     a static background with some edges (:func:`~vistrack.data_synth.render.clutter_background`, 10

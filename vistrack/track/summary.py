@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.longterm import lt_scores
 from ..core.metrics import (
     center_error,
     iou,
     landmark_error,
     lost_frames,
+    lt_scores,
     plate_frame_measures,
     precision,
     success_auc,
