@@ -23,7 +23,9 @@ Robustness starts (OTB's SRE)
 from __future__ import annotations
 
 import hashlib
+import json
 import os
+import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
@@ -39,6 +41,8 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "real"
 NANOTRACK = ROOT.parent / "shared" / "data" / "baselines" / "nanotrack"
 FRAME_CACHE = Path(os.environ.get("VISTRACK_FRAME_CACHE", Path.home() / ".cache" / "vistrack" / "frames"))
+#: finished runs' scores (JSON lines keyed by the code's digest, clip, tracker, start, seed and options)
+SCORE_CACHE = Path.home() / ".cache" / "vistrack" / "corpus_runs.jsonl"
 #: OTB's spatial-robustness starts: shifts (share of w, h) and scales about the centre
 SRE_SHIFTS = [(dx, dy) for dx in (-0.1, 0.0, 0.1) for dy in (-0.1, 0.0, 0.1) if (dx, dy) != (0.0, 0.0)]
 SRE_SCALES = (0.8, 0.9, 1.1, 1.2)
@@ -230,6 +234,46 @@ def run_jobs(jobs, workers=2, progress=None):
             if progress:
                 progress()
         return out
+
+
+def code_digest(root=ROOT / "vistrack"):
+    """SHA-1 of every ``.py`` file under ``root`` (names and contents) and of OpenCV's version: a cached run
+    is reused only for the same code."""
+    h = hashlib.sha1(cv2.__version__.encode())
+    for p in sorted(Path(root).rglob("*.py")):
+        h.update(str(p.relative_to(root)).encode())
+        h.update(p.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def cached_scores(jobs, *, cache=SCORE_CACHE, workers=2, desc="runs"):
+    """The scores ``(auc, precision, error)`` of each of ``jobs`` (see :func:`_job`), in order: read from
+    ``cache`` where the same code ran the same job before, the rest run (``workers`` processes) and added."""
+    from tqdm import tqdm
+
+    digest = code_digest()
+    keys = [json.dumps([digest, Path(f).name, t, [int(v) for v in st], s if t == "vistrack" else 0, o or {}],
+                       sort_keys=True) for f, t, st, s, o in jobs]
+    done = {}
+    if cache and Path(cache).is_file():
+        for line in Path(cache).read_text().splitlines():
+            try:
+                rec = json.loads(line)
+                done[rec["key"]] = rec["scores"]
+            except (json.JSONDecodeError, KeyError):
+                continue
+    todo = {k: j for k, j in zip(keys, jobs) if k not in done}
+    if todo:
+        bar = tqdm(total=len(todo), desc=desc, unit="run", file=sys.stderr)
+        results = run_jobs(list(todo.values()), workers, progress=bar.update)
+        bar.close()
+        if cache:
+            Path(cache).parent.mkdir(parents=True, exist_ok=True)
+        with open(cache, "a") if cache else open(os.devnull, "w") as fh:
+            for k, (sc, _) in zip(todo, results):
+                done[k] = [float(v) for v in sc]
+                fh.write(json.dumps({"key": k, "scores": done[k]}) + "\n")
+    return [done[k] for k in keys]
 
 
 def lost_runs(boxes, truth, min_len=5):
