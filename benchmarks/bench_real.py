@@ -19,7 +19,7 @@ Trackers
     runs) for seeds 1..``--seeds``; OpenCV's MIL, KCF, CSRT (KCF and CSRT need
     opencv-contrib-python-headless) and NanoTrack (``cv2.TrackerNano`` with the ONNX weights in
     ``../shared/data/baselines/nanotrack``), each run once (they are deterministic); a tracker that is
-    missing is skipped with a note.
+    missing is skipped with a note. ``--entries [model/]algo:N,...`` adds vistrack configurations.
 Cross-validation (``--candidates FILE``)
     the box model's configurations tried (``benchmarks/box_candidates.json``; the defaults first) run on
     every clip and seed (as ``tune_box.py`` runs them); for each clip the configuration best on the *other*
@@ -72,6 +72,21 @@ from vistrack.io.video import open_video
 STRESS_CACHE = Path.home() / ".cache" / "vistrack" / "bench_real"
 CANDIDATES = Path(__file__).with_name("box_candidates.json")
 DEFAULT = "vistrack"
+#: ``--entries``: more vistrack configurations by name (``lis-100``: ``{"algo": "lis", "particles": 100}``)
+ENTRIES = {}
+
+
+def parse_entries(spec):
+    """``[model/]algo:N,...`` -> ``{name: Tracker options}``."""
+    out = {}
+    for e in (e.strip() for e in spec.split(",") if e.strip()):
+        name, n = e.split(":")
+        model, algo = name.split("/") if "/" in name else ("box", name)
+        opts = {"algo": algo, "particles": int(n)}
+        if model != "box":
+            opts.update(model=model, **({"layout": "single-row"} if model == "plate" else {}))
+        out[f"{algo}-{n}" if model == "box" else f"{model}/{algo}-{n}"] = opts
+    return out
 
 
 def stressed_copy(clip, stress, cache=STRESS_CACHE):
@@ -95,12 +110,15 @@ def accuracy(clips, trackers, seeds, *, sre=False, workers=2, cache=SCORE_CACHE)
     jobs, where = [], []
     for clip, stress in clips:
         for tr in trackers:
-            for s in (seeds if tr == DEFAULT else [0]):
-                jobs.append((clip.folder, tr, clip.user_box, s, None))
+            kind, options = ("vistrack", ENTRIES.get(tr)) if tr == DEFAULT or tr in ENTRIES else (tr, None)
+            if options and options.get("model") == "plate" and not clip.name.startswith("plate"):
+                continue
+            for s in (seeds if kind == "vistrack" else [0]):
+                jobs.append((clip.folder, kind, clip.user_box, s, options))
                 where.append((clip.name, stress, tr, "user"))
-            if sre:
+            if sre and tr in (DEFAULT, *OPENCV):
                 for start in sre_starts(clip.user_box):
-                    jobs.append((clip.folder, tr, start, 1, None))
+                    jobs.append((clip.folder, kind, start, 1, options))
                     where.append((clip.name, stress, tr, "sre"))
     rows = {}
     for (clip, stress, tr, kind), sc in zip(where, cached_scores(jobs, cache=cache, workers=workers,
@@ -305,6 +323,8 @@ def main():
     ap.add_argument("--reps", type=int, default=3, help="--speed: runs of each tracker per clip, the fastest kept")
     ap.add_argument("--candidates", default=str(CANDIDATES),
                     help="the box configurations tried, for the leave-one-clip-out mean ('' none)")
+    ap.add_argument("--entries", default="", help="more vistrack configurations beside the defaults: "
+                    "[model/]algo:N, e.g. bootstrap:100,rb-ss-hs-sir:400")
     ap.add_argument("--opencv", default=",".join(OPENCV), help="OpenCV's trackers beside vistrack")
     ap.add_argument("--stress", default="",
                     help=f"stressed copies too, comma-separated, of {', '.join(STRESS_PRESETS)}")
@@ -329,7 +349,8 @@ def main():
               "Nano: ../shared/data/baselines/nanotrack)")
     seeds = list(range(1, args.seeds + 1))
     variants = [(c, "none") for c in clips] + [(load_clip(stressed_copy(c, s)), s) for s in stresses for c in clips]
-    rows = accuracy(variants, [DEFAULT, *cvs], seeds, sre=args.sre, workers=args.workers)
+    ENTRIES.update(parse_entries(args.entries))
+    rows = accuracy(variants, [DEFAULT, *ENTRIES, *cvs], seeds, sre=args.sre, workers=args.workers)
     cv = cross_validated(clips, seeds, args.candidates, args.workers) if args.candidates else None
     spd = speed(clips, args.reps) if args.speed else None
     print_report(rows, cv, spd)

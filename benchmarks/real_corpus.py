@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import multiprocessing
 import os
 import sys
 import time
@@ -227,7 +228,8 @@ def run_jobs(jobs, workers=2, progress=None):
             if progress:
                 progress()
         return out
-    with ProcessPoolExecutor(workers) as ex:
+    # spawned, not forked: a fork after OpenCV's DNN or thread pools started (NanoTrack made here) can hang
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as ex:
         out = []
         for r in ex.map(_job, jobs, chunksize=1):
             out.append(r)
