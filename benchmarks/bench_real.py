@@ -13,7 +13,7 @@ Starts (``real_corpus.py``)
     every tracker starts from the box a user types: the first line of the ground-truth file as written,
     in whole pixels (for OTB's 1-based files one pixel off the 0-based truth, the same box for all).
     ``--sre`` adds OTB's 12 spatial-robustness starts (the box shifted by 10 % of its size in 8
-    directions and scaled by 0.8, 0.9, 1.1, 1.2): their mean AUC per clip (vistrack seed 1).
+    directions and scaled by 0.8, 0.9, 1.1, 1.2): their mean AUC per clip (vistrack seed 1, NanoTrack, CSRT).
 Trackers
     vistrack's defaults (``vistrack.Tracker(seed=s)``, what ``vistrack run VIDEO --init X,Y,W,H``
     runs) for seeds 1..``--seeds``; OpenCV's MIL, KCF, CSRT (KCF and CSRT need
@@ -72,6 +72,8 @@ from vistrack.io.video import open_video
 STRESS_CACHE = Path.home() / ".cache" / "vistrack" / "bench_real"
 CANDIDATES = Path(__file__).with_name("box_candidates.json")
 DEFAULT = "vistrack"
+#: the trackers run from the robustness starts (issue 43 compares vistrack with these)
+SRE_TRACKERS = (DEFAULT, "Nano", "CSRT")
 #: ``--entries``: more vistrack configurations by name (``lis-100``: ``{"algo": "lis", "particles": 100}``)
 ENTRIES = {}
 
@@ -116,7 +118,7 @@ def accuracy(clips, trackers, seeds, *, sre=False, workers=2, cache=SCORE_CACHE)
             for s in (seeds if kind == "vistrack" else [0]):
                 jobs.append((clip.folder, kind, clip.user_box, s, options))
                 where.append((clip.name, stress, tr, "user"))
-            if sre and tr in (DEFAULT, *OPENCV):
+            if sre and tr in SRE_TRACKERS:
                 for start in sre_starts(clip.user_box):
                     jobs.append((clip.folder, kind, start, 1, options))
                     where.append((clip.name, stress, tr, "sre"))
@@ -236,9 +238,10 @@ def markdown(rows, seeds, command, cv=None, spd=None):
     clips = list(dict.fromkeys(r["clip"] for r in rows))
     has_sre = any(r["sre"] is not None for r in rows)
     cv_held = dict(zip(clips, cv[3])) if cv is not None else {}
-    head = ["clip", "vistrack AUC (worst seed)"] + (["left-out AUC"] if cv else []) + \
-           (["vistrack SRE"] if has_sre else []) + [f"{t} AUC" + (" (SRE)" if has_sre else "") for t in others] + \
-           (["frames/s: vistrack / NanoTrack"] if spd else [])
+    head = (["clip", "vistrack AUC (worst seed)"] + (["left-out AUC"] if cv else [])
+            + (["vistrack SRE"] if has_sre else [])
+            + [f"{t} AUC" + (" (SRE)" if has_sre and t in SRE_TRACKERS else "") for t in others]
+            + (["frames/s: vistrack / NanoTrack"] if spd else []))
     lines = [f"Success AUC from the start box a user types (the first ground-truth line in whole pixels), vistrack "
              f"seeds {seeds[0]}–{seeds[-1]} (worst seed in brackets), OpenCV {cv2.__version__}'s trackers once"
              + ("; SRE: the mean over OTB's 12 robustness starts" if has_sre else "")
@@ -255,7 +258,8 @@ def markdown(rows, seeds, command, cv=None, spd=None):
         cells += [f"{r['sre']:.3f}"] if has_sre else []
         for t in others:
             o = get.get((c, t))
-            cells.append("–" if o is None else f"{o['auc']:.3f}" + (f" ({o['sre']:.3f})" if has_sre else ""))
+            sre = f" ({o['sre']:.3f})" if o is not None and o["sre"] is not None else ""
+            cells.append("–" if o is None else f"{o['auc']:.3f}{sre}")
         if spd:
             f = fps.get(c)
             cells.append(f"{f['vistrack_fps']:.0f} / {f['nano_fps']:.0f}" if f and f["nano_fps"] else "–")

@@ -220,22 +220,22 @@ def _job(args):
 
 
 def run_jobs(jobs, workers=2, progress=None):
-    """``[(scores, Run)]`` of ``jobs`` (see :func:`_job`), in order, over ``workers`` processes."""
+    """``[(scores, Run)]`` of ``jobs`` (see :func:`_job`), in order, over ``workers`` processes;
+    ``progress(result)`` after each."""
+    out = []
     if workers <= 1:
-        out = []
         for j in jobs:
             out.append(_job(j))
             if progress:
-                progress()
+                progress(out[-1])
         return out
     # spawned, not forked: a fork after OpenCV's DNN or thread pools started (NanoTrack made here) can hang
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as ex:
-        out = []
         for r in ex.map(_job, jobs, chunksize=1):
             out.append(r)
             if progress:
-                progress()
-        return out
+                progress(r)
+    return out
 
 
 def code_digest(root=ROOT / "vistrack"):
@@ -266,15 +266,20 @@ def cached_scores(jobs, *, cache=SCORE_CACHE, workers=2, desc="runs"):
                 continue
     todo = {k: j for k, j in zip(keys, jobs) if k not in done}
     if todo:
-        bar = tqdm(total=len(todo), desc=desc, unit="run", file=sys.stderr)
-        results = run_jobs(list(todo.values()), workers, progress=bar.update)
-        bar.close()
         if cache:
             Path(cache).parent.mkdir(parents=True, exist_ok=True)
+        bar = tqdm(total=len(todo), desc=desc, unit="run", file=sys.stderr)
+        pending = iter(todo)
         with open(cache, "a") if cache else open(os.devnull, "w") as fh:
-            for k, (sc, _) in zip(todo, results):
-                done[k] = [float(v) for v in sc]
+            def record(result):  # each run kept as it ends: an interrupted table resumes where it stopped
+                k = next(pending)
+                done[k] = [float(v) for v in result[0]]
                 fh.write(json.dumps({"key": k, "scores": done[k]}) + "\n")
+                fh.flush()
+                bar.update()
+
+            run_jobs(list(todo.values()), workers, progress=record)
+        bar.close()
     return [done[k] for k in keys]
 
 
