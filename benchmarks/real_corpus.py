@@ -23,7 +23,10 @@ Robustness starts (OTB's SRE)
 from __future__ import annotations
 
 import hashlib
+import json
+import multiprocessing
 import os
+import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
@@ -39,6 +42,8 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "real"
 NANOTRACK = ROOT.parent / "shared" / "data" / "baselines" / "nanotrack"
 FRAME_CACHE = Path(os.environ.get("VISTRACK_FRAME_CACHE", Path.home() / ".cache" / "vistrack" / "frames"))
+#: finished runs' scores (JSON lines keyed by the code's digest, clip, tracker, start, seed and options)
+SCORE_CACHE = Path.home() / ".cache" / "vistrack" / "corpus_runs.jsonl"
 #: OTB's spatial-robustness starts: shifts (share of w, h) and scales about the centre
 SRE_SHIFTS = [(dx, dy) for dx in (-0.1, 0.0, 0.1) for dy in (-0.1, 0.0, 0.1) if (dx, dy) != (0.0, 0.0)]
 SRE_SCALES = (0.8, 0.9, 1.1, 1.2)
@@ -239,22 +244,69 @@ def _job(args):
 
 def iter_jobs(jobs, workers=2):
     """``(scores, Run)`` of each of ``jobs`` (see :func:`_job`), in order, as each finishes, over ``workers``
-    processes."""
+    processes (spawned, not forked: a fork after OpenCV's DNN or thread pools started, NanoTrack made
+    here, can hang)."""
     if workers <= 1:
         yield from map(_job, jobs)
         return
-    with ProcessPoolExecutor(workers) as ex:
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as ex:
         yield from ex.map(_job, jobs, chunksize=1)
 
 
 def run_jobs(jobs, workers=2, progress=None):
-    """``[(scores, Run)]`` of ``jobs`` (see :func:`_job`), in order, over ``workers`` processes."""
+    """``[(scores, Run)]`` of ``jobs`` (see :func:`_job`), in order, over ``workers`` processes;
+    ``progress(result)`` after each."""
     out = []
     for r in iter_jobs(jobs, workers):
         out.append(r)
         if progress:
-            progress()
+            progress(r)
     return out
+
+
+def code_digest(root=ROOT / "vistrack"):
+    """SHA-1 of every ``.py`` file under ``root`` (names and contents) and of OpenCV's version: a cached run
+    is reused only for the same code."""
+    h = hashlib.sha1(cv2.__version__.encode())
+    for p in sorted(Path(root).rglob("*.py")):
+        h.update(str(p.relative_to(root)).encode())
+        h.update(p.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def cached_scores(jobs, *, cache=SCORE_CACHE, workers=2, desc="runs"):
+    """The scores ``(auc, precision, error)`` of each of ``jobs`` (see :func:`_job`), in order: read from
+    ``cache`` where the same code ran the same job before, the rest run (``workers`` processes) and added."""
+    from tqdm import tqdm
+
+    digest = code_digest()
+    keys = [json.dumps([digest, Path(f).name, t, [int(v) for v in st], s if t == "vistrack" else 0, o or {}],
+                       sort_keys=True) for f, t, st, s, o in jobs]
+    done = {}
+    if cache and Path(cache).is_file():
+        for line in Path(cache).read_text().splitlines():
+            try:
+                rec = json.loads(line)
+                done[rec["key"]] = rec["scores"]
+            except (json.JSONDecodeError, KeyError):
+                continue
+    todo = {k: j for k, j in zip(keys, jobs) if k not in done}
+    if todo:
+        if cache:
+            Path(cache).parent.mkdir(parents=True, exist_ok=True)
+        bar = tqdm(total=len(todo), desc=desc, unit="run", file=sys.stderr)
+        pending = iter(todo)
+        with open(cache, "a") if cache else open(os.devnull, "w") as fh:
+            def record(result):  # each run kept as it ends: an interrupted table resumes where it stopped
+                k = next(pending)
+                done[k] = [float(v) for v in result[0]]
+                fh.write(json.dumps({"key": k, "scores": done[k]}) + "\n")
+                fh.flush()
+                bar.update()
+
+            run_jobs(list(todo.values()), workers, progress=record)
+        bar.close()
+    return [done[k] for k in keys]
 
 
 def lost_runs(boxes, truth, min_len=5):

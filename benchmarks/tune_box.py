@@ -24,27 +24,13 @@ the options), so a grid that grows runs only what is new; ``--workers`` processe
 from __future__ import annotations
 
 import argparse
-import hashlib
 import itertools
 import json
 import sys
 from pathlib import Path
 
 import numpy as np
-from real_corpus import DATA, ROOT, find_clips, run_jobs, sre_starts
-from tqdm import tqdm
-
-CACHE = Path.home() / ".cache" / "vistrack" / "tune_box.jsonl"
-
-
-def code_digest(root=ROOT / "vistrack"):
-    """SHA-1 of every ``.py`` file under ``root`` (names and contents): a cached run is reused only for the
-    same code."""
-    h = hashlib.sha1()
-    for p in sorted(Path(root).rglob("*.py")):
-        h.update(str(p.relative_to(root)).encode())
-        h.update(p.read_bytes())
-    return h.hexdigest()[:16]
+from real_corpus import DATA, SCORE_CACHE, cached_scores, find_clips, sre_starts
 
 
 def candidates(grid=None, configs=None):
@@ -86,44 +72,20 @@ def cross_validate(scores):
     return chosen, scores[chosen, np.arange(n_clips)]
 
 
-def _key(digest, clip, start, seed, opts):
-    return json.dumps([digest, clip, list(start), seed, opts], sort_keys=True)
-
-
-def evaluate(cands, clips, seeds, *, sre=False, cache=CACHE, workers=2, digest=None):
+def evaluate(cands, clips, seeds, *, sre=False, cache=SCORE_CACHE, workers=2):
     """``{(name, clip, start_index): [AUC per seed]}`` for every candidate (start 0: the user's box;
-    1.. the robustness starts with ``sre``)."""
-    digest = digest or code_digest()
-    done = {}
-    if cache and Path(cache).is_file():
-        for line in Path(cache).read_text().splitlines():
-            try:
-                rec = json.loads(line)
-            except json.JSONDecodeError:
-                continue
-            done[rec["key"]] = rec["auc"]
-    jobs, keys = [], []
+    1.. the robustness starts with ``sre``), cached (:func:`real_corpus.cached_scores`)."""
+    jobs, where = [], []
     for name, opts in cands:
         for c in clips:
             starts = [c.user_box] + (sre_starts(c.user_box) if sre else [])
             for si, start in enumerate(starts):
                 for s in seeds:
-                    k = _key(digest, c.name, start, s, opts)
-                    keys.append((name, c.name, si, k))
-                    if k not in done:
-                        jobs.append((k, (c.folder, "vistrack", start, s, opts)))
-    if jobs:
-        bar = tqdm(total=len(jobs), desc="tune_box", unit="run", file=sys.stderr)
-        uniq = dict(jobs)
-        results = run_jobs(list(uniq.values()), workers, progress=bar.update)
-        bar.close()
-        with open(cache, "a") if cache else open("/dev/null", "w") as fh:
-            for k, (sc, _) in zip(uniq, results):
-                done[k] = float(sc[0])
-                fh.write(json.dumps({"key": k, "auc": float(sc[0])}) + "\n")
+                    jobs.append((c.folder, "vistrack", start, s, opts))
+                    where.append((name, c.name, si))
     out = {}
-    for name, clip, si, k in keys:
-        out.setdefault((name, clip, si), []).append(done[k])
+    for w, sc in zip(where, cached_scores(jobs, cache=cache, workers=workers, desc="tune_box")):
+        out.setdefault(w, []).append(sc[0])
     return out
 
 
@@ -137,7 +99,7 @@ def main(argv=None):
     ap.add_argument("--clips", default="", help="clip folder names (default: every one with ground truth)")
     ap.add_argument("--data", default=str(DATA))
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--cache", default=str(CACHE), help="the cache of finished runs ('' none)")
+    ap.add_argument("--cache", default=str(SCORE_CACHE), help="the cache of finished runs ('' none)")
     ap.add_argument("--json", default=None, help="write the scores, folds and choices here")
     args = ap.parse_args(argv)
     grid = json.loads(args.grid) if args.grid else None
@@ -146,8 +108,6 @@ def main(argv=None):
     clips = find_clips(args.data, [c for c in args.clips.split(",") if c] or None)
     if not clips:
         sys.exit(f"no clip with groundtruth_rect.txt under {args.data}")
-    if args.cache:
-        Path(args.cache).parent.mkdir(parents=True, exist_ok=True)
     seeds = list(range(1, args.seeds + 1))
     res = evaluate(cands, clips, seeds, sre=args.sre, cache=args.cache or None, workers=args.workers)
     names = [c.name for c in clips]

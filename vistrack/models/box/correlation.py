@@ -34,7 +34,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from ... import kernels
-from ...core.features import colour_bins, greedy_peaks
+from ...core.features import greedy_peaks
 
 __all__ = ["CorrelationFilter", "DCFResponse", "dcf_features"]
 
@@ -231,7 +231,7 @@ class CorrelationFilter:
     """
 
     def __init__(self, frame, box, *, cell_size=24.0, padding=1.0, sigma=0.1, lam=1e-2, rate=0.004, anchor=0.2,
-                 n_scales=3, scale_step=1.04, n_orient=6, reuse=False, colour_lut=None, colour_grey=False):
+                 n_scales=3, scale_step=1.04, n_orient=6, reuse=False):
         x, y, w, h = (float(v) for v in box)
         self.size0 = np.array([w, h])
         self.f = cell_size / np.sqrt(w * h)  # feature px per frame px at scale 1
@@ -241,11 +241,6 @@ class CorrelationFilter:
         ph, pw = self.shape
         self.anchor_px = np.array([pw // 2, ph // 2], float)
         self.n_orient = int(n_orient)
-        #: a colour channel: each pixel's colour bin (:func:`~vistrack.core.features.colour_bins`) read in this
-        #: table (the target's share of the colour), standardised over the patch (``None``: no colour channel)
-        self.colour_lut = None if colour_lut is None else np.asarray(colour_lut, np.float32)
-        self.colour_grey = bool(colour_grey)
-        self.n_channels = self.n_orient + 1 + (self.colour_lut is not None)
         self.lam, self.rate, self.anchor = float(lam), float(rate), float(anchor)
         self.log_scales = (np.arange(n_scales) - (n_scales - 1) / 2) * np.log(scale_step)
         self.hann = np.outer(np.hanning(ph + 2)[1:-1], np.hanning(pw + 2)[1:-1]).astype(np.float32)
@@ -286,17 +281,11 @@ class CorrelationFilter:
         batched transform: each the same as on its own)."""
         scales = np.atleast_1d(log_scales)
         if len(scales) not in self._feat:
-            self._feat[len(scales)] = np.empty((len(scales), self.n_channels) + self.shape, np.float32)
+            self._feat[len(scales)] = np.empty((len(scales), self.n_orient + 1) + self.shape, np.float32)
         feat = self._feat[len(scales)]
-        c = self.n_orient + 1
         for k, ls in enumerate(scales):
-            patch = self.warp(frame, centre, ls)
-            dcf_features(patch, self.n_orient, out=feat[k, :c], scratch=self._scratch, window=self.hann)
-            if self.colour_lut is not None:
-                v = self.colour_lut[colour_bins(patch, self.colour_grey)]
-                m, s = cv2.meanStdDev(v)
-                np.multiply(v - np.float32(m[0, 0]), np.float32(1.0 / max(float(s[0, 0]), 0.05)) * self.hann,
-                            out=feat[k, c])
+            dcf_features(self.warp(frame, centre, ls), self.n_orient, out=feat[k], scratch=self._scratch,
+                         window=self.hann)
         out = sfft.rfft2(feat)
         return out if np.ndim(log_scales) else out[0]
 

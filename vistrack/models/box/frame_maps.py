@@ -115,7 +115,7 @@ class AppearanceFrame:
     #: set by ``Box.observe``: the correlation filter's response and share ``β``, a re-detection?, the frame
     dcf = dcf_share = frame_image = None
     #: set by ``Box.observe``: the scale filter's response (or ``None``) and the proposal's log-scale centre
-    scale = scale_centre = dcf2 = None
+    scale = scale_centre = None
     redetected = False
     #: set by ``Box._redetect`` on a frame whose whole-frame search found the object: the pose found ``(cx, cy, l)``
     found = None

@@ -46,7 +46,6 @@ from ..collapse import CollapseCheck
 from ..innovation import ARInnovation
 from ..protocol import VideoModelBase
 from .appearance import Appearance
-from .bacf import BackgroundAwareFilter
 from .correlation import CorrelationFilter
 from .correlation_proposal import CorrelationProposal
 from .lost import LostAndFound
@@ -105,6 +104,17 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
     dcf_options : dict or None
         Passed to :class:`~vistrack.models.box.correlation.CorrelationFilter` (its ``padding``: ``4 sigma_xy``
         unless given, so that the search region about the dynamics' prediction holds 4 innovation stds).
+    scale_filter : bool or dict
+        Learn DSST's scale filter (:class:`~vistrack.models.box.scale_filter.ScaleFilter`, a dict: its
+        options) beside the correlation filter; ``False``: none.
+    lambda_scale : float
+        ``λ_s``, the weight of the scale filter's response at each state's log-scale in ``log r``.
+    scale_proposal : {"filter", "dcf"}
+        The correlation proposal's log-scale centre: the scale filter's refined peak, or the best of the
+        correlation filter's three scales. The scale filter with ``λ_s`` 20 and its peak as the proposal's
+        scale were chosen by leave-one-clip-out cross-validation over the 18 real clips (mean AUC 0.548
+        without it, 0.556–0.563 with it; each part alone less: ``benchmarks/tune_box.py``,
+        ``docs/experiments.md``).
     **appearance
         Passed to :class:`~vistrack.models.box.appearance.Appearance` (with the filter, ``lambda_colour`` 12,
         ``lambda_template`` 8 and ``kappa`` 0.5 unless given).
@@ -119,8 +129,7 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
     def __init__(self, frame, box, *, sigma_xy=None, sigma_scale=None, damping=0.5, prior_std=(0.04, 0.02),
                  window=2.5, map_stride=1, dcf=True, lambda_dcf=60.0, dcf_share=0.5, dcf_tempering=(60.0, 0.05),
                  dcf_scale_std=0.02, redetect=0.5, reentry=0.05, collapse_drop=28.0,
-                 dcf_options=None, dcf_scale_read="interp", scale_filter=None, lambda_scale=0.0,
-                 scale_proposal="dcf", estimator="mean", frame_bound=False, bacf_term=None, lambda_bacf=0.0,
+                 dcf_options=None, scale_filter=True, lambda_scale=20.0, scale_proposal="filter",
                  confidence=True, lost_confidence=None, redetect_after=3, search_crop=1.0, search_peaks=3,
                  **appearance):
         x, y, w, h = (float(v) for v in box)
@@ -148,29 +157,20 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         self.blob_cell = 0.25 * side  # the colour-blob proposal's cell (frame px)
         self.learn_blob(frame, _inner_ellipse(frame.shape[:2], (x, y, w, h)))
         # the search region: the box grown by 4 innovation stds of the centre on each side, about the prediction
-        dcf_options = dict(dcf_options or {})
-        kind = dcf_options.pop("kind", "dcf")
-        if kind == "bacf":
-            self.cf = BackgroundAwareFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
-        else:
-            dcf_options = {"padding": 4.0 * sigma_xy, **dcf_options}
-            if dcf_options.pop("colour", False):
-                dcf_options.update(colour_lut=self.app.colour.backprojection, colour_grey=self.app.grey)
-            self.cf = CorrelationFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
+        dcf_options = {"padding": 4.0 * sigma_xy, **(dcf_options or {})}
+        self.cf = CorrelationFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
         self._reach = 1.0 if dcf else 1.0 + self.window  # the observed region's reach, in 4 innovation stds
         if dcf:  # log r's scale with the filter's term: lost 28 below the running level
             self.collapse_options = {"drop": float(collapse_drop)}
         self.lambda_dcf, self.dcf_share, self.dcf_scale_std = float(lambda_dcf), float(dcf_share), float(dcf_scale_std)
         self.dcf_tempering = tuple(float(v) for v in dcf_tempering)
         self._d = self.damping  # this frame's damping: 0 on the frame after a re-detection (no velocity)
-        self.dcf_scale_read = dcf_scale_read
-        self.sf = ScaleFilter(frame, (x, y, w, h), **scale_filter) if (dcf and scale_filter is not None) else None
+        if scale_proposal not in ("filter", "dcf"):
+            raise ValueError(f"scale_proposal is 'filter' or 'dcf', got {scale_proposal!r}")
+        sf_options = scale_filter if isinstance(scale_filter, dict) else {}
+        self.sf = ScaleFilter(frame, (x, y, w, h), **sf_options) if (dcf and scale_filter) else None
         self.lambda_scale = float(lambda_scale)
         self.scale_proposal = scale_proposal
-        self.estimator = estimator
-        self.cf2 = BackgroundAwareFilter(frame, (x, y, w, h), **bacf_term) if bacf_term is not None else None
-        self.lambda_bacf = float(lambda_bacf)
-        self.frame_bound = bool(frame_bound)
         self.init_lost(dcf, confidence, lost_confidence, redetect, reentry, redetect_after, search_crop, search_peaks)
 
     # -- geometry ---------------------------------------------------------------------
@@ -313,11 +313,8 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         obs = self.app.frame(frame, roi)
         obs.dcf, obs.dcf_share, obs.redetected, obs.frame_image = resp, share, redetected, frame
         obs.scale = None if self.sf is None else self.sf.detect(frame, resp.peak_xy, float(centre[2]))
-        obs.dcf2 = None if self.cf2 is None else self.cf2.detect(frame, centre[:2], float(centre[2]))
         if self.scale_proposal == "filter" and obs.scale is not None:
             obs.scale_centre = obs.scale.peak_log_scale
-        elif self.scale_proposal == "prediction":
-            obs.scale_centre = float(centre[2])
         return obs
 
     def loglik(self, obs, states):
@@ -329,34 +326,13 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
             out = self.app.loglik(obs, self.boxes(states))
         resp = obs.dcf
         if resp is not None and self.lambda_dcf:
-            s = np.atleast_2d(states)
-            if self.dcf_scale_read == "best":
-                s = s.copy()
-                s[:, 2] = resp.log_scales[resp.best]
-            out = out + self.lambda_dcf * resp.read(s)
+            out = out + self.lambda_dcf * resp.read(np.atleast_2d(states))
         if obs.scale is not None and self.lambda_scale:
             out = out + self.lambda_scale * obs.scale.read(np.atleast_2d(states)[:, 2])
-        if self.cf2 is not None and self.lambda_bacf and obs.dcf2 is not None:
-            s = np.atleast_2d(states).copy()
-            s[:, 2] = obs.dcf2.log_scales[0]
-            out = out + self.lambda_bacf * obs.dcf2.read(s)
-        if self.frame_bound:
-            s = np.atleast_2d(states)
-            w, h = self.frame_size
-            out = np.where((s[:, 0] >= 0) & (s[:, 0] < w) & (s[:, 1] >= 0) & (s[:, 1] < h), out, out - 1e3)
         return out
 
     def estimate(self, particles):
-        """The weighted mean state (``estimator="mode"``: the weighted mean of the particles whose centre is
-        within a third of the box's side of the heaviest particle's)."""
-        if self.estimator == "mode":
-            s = particles.states
-            w = particles.weights
-            k = int(np.argmax(w))
-            side = np.sqrt(np.prod(self.size0)) * np.exp(s[k, 2])
-            near = np.hypot(s[:, 0] - s[k, 0], s[:, 1] - s[k, 1]) <= side / 3
-            wn = w * near
-            return wn @ s / wn.sum()
+        """The weighted mean state."""
         return particles.mean()
 
     def adapt(self, obs, estimate):
@@ -372,8 +348,6 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
             self.cf.adapt(obs.frame_image, e[:2], float(e[2]))
             if self.sf is not None:
                 self.sf.adapt(obs.frame_image, e[:2], float(e[2]))
-            if self.cf2 is not None:
-                self.cf2.adapt(obs.frame_image, e[:2], float(e[2]))
         return done
 
     # -- local moves (and :class:`~vistrack.models.box.moves.BoxMoves`) ------------------------
