@@ -1,30 +1,42 @@
-"""vistrack's defaults beside OpenCV's trackers on every real clip with ground truth, and on
-stressed copies of them: the benchmark that decides defaults (issue 34).
+"""vistrack's defaults beside OpenCV's trackers on every real clip with ground truth: the table of record
+(issues 34 and 43).
 
-    python benchmarks/bench_real.py --all --seeds 3                # the table of record
-    python benchmarks/bench_real.py --seeds 1 --stress ''           # originals only, one seed
-    python benchmarks/bench_real.py --all --seeds 3 --readme README.md --json real.json
+    python benchmarks/bench_real.py --seeds 3 --sre --speed             # the table of record
+    python benchmarks/bench_real.py --seeds 1                           # user starts only, one seed
+    python benchmarks/bench_real.py --seeds 3 --sre --speed --readme README.md --json real.json
+    python benchmarks/bench_real.py --seeds 3 --stress ramp,blur        # also stressed copies (issue 34)
 
-Clips: every folder under ``--data`` (``../shared/data/real``) holding ``groundtruth_rect.txt`` —
-found by globbing, so a clip added later is included — or those named by ``--clips``. With
-``--all`` (or ``--stress KINDS``) each clip is also run as stressed copies made by
-``vistrack synth perturb`` (``data_synth.perturb.STRESS_PRESETS``: light ramp ×0.3 → ×1.6,
-motion blur 9 px, camera shake ±6 px, a zoom out from 1.6 to 1 times the object's size; seed 1), cached under
-``--cache``. Every tracker starts from the first ground-truth box of the copy it runs on.
+Clips: the corpus of ``real_corpus.py``: every folder under ``--data`` (``../shared/data/real``) holding
+``groundtruth_rect.txt`` (globbed, so a clip added later is included), or those named by ``--clips``.
 
-vistrack runs with its defaults (``vistrack.Tracker(seed=s)``, what ``vistrack run VIDEO --init``
-runs) for seeds 1..``--seeds``, and any ``--entries`` ``[model/]algo:N`` beside it; OpenCV's MIL,
-KCF and CSRT (KCF and CSRT need opencv-contrib-python-headless; missing ones are skipped with a
-note) run once (they are deterministic), single-threaded like vistrack. Frames are decoded once
-and held in memory: "frames/s" is tracking only (``init`` + ``update``), "e2e" adds the clip's
-decoding time per frame (``--clock process``: CPU time of this process instead of wall time, for a
-machine shared with other jobs). Scores (``vistrack.core.metrics.box_scores``): success AUC (IoU thresholds
-0, 0.05, .., 1), precision at 20 px, mean centre error, over frames with a true box.
+Starts (``real_corpus.py``)
+    every tracker starts from the box a user types: the first line of the ground-truth file as written,
+    in whole pixels (for OTB's 1-based files one pixel off the 0-based truth, the same box for all).
+    ``--sre`` adds OTB's 12 spatial-robustness starts (the box shifted by 10 % of its size in 8
+    directions and scaled by 0.8, 0.9, 1.1, 1.2): their mean AUC per clip (vistrack seed 1, NanoTrack, CSRT).
+Trackers
+    vistrack's defaults (``vistrack.Tracker(seed=s)``, what ``vistrack run VIDEO --init X,Y,W,H``
+    runs) for seeds 1..``--seeds``; OpenCV's MIL, KCF, CSRT (KCF and CSRT need
+    opencv-contrib-python-headless) and NanoTrack (``cv2.TrackerNano`` with the ONNX weights in
+    ``../shared/data/baselines/nanotrack``), each run once (they are deterministic); a tracker that is
+    missing is skipped with a note. ``--entries [model/]algo:N,...`` adds vistrack configurations.
+Cross-validation (``--candidates FILE``)
+    the box model's configurations tried (``benchmarks/box_candidates.json``; the defaults first) run on
+    every clip and seed (as ``tune_box.py`` runs them); for each clip the configuration best on the *other*
+    clips is scored on it: the leave-one-clip-out mean, printed beside the defaults' in-sample mean.
+Speed (``--speed``)
+    per clip, in this one process, single-threaded, from the same decoded frames held in memory:
+    vistrack (seed 1) and NanoTrack alternately, ``--reps`` times each, the fastest of each;
+    tracking-only frames/s and their ratio. End to end (decoding included, vistrack's reader) against
+    KCF's on the median clip.
+Scores (``vistrack.core.metrics.box_scores``)
+    success AUC (IoU thresholds 0, 0.05, .., 1), precision at 20 px, mean centre error, over frames
+    with a true box.
 
-Printed: a row per clip, stress and tracker (mean AUC over seeds, the worst seed's AUC, P@20, error,
-frames/s, e2e frames/s), the mean over clips per stress, and issue 34's acceptance checks.
-``--readme FILE`` rewrites the block between ``<!-- BEGIN real-clips`` and ``<!-- END real-clips -->``
-with the tables; ``--json FILE`` keeps every number.
+Printed: a row per clip and tracker, the means, and issue 43's acceptance checks. ``--readme FILE``
+rewrites the block between ``<!-- BEGIN real-clips`` and ``<!-- END real-clips -->``; ``--json FILE``
+keeps every number. Runs are cached (``~/.cache/vistrack/corpus_runs.jsonl``, keyed by vistrack's code and
+OpenCV's version), so a second table after no change of code runs only ``--speed``.
 """
 
 from __future__ import annotations
@@ -37,48 +49,50 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from real_corpus import (
+    DATA,
+    OPENCV,
+    SCORE_CACHE,
+    cached_scores,
+    find_clips,
+    load_clip,
+    opencv_tracker,
+    run_opencv,
+    run_vistrack,
+    sre_starts,
+)
 from tqdm import tqdm
+from tune_box import cross_validate
+from tune_box import evaluate as tune_evaluate
 
-import vistrack
-from vistrack.core.metrics import box_scores
 from vistrack.core.runtime import keep_freed_memory
 from vistrack.data_synth.perturb import STRESS_PRESETS, perturb_clip
-from vistrack.io.video import find_groundtruth, groundtruth_origin, open_video, read_rects
+from vistrack.io.video import open_video
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
-CACHE = Path.home() / ".cache" / "vistrack" / "bench_real"
-#: the stresses --all adds (issue 34: light ramp, blur, shake, zoom)
-ALL_STRESSES = ("ramp", "blur", "shake", "zoom")
-#: the clips that earlier defaults were tuned on; since issue 34 defaults change only on the mean over all clips
-TUNED_ON = ("girl_otb", "hand_vot2013", "car4_otb_first100", "plate_in_polo_dashcam")
+STRESS_CACHE = Path.home() / ".cache" / "vistrack" / "bench_real"
+CANDIDATES = Path(__file__).with_name("box_candidates.json")
 DEFAULT = "vistrack"
-#: the clock every time is read with (``--clock``): wall time, or this process's CPU time
-CLOCK = [time.perf_counter]
+#: the trackers run from the robustness starts (issue 43 compares vistrack with these)
+SRE_TRACKERS = (DEFAULT, "Nano", "CSRT")
+#: ``--entries``: more vistrack configurations by name (``lis-100``: ``{"algo": "lis", "particles": 100}``)
+ENTRIES = {}
 
 
-def opencv_tracker(name):
-    """``cv2.Tracker<name>`` from this OpenCV build, or ``None``."""
-    for ns in (cv2, getattr(cv2, "legacy", None)):
-        if ns is not None and hasattr(ns, f"Tracker{name}_create"):
-            return getattr(ns, f"Tracker{name}_create")()
-    cls = getattr(cv2, f"Tracker{name}", None)
-    return cls.create() if cls is not None and hasattr(cls, "create") else None
+def parse_entries(spec):
+    """``[model/]algo:N,...`` -> ``{name: Tracker options}``."""
+    out = {}
+    for e in (e.strip() for e in spec.split(",") if e.strip()):
+        name, n = e.split(":")
+        model, algo = name.split("/") if "/" in name else ("box", name)
+        opts = {"algo": algo, "particles": int(n)}
+        if model != "box":
+            opts.update(model=model, **({"layout": "single-row"} if model == "plate" else {}))
+        out[f"{algo}-{n}" if model == "box" else f"{model}/{algo}-{n}"] = opts
+    return out
 
 
-def find_clips(data, names=None):
-    """Clip folders under ``data`` with ``groundtruth_rect.txt``, sorted (or those ``names``)."""
-    found = sorted(p.parent for p in Path(data).glob("*/groundtruth_rect.txt"))
-    if names:
-        by_name = {p.name: p for p in found}
-        missing = [n for n in names if n not in by_name]
-        if missing:
-            sys.exit(f"not found under {data} (or without groundtruth_rect.txt): {', '.join(missing)}")
-        found = [by_name[n] for n in names]
-    return found
-
-
-def stressed_copy(clip, stress, cache):
-    """The folder of ``clip``'s copy under the preset ``stress``, made once into ``cache``."""
+def stressed_copy(clip, stress, cache=STRESS_CACHE):
+    """The folder of ``clip``'s copy under the preset ``stress`` (``vistrack synth perturb``, seed 1), made once."""
     p = STRESS_PRESETS[stress]
     p = type(p)(**{**p.__dict__, "seed": 1})
     out = Path(cache) / f"{clip.name}-{stress}"
@@ -86,191 +100,185 @@ def stressed_copy(clip, stress, cache):
     if meta.is_file():
         m = json.loads(meta.read_text())
         same = all(m.get(k) == (list(v) if isinstance(v, tuple) else v) for k, v in p.__dict__.items())
-        if same and m.get("source") == str(clip.resolve()):
+        if same and m.get("source") == str(clip.folder.resolve()):
             return out
-    perturb_clip(out, clip=clip, p=p)
+    perturb_clip(out, clip=clip.folder, p=p)
     return out
 
 
-def load(folder):
-    """Frames (decoded once), 0-based ground truth ``(T, 4)`` and decoding seconds of a clip folder."""
-    t0 = CLOCK[0]()
-    frames = [f for _, f in open_video(folder)]
-    decode = CLOCK[0]() - t0
-    gt_path = find_groundtruth(folder)
-    gt = read_rects(gt_path, origin=groundtruth_origin(gt_path))[: len(frames)]
-    return frames[: len(gt)], gt, decode * len(gt) / max(len(frames), 1)
-
-
-def first_box(gt):
-    """The first frame with a true box and that box."""
-    k = int(np.argmax((gt[:, 2] > 0) & (gt[:, 3] > 0)))
-    return k, gt[k]
-
-
-def run_vistrack(frames, gt, seed, model=None, algo=None, n=None):
-    kw = {k: v for k, v in (("model", model), ("algo", algo), ("particles", n)) if v is not None}
-    if model == "plate":
-        kw["layout"] = "single-row"
-    t = vistrack.Tracker(seed=seed, **kw)
-    k, box = first_box(gt)
-    out = np.zeros_like(gt)
-    t0 = CLOCK[0]()
-    t.init(frames[k], box)
-    out[k] = t.box_estimate  # the float estimate (update's box is rounded, as OpenCV's)
-    for i in range(k + 1, len(frames)):
-        t.update(frames[i])
-        out[i] = t.box_estimate
-    return out, CLOCK[0]() - t0
-
-
-def run_opencv(frames, gt, name):
-    tr = opencv_tracker(name)
-    k, box = first_box(gt)
-    b = tuple(int(round(v)) for v in box)
-    out = np.zeros_like(gt)
-    t0 = CLOCK[0]()
-    tr.init(frames[k], b)
-    out[k] = last = b
-    for i in range(k + 1, len(frames)):
-        ok, r = tr.update(frames[i])
-        last = tuple(r) if ok else last  # a failed update holds its last box
-        out[i] = last
-    return out, CLOCK[0]() - t0
-
-
-def parse_entries(spec):
-    entries = [(DEFAULT, None, None, None)]
-    for e in (e for e in spec.split(",") if e.strip()):
-        name, n = e.split(":")
-        model, algo = name.split("/") if "/" in name else ("box", name)
-        entries.append((f"{algo}-{n}" if model == "box" else f"{model}/{algo}-{n}", model, algo, int(n)))
-    return entries
-
-
-def bench(clips, stresses, entries, cvs, seeds, cache):
-    """Every row: ``{"clip", "stress", "tracker", "auc", "auc_seeds", "precision", "error", "fps", "e2e_fps"}``."""
-    variants = [(c, "none") for c in clips] + [(c, s) for s in stresses for c in clips]
-    rows = []
-    bar = tqdm(total=len(variants) * (len(entries) * len(seeds) + len(cvs)), unit="run", desc="bench_real",
-               file=sys.stderr)
-    for i, (clip, stress) in enumerate(variants):
-        folder = clip if stress == "none" else stressed_copy(clip, stress, cache)
-        frames, gt, decode = load(folder)
-        n = len(frames) - first_box(gt)[0]
-        if i == 0:  # load the compiled kernels before any clock runs
-            for _, model, algo, particles in entries:
-                run_vistrack(frames[:5], gt[:5], 0, model, algo, particles)
-        runs = []
-        for name, model, algo, particles in entries:
-            if model == "plate" and not clip.name.startswith("plate"):
-                bar.update(len(seeds))
+def accuracy(clips, trackers, seeds, *, sre=False, workers=2, cache=SCORE_CACHE):
+    """Rows ``{"clip", "stress", "tracker", "auc", "auc_seeds", "precision", "error", "sre"}`` (runs cached:
+    :func:`real_corpus.cached_scores`)."""
+    jobs, where = [], []
+    for clip, stress in clips:
+        for tr in trackers:
+            kind, options = ("vistrack", ENTRIES.get(tr)) if tr == DEFAULT or tr in ENTRIES else (tr, None)
+            if options and options.get("model") == "plate" and not clip.name.startswith("plate"):
                 continue
-            res = []
-            for s in seeds:
-                res.append(run_vistrack(frames, gt, s, model, algo, particles))
-                bar.update()
-            runs.append((name, res))
-        for name in cvs:
-            runs.append((name, [run_opencv(frames, gt, name)]))
-            bar.update()
-        for name, res in runs:
-            sc = np.array([box_scores(b, gt) for b, _ in res])
-            track = float(np.median([t for _, t in res]))
-            rows.append({"clip": clip.name, "stress": stress, "tracker": name, "auc": float(sc[:, 0].mean()),
-                         "auc_seeds": [float(v) for v in sc[:, 0]], "precision": float(sc[:, 1].mean()),
-                         "error": float(sc[:, 2].mean()), "fps": n / track,
-                         "e2e_fps": n / (track + decode * n / len(frames)), "frames": n})
-        del frames
-    bar.close()
-    return rows
+            for s in (seeds if kind == "vistrack" else [0]):
+                jobs.append((clip.folder, kind, clip.user_box, s, options))
+                where.append((clip.name, stress, tr, "user"))
+            if sre and tr in SRE_TRACKERS:
+                for start in sre_starts(clip.user_box):
+                    jobs.append((clip.folder, kind, start, 1, options))
+                    where.append((clip.name, stress, tr, "sre"))
+    rows = {}
+    for (clip, stress, tr, kind), sc in zip(where, cached_scores(jobs, cache=cache, workers=workers,
+                                                                  desc="bench_real")):
+        r = rows.setdefault((clip, stress, tr), {"clip": clip, "stress": stress, "tracker": tr, "scores": [],
+                                                 "sre_auc": []})
+        (r["scores"] if kind == "user" else r["sre_auc"]).append(sc)
+    out = []
+    for r in rows.values():
+        sc = np.array(r.pop("scores"))
+        sre_auc = [float(s[0]) for s in r.pop("sre_auc")]
+        out.append({**r, "auc": float(sc[:, 0].mean()), "auc_seeds": sc[:, 0].tolist(),
+                    "precision": float(sc[:, 1].mean()), "error": float(sc[:, 2].mean()),
+                    "sre": float(np.mean(sre_auc)) if sre_auc else None})
+    return out
 
 
-def print_rows(rows):
-    print(f"{'clip':<24} {'stress':<7} {'tracker':<14} {'AUC':>6} {'worst':>6} {'P@20':>6} {'err px':>7} "
-          f"{'frames/s':>9} {'e2e':>6}")
-    for r in rows:
-        print(f"{r['clip']:<24} {r['stress']:<7} {r['tracker']:<14} {r['auc']:>6.3f} {min(r['auc_seeds']):>6.3f} "
-              f"{r['precision']:>6.3f} {r['error']:>7.1f} {r['fps']:>9.0f} {r['e2e_fps']:>6.0f}")
+def _tracking_seconds(frames, start, tracker):
+    return (run_vistrack(frames, start, 1) if tracker == DEFAULT else run_opencv(frames, start, tracker)).seconds
 
 
-def means(rows):
-    """``{stress: {tracker: mean AUC over clips}}`` (trackers run on every clip of that stress)."""
+def speed(clips, reps=3, kcf=True):
+    """Per clip ``{"clip", "frames", "vistrack_fps", "nano_fps", "ratio", "decode_s", "vistrack_e2e", "kcf_e2e"}``:
+    tracking-only frames/s in this process, the fastest of ``reps`` alternating runs of each."""
+    cv2.setNumThreads(1)
+    has_nano, has_kcf = opencv_tracker("Nano") is not None, kcf and opencv_tracker("KCF") is not None
+    out = []
+    for clip in tqdm(clips, desc="speed", unit="clip", file=sys.stderr):
+        frames = np.ascontiguousarray(clip.frames())
+        n = len(frames)
+        _tracking_seconds(frames[:5], clip.user_box, DEFAULT)  # compiled kernels loaded before any clock
+        best = {DEFAULT: np.inf, "Nano": np.inf, "KCF": np.inf}
+        for _ in range(reps):
+            for tr in [DEFAULT] + ["Nano"] * has_nano + ["KCF"] * has_kcf:
+                best[tr] = min(best[tr], _tracking_seconds(frames, clip.user_box, tr))
+        t0 = time.perf_counter()
+        for k, _ in enumerate(open_video(clip.video)):
+            if k + 1 == n:
+                break
+        decode = time.perf_counter() - t0
+        out.append({"clip": clip.name, "frames": n, "vistrack_fps": n / best[DEFAULT],
+                    "nano_fps": n / best["Nano"] if has_nano else None,
+                    "ratio": best["Nano"] / best[DEFAULT] if has_nano else None, "decode_s": decode,
+                    "vistrack_e2e": n / (best[DEFAULT] + decode),
+                    "kcf_e2e": n / (best["KCF"] + decode) if has_kcf else None})
+    return out
+
+
+def cross_validated(clips, seeds, candidates_file, workers=2):
+    """``(names, scores (C, K), chosen (K,), held_out (K,))`` over the candidates of ``candidates_file``."""
+    configs = json.loads(Path(candidates_file).read_text())
+    cands = [("defaults", {})] + [(k, v) for k, v in configs.items() if k != "defaults"]
+    res = tune_evaluate(cands, clips, seeds, workers=workers)
+    scores = np.array([[np.mean(res[(n, c.name, 0)]) for c in clips] for n, _ in cands])
+    chosen, held = cross_validate(scores)
+    return [n for n, _ in cands], scores, chosen, held
+
+
+def means(rows, key="auc"):
+    """``{stress: {tracker: mean over clips}}`` for trackers with ``key`` on every clip of that stress."""
     out = {}
     for stress in dict.fromkeys(r["stress"] for r in rows):
         sub = [r for r in rows if r["stress"] == stress]
         n_clips = len({r["clip"] for r in sub})
         by = {}
         for r in sub:
-            by.setdefault(r["tracker"], []).append(r["auc"])
+            if r.get(key) is not None:
+                by.setdefault(r["tracker"], []).append(r[key])
         out[stress] = {k: float(np.mean(v)) for k, v in by.items() if len(v) == n_clips}
     return out
 
 
-def checks(rows):
-    """Issue 34's acceptance checks that these rows can decide: ``[(text, passed)]``."""
-    get = {(r["clip"], r["stress"], r["tracker"]): r for r in rows}
-    orig = [r for r in rows if r["stress"] == "none" and r["tracker"] == DEFAULT]
-    m = means(rows)
+def checks(rows, cv=None, spd=None):
+    """Issue 43's acceptance checks that these numbers can decide: ``[(text, passed)]``."""
     out = []
-    if "CSRT" in m.get("none", {}):
-        v, c = m["none"][DEFAULT], m["none"]["CSRT"]
-        out.append((f"mean AUC over {len(orig)} clips {v:.3f} >= CSRT's {c:.3f} + 0.05", v >= c + 0.05))
-    for r in orig:
-        mil, csrt = get.get((r["clip"], "none", "MIL")), get.get((r["clip"], "none", "CSRT"))
-        if mil and csrt:
-            ok = r["auc"] >= mil["auc"] and r["auc"] >= csrt["auc"] - 0.10 and min(r["auc_seeds"]) >= mil["auc"] - 0.05
-            out.append((f"{r['clip']}: {r['auc']:.3f} (worst {min(r['auc_seeds']):.3f}) vs MIL {mil['auc']:.3f}, "
-                        f"CSRT {csrt['auc']:.3f}", ok))
-        if csrt:
-            out.append((f"{r['clip']}: frames/s {r['fps']:.0f} >= 5 x CSRT's {csrt['fps']:.0f}",
-                        r["fps"] >= 5 * csrt["fps"]))
-    for stress, by in m.items():
-        if stress != "none" and "CSRT" in by and DEFAULT in by:
-            out.append((f"stress {stress}: mean AUC {by[DEFAULT]:.3f} >= CSRT's {by['CSRT']:.3f}",
-                        by[DEFAULT] >= by["CSRT"]))
-    kcf = [(r["e2e_fps"], get[(r["clip"], "none", "KCF")]["e2e_fps"]) for r in orig
-           if (r["clip"], "none", "KCF") in get]
-    if kcf:
-        ratio = float(np.median([a / b for a, b in kcf]))
-        out.append((f"end-to-end frames/s, median clip: {ratio:.2f} x KCF's", ratio >= 1.0))
+    m, s = means(rows).get("none", {}), means(rows, "sre").get("none", {})
+    v = m.get(DEFAULT)
+    if v is not None and "Nano" in m:
+        out.append((f"mean AUC {v:.3f} >= NanoTrack's {m['Nano']:.3f}", v >= m["Nano"]))
+    if v is not None and "CSRT" in m:
+        out.append((f"mean AUC {v:.3f} >= CSRT's {m['CSRT']:.3f} + 0.08", v >= m["CSRT"] + 0.08))
+        get = {(r["clip"], r["tracker"]): r["auc"] for r in rows if r["stress"] == "none"}
+        worse = [f"{c} {a:.3f} vs {get[(c, 'CSRT')]:.3f}" for (c, t), a in get.items()
+                 if t == DEFAULT and (c, "CSRT") in get and a < get[(c, "CSRT")] - 0.10]
+        out.append(("every clip >= CSRT's - 0.10" + (f" (not: {'; '.join(worse)})" if worse else ""), not worse))
+    if cv is not None:
+        names, scores, _, held = cv
+        gap = scores[0].mean() - held.mean()
+        out.append((f"leave-one-clip-out mean {held.mean():.3f} within 0.03 of the defaults' in-sample "
+                    f"{scores[0].mean():.3f}", abs(gap) <= 0.03))
+    if s.get(DEFAULT) is not None:
+        for other in ("Nano", "CSRT"):
+            if other in s:
+                out.append((f"robustness starts: mean AUC {s[DEFAULT]:.3f} >= {other}'s {s[other]:.3f}",
+                            s[DEFAULT] >= s[other]))
+    if spd:
+        ratios = [(r["clip"], r["ratio"]) for r in spd if r["ratio"] is not None]
+        if ratios:
+            low = [f"{c} {x:.2f}x" for c, x in ratios if x < 2]
+            out.append((f"tracking frames/s >= 2x NanoTrack's on every clip (lowest {min(x for _, x in ratios):.2f}x"
+                        + (f"; below 2x: {', '.join(low)}" if low else "") + ")", not low))
+        kcf = sorted(r["vistrack_e2e"] / r["kcf_e2e"] for r in spd if r["kcf_e2e"])
+        if kcf:
+            med = float(np.median(kcf))
+            out.append((f"end-to-end frames/s, median clip: {med:.2f}x KCF's", med >= 1.0))
     return out
 
 
-def markdown(rows, seeds, command):
-    """README's tables: the originals per clip, and the mean over clips per stress."""
+def markdown(rows, seeds, command, cv=None, spd=None):
+    """README's table: a row per clip (AUC from user starts, robustness starts, frames/s) and the means."""
     trackers = list(dict.fromkeys(r["tracker"] for r in rows))
     others = [t for t in trackers if t != DEFAULT]
-    get = {(r["clip"], r["stress"], r["tracker"]): r for r in rows}
+    get = {(r["clip"], r["tracker"]): r for r in rows if r["stress"] == "none"}
+    fps = {r["clip"]: r for r in spd or []}
     clips = list(dict.fromkeys(r["clip"] for r in rows))
-    head = ("| clip | vistrack (defaults): AUC (worst seed) | P@20 | frames/s (e2e) | "
-            + " | ".join(f"{t} AUC | {t} frames/s" for t in others) + " |")
-    lines = [f"Success AUC (mean over seeds {seeds[0]}–{seeds[-1]}, the worst seed in brackets; OpenCV's trackers run "
-             f"once), precision at 20 px and tracking frames/s (decoding included in brackets), from `{command}` "
-             f"(OpenCV {cv2.__version__}). The defaults were chosen on the mean over all these clips (issue 34); "
-             f"before that only {', '.join(c for c in clips if c in TUNED_ON)} were used. The real clips without "
-             "ground truth were never used to choose a default.", "", head, "|" + "---|" * (4 + 2 * len(others))]
+    has_sre = any(r["sre"] is not None for r in rows)
+    cv_held = dict(zip(clips, cv[3])) if cv is not None else {}
+    head = (["clip", "vistrack AUC (worst seed)"] + (["left-out AUC"] if cv else [])
+            + (["vistrack SRE"] if has_sre else [])
+            + [f"{t} AUC" + (" (SRE)" if has_sre and t in SRE_TRACKERS else "") for t in others]
+            + (["frames/s: vistrack / NanoTrack"] if spd else []))
+    lines = [f"Success AUC from the start box a user types (the first ground-truth line in whole pixels), vistrack "
+             f"seeds {seeds[0]}–{seeds[-1]} (worst seed in brackets), OpenCV {cv2.__version__}'s trackers once"
+             + ("; SRE: the mean over OTB's 12 robustness starts" if has_sre else "")
+             + ("; left-out AUC: the configuration chosen on the other clips (leave-one-clip-out), scored on this one"
+                if cv else "")
+             + ("; tracking-only frames/s, one process, single-threaded" if spd else "") + f". From `{command}`.",
+             "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for c in clips:
-        r = get.get((c, "none", DEFAULT))
+        r = get.get((c, DEFAULT))
         if r is None:
             continue
-        cells = [c, f"{r['auc']:.3f} ({min(r['auc_seeds']):.3f})",
-                 f"{r['precision']:.3f}", f"{r['fps']:.0f} ({r['e2e_fps']:.0f})"]
+        cells = [c, f"{r['auc']:.3f} ({min(r['auc_seeds']):.3f})"]
+        cells += [f"{cv_held[c]:.3f}"] if cv else []
+        cells += [f"{r['sre']:.3f}"] if has_sre else []
         for t in others:
-            o = get.get((c, "none", t))
-            cells += [f"{o['auc']:.3f}", f"{o['fps']:.0f}"] if o else ["–", "–"]
+            o = get.get((c, t))
+            sre = f" ({o['sre']:.3f})" if o is not None and o["sre"] is not None else ""
+            cells.append("–" if o is None else f"{o['auc']:.3f}{sre}")
+        if spd:
+            f = fps.get(c)
+            cells.append(f"{f['vistrack_fps']:.0f} / {f['nano_fps']:.0f}" if f and f["nano_fps"] else "–")
         lines.append("| " + " | ".join(cells) + " |")
-    m = means(rows)
-    if "none" in m:
-        lines.append("| **mean** | " + f"**{m['none'].get(DEFAULT, float('nan')):.3f}** | | | "
-                     + "".join(f"{m['none'][t]:.3f} | | " if t in m["none"] else "– | | " for t in others).rstrip())
-    stressed = [s for s in m if s != "none"]
+    m, s = means(rows).get("none", {}), means(rows, "sre").get("none", {})
+    cells = ["**mean**", f"**{m.get(DEFAULT, float('nan')):.3f}**"]
+    cells += [f"{cv[3].mean():.3f}"] if cv else []
+    cells += [f"{s.get(DEFAULT, float('nan')):.3f}"] if has_sre else []
+    cells += [f"{m[t]:.3f}" + (f" ({s[t]:.3f})" if t in s else "") if t in m else "–" for t in others]
+    cells += [""] if spd else []
+    lines.append("| " + " | ".join(cells) + " |")
+    stressed = [st for st in means(rows) if st != "none"]
     if stressed:
+        ms = means(rows)
         lines += ["", "Mean success AUC over the same clips' stressed copies (`vistrack synth perturb`, seed 1):", "",
-                  "| stress | " + " | ".join(["vistrack", *others]) + " |", "|---|" + "---|" * (1 + len(others))]
-        for s in ["none", *stressed]:
-            lines.append(f"| {'original' if s == 'none' else s} | "
-                         + " | ".join(f"{m[s][t]:.3f}" if t in m[s] else "–" for t in [DEFAULT, *others]) + " |")
+                  "| stress | " + " | ".join([DEFAULT, *others]) + " |", "|---|" + "---|" * (1 + len(others))]
+        for st in ["none", *stressed]:
+            lines.append(f"| {'original' if st == 'none' else st} | "
+                         + " | ".join(f"{ms[st][t]:.3f}" if t in ms[st] else "–" for t in [DEFAULT, *others]) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -284,54 +292,82 @@ def update_readme(path, table):
     Path(path).write_text(text[:begin] + table + text[end:])
 
 
+def print_report(rows, cv, spd):
+    print(f"{'clip':<26} {'stress':<7} {'tracker':<9} {'AUC':>6} {'worst':>6} {'P@20':>6} {'err px':>7} {'SRE':>6}")
+    for r in rows:
+        sre = f"{r['sre']:.3f}" if r["sre"] is not None else "–"
+        print(f"{r['clip']:<26} {r['stress']:<7} {r['tracker']:<9} {r['auc']:>6.3f} {min(r['auc_seeds']):>6.3f} "
+              f"{r['precision']:>6.3f} {r['error']:>7.1f} {sre:>6}")
+    for stress, by in means(rows).items():
+        print(f"mean AUC over clips, {stress}: " + ", ".join(f"{k} {v:.3f}" for k, v in by.items()))
+    for stress, by in means(rows, "sre").items():
+        if by:
+            print(f"mean AUC over the robustness starts, {stress}: "
+                  + ", ".join(f"{k} {v:.3f}" for k, v in by.items()))
+    if cv is not None:
+        names, scores, chosen, held = cv
+        print(f"cross-validation over {len(names)} configurations ({', '.join(names)}): defaults in-sample "
+              f"{scores[0].mean():.3f}, leave-one-clip-out {held.mean():.3f}; chosen per clip: "
+              + ", ".join(f"{names[k]}" for k in chosen))
+    for r in spd or []:
+        nano = f"NanoTrack {r['nano_fps']:.0f}, ratio {r['ratio']:.2f}x" if r["nano_fps"] else "no NanoTrack"
+        kcf = f", e2e {r['vistrack_e2e']:.0f} vs KCF {r['kcf_e2e']:.0f}" if r["kcf_e2e"] else ""
+        print(f"speed {r['clip']:<26} vistrack {r['vistrack_fps']:.0f} frames/s, {nano}{kcf}")
+    print("issue 43 checks:")
+    for text, ok in checks(rows, cv, spd):
+        print(f"  [{'ok' if ok else 'NO'}] {text}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
-    ap.add_argument("--all", action="store_true", help=f"also the stressed copies ({', '.join(ALL_STRESSES)})")
-    ap.add_argument("--stress", default=None,
-                    help=f"stressed copies to add, comma-separated, of {', '.join(STRESS_PRESETS)} ('' none)")
-    ap.add_argument("--seeds", type=int, default=3, help="vistrack run seeds 1..SEEDS")
+    ap.add_argument("--seeds", type=int, default=3, help="vistrack seeds 1..SEEDS (default 3)")
+    ap.add_argument("--sre", action="store_true", help="also OTB's 12 robustness starts (mean AUC per clip)")
+    ap.add_argument("--speed", action="store_true", help="tracking frames/s against NanoTrack's, e2e against KCF's")
+    ap.add_argument("--reps", type=int, default=3, help="--speed: runs of each tracker per clip, the fastest kept")
+    ap.add_argument("--candidates", default=str(CANDIDATES),
+                    help="the box configurations tried, for the leave-one-clip-out mean ('' none)")
     ap.add_argument("--entries", default="", help="more vistrack configurations beside the defaults: "
-                    "[model/]algo:N, e.g. bootstrap:100,contour/lis:100")
-    ap.add_argument("--opencv", default="MIL,KCF,CSRT")
+                    "[model/]algo:N, e.g. bootstrap:100,rb-ss-hs-sir:400")
+    ap.add_argument("--opencv", default=",".join(OPENCV), help="OpenCV's trackers beside vistrack")
+    ap.add_argument("--stress", default="",
+                    help=f"stressed copies too, comma-separated, of {', '.join(STRESS_PRESETS)}")
     ap.add_argument("--clips", default="", help="clip folder names (default: every one with ground truth)")
     ap.add_argument("--data", default=str(DATA))
-    ap.add_argument("--cache", default=str(CACHE), help="where the stressed copies are made once")
-    ap.add_argument("--clock", choices=("wall", "process"), default="wall",
-                    help="time with the wall clock (default) or this process's CPU time (steadier on a shared "
-                         "machine: every tracker runs single-threaded; decoding counts all its threads)")
-    ap.add_argument("--json", default=None, help="write every row here")
-    ap.add_argument("--readme", default=None, help="rewrite this file's real-clips block with the tables")
+    ap.add_argument("--workers", type=int, default=2, help="processes for the accuracy runs")
+    ap.add_argument("--json", default=None, help="write every number here")
+    ap.add_argument("--readme", default=None, help="rewrite this file's real-clips block with the table")
     args = ap.parse_args()
-    cv2.setNumThreads(1)
-    CLOCK[0] = time.process_time if args.clock == "process" else time.perf_counter
-    stresses = args.stress.split(",") if args.stress is not None else (list(ALL_STRESSES) if args.all else [])
-    stresses = [s for s in stresses if s]
+    stresses = [s for s in args.stress.split(",") if s]
     bad = [s for s in stresses if s not in STRESS_PRESETS]
     if bad:
         sys.exit(f"unknown stress {', '.join(bad)}: choose from {', '.join(STRESS_PRESETS)}")
-    clips = find_clips(args.data, [c for c in args.clips.split(",") if c])
+    clips = find_clips(args.data, [c for c in args.clips.split(",") if c] or None)
     if not clips:
         sys.exit(f"no clip with groundtruth_rect.txt under {args.data}")
-    cvs = [c for c in args.opencv.split(",") if c and opencv_tracker(c) is not None]
-    missing = sorted(set(args.opencv.split(",")) - set(cvs) - {""})
-    if missing:
-        print(f"not in this OpenCV ({cv2.__version__}): {', '.join(missing)} (opencv-contrib-python-headless has them)")
+    wanted = [c for c in args.opencv.split(",") if c]
+    cvs = [c for c in wanted if opencv_tracker(c) is not None]
+    if len(cvs) < len(wanted):
+        print(f"skipped, not in this OpenCV ({cv2.__version__}) or without weights: "
+              f"{', '.join(sorted(set(wanted) - set(cvs)))} (KCF, CSRT: opencv-contrib-python-headless; "
+              "Nano: ../shared/data/baselines/nanotrack)")
     seeds = list(range(1, args.seeds + 1))
-    rows = bench(clips, stresses, parse_entries(args.entries), cvs, seeds, args.cache)
-    print_rows(rows)
-    for stress, by in means(rows).items():
-        print(f"mean AUC over clips, {stress}: " + ", ".join(f"{k} {v:.3f}" for k, v in by.items()))
-    print("issue 34 checks:")
-    for text, ok in checks(rows):
-        print(f"  [{'ok' if ok else 'NO'}] {text}")
+    variants = [(c, "none") for c in clips] + [(load_clip(stressed_copy(c, s)), s) for s in stresses for c in clips]
+    ENTRIES.update(parse_entries(args.entries))
+    rows = accuracy(variants, [DEFAULT, *ENTRIES, *cvs], seeds, sre=args.sre, workers=args.workers)
+    cv = cross_validated(clips, seeds, args.candidates, args.workers) if args.candidates else None
+    spd = speed(clips, args.reps) if args.speed else None
+    print_report(rows, cv, spd)
     command = "python benchmarks/bench_real.py " + " ".join(sys.argv[1:])
     if args.json:
-        Path(args.json).write_text(json.dumps({"command": command, "seeds": seeds, "opencv": cv2.__version__,
-                                               "clock": args.clock, "rows": rows}, indent=1))
+        Path(args.json).write_text(json.dumps({
+            "command": command, "seeds": seeds, "opencv": cv2.__version__, "rows": rows, "speed": spd,
+            "cross_validation": None if cv is None else {
+                "configurations": cv[0], "scores": cv[1].tolist(), "chosen": [cv[0][k] for k in cv[2]],
+                "held_out": cv[3].tolist()}}, indent=1))
     if args.readme:
-        update_readme(args.readme, markdown(rows, seeds, "python benchmarks/bench_real.py --all --seeds "
-                                            f"{args.seeds}"))
+        flags = f"--seeds {args.seeds}" + " --sre" * args.sre + " --speed" * args.speed
+        update_readme(args.readme, markdown(rows, seeds, f"python benchmarks/bench_real.py {flags}", cv, spd))
 
 
 if __name__ == "__main__":

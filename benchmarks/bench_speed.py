@@ -34,6 +34,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from real_corpus import opencv_tracker  # noqa: E402 (run from benchmarks/)
 
 import vistrack
 from vistrack.core.runtime import keep_freed_memory
@@ -45,8 +46,6 @@ from vistrack.io.video import groundtruth_origin, open_video, prefetch, read_rec
 from vistrack.registry.builders import build_model
 from vistrack.track.loop import FrameStepper, warm_up
 from vistrack.track.run import track_video
-
-from bench_real import opencv_tracker  # noqa: E402 (run from benchmarks/)
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 CLOCK = time.perf_counter  # --cpu: time.process_time

@@ -175,7 +175,7 @@ def test_track_csv_has_the_redetected_column(tmp_path, capsys):
     assert code == 0, err
     with open(track, newline="") as f:
         rows = list(csv.DictReader(f))
-    assert list(rows[0])[-4:] == ["redetected", "ess", "ms", "lost_reason"]
+    assert list(rows[0])[-5:] == ["redetected", "ess", "ms", "lost_reason", "confidence"]
     found = [int(r["frame"]) for r in rows if r["redetected"] == "1"]
     assert len(found) == 1 and BACK <= found[0] <= BACK + 5
     assert rows[found[0]]["visible"] == "1" and rows[found[0]]["lost_reason"] == ""
@@ -214,14 +214,14 @@ def test_correlation_proposal_weights_match_a_brute_force_posterior():
     w = np.exp(lw - lw.max())
     sd, sl = model.sigma[0], model.sigma[2]
     cs = np.arange(-4 * sd, 4 * sd + 1e-9, 0.25)
-    ls = np.arange(-4 * sl, 4 * sl + 1e-9, sl / 4)
+    ls = np.arange(-4 * sl, 4 * sl + 1e-9, sl / 12)  # the scale filter's term is sharp in l
     du, dv, dl = (a.ravel() for a in np.meshgrid(cs, cs, ls, indexing="ij"))
     grid = np.tile(np.concatenate([pose, pose]), (du.size, 1))
     grid[:, 0] += du
     grid[:, 1] += dv
     grid[:, 2] += dl
     lp = model.loglik(obs, grid) + model.transition_logpdf(grid, prev[:1].repeat(len(grid), 0))
-    vol = 0.25 * 0.25 * (sl / 4)
+    vol = 0.25 * 0.25 * (sl / 12)
     assert logsumexp(lw) - np.log(n) == pytest.approx(logsumexp(lp) + np.log(vol), abs=0.1)
     g = np.exp(lp - lp.max())
     mean_is, mean_grid = (w @ z[:, :3]) / w.sum(), (g @ grid[:, :3]) / g.sum()
@@ -292,8 +292,8 @@ def test_compiled_correlation_draws_equal_the_numpy_path():
     prev = np.column_stack([rng.uniform(ox - 3 * a, ox + 9 * a, 500), rng.uniform(oy - 3 * a, oy + 7 * a, 500),
                             rng.normal(0, 0.1, 500), np.zeros((500, 3))])
     x = prev + rng.normal(0, 1.0, prev.shape)
-    for beta in (0.0, 0.5, 1.0):
-        obs = SimpleNamespace(dcf=resp, dcf_share=beta)
+    for beta, centre in ((0.0, None), (0.5, None), (1.0, None), (0.5, 0.037)):  # centre: the scale filter's peak
+        obs = SimpleNamespace(dcf=resp, dcf_share=beta, scale_centre=centre)
         got = both(lambda: prop._sample(x, obs, np.random.default_rng(15), prev))
         for p, k in zip(*got):
             np.testing.assert_array_equal(p, k)

@@ -7,6 +7,7 @@ from tqdm import tqdm
 
 from vistrack.data_synth.contour import CLUTTER, make_contour_clip
 from vistrack.data_synth.landmarks import make_landmark_clip
+from vistrack.data_synth.longterm import make_longterm_clip
 from vistrack.data_synth.perturb import LIGHTS, Perturbation, perturb_clip, read_clip
 from vistrack.data_synth.plate import make_plate_clip
 from vistrack.data_synth.plate_composite import composite_plate_clip
@@ -131,6 +132,32 @@ def landmarks(out, k, frames, size, seed, clutter_blobs, occlusion, quiet):
                            occlusion=occlusion, progress=bar.update)
     if not quiet:
         click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({frames} frames, {size[0]}x{size[1]}, K={k})")
+
+
+@synth.command()
+@click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write.")
+@click.option("--size", default="640x480", show_default=True, type=Size(), help="Frame size WIDTHxHEIGHT in pixels.")
+@click.option("--seed", default=0, show_default=True, type=SEED,
+              help="Random seed: the same seed gives the same output, bit for bit.")
+@click.option("--gap", default=2.0, show_default=True, type=click.FloatRange(0.2, 60),
+              help="Seconds of each absence (out of the frame, then behind the pillar).")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
+def longterm(out, size, seed, gap, quiet):
+    """A long-term clip: an object that leaves the frame, comes back through another edge, hides behind a
+    pillar and comes out on its other side (GAP seconds away each time), for a tracker that must say when
+    the object is gone. groundtruth.csv marks the frames without any of it in view visible=0 (0,0,0,0);
+    meta.json lists them. Its length follows from the script (about 12 s at 30 frames/s).
+
+    \b
+    Example:
+      vistrack synth longterm --out lt --seed 1 && vistrack run lt --init-gt --track t.csv
+    """
+    out = _out_dir(out)
+    with tqdm(unit="frame", disable=quiet, desc="synth longterm") as bar:
+        meta = _make(make_longterm_clip, out, size=size, seed=seed, gap=gap, progress=bar.update)
+    if not quiet:
+        click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({meta['frames']} frames, {size[0]}x{size[1]}, "
+                   f"absent in frames " + ", ".join(f"{a}-{b}" for a, b in meta["absent"]) + ")")
 
 
 @synth.command()

@@ -19,8 +19,8 @@ import numpy as np
 
 from .. import kernels
 
-__all__ = ["FeatureMaps", "box_dog", "remap_points", "blob_peaks", "is_grey", "colour_bins", "n_colour_bins",
-           "bin_integrals", "box_sums"]
+__all__ = ["FeatureMaps", "box_dog", "remap_points", "blob_peaks", "greedy_peaks", "is_grey", "colour_bins",
+           "n_colour_bins", "bin_integrals", "box_sums"]
 
 #: colour binning (hue x saturation for chromatic pixels, value for the rest; grey levels for grey video)
 HUE_BINS, SAT_BINS, VALUE_BINS, GREY_BINS = 8, 3, 4, 16
@@ -133,6 +133,23 @@ def box_dog(gray, inner, outer):
     a = cv2.boxFilter(gray, cv2.CV_32F, (inner, inner), borderType=cv2.BORDER_REFLECT)
     b = cv2.boxFilter(gray, cv2.CV_32F, (outer, outer), borderType=cv2.BORDER_REFLECT)
     return a - b
+
+
+def greedy_peaks(score, half, k):
+    """The ``k`` best places of a map ``score (H, W)``, best first: each the maximum left once the boxes
+    of ``(4 half_x + 1) × (4 half_y + 1)`` cells about the better ones are taken out (``half = (half_x,
+    half_y)``, an object's half box: two places at least an object's box apart). Returns a list of ``(i, j,
+    value)`` (row, column), fewer where the map runs out. ``score`` is left as it was."""
+    total = np.array(score, np.float32)
+    hx, hy = half
+    out = []
+    for _ in range(int(k)):
+        i, j = np.unravel_index(int(np.argmax(total)), total.shape)
+        if not np.isfinite(total[i, j]):
+            break
+        out.append((int(i), int(j), float(total[i, j])))
+        total[max(0, i - 2 * hy):i + 2 * hy + 1, max(0, j - 2 * hx):j + 2 * hx + 1] = -np.inf
+    return out
 
 
 def blob_peaks(response, threshold, radius=3):

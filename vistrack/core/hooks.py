@@ -9,7 +9,7 @@ import functools
 from typing import Protocol, runtime_checkable
 
 __all__ = ["offers", "class_offers", "require", "missing_parts", "LookAhead", "FusedPropose", "FusedLISStep",
-           "ProposalMap", "Redetects"]
+           "ProposalMap", "Redetects", "Reseeds", "Confidence"]
 
 
 @functools.cache
@@ -94,3 +94,25 @@ class Redetects(Protocol):
     redetect: float
 
     def redetected(self, obs): ...
+
+
+@runtime_checkable
+class Reseeds(Protocol):
+    """A model that re-seeds the particles where a whole-frame search found a lost object (the box
+    model's): ``reseed(obs, particles, rng)`` is the particle set the frame loop steps from on the frame
+    observed as ``obs`` (``None``: ``particles`` kept)."""
+
+    def reseed(self, obs, particles, rng): ...
+
+
+@runtime_checkable
+class Confidence(Protocol):
+    """A calibrated confidence in the frame's estimate (the box model's,
+    :mod:`vistrack.models.box.confidence`; the track CSV's ``confidence``, ``vistrack.Tracker.confidence``):
+    asked once per frame, in order, by the frame loop after the step and before the model's ``check_lost``
+    (which may report the object lost when it is low)."""
+
+    def confidence(self, obs, state, particles):
+        """The probability in ``[0, 1]`` that the estimate ``state (d,)`` lies on the object in the frame
+        observed as ``obs``, with the frame's weighted :class:`~vistrack.core.particles.ParticleSet`
+        ``particles``; ``None`` where the model has none this time."""

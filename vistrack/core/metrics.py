@@ -10,7 +10,9 @@
   reported or the summed vertex error exceeds a third of the plate height; a report in a
   frame without a plate is a false report (:func:`plate_frame_measures`);
 - P(lost) per frame is the fraction of runs lost; the mean error is over
-  runs (and frames) not lost.
+  runs (and frames) not lost;
+- what the tracker reported: the long-term scores of :mod:`vistrack.core.longterm` (:func:`lt_scores`,
+  :func:`reported_ious`).
 """
 
 from __future__ import annotations
@@ -19,9 +21,12 @@ import time
 
 import numpy as np
 
+from .longterm import lt_pooled, reported_summary
+
 __all__ = ["center_error", "contour_lost_threshold", "plate_frame_measures", "lost_frames", "summarize_runs",
            "landmark_error", "iou", "success_auc", "success_curve", "precision", "precision_curve", "IOU_THRESHOLDS",
-           "PRECISION_THRESHOLDS", "box_scores", "score_frames", "summarize", "pooled_summary",
+           "PRECISION_THRESHOLDS", "box_scores", "score_frames", "summarize", "pooled_summary", "reported_ious",
+           "lt_scores",
            "equal_time", "best_ms", "equal_time_n", "equal_time_search"]
 
 #: IoU thresholds of the success plot (OTB protocol)
@@ -142,6 +147,40 @@ def box_scores(boxes, truth, precision_px=20.0):
     return success_auc(iou(b, g)), precision(err, precision_px), float(np.mean(err))
 
 
+def reported_ious(boxes, truth, visible):
+    """IoUs ``(T,)`` of ``boxes`` with ``truth`` (``(T, 4)`` ``x, y, w, h``) where the tracker reports the
+    object (``visible (T,)`` true) and 0 where it reports it lost: an empty box. Frames whose true box
+    has no area get 0 too (the callers score only frames with the object, as OTB does)."""
+    v = np.nan_to_num(iou(boxes, truth), nan=0.0)
+    return np.where(np.asarray(visible, bool), v, 0.0)
+
+
+def lt_scores(boxes, truth, visible, confidence=None, resolution=100):
+    """VOT-LT's long-term scores of one track (module docstring).
+
+    Parameters
+    ----------
+    boxes, truth : ndarray, shape (T, 4)
+        Predicted and true ``x, y, w, h`` (a true box without area: the object absent).
+    visible : ndarray, shape (T,)
+        Whether the tracker reports the object on each frame.
+    confidence : ndarray of shape (T,) or None
+        The tracker's confidence; ``None`` for a tracker without one (the scores at its own threshold).
+    resolution : int
+        Thresholds over the confidences (:func:`~vistrack.core.longterm.lt_thresholds`).
+
+    Returns
+    -------
+    dict
+        ``precision``, ``recall``, ``f_score`` and ``threshold`` at the best threshold (at the tracker's own:
+        ``threshold`` NaN, where it has no confidence), and ``precision_own``, ``recall_own``, ``f_own``
+        over the frames it reports visible.
+    """
+    truth = np.asarray(truth, float)
+    present = (truth[:, 2] > 0) & (truth[:, 3] > 0)
+    return lt_pooled([("", iou(boxes, truth), present, visible, confidence)], resolution)
+
+
 def plate_frame_measures(result, truth, aspect):
     """Per-frame ``(has_plate, vertex_error, lost, false_report)`` of one task against the truth."""
     m = min(len(result["reported"]), len(truth["frame"]))
@@ -183,7 +222,8 @@ def lost_frames(rule, centre_err, frame_width, *, truth=None, reported=None, ver
     return centre_err > contour_lost_threshold(frame_width)
 
 
-def score_frames(truth, boxes, frame_width, *, rule="size", reported=(), vertices=(), aspect=None):
+def score_frames(truth, boxes, frame_width, *, rule="size", reported=(), vertices=(), aspect=None, shown=None,
+                 confidence=None):
     """Per-frame measures of one track, what ``eval`` records per task and ``run``'s summary scores.
 
     Parameters
@@ -197,12 +237,18 @@ def score_frames(truth, boxes, frame_width, *, rule="size", reported=(), vertice
     frame_width : int
     rule, reported, vertices, aspect
         The lost rule and its inputs (:func:`lost_frames`).
+    shown : array_like of bool, shape (frames,), optional
+        Whether the tracker reported the object on each frame (``visible``); by default where it gave a
+        box with an area.
+    confidence : array_like, shape (frames,), optional
+        The tracker's confidence per frame (NaN where it gave none).
 
     Returns
     -------
     dict
         ``frames``, ``visible``, ``error`` (centre, px; ``None`` without an estimate), ``lost``,
-        ``iou`` and ``boxes`` (``None`` without an estimate), lists of ``frames`` values.
+        ``iou``, ``boxes`` (``None`` without an estimate), ``reported`` (0/1) and ``confidence``
+        (``None`` without one), lists of ``frames`` values (``confidence``: ``None`` when not given).
     """
     t = truth
     m = min(len(boxes), len(t["cx"]))
@@ -212,7 +258,13 @@ def score_frames(truth, boxes, frame_width, *, rule="size", reported=(), vertice
                        tb[:, 1] + tb[:, 3] / 2)
     err = np.where(np.isfinite(err), err, np.inf)
     visible = np.asarray(t["visible"][:m]) > 0
+    if shown is None:
+        shown = np.all(np.isfinite(boxes), axis=1) & (np.nan_to_num(boxes[:, 2]) > 0) & (np.nan_to_num(boxes[:, 3]) > 0)
+    shown = np.asarray(shown, bool)[:m]
     return {
+        "reported": shown.astype(int).tolist(),
+        "confidence": None if confidence is None else [None if not np.isfinite(v) else round(float(v), 4)
+                                                       for v in np.asarray(confidence, float)[:m]],
         "frames": int(m), "visible": visible.astype(int).tolist(),
         "error": [float(e) if np.isfinite(e) else None for e in err],
         "lost": lost_frames(rule, err, frame_width, truth=t, reported=list(reported)[:m],
@@ -226,7 +278,10 @@ def score_frames(truth, boxes, frame_width, *, rule="size", reported=(), vertice
 def summarize(results, not_filters=()):
     """Per clip × algo × N summaries (list of dicts, in first-seen order) from task results (``eval``'s
     task files); ``not_filters``: the algorithms that are not particle filters (OpenCV's trackers:
-    their ``N`` means nothing), besides results read from other trackers' files (``external``)."""
+    their ``N`` means nothing), besides results read from other trackers' files (``external``).
+
+    Beside OTB's scores and P(lost) (lost by the ground truth), each summary has what the tracker
+    reported (:func:`~vistrack.core.longterm.reported_summary`)."""
     groups = {}
     for r in results:
         groups.setdefault((r["clip"], r["algo"], r["particles"]), []).append(r)
@@ -241,6 +296,8 @@ def summarize(results, not_filters=()):
         with np.errstate(invalid="ignore"):
             err_frame = np.where(ok.any(axis=0), np.sum(np.where(ok, err, 0), axis=0) / ok.sum(axis=0), np.nan)
         ious = np.array([r["iou"] for r in rs])[:, vis]
+        reported = reported_summary(clip, rs, vis)
+        lost_empty = success_curve(reported.pop("lost_empty"))  # the frames reported lost as empty boxes
         # the scores: over runs × frames, and per run
         success = success_curve(ious)
         precision20 = precision(err[:, vis])
@@ -266,6 +323,8 @@ def summarize(results, not_filters=()):
             "error_per_frame": [None if not np.isfinite(v) else float(v) for v in err_frame],
             "success_auc": float(np.mean(success)),
             "success_curve": success,
+            **reported,
+            "success_auc_lost_empty": float(np.mean(lost_empty)),
             "precision_20px": precision20,
             "precision_curve": prec_curve,
             "frames_per_s": float(1e3 / ms.mean()) if np.all(np.isfinite(ms)) else None,

@@ -14,10 +14,13 @@ published tables were computed with: run ``r`` on clip ``c`` draws from
 Boxes are ``(cx ± w/2, cy ± h/2)`` with ``cx, cy`` the pose centre, as in
 groundtruth.csv. Per frame a task records the centre error, whether the tracker is lost
 (centre error > 50 px at 240-px width, scaled — thesis §3.2.5), the IoU of the
-estimated box with the true box, ESS and ms. :func:`summarize` turns the task
-files into per clip × algo × N summaries (mean error over frames not lost,
-P(lost) per frame and overall, success AUC over IoU thresholds 0..1,
-precision at 20 px, frames/s, mean ESS).
+estimated box with the true box, ESS and ms, whether the tracker reported the object
+(``reported``: vistrack's ``visible``, OpenCV's ``update`` result, a result file's non-empty
+box) and its confidence (``confidence``; ``None`` for a tracker without one). :func:`summarize`
+turns the task files into per clip × algo × N summaries (mean error over frames not lost,
+P(lost) per frame and overall, the share of frames reported lost, success AUC over IoU
+thresholds 0..1 and with the frames reported lost as empty, VOT-LT's long-term precision,
+recall and F-score, precision at 20 px, frames/s, mean ESS).
 """
 
 from __future__ import annotations
@@ -263,6 +266,7 @@ def run_task(task, out_dir):
     # eval: the object's own size (the plate's vertex rule for plates); reproduce: the thesis's
     rule = "centre" if task.get("lost_rule") == "thesis" else "size"
     reported, vertices, aspect = [], [], None
+    shown, conf = None, None  # what the tracker reported per frame, its confidence
     if algo in OPENCV_TRACKERS:
         boxes, ms, index = track_opencv(algo, clip.first_box(), frames)
         boxes, ess = _by_index(boxes, index), np.full(index.max() + 1, np.nan)
@@ -271,12 +275,14 @@ def run_task(task, out_dir):
         model = build_model(task["model"], clip, init_gt="", **task.get("model_params", {}))
         filt = make_filter(algo, model)
         rng = np.random.default_rng(task["seed_seq"])
-        est, ms, ess, index = [], [], [], []
+        est, ms, ess, index, shown, conf = [], [], [], [], [], []
         for res in track(frames, filt, n, rng):
             index.append(res.index)
             est.append(res.estimate)
             ms.append(res.ms)
             ess.append(res.ess)
+            shown.append(res.visible)
+            conf.append(np.nan if res.confidence is None else res.confidence)
             if spec.lost_rule == "plate":  # the plate rule scores what was reported
                 reported.append(res.visible)
                 vertices.append(model.vertices(res.estimate)[0])
@@ -285,11 +291,14 @@ def run_task(task, out_dir):
         # boxes centred on the pose centre, as groundtruth.csv's (cx, cy, w, h)
         boxes = _by_index(np.concatenate([est[:, :2] - wh / 2, wh], axis=1), index)
         ms, ess = np.array(ms), _by_index(np.array(ess), index)
+        shown = np.nan_to_num(_by_index(np.array(shown, float), index)) > 0  # a frame not decoded: not reported
+        conf = _by_index(np.array(conf, float), index) if np.isfinite(conf).any() else None
         if spec.lost_rule == "plate":  # placed at their frames too: not reported before the start or where undecoded
             rule, aspect = "plate", model.layout.aspect
             reported = np.nan_to_num(_by_index(np.array(reported, float), index)).astype(bool).tolist()
             vertices = _by_index(np.array(vertices, float), index)
-    result = score_boxes(clip, boxes, rule=rule, reported=reported, vertices=vertices, aspect=aspect)
+    result = score_boxes(clip, boxes, rule=rule, reported=reported, vertices=vertices, aspect=aspect, shown=shown,
+                         confidence=conf)
     result.update({"clip": task["clip"], "algo": algo, "particles": n, "run": task["run"],
                    "ms": [float(v) for v in ms[:result["frames"]]],
                    "ess": [None if not np.isfinite(v) else float(v) for v in ess[:result["frames"]]], **source})
@@ -311,12 +320,12 @@ def _remote_source(clip, task):
     return {"source": remote.record()}
 
 
-def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=None):
+def score_boxes(clip, boxes, *, rule="size", reported=(), vertices=(), aspect=None, shown=None, confidence=None):
     """Per-frame measures of ``boxes (frames, 4)`` (``x, y, w, h``; NaN where there is no
     estimate) against ``clip``'s ground truth (:func:`~vistrack.core.metrics.score_frames`:
-    ``frames``, ``visible``, ``error``, ``lost``, ``iou``, ``boxes``)."""
+    ``frames``, ``visible``, ``error``, ``lost``, ``iou``, ``boxes``, ``reported``, ``confidence``)."""
     return score_frames(clip.truth, boxes, clip.source.size[0], rule=rule, reported=reported, vertices=vertices,
-                        aspect=aspect)
+                        aspect=aspect, shown=shown, confidence=confidence)
 
 
 def result_files(dirs, clips, fmt="otb"):

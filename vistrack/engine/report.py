@@ -18,7 +18,8 @@ from .tasks import write_atomic
 __all__ = ["CSV_COLUMNS", "task_row", "write_eval_outputs", "averages"]
 
 CSV_COLUMNS = ["clip", "algo", "particles", "run", "frames", "mean_error", "mean_error_all", "p_lost", "success_auc",
-               "precision_20px", "frames_per_s", "mean_ess"]
+               "precision_20px", "frames_per_s", "mean_ess", "reported_lost", "success_auc_lost_empty", "lt_precision",
+               "lt_recall", "lt_f"]
 
 
 def averages(out):
@@ -287,7 +288,8 @@ document.querySelectorAll('video').forEach(v => v.addEventListener('loadedmetada
 </script>"""
 
 _HEADER = ["algo", "N", "runs", "mean error, all frames (px)", "mean error, not lost (px)", "P(lost)",
-           "P(lost) last frame", "success AUC", "precision@20px", "frames/s"]
+           "reported lost", "P(lost) last frame", "success AUC", "AUC, reported lost as empty", "long-term F (Pr / Re)",
+           "precision@20px", "frames/s"]
 
 
 def _mean(ss, key, fmt=".2f"):
@@ -308,14 +310,23 @@ def _cells(ss):
     s0 = ss[0]
     return [s0["algo"], str(s0["particles"]) if s0.get("particle_filter", True) else "–",
             "/".join(str(v) for v in sorted({s["runs"] for s in ss})), _mean(ss, "mean_error_all"),
-            _mean(ss, "mean_error"), _pm(ss, "p_lost"), f"{np.mean([s['p_lost_final'] for s in ss]):.3f}",
-            _pm(ss, "success_auc"), _pm(ss, "precision_20px"), _mean(ss, "frames_per_s", ".0f")]
+            _mean(ss, "mean_error"), _pm(ss, "p_lost"), _mean(ss, "reported_lost", ".3f"),
+            f"{np.mean([s['p_lost_final'] for s in ss]):.3f}", _pm(ss, "success_auc"),
+            _mean(ss, "success_auc_lost_empty", ".3f"), _lt(ss), _pm(ss, "precision_20px"),
+            _mean(ss, "frames_per_s", ".0f")]
+
+
+def _lt(ss):
+    """``F (Pr / Re)``: VOT-LT's long-term scores, the mean over the summaries (``–`` where they have none)."""
+    if any(s.get("lt_f") is None for s in ss):
+        return "–"
+    return " ".join([_mean(ss, "lt_f", ".3f"), f"({_mean(ss, 'lt_precision', '.3f')} /",
+                     f"{_mean(ss, 'lt_recall', '.3f')})"])
 
 
 def _table(labels, first):
     """A markdown table: one row per ``label -> [summaries]``, their averages (``±``: over runs)."""
-    out = [f"| {first} | runs | mean error, all frames (px) | mean error, not lost (px) | P(lost) | "
-           "P(lost) last frame | success AUC | precision@20px | frames/s |", "|---" * 10 + "|"]
+    out = ["| " + first + " | " + " | ".join(_HEADER[2:]) + " |", "|---" * (len(_HEADER) - 1) + "|"]
     for ss in labels.values():
         out.append("| " + " | ".join(_cells(ss)) + " |")
     return "\n".join(out)
@@ -324,4 +335,8 @@ def _table(labels, first):
 def _lost_note(cfg):
     rule = ("plate: no plate reported, or the vertex error above a third of the plate height" if cfg.model == "plate"
             else "centre error above half the larger side of the true box")
-    return f"Lost: {rule} (thesis reproductions use the thesis's rules: `vistrack reproduce`)."
+    return (f"Lost: {rule} (thesis reproductions use the thesis's rules: `vistrack reproduce`). Reported lost: the "
+            "share of the frames with the object that the tracker reported lost (vistrack's `visible=0`, an OpenCV "
+            "tracker's failed `update`). Long-term F: VOT-LT's tracking F-score (precision over the frames the tracker "
+            "reports, recall over the frames with the object, at the confidence threshold that maximises F; at the "
+            "tracker's own threshold where it gives no confidence).")

@@ -81,7 +81,8 @@ TEXT_COLUMNS = ("lost_reason",)
 
 
 def read_groundtruth_csv(path):
-    """Columns of a ``groundtruth.csv`` (or track CSV) as float arrays (:data:`TEXT_COLUMNS`: str)."""
+    """Columns of a ``groundtruth.csv`` (or track CSV) as float arrays (:data:`TEXT_COLUMNS`: str; an empty
+    number, such as the ``confidence`` of a model without one, is NaN)."""
     try:
         with open(path, newline="", encoding="utf-8-sig") as f:
             rd = csv.reader(f)
@@ -98,7 +99,8 @@ def read_groundtruth_csv(path):
     try:
         if any(len(r) != len(header) for r in rows):
             raise ValueError
-        data = np.array([[v for k, v in enumerate(r) if k not in text] for r in rows], dtype=float)
+        data = np.array([[v if v.strip() else "nan" for k, v in enumerate(r) if k not in text] for r in rows],
+                        dtype=float)
     except ValueError:
         raise VideoError(f"{path}: every row needs {len(header)} numbers") from None
     numeric = [h for k, h in enumerate(header) if k not in text]

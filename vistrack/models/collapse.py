@@ -6,16 +6,18 @@ track CSV's ``visible`` and ``lost_reason`` columns and what ``vistrack run`` sa
 loses the object. A model whose estimate collapses is reported lost with one of
 :data:`REASONS`:
 
-``scale``
-    the estimate's scale below ``scale_floor`` (0.3) of the first frame's: the contour or
-    box has shrunk towards a point;
-``outside``
+``out-of-frame``
     the estimate's centre outside the frame;
-``likelihood``
-    ``log r`` at the estimate far below its running level (the median over the last
-    ``window`` = 30 frames where the object was reported): more than ``drop`` below it
-    (a difference, for likelihoods of any sign: the box model, 55), or under ``ratio``
-    times it (for a positive level: the contour's edge evidence, 0.15); or not finite.
+``collapse``
+    the estimate's scale below ``scale_floor`` (0.3) of the first frame's (the contour or
+    box has shrunk towards a point), or ``log r`` at the estimate far below its running level
+    (the median over the last ``window`` = 30 frames where the object was reported): more
+    than ``drop`` below it (a difference, for likelihoods of any sign: the box model, 55), or
+    under ``ratio`` times it (for a positive level: the contour's edge evidence, 0.15); or not
+    finite (the detail says which);
+``low-confidence``
+    a model with a calibrated confidence (the box model's, :mod:`~vistrack.models.box.confidence`)
+    found it below its threshold, the estimate unlike the object.
 
 A frame reported lost does not enter the running level, so the track stays lost until
 the likelihood at the estimate comes back. The test looks at the estimate only, not at
@@ -35,9 +37,9 @@ __all__ = ["REASONS", "CollapseWatch", "CollapseCheck"]
 
 #: ``lost_reason`` codes (the track CSV's column) and what they mean
 REASONS = {
-    "scale": "the estimate's scale fell below the floor",
-    "outside": "the estimate's centre left the frame",
-    "likelihood": "log r at the estimate fell far below its running level",
+    "low-confidence": "the estimate's confidence fell below the model's threshold",
+    "collapse": "the estimate's scale fell below the floor, or log r there far below its running level",
+    "out-of-frame": "the estimate's centre left the frame",
     "not found": "the model's own test found no object at the estimate",
 }
 
@@ -87,20 +89,21 @@ class CollapseWatch:
             return f"log r at the estimate {loglik:.1f}, under {self.ratio:g} of its running level {level:.1f}"
         return ""
 
-    def check(self, loglik, scale, centre, frame_size):
+    def check(self, loglik, scale, centre, frame_size, low=""):
         """``(reason, detail)`` for one frame's estimate: ``("", "")`` when it is reported,
-        else a :data:`REASONS` code and a sentence with the numbers. Updates the running
-        level (a reported frame) and, on the first call, the reference scale."""
+        else a :data:`REASONS` code and a sentence with the numbers (``low``: the model's sentence
+        when its confidence is below its threshold, ``""`` otherwise). Updates the running level
+        (a reported frame) and, on the first call, the reference scale."""
         if self.scale0 is None:
             self.scale0 = float(scale)
         (x, y), (w, h) = centre, frame_size
         if not scale >= self.scale_floor * self.scale0:
-            out = "scale", f"scale {scale:.3g}, below {self.scale_floor:g} of the first frame's {self.scale0:.3g}"
+            out = "collapse", f"scale {scale:.3g}, below {self.scale_floor:g} of the first frame's {self.scale0:.3g}"
         elif not (0 <= x < w and 0 <= y < h):
-            out = "outside", f"centre ({x:.1f}, {y:.1f}) outside the {w}x{h} frame"
+            out = "out-of-frame", f"centre ({x:.1f}, {y:.1f}) outside the {w}x{h} frame"
         else:
             detail = self._likelihood(float(loglik))
-            out = ("likelihood", detail) if detail else ("", "")
+            out = ("collapse", detail) if detail else ("low-confidence", low) if low else ("", "")
         if not out[0]:
             self.history.append(float(loglik))
         return out
@@ -115,16 +118,22 @@ class CollapseCheck:
     collapse_options: dict = {}
     _collapse = None
 
-    def check_lost(self, obs, state):
+    @property
+    def collapse_level(self):
+        """The running level of ``log r`` (:attr:`CollapseWatch.level`; ``None`` before a frame was reported)."""
+        return None if self._collapse is None else self._collapse.level
+
+    def check_lost(self, obs, state, low=""):
         """``(reason, detail)``: ``("", "")`` when the object is reported at the frame's
-        estimate ``state``, else why not (:data:`REASONS`). Called once per frame, in order,
-        by the frame loop (it keeps the running level)."""
+        estimate ``state``, else why not (:data:`REASONS`; ``low``: the model's sentence when its
+        confidence is below its threshold). Called once per frame, in order, by the frame loop (it
+        keeps the running level)."""
         if self._collapse is None:
             self._collapse = CollapseWatch(**self.collapse_options)
         s = np.asarray(state, float).reshape(1, -1)
         scale, cx, cy = self.collapse_pose(s[0])
         return self._collapse.check(float(self.loglik(obs, s)[0]), float(scale), (float(cx), float(cy)),
-                                    self.frame_size)
+                                    self.frame_size, low)
 
     def collapse_pose(self, state):
         """``(scale, cx, cy)`` of ``state`` that the test reads: :meth:`describe`'s (a model whose

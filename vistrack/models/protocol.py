@@ -21,6 +21,8 @@ local coordinates; each method's docstring gives its arguments and results.
   (for LIS inside each partition) local proposals ``q_j``.
 * :class:`InnovationSplit`: the history-sampling family (§3.2): innovation, history and the
   1a/1b subspace split, with the image-only proposal of the innovation.
+* :class:`~vistrack.core.hooks.Confidence`: a calibrated confidence in the estimate (the track CSV's
+  ``confidence``, ``vistrack.Tracker.confidence``).
 * :class:`VideoModel`: the frame loop, ``run``, ``eval`` and ``vistrack.Tracker``. Subclass
   :class:`VideoModelBase` for the defaults (the maps are the observation, no adaptation,
   the weighted mean, always visible, lost where ``visible`` says no; ``check_lost``

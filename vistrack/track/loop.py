@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.features import FeatureMaps
+from ..core.hooks import Confidence, Reseeds
 from ..core.metrics import best_ms
 from ..core.particles import ParticleSet
 from ..filters import make_filter
@@ -44,6 +45,9 @@ class FrameResult:
     #: the model re-found the object on this frame after a loss (a whole-frame search, the box model's
     #: ``redetect``) and reports it here (the track CSV's ``redetected``)
     redetected: bool = False
+    #: the model's calibrated confidence in the estimate, in ``[0, 1]``
+    #: (:class:`~vistrack.core.hooks.Confidence`; the track CSV's ``confidence``), ``None`` without one
+    confidence: float | None = None
 
     @property
     def ess(self):
@@ -86,8 +90,9 @@ class FrameStepper:
     shared maps), ``estimate(particles)`` gives the point estimate (unless
     ``estimator`` is given), ``check_lost(obs, estimate)`` whether the object is reported
     there (:mod:`vistrack.models.collapse`) and ``adapt(obs, estimate)`` is told each
-    frame's estimate after the step (the box model's appearance). The feature maps of a frame live in
-    buffers that the next frame overwrites: use them before stepping again.
+    frame's estimate after the step (the box model's appearance); a model with a
+    :class:`~vistrack.core.hooks.Confidence` is asked for it before ``check_lost``. The feature
+    maps of a frame live in buffers that the next frame overwrites: use them before stepping again.
     """
 
     def __init__(self, filt, n, rng, *, estimator=None):
@@ -106,11 +111,15 @@ class FrameStepper:
         t0 = time.perf_counter()
         maps = FeatureMaps(frame, buffers=self._buffers)
         obs = self.model.observe(maps, self.particles)
+        if self.particles is not None and offers(self.model, Reseeds):  # a lost object found again: re-seeded
+            seeded = self.model.reseed(obs, self.particles, self.rng)
+            self.particles = self.particles if seeded is None else seeded
         if self.particles is None:
             self.particles = self.filt.first_step(obs, self.n, self.rng)
         else:
             self.particles = self.filt.step(self.particles, obs, self.rng)
         est = self.estimator(self.particles)
+        conf = self.model.confidence(obs, est, self.particles) if offers(self.model, Confidence) else None
         reason, detail = self.model.check_lost(obs, est)
         self.model.adapt(obs, est)
         targets = None
@@ -119,7 +128,8 @@ class FrameStepper:
             targets = (self.identities.assign(index, self.model.target_box(states)), states)
         ms = (time.perf_counter() - t0) * 1e3
         redetected = offers(self.model, Redetects) and self.model.redetected(obs) and not reason
-        return FrameResult(index, frame, self.particles, est, ms, maps, obs, reason, detail, targets, redetected)
+        return FrameResult(index, frame, self.particles, est, ms, maps, obs, reason, detail, targets, redetected,
+                           conf)
 
 
 def warm_up(filt, n, frame):

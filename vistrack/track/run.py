@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.hooks import Redetects, offers
+from ..core.hooks import Confidence, Redetects, offers
 from ..core.particles import DegenerateWeightsWarning
 from ..io.render import annotate, annotate_targets
 from ..io.results_format import result_paths
@@ -90,16 +90,21 @@ class VideoRun:
 def track_row(model, res):
     """The track-CSV row of a :class:`~vistrack.track.loop.FrameResult`: ``frame, visible``, the
     model's :meth:`describe` columns, ``redetected`` (a model that re-detects a lost object, the box
-    model's: 1 on the frame it is re-found), ``ess, ms, lost_reason``."""
-    return _row(model, res.index, res.visible, res.estimate, int(res.redetected), res.ess, res.ms, res.lost_reason)
+    model's: 1 on the frame it is re-found), ``ess, ms, lost_reason`` and, for a model with a
+    calibrated confidence (:class:`~vistrack.core.hooks.Confidence`, the box model's),
+    ``confidence`` in ``[0, 1]`` (empty on a frame it gives none)."""
+    return _row(model, res.index, res.visible, res.estimate, int(res.redetected), res.ess, res.ms, res.lost_reason,
+                res.confidence)
 
 
-def _row(model, index, visible, estimate, redetected, ess, ms, lost_reason):
+def _row(model, index, visible, estimate, redetected, ess, ms, lost_reason, confidence=None):
     """A track-CSV row, its columns in :func:`track_row`'s order whether the frame was tracked or not."""
     row = {"frame": index, "visible": int(visible), **model.describe(estimate)}
     if offers(model, Redetects):
         row["redetected"] = redetected
     row["ess"], row["ms"], row["lost_reason"] = ess, ms, lost_reason
+    if offers(model, Confidence):
+        row["confidence"] = "" if confidence is None else float(confidence)
     return row
 
 

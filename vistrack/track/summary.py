@@ -84,21 +84,35 @@ NO_ESTIMATE = ("decode", "not started", "not found")
 def _box_summary(rows, t, frame_width):
     """One line: the track scored as ``eval`` scores a task (:func:`~vistrack.core.metrics.score_frames`,
     :func:`~vistrack.core.metrics.summarize`), over the same frames: a frame without an estimate
-    (undecodable, searched before the object was found) is a missed frame in both."""
+    (undecodable, searched before the object was found) is a missed frame in both; beside the scores,
+    the frames the tracker reported lost (``visible=0``) and those the ground truth says it lost."""
     n_frames = int(max(r["frame"] for r in rows)) + 1
-    boxes = np.full((n_frames, 4), np.nan)
+    boxes, shown, conf = np.full((n_frames, 4), np.nan), np.zeros(n_frames, bool), np.full(n_frames, np.nan)
     for r in rows:
         if r["lost_reason"] not in NO_ESTIMATE:
             boxes[r["frame"]] = (r["cx"] - r["w"] / 2, r["cy"] - r["h"] / 2, r["w"], r["h"])
-    scored = score_frames(t, boxes, frame_width, rule="size")
+        shown[r["frame"]] = bool(r["visible"])
+        if r.get("confidence", "") not in ("", None):
+            conf[r["frame"]] = float(r["confidence"])
+    scored = score_frames(t, boxes, frame_width, rule="size", shown=shown,
+                          confidence=conf if np.isfinite(conf).any() else None)
     s = summarize([{**scored, "clip": "", "algo": "", "particles": 0, "run": 0, "ms": [], "ess": []}])[0]
     vis = np.array(scored["visible"], bool)
+    reported = np.array(scored["reported"], bool)
     missed = int(np.sum(vis & np.array([e is None for e in scored["error"]])))
-    lost = int(np.sum(vis & np.array(scored["lost"], bool)))
+    lost = vis & np.array(scored["lost"], bool)
     mean_all = "n/a" if s["mean_error_all"] is None else f"{s['mean_error_all']:.2f} px"
-    tracked = "none" if s["mean_error"] is None else f"{s['mean_error']:.2f} px"
+    err = np.array([np.inf if e is None else e for e in scored["error"]])
+    on = vis & reported & np.isfinite(err)  # tracked: the frames the tracker reported (issue 44), not the truth's rule
+    tracked = f"{err[on].mean():.2f} px" if on.any() else "none"
     but = f" but the {missed} without an estimate (undecodable, or searched before it was found)" if missed else ""
-    return (f"vs ground truth ({int(vis.sum())} frames with the object): success AUC {s['success_auc']:.3f}, "
-            f"precision@20px {s['precision_20px']:.3f}, mean centre error {mean_all} over all of them{but} ({tracked} "
-            f"over tracked frames); lost (centre error > half the object's larger side, or no estimate) in {lost} "
-            "frames")
+    absent = int((~vis).sum())
+    return (f"vs ground truth ({int(vis.sum())} frames with the object): success AUC {s['success_auc']:.3f} "
+            f"({s['success_auc_lost_empty']:.3f} with the frames reported lost as empty), precision@20px "
+            f"{s['precision_20px']:.3f}, long-term F-score {s['lt_f']:.3f} (precision {s['lt_precision']:.3f}, "
+            f"recall {s['lt_recall']:.3f}), mean centre error {mean_all} over all of them{but} ({tracked} over "
+            f"the frames reported tracked); reported lost (visible=0) in {int((vis & ~reported).sum())} of them, lost by the "
+            f"ground truth (centre error > half the object's larger side, or no estimate) in {int(lost.sum())} "
+            f"(both in {int((lost & ~reported).sum())})"
+            + (f"; the object absent in {absent} frames, reported absent in {int((~vis & ~reported).sum())}"
+               if absent else ""))

@@ -156,6 +156,13 @@ class Tracker:
         return self.result.visible
 
     @property
+    def confidence(self):
+        """The last frame's calibrated confidence in ``[0, 1]`` that the box lies on the object (the box
+        model's, :mod:`vistrack.models.box.confidence`; the track CSV's ``confidence``), ``None`` for a
+        model without one."""
+        return self.result.confidence
+
+    @property
     def lost_reason(self):
         """``""``, or why the last frame does not report the object
         (:data:`~vistrack.models.collapse.REASONS`)."""

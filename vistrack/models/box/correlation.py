@@ -34,6 +34,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from ... import kernels
+from ...core.features import greedy_peaks
 
 __all__ = ["CorrelationFilter", "DCFResponse", "dcf_features"]
 
@@ -346,13 +347,18 @@ class CorrelationFilter:
         self.B = (1 - r) * self.B + r * b
         self._applied = self._terms = None
 
-    def search(self, frame, log_scale, stride=2):
-        """Whole-frame search at ``log_scale``: the applied filter's spatial taps correlated with the frame's
-        features at the filter's resolution shrunk by ``stride``. Returns ``(x, y, value)``: the best
-        centre (frame px) and its response."""
+    def search(self, frame, log_scale, stride=2, crop=None, peaks=1):
+        """Whole-frame search at ``log_scale``: the applied filter's spatial taps (``crop``: those over the
+        object's box grown ``crop`` times; ``None``: all, the surroundings too, which on a still background find
+        where the object was) correlated with the frame's features at the filter's resolution shrunk by
+        ``stride``. Returns ``(x, y, value)``: the best centre (frame px) and its response; with ``peaks`` > 1, a
+        list of the ``peaks`` best places (:func:`~vistrack.core.features.greedy_peaks`), best first."""
         A, B = self.filter()
         taps = sfft.irfft2(A / (B + self.lam)[None], s=self.shape)  # h (C, ph, pw): y[n] = sum_m h[m] z[m + n]
         taps = sfft.fftshift(taps, axes=(1, 2))  # the object's centre at the middle (label at anchor)
+        if crop is not None:  # zero outside the object's box grown crop times about the middle
+            (hx, hy), (ph, pw) = 0.5 * crop * self.size0 * self.f, self.shape
+            taps = taps * np.outer(np.abs(np.arange(ph) - ph // 2) <= hy, np.abs(np.arange(pw) - pw // 2) <= hx)
         s = self.f * np.exp(-log_scale) / stride
         h, w = frame.shape[:2]
         img = _grey(cv2.resize(frame, (max(8, int(round(w * s))), max(8, int(round(h * s)))),
@@ -364,8 +370,9 @@ class CorrelationFilter:
         for c in range(len(feat)):
             t = cv2.resize(np.ascontiguousarray(taps[c]), k, interpolation=cv2.INTER_AREA) * np.float32(stride**2)
             total += cv2.filter2D(feat[c], -1, t, borderType=cv2.BORDER_CONSTANT)
-        i, j = np.unravel_index(int(np.argmax(total)), total.shape)
-        return (j + 0.5) / s, (i + 0.5) / s, float(total[i, j])
+        half = [int(np.ceil(v)) for v in 0.5 * self.size0 * self.f / stride]  # the object's half box there
+        out = [((j + 0.5) / s, (i + 0.5) / s, v) for i, j, v in greedy_peaks(total, half, peaks)]
+        return out[0] if peaks == 1 else out
 
 
 def _exact_filter_kernels():

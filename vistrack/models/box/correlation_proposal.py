@@ -45,7 +45,14 @@ class CorrelationProposal:
         self.model = model
         self.kernel = kernel
 
-    def log_density(self, resp, z):
+    @staticmethod
+    def _centre(obs):
+        """The proposal's log-scale centre ``l*``: the observation's ``scale_centre`` where the model set one,
+        else the translation filter's best scale."""
+        resp = obs.dcf
+        return resp.log_scales[resp.best] if obs.scale_centre is None else obs.scale_centre
+
+    def log_density(self, resp, z, centre=None):
         """``log q_Y(z)`` ``(N,)`` of states ``z (N, >=3)`` (module docstring); ``-inf`` outside the region."""
         t, s = self.model.dcf_tempering
         log_p = resp.cell_log_p(t, s)
@@ -56,12 +63,12 @@ class CorrelationProposal:
         inside = (j >= 0) & (j < w) & (i >= 0) & (i < h)
         out = np.full(len(z), -np.inf)
         sd = self.model.dcf_scale_std
-        d = (z[:, 2] - resp.log_scales[resp.best]) / sd
+        d = (z[:, 2] - (resp.log_scales[resp.best] if centre is None else centre)) / sd
         out[inside] = log_p[i[inside] * w + j[inside]] - 2 * np.log(a) - 0.5 * d[inside] ** 2 - _LOG_SQRT_2PI \
             - np.log(sd)
         return out
 
-    def draw(self, resp, u, e):
+    def draw(self, resp, u, e, centre=None):
         """Poses ``(N, 3)`` drawn from ``q_Y`` with uniforms ``u (N, 3)`` (cell, position in it) and normals
         ``e (N,)`` (log-scale)."""
         c = resp.cell_cumulative(*self.model.dcf_tempering)
@@ -70,7 +77,8 @@ class CorrelationProposal:
         (ox, oy), a = resp.cell_origin()
         x = ox + a * (k % w + u[:, 1] - 0.5)
         y = oy + a * (k // w + u[:, 2] - 0.5)
-        return np.stack([x, y, resp.log_scales[resp.best] + self.model.dcf_scale_std * e], axis=1)
+        l_star = resp.log_scales[resp.best] if centre is None else centre
+        return np.stack([x, y, l_star + self.model.dcf_scale_std * e], axis=1)
 
     def sample(self, x, obs, rng, prev):
         """``(z, log α, log q)`` for LIS (module docstring) about the predictions ``x (N, 6)`` from ``prev``."""
@@ -110,14 +118,14 @@ class CorrelationProposal:
             z, log_qy = np.empty(np.shape(x)), np.empty(n)
             correlation_draws(np.ascontiguousarray(x, float), u, e, beta, resp.cell_cumulative(t, s),
                               resp.cell_log_p(t, s), float(ox), float(oy), float(a), w, h,
-                              float(resp.log_scales[resp.best]), float(sd), float(2 * np.log(a)), float(np.log(sd)),
+                              float(self._centre(obs)), float(sd), float(2 * np.log(a)), float(np.log(sd)),
                               _LOG_SQRT_2PI, z, log_qy)
         else:
             z = np.array(x, float)
             pick = u[:, 0] < beta
             if pick.any():
-                z[pick, :3] = self.draw(resp, u[pick, 1:], e[pick])
-            log_qy = self.log_density(resp, z)
+                z[pick, :3] = self.draw(resp, u[pick, 1:], e[pick], self._centre(obs))
+            log_qy = self.log_density(resp, z, self._centre(obs))
         log_kz = self.kernel.logpdf(z, prev)
         parts = [np.log(beta) + log_qy if beta > 0 else np.full(n, -np.inf),
                  np.log1p(-beta) + log_kz if beta < 1 else np.full(n, -np.inf)]

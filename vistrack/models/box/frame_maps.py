@@ -114,7 +114,11 @@ class AppearanceFrame:
 
     #: set by ``Box.observe``: the correlation filter's response and share ``β``, a re-detection?, the frame
     dcf = dcf_share = frame_image = None
+    #: set by ``Box.observe``: the scale filter's response (or ``None``) and the proposal's log-scale centre
+    scale = scale_centre = None
     redetected = False
+    #: set by ``Box._redetect`` on a frame whose whole-frame search found the object: the pose found ``(cx, cy, l)``
+    found = None
     _texture = _labels = _ii = _work = None  # the maps (see :meth:`maps`) and the working image's buffer
 
     def __init__(self, frame, roi, f, grey, work=None, interpolation=cv2.INTER_AREA, buffers=None):

@@ -28,11 +28,9 @@ Local moves (thesis 001, §4.3–4.5)
     ``lls``: the exact ``r`` on a grid of the window (:class:`~vistrack.proposals.Window`).
     With the correlation filter, ``lis``'s proposal is its response mixed with ``K``
     (:class:`~vistrack.models.box.correlation_proposal.CorrelationProposal`, exact density, proper weights).
-Lost
-    ``visible=0`` where ``log r`` at the estimate falls far below its running level, the
-    scale below a floor or the centre leaves the frame (:mod:`~vistrack.models.collapse`).
-    With the filter, while lost, each frame is searched whole (:meth:`Box._redetect`) and the
-    particles re-seeded where the object is found (the track CSV's ``redetected``).
+Lost and found
+    ``visible=0`` where the collapse test fires or, with the filter, the estimate's calibrated
+    confidence is low; a whole-frame search after a few such frames (:mod:`~vistrack.models.box.lost`).
 """
 
 from __future__ import annotations
@@ -50,12 +48,14 @@ from ..protocol import VideoModelBase
 from .appearance import Appearance
 from .correlation import CorrelationFilter
 from .correlation_proposal import CorrelationProposal
+from .lost import LostAndFound
 from .moves import BoxMoves
+from .scale_filter import ScaleFilter
 
 __all__ = ["Box"]
 
 
-class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
+class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBase):
     """Box tracking model with appearance learned from the first frame.
 
     Parameters
@@ -94,21 +94,27 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         ``(t, s)``: the response's cells drawn ``∝ (1 - s) exp(t (y - max y)) / Σ + s / C``.
     dcf_scale_std : float
         ``σ_l`` of the proposal's log-scale about the best scale of the search.
-    redetect : float or None
-        While the object is reported lost, search the whole frame with the filter and centre the search
-        region at the best place when ``log r`` there is within ``redetect`` times the collapse test's
-        ``drop`` of its running level (``None``: never); the dynamics then has a share ``reentry`` of a
-        pose uniform over the frame (:meth:`predict`).
-    reentry : float
-        That share.
     collapse_drop : float
         With the filter, the collapse test's ``drop`` (:attr:`collapse_options`: 55 without it): ``log r``
         at the estimate falls by 43-47 on the synthetic clip of ``tests/test_box_dcf.py`` when the object
         vanishes; 28 (the 7-clip mean AUC 0.690 against 0.685 with 35, and with the filter's rate 0.004
         0.695 and the hand held on 6 of 6 seeds: ``docs/experiments.md``).
+    confidence, lost_confidence, redetect, reentry, redetect_after, search_crop, search_peaks
+        What is reported lost and how it is found again: :meth:`~vistrack.models.box.lost.LostAndFound.init_lost`.
     dcf_options : dict or None
         Passed to :class:`~vistrack.models.box.correlation.CorrelationFilter` (its ``padding``: ``4 sigma_xy``
         unless given, so that the search region about the dynamics' prediction holds 4 innovation stds).
+    scale_filter : bool or dict
+        Learn DSST's scale filter (:class:`~vistrack.models.box.scale_filter.ScaleFilter`, a dict: its
+        options) beside the correlation filter; ``False``: none.
+    lambda_scale : float
+        ``λ_s``, the weight of the scale filter's response at each state's log-scale in ``log r``.
+    scale_proposal : {"filter", "dcf"}
+        The correlation proposal's log-scale centre: the scale filter's refined peak, or the best of the
+        correlation filter's three scales. The scale filter with ``λ_s`` 20 and its peak as the proposal's
+        scale were chosen by leave-one-clip-out cross-validation over the 18 real clips (mean AUC 0.548
+        without it, 0.556–0.563 with it; each part alone less: ``benchmarks/tune_box.py``,
+        ``docs/experiments.md``).
     **appearance
         Passed to :class:`~vistrack.models.box.appearance.Appearance` (with the filter, ``lambda_colour`` 12,
         ``lambda_template`` 8 and ``kappa`` 0.5 unless given).
@@ -123,7 +129,9 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
     def __init__(self, frame, box, *, sigma_xy=None, sigma_scale=None, damping=0.5, prior_std=(0.04, 0.02),
                  window=2.5, map_stride=1, dcf=True, lambda_dcf=60.0, dcf_share=0.5, dcf_tempering=(60.0, 0.05),
                  dcf_scale_std=0.02, redetect=0.5, reentry=0.05, collapse_drop=28.0,
-                 dcf_options=None, **appearance):
+                 dcf_options=None, scale_filter=True, lambda_scale=20.0, scale_proposal="filter",
+                 confidence=True, lost_confidence=None, redetect_after=3, search_crop=1.0, search_peaks=3,
+                 **appearance):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
             raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
@@ -156,13 +164,14 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
             self.collapse_options = {"drop": float(collapse_drop)}
         self.lambda_dcf, self.dcf_share, self.dcf_scale_std = float(lambda_dcf), float(dcf_share), float(dcf_scale_std)
         self.dcf_tempering = tuple(float(v) for v in dcf_tempering)
-        self.redetect = None if redetect is None else float(redetect)
-        self.reentry = float(reentry)
-        self._lost = False  # the last frame's collapse test said lost
-        self._last_scale = 0.0  # the log-scale of the last frame reported
         self._d = self.damping  # this frame's damping: 0 on the frame after a re-detection (no velocity)
-        self._found = False  # this frame is a re-detection
-        self._reentry = False  # this frame's dynamics has the re-entry share
+        if scale_proposal not in ("filter", "dcf"):
+            raise ValueError(f"scale_proposal is 'filter' or 'dcf', got {scale_proposal!r}")
+        sf_options = scale_filter if isinstance(scale_filter, dict) else {}
+        self.sf = ScaleFilter(frame, (x, y, w, h), **sf_options) if (dcf and scale_filter) else None
+        self.lambda_scale = float(lambda_scale)
+        self.scale_proposal = scale_proposal
+        self.init_lost(dcf, confidence, lost_confidence, redetect, reentry, redetect_after, search_crop, search_peaks)
 
     # -- geometry ---------------------------------------------------------------------
     def boxes(self, states):
@@ -284,9 +293,9 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
             obs = self.app.frame(maps.frame, roi)
             obs.dcf, obs.dcf_share, obs.redetected, obs.frame_image = None, self.dcf_share, False, maps.frame
             return obs
-        pred = particles.weights @ self.predict_mean(particles.states)[:, :3]
-        if self._lost and self.redetect is not None:
-            found = self._redetect(maps.frame, roi, pred)
+        pred = self._pred = particles.weights @ self.predict_mean(particles.states)[:, :3]
+        if self._lost_run >= self.redetect_after and self.redetect is not None:
+            found = self._redetect(maps.frame)
             if found is not None:
                 return found
         return self._dcf_frame(maps.frame, roi, pred, self.dcf_share, False)
@@ -303,30 +312,10 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
                max(roi[2], int(np.ceil(x1 + grow))), max(roi[3], int(np.ceil(y1 + grow))))
         obs = self.app.frame(frame, roi)
         obs.dcf, obs.dcf_share, obs.redetected, obs.frame_image = resp, share, redetected, frame
+        obs.scale = None if self.sf is None else self.sf.detect(frame, resp.peak_xy, float(centre[2]))
+        if self.scale_proposal == "filter" and obs.scale is not None:
+            obs.scale_centre = obs.scale.peak_log_scale
         return obs
-
-    def _redetect(self, frame, roi, pred):
-        """While the track is lost: the best place of a whole-frame search with the filter
-        (:meth:`CorrelationFilter.search`) at the last reported frame's scale, taken (the observation about it,
-        ``β`` at least 0.9, the dynamics' re-entry share on, and no velocity carried into the next frame's
-        prediction: ``d = 0`` there) when ``log r`` of the pose there at
-        the response's peak is within ``redetect`` times the collapse test's ``drop`` of its running
-        level; ``None`` otherwise."""
-        scale = self._last_scale  # the estimate's scale drifts while the object is lost
-        x, y, _ = self.cf.search(frame, scale)
-        obs = self._dcf_frame(frame, roi, np.array([x, y, scale]), max(self.dcf_share, 0.9), True)
-        r = obs.dcf
-        cand = np.array([[*r.peak_xy, r.log_scales[r.best]]])
-        level, drop = self._collapse.level, self._collapse.drop
-        if level is None or drop is None or not self.loglik(obs, cand)[0] >= level - self.redetect * drop:
-            return None
-        self._reentry = self.reentry > 0
-        self._found = True
-        return obs
-
-    def redetected(self, obs):
-        """Whether this frame's observation is a whole-frame search's find (:meth:`_redetect`)."""
-        return bool(obs.redetected)
 
     def loglik(self, obs, states):
         """``log r`` of ``states (N, 6)``, shape ``(N,)``: the colour and template terms, plus
@@ -338,6 +327,8 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         resp = obs.dcf
         if resp is not None and self.lambda_dcf:
             out = out + self.lambda_dcf * resp.read(np.atleast_2d(states))
+        if obs.scale is not None and self.lambda_scale:
+            out = out + self.lambda_scale * obs.scale.read(np.atleast_2d(states)[:, 2])
         return out
 
     def estimate(self, particles):
@@ -345,23 +336,19 @@ class Box(BoxMoves, CollapseCheck, TranslationMoves, ARInnovation, VideoModelBas
         return particles.mean()
 
     def adapt(self, obs, estimate):
-        """Adapt the appearance to the estimate on a confident frame (:meth:`Appearance.adapt`) and the
-        correlation filter on a frame where the object is reported (:meth:`CorrelationFilter.adapt`)."""
+        """On a frame where the object is reported, adapt the appearance to the estimate where it is confident
+        (:meth:`Appearance.adapt`) and the correlation filter (:meth:`CorrelationFilter.adapt`); a frame
+        reported lost changes nothing."""
+        if self._lost:
+            return False
         done = self.app.adapt(obs, self.boxes(estimate)[0])
         resp = obs.dcf
-        if resp is not None and not self._lost:
+        if resp is not None:
             e = np.asarray(estimate, float).ravel()
             self.cf.adapt(obs.frame_image, e[:2], float(e[2]))
+            if self.sf is not None:
+                self.sf.adapt(obs.frame_image, e[:2], float(e[2]))
         return done
-
-    def check_lost(self, obs, state):
-        """The collapse test (:class:`~vistrack.models.collapse.CollapseCheck`), remembered for the next
-        frame's re-detection."""
-        out = super().check_lost(obs, state)
-        self._lost = bool(out[0])
-        if not self._lost:
-            self._last_scale = float(np.ravel(state)[2])
-        return out
 
     # -- local moves (and :class:`~vistrack.models.box.moves.BoxMoves`) ------------------------
     def lis_proposal(self, kernel=None):
