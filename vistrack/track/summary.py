@@ -111,8 +111,8 @@ def _box_summary(rows, t, frame_width):
             f"({s['success_auc_lost_empty']:.3f} with the frames reported lost as empty), precision@20px "
             f"{s['precision_20px']:.3f}, long-term F-score {s['lt_f']:.3f} (precision {s['lt_precision']:.3f}, "
             f"recall {s['lt_recall']:.3f}), mean centre error {mean_all} over all of them{but} ({tracked} over "
-            f"the frames reported tracked); reported lost (visible=0) in {int((vis & ~reported).sum())} of them, lost by the "
-            f"ground truth (centre error > half the object's larger side, or no estimate) in {int(lost.sum())} "
-            f"(both in {int((lost & ~reported).sum())})"
+            f"the frames reported tracked); reported lost (visible=0) in {int((vis & ~reported).sum())} of them, "
+            f"lost by the ground truth (centre error > half the object's larger side, or no estimate) in "
+            f"{int(lost.sum())} (both in {int((lost & ~reported).sum())})"
             + (f"; the object absent in {absent} frames, reported absent in {int((~vis & ~reported).sum())}"
                if absent else ""))
