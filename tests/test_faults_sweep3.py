@@ -314,7 +314,7 @@ def test_the_tracker_checks_every_argument_when_it_is_made(kw, words):
 def test_the_tracker_names_the_options_it_takes():
     import vistrack
 
-    with pytest.raises(ValueError, match="lambda_dcf, map_stride"):
+    with pytest.raises(ValueError, match="lambda_dcf, lambda_scale, lost_confidence, map_stride"):
         vistrack.Tracker(frobnicate=3)
     vistrack.Tracker(lambda_dcf=30.0, lambda_template=2.0)  # the model's own and its appearance's
 
@@ -481,7 +481,8 @@ def test_run_summary_scores_an_undecodable_frame_as_eval_does(tmp_path):
     (r,) = json.loads((tmp_path / "ev" / "results.json").read_text())["results"]
     got = {k: float(re.search(pat, line).group(1)) for k, pat in (
         ("success_auc", r"success AUC ([0-9.]+)"), ("precision_20px", r"precision@20px ([0-9.]+)"),
-        ("mean_error_all", r"mean centre error ([0-9.]+) px over all"), ("lost", r"in (\d+) frames$"))}
+        ("mean_error_all", r"mean centre error ([0-9.]+) px over all"),
+        ("lost", r"lost by the ground truth \([^)]*\) in (\d+)"))}
     assert got["precision_20px"] == pytest.approx(r["precision_20px"], abs=1e-3) == 11 / 12
     assert got["lost"] / 12 == pytest.approx(r["p_lost"]) == 1 / 12
     assert got["success_auc"] == pytest.approx(r["success_auc"], abs=1e-3)
@@ -518,7 +519,7 @@ def test_init_gt_with_missing_first_boxes_keeps_the_redetected_column(tmp_path):
     with open(tmp_path / "t.csv", newline="") as f:
         track = list(csv.DictReader(f))
     assert list(track[0]) == ["frame", "visible", "cx", "cy", "w", "h", "angle_deg", "scale", "redetected", "ess", "ms",
-                              "lost_reason"]
+                              "lost_reason", "confidence"]
     assert [r["lost_reason"] for r in track[:3]] == ["not started"] * 3
     assert {r["redetected"] for r in track[:3]} == {"0"}
 

@@ -32,9 +32,9 @@ from pathlib import Path
 import numpy as np
 
 from ..core.metrics import score_frames
-from ..core.metrics import summarize as metrics_summarize
 from ..core.runtime import check_memory, prepare_worker
 from ..core.seeds import run_seed
+from ..core.summaries import summarize as metrics_summarize
 from ..filters import ALGORITHMS, make_filter
 from ..io.clips import GroundTruthWarning, load_clip, sequence_name
 from ..io.remote import is_url, url_version
@@ -380,7 +380,7 @@ def score_result_file(clip_path, path, name, fmt="otb"):
 
 
 def summarize(results):
-    """Per clip × algo × N summaries of task results (:func:`vistrack.core.metrics.summarize`; OpenCV's
+    """Per clip × algo × N summaries of task results (:func:`vistrack.core.summaries.summarize`; OpenCV's
     trackers marked as no particle filter)."""
     return metrics_summarize(results, not_filters=OPENCV_TRACKERS)
 

@@ -234,8 +234,17 @@ class VideoWriter:
     def __enter__(self):
         return self
 
-    def __exit__(self, *exc):
-        self.close()
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is None:
+            self.close()
+            return
+        # the run failed (an error, Ctrl-C, SIGTERM): an earlier file is kept, and a failure to close this
+        # one (a file cut short is removed) does not hide the error that ended the run
+        self.abandon()
+        try:
+            self.close()
+        except Exception:  # noqa: BLE001
+            pass
 
 
 def _check_playable(path, frames):

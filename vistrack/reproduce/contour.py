@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..core.metrics import pooled_summary
+from ..core.summaries import pooled_summary
 from ..engine.evaluation import entries_config, entry_tasks, run_task
 from ..engine.tasks import load_task_results
 from ..registry import check_algo, get_filter_spec
@@ -64,6 +64,6 @@ class ContourConfig:
 
     def results(self, tasks, out_dir):
         """``{"config", "results"}``: pooled summaries per (algo, N) over clips and runs, in the order of the
-        entries (:func:`~vistrack.core.metrics.pooled_summary`)."""
+        entries (:func:`~vistrack.core.summaries.pooled_summary`)."""
         return {"config": entries_config(self), "results": pooled_summary(load_task_results(tasks, out_dir))}
 

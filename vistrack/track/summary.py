@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.metrics import landmark_error, plate_frame_measures, score_frames, summarize
+from ..core.metrics import landmark_error, plate_frame_measures, score_frames
+from ..core.summaries import summarize
 from .profiling import STAGES
 
 __all__ = ["summary_lines"]
@@ -83,7 +84,7 @@ NO_ESTIMATE = ("decode", "not started", "not found")
 
 def _box_summary(rows, t, frame_width):
     """One line: the track scored as ``eval`` scores a task (:func:`~vistrack.core.metrics.score_frames`,
-    :func:`~vistrack.core.metrics.summarize`), over the same frames: a frame without an estimate
+    :func:`~vistrack.core.summaries.summarize`), over the same frames: a frame without an estimate
     (undecodable, searched before the object was found) is a missed frame in both; beside the scores,
     the frames the tracker reported lost (``visible=0``) and those the ground truth says it lost."""
     n_frames = int(max(r["frame"] for r in rows)) + 1

@@ -101,6 +101,8 @@ class ScaleFilter:
         Multiply the samples by a Hann window over the scales (DSST's; without it the 18 real clips'
         mean AUC falls by 0.013, ``docs/experiments.md``).
 
+    Notes
+    -----
     ``model_area`` 1024 and ``anchor`` 0.2 were chosen by leave-one-clip-out cross-validation over the
     real clips (``benchmarks/tune_box.py``; 512 and 0: mean AUC 0.525 against 0.556–0.563).
     """
