@@ -56,9 +56,9 @@ def test_likelihood_peaks_at_the_plate_from_the_detection(dashcam):
 def test_from_the_first_box_the_angle_holds_and_the_plate_model_is_level_with_the_box_model(dashcam):
     """Issue 35: from the first ground-truth box (LIS-100, seed 1) the plate model's success AUC is at least
     the box model's (since the box model's scale filter, issue 43, the two are level: 0.931 each). The
-    learned template reads the parallelogram's axis-aligned box; adapted to the estimate, it learned the taller box of a tilted estimate and the angle drifted to about -2 degrees
-    (the reported box 12 % higher than the ground truth, AUC 0.88 against the box model's 0.91): the
-    plate model keeps its first view (``Plate.adapt_rate`` 0) and the correlation filter adapts."""
+    learned template reads the parallelogram's axis-aligned box; adapted to the estimate, it learned the
+    taller box of a tilted estimate and the angle drifted to about -2 degrees (the reported box 12 % higher
+    than the ground truth, AUC 0.88 against the box model's 0.91): the plate model keeps its first view (``Plate.adapt_rate`` 0) and the correlation filter adapts."""
     import vistrack
     from vistrack.core.metrics import iou, success_auc
 

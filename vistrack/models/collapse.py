@@ -132,8 +132,13 @@ class CollapseCheck:
             self._collapse = CollapseWatch(**self.collapse_options)
         s = np.asarray(state, float).reshape(1, -1)
         scale, cx, cy = self.collapse_pose(s[0])
-        return self._collapse.check(float(self.loglik(obs, s)[0]), float(scale), (float(cx), float(cy)),
+        return self._collapse.check(float(self.collapse_loglik(obs, s)[0]), float(scale), (float(cx), float(cy)),
                                     self.frame_size, low)
+
+    def collapse_loglik(self, obs, states):
+        """The ``log r`` the test watches (``(N,)`` of ``states``): :meth:`loglik` (a model whose ``log r``
+        has terms that say how well a pose fits, not whether the object is there, leaves them out)."""
+        return self.loglik(obs, states)
 
     def collapse_pose(self, state):
         """``(scale, cx, cy)`` of ``state`` that the test reads: :meth:`describe`'s (a model whose

@@ -205,7 +205,7 @@ class BoxConfidence:
         bp = colour.bp
         contrast = float(inner[0] @ bp / max(inner[0].sum(), 1) - ring[0] @ bp / max(ring[0].sum(), 1))
         level = model.collapse_level
-        loglik = float(model.loglik(obs, s)[0])
+        loglik = float(model.collapse_loglik(obs, s)[0])  # the collapse test's log r, against its level
         drop = 0.0 if level is None or not np.isfinite(loglik) else float(np.clip(loglik - level, -100.0, 20.0))
         if not np.isfinite(loglik):
             drop = -100.0

@@ -94,7 +94,7 @@ class LostAndFound:
         else:
             obs, cand = found[0][0], found[0][1][None]
             level, drop = self._collapse.level, self._collapse.drop
-            if level is None or drop is None or not self.loglik(obs, cand)[0] >= level - self.redetect * drop:
+            if level is None or drop is None or not self.collapse_loglik(obs, cand)[0] >= level - self.redetect * drop:
                 return None
         self._reentry = self.reentry > 0
         self._found = True

@@ -319,7 +319,18 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
 
     def loglik(self, obs, states):
         """``log r`` of ``states (N, 6)``, shape ``(N,)``: the colour and template terms, plus
-        ``λ_dcf`` times the correlation filter's response where the frame has one."""
+        ``λ_dcf`` times the correlation filter's response where the frame has one, plus ``λ_s`` times the
+        scale filter's response at each state's log-scale where it has one."""
+        out = self.collapse_loglik(obs, states)
+        if obs.scale is not None and self.lambda_scale:
+            out = out + self.lambda_scale * obs.scale.read(np.atleast_2d(states)[:, 2])
+        return out
+
+    def collapse_loglik(self, obs, states):
+        """:meth:`loglik` without the scale filter's term, which says how well a size fits, not whether the
+        object is there: the collapse test's ``log r`` (its ``drop`` was set on it; the scale term, about 20
+        on the frames after the first and 5-10 once the filter has adapted, would otherwise lower the
+        running level's reference and report a tracked object lost)."""
         if kernels.use():
             out = self.app.loglik_states(obs, np.ascontiguousarray(states, float), self.size0)
         else:
@@ -327,8 +338,6 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         resp = obs.dcf
         if resp is not None and self.lambda_dcf:
             out = out + self.lambda_dcf * resp.read(np.atleast_2d(states))
-        if obs.scale is not None and self.lambda_scale:
-            out = out + self.lambda_scale * obs.scale.read(np.atleast_2d(states)[:, 2])
         return out
 
     def estimate(self, particles):
