@@ -58,7 +58,8 @@ def test_from_the_first_box_the_angle_holds_and_the_plate_model_is_level_with_th
     the box model's (since the box model's scale filter, issue 43, the two are level: 0.931 each). The
     learned template reads the parallelogram's axis-aligned box; adapted to the estimate, it learned the
     taller box of a tilted estimate and the angle drifted to about -2 degrees (the reported box 12 % higher
-    than the ground truth, AUC 0.88 against the box model's 0.91): the plate model keeps its first view (``Plate.adapt_rate`` 0) and the correlation filter adapts."""
+    than the ground truth, AUC 0.88 against the box model's 0.91): the plate model keeps its first view
+    (``Plate.adapt_rate`` 0) and the correlation filter adapts."""
     import vistrack
     from vistrack.core.metrics import iou, success_auc
 
