@@ -326,7 +326,7 @@ def _lt(ss):
 
 def _table(labels, first):
     """A markdown table: one row per ``label -> [summaries]``, their averages (``±``: over runs)."""
-    out = ["| " + first + " | " + " | ".join(_HEADER[2:]) + " |", "|---" * (len(_HEADER) - 1) + "|"]
+    out = ["| " + first + " | " + " | ".join(_HEADER[2:]) + " |", "|---" * len(_HEADER) + "|"]
     for ss in labels.values():
         out.append("| " + " | ".join(_cells(ss)) + " |")
     return "\n".join(out)
