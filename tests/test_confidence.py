@@ -126,3 +126,15 @@ def test_synth_longterm_marks_the_absent_frames(tmp_path):
     assert np.all(t["visible"][absent] == 0) and np.all(t["visible"][~absent] == 1)
     assert np.all(np.column_stack([t["cx"], t["cy"], t["w"], t["h"]])[absent] == 0)
     assert np.all(t["w"][~absent] > 0)
+
+
+def test_the_calibration_ships_with_the_installed_package():
+    """The box model's calibration is package data: without it an installed vistrack tracks without a
+    confidence (no frame reported low-confidence) and its tracks differ from a clone's."""
+    from importlib.resources import files
+
+    from vistrack.models.box.confidence import CALIBRATION
+
+    assert files("vistrack.models.box").joinpath("confidence.npz").is_file()
+    cal = Calibration.load(CALIBRATION)
+    assert 0 < cal.threshold < 1
