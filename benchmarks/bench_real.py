@@ -335,6 +335,8 @@ def main():
     ap.add_argument("--clips", default="", help="clip folder names (default: every one with ground truth)")
     ap.add_argument("--data", default=str(DATA))
     ap.add_argument("--workers", type=int, default=2, help="processes for the accuracy runs")
+    ap.add_argument("--reuse", default=None, help="take the accuracy rows and the cross-validation from this "
+                    "earlier --json (the same code's tracks) and run only --speed")
     ap.add_argument("--json", default=None, help="write every number here")
     ap.add_argument("--readme", default=None, help="rewrite this file's real-clips block with the table")
     args = ap.parse_args()
@@ -354,8 +356,15 @@ def main():
     seeds = list(range(1, args.seeds + 1))
     variants = [(c, "none") for c in clips] + [(load_clip(stressed_copy(c, s)), s) for s in stresses for c in clips]
     ENTRIES.update(parse_entries(args.entries))
-    rows = accuracy(variants, [DEFAULT, *ENTRIES, *cvs], seeds, sre=args.sre, workers=args.workers)
-    cv = cross_validated(clips, seeds, args.candidates, args.workers) if args.candidates else None
+    if args.reuse:
+        old = json.loads(Path(args.reuse).read_text())
+        rows, c = old["rows"], old["cross_validation"]
+        cv = None if c is None else (c["configurations"], np.array(c["scores"]),
+                                     np.array([c["configurations"].index(n) for n in c["chosen"]]),
+                                     np.array(c["held_out"]))
+    else:
+        rows = accuracy(variants, [DEFAULT, *ENTRIES, *cvs], seeds, sre=args.sre, workers=args.workers)
+        cv = cross_validated(clips, seeds, args.candidates, args.workers) if args.candidates else None
     spd = speed(clips, args.reps) if args.speed else None
     print_report(rows, cv, spd)
     command = "python benchmarks/bench_real.py " + " ".join(sys.argv[1:])
