@@ -13,6 +13,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from test_faults_sweep2 import one_error
 
 from cli_helpers import run
 
@@ -39,15 +40,6 @@ def avi(path, n, w=W, h=H):
         wr.write(box_frame(i, w, h))
     wr.release()
     return path
-
-
-def one_error(code, err, *words):
-    assert code not in (0, None) and "Traceback" not in err, err
-    lines = [ln for ln in err.splitlines() if ln.startswith("Error:")]
-    assert len(lines) == 1, err
-    for w in words:
-        assert w in lines[0], (w, lines[0])
-    return lines[0]
 
 
 # ------------------------------------------------------------------ 1: outputs replaced only by complete files
