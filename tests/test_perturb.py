@@ -155,3 +155,15 @@ def test_a_clip_without_ground_truth_is_refused(tmp_path):
     r = CliRunner().invoke(main, ["synth", "perturb", str(src), "--out", str(tmp_path / "o"), "--blur", "3"])
     assert r.exit_code == 1 and "has no box ground truth" in r.output
     assert not (tmp_path / "o").exists()
+
+
+def test_every_preset_is_remade_from_its_fields():
+    """``dataclasses.replace`` of a preset (the benchmark's seed 1) gives the same stress: a perturbation
+    without a light holds the default gain, which is not a --gain given without --light."""
+    import dataclasses
+
+    from vistrack.data_synth.perturb import STRESS_PRESETS
+
+    for name, p in STRESS_PRESETS.items():
+        q = dataclasses.replace(p, seed=1)
+        assert (q.name, q.gain, q.seed) == (p.name, p.gain, 1), name

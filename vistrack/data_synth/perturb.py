@@ -68,7 +68,8 @@ class Perturbation:
     def __post_init__(self):
         if self.light is not None and self.light not in LIGHTS:
             raise ValueError(f"light must be one of {', '.join(LIGHTS)}, got {self.light!r}")
-        if self.gain is not None and self.light is None:
+        # (a gain equal to the default is what every perturbation holds: one remade from its fields passes)
+        if self.gain is not None and self.light is None and tuple(self.gain) != DEFAULT_GAIN:
             raise ValueError("--gain sets the range of --light: give --light ramp or --light flicker with it")
         if self.gain is None:
             object.__setattr__(self, "gain", DEFAULT_GAIN)
