@@ -4,7 +4,7 @@ timed call is counted once, in its own part)."""
 import time
 import warnings
 
-from vistrack.track.profiling import Timer  # noqa: F401  (the benchmarks import it from here)
+from vistrack.loop.profiling import Timer  # noqa: F401  (the benchmarks import it from here)
 
 PARTS = ["decode", "features", "likelihood", "proposal", "resampling"]
 

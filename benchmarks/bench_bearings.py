@@ -14,10 +14,11 @@ import time
 import numpy as np
 
 from vistrack.core.particles import ParticleSet
-from vistrack.core.runtime import keep_freed_memory
-from vistrack.data_synth.bearings import simulate
-from vistrack.filters import filter_steps, make_filter
+from vistrack.data_synth.bearings_sequence import simulate
+from vistrack.filters import filter_steps
 from vistrack.models import Bearings
+from vistrack.registry import make_filter
+from vistrack.system.resources import keep_freed_memory
 
 
 def main():

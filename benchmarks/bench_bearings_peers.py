@@ -31,9 +31,10 @@ import numpy as np
 
 from vistrack.core.gaussian import diag_logpdf
 from vistrack.core.transition import PriorKernel
-from vistrack.filters import filter_steps, make_filter
+from vistrack.filters import filter_steps
 from vistrack.models.bearings.model import Bearings, simulate, wrapped_cauchy_logpdf
 from vistrack.models.bearings.xi import XiProposal
+from vistrack.registry import make_filter
 
 try:
     import particles

@@ -11,10 +11,10 @@ import time
 
 import numpy as np
 
-from vistrack.core.runtime import keep_freed_memory
-from vistrack.data_synth.bearings import simulate
+from vistrack.data_synth.bearings_sequence import simulate
 from vistrack.filters import Bootstrap
 from vistrack.models import Bearings
+from vistrack.system.resources import keep_freed_memory
 
 
 def time_step(filt, particles, obs, rng, repeats):

@@ -16,13 +16,13 @@ import tempfile
 
 import numpy as np
 
-from vistrack.core.features import FeatureMaps
-from vistrack.core.runtime import keep_freed_memory
-from vistrack.data_synth.contour import make_contour_clip
-from vistrack.filters import make_filter
+from vistrack.appearance.features import FeatureMaps
+from vistrack.data_synth.contour_clip import make_contour_clip
 from vistrack.io.clips import load_clip
 from vistrack.models.contour.model import Contour
+from vistrack.registry import make_filter
 from vistrack.registry.builders import build_model
+from vistrack.system.resources import keep_freed_memory
 
 from _timing import Timer, run_timed, split_table, stepper
 

@@ -8,8 +8,8 @@ import time
 
 import numpy as np
 
-from vistrack.core.features import FeatureMaps
-from vistrack.core.runtime import keep_freed_memory
+from vistrack.appearance.features import FeatureMaps
+from vistrack.system.resources import keep_freed_memory
 
 
 def main():

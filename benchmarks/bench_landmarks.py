@@ -16,14 +16,14 @@ import warnings
 
 import numpy as np
 
-from vistrack.core.features import FeatureMaps
+from vistrack.appearance.features import FeatureMaps
 from vistrack.core.particles import ParticleSet
-from vistrack.core.runtime import keep_freed_memory
-from vistrack.data_synth.landmarks import make_landmark_clip, simulate
-from vistrack.filters import make_filter
+from vistrack.data_synth.landmark_clip import make_landmark_clip, simulate
 from vistrack.io.clips import load_clip
+from vistrack.registry import make_filter
 from vistrack.registry.builders import build_model
 from vistrack.reproduce.landmarks import LandmarksConfig
+from vistrack.system.resources import keep_freed_memory
 
 
 def sim_part(rounds):

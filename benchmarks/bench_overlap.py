@@ -18,12 +18,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from vistrack.data_synth.contour import make_contour_clip
-from vistrack.filters import make_filter
+from vistrack.data_synth.contour_clip import make_contour_clip
 from vistrack.io.clips import load_clip
 from vistrack.io.video import open_video, prefetch
+from vistrack.loop.stepper import FrameStepper, warm_up
+from vistrack.registry import make_filter
 from vistrack.registry.builders import build_model
-from vistrack.track.loop import FrameStepper, warm_up
 
 
 def decode_rate(clip, busy):

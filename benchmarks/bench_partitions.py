@@ -38,9 +38,10 @@ import time
 import numpy as np
 
 from vistrack.core.particles import logsumexp
-from vistrack.filters import BranchedPartitioned, filter_steps, make_filter
+from vistrack.filters import BranchedPartitioned, filter_steps
 from vistrack.filters.partition_step import PartitionedBase
 from vistrack.models import Bearings
+from vistrack.registry import make_filter
 from vistrack.reproduce.bearings import BearingsConfig, sequence
 
 

@@ -13,13 +13,13 @@ import tempfile
 
 import numpy as np
 
-from vistrack.core.features import FeatureMaps
-from vistrack.core.runtime import keep_freed_memory
-from vistrack.data_synth.plate import make_plate_clip
-from vistrack.filters import make_filter
+from vistrack.appearance.features import FeatureMaps
+from vistrack.data_synth.plate_clip import make_plate_clip
 from vistrack.io.clips import load_clip
 from vistrack.models.plate.model import PlateLikelihood
+from vistrack.registry import make_filter
 from vistrack.registry.builders import build_model
+from vistrack.system.resources import keep_freed_memory
 
 from _timing import Timer, run_timed, split_table, stepper
 

@@ -14,10 +14,10 @@ import cv2
 import numpy as np
 
 import vistrack
-from vistrack.core.runtime import keep_freed_memory
-from vistrack.data_synth.plate import detection_frames
+from vistrack.data_synth.plate_clip import detection_frames
 from vistrack.io.video import open_video, read_rects
 from vistrack.models.plate.detect import PlateDetector
+from vistrack.system.resources import keep_freed_memory
 
 CLIP = Path(__file__).resolve().parents[2] / "shared" / "data" / "real" / "plate_in_polo_dashcam"
 

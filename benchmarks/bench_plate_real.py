@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from vistrack.core.metrics import iou, success_auc
 from vistrack.io.results_format import read_result_file
+from vistrack.scoring.metrics import iou, success_auc
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 DASHCAM = REAL / "plate_in_polo_dashcam"

@@ -29,7 +29,7 @@ Speed (``--speed``)
     vistrack (seed 1) and NanoTrack alternately, ``--reps`` times each, the fastest of each;
     tracking-only frames/s and their ratio. End to end (decoding included, vistrack's reader) against
     KCF's on the median clip.
-Scores (``vistrack.core.metrics.box_scores``)
+Scores (``vistrack.scoring.metrics.box_scores``)
     success AUC (IoU thresholds 0, 0.05, .., 1), precision at 20 px, mean centre error, over frames
     with a true box.
 
@@ -65,9 +65,9 @@ from tqdm import tqdm
 from tune_box import cross_validate
 from tune_box import evaluate as tune_evaluate
 
-from vistrack.core.runtime import keep_freed_memory
 from vistrack.data_synth.perturb import STRESS_PRESETS, perturb_clip
 from vistrack.io.video import open_video
+from vistrack.system.resources import keep_freed_memory
 
 STRESS_CACHE = Path.home() / ".cache" / "vistrack" / "bench_real"
 CANDIDATES = Path(__file__).with_name("box_candidates.json")

@@ -2,7 +2,7 @@
 so that machine noise hits them alike).
 
 1. Decode-only rate of each clip (``open_video``, frames read and dropped) beside the ``vistrack
-   run``-equivalent end-to-end rate (:func:`vistrack.track.run.track_video` on the prefetched frames,
+   run``-equivalent end-to-end rate (:func:`vistrack.session.recording.record_video` on the prefetched frames,
    the stage timers on, decode included; model building and the kernels' loading excluded, as start-up)
    of the three paths: contour
    LS-N-IPS-30 at 320x240, plate LIS-100 at 640x480 (synthetic; and the real dashcam clip with its
@@ -37,15 +37,15 @@ import numpy as np
 from real_corpus import opencv_tracker  # noqa: E402 (run from benchmarks/)
 
 import vistrack
-from vistrack.core.runtime import keep_freed_memory
-from vistrack.data_synth.contour import make_contour_clip
-from vistrack.data_synth.plate import make_plate_clip
-from vistrack.filters import make_filter
+from vistrack.data_synth.contour_clip import make_contour_clip
+from vistrack.data_synth.plate_clip import make_plate_clip
 from vistrack.io.clips import load_clip
 from vistrack.io.video import groundtruth_origin, open_video, prefetch, read_rects
+from vistrack.loop.stepper import FrameStepper, warm_up
+from vistrack.registry import make_filter
 from vistrack.registry.builders import build_model
-from vistrack.track.loop import FrameStepper, warm_up
-from vistrack.track.run import track_video
+from vistrack.session.recording import record_video
+from vistrack.system.resources import keep_freed_memory
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 CLOCK = time.perf_counter  # --cpu: time.process_time
@@ -88,7 +88,7 @@ def e2e_rate(folder, model_name, algo, n, seed, **build):
     filt = make_filter(algo, model)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        run = track_video(prefetch(clip.source), model, filt, n, np.random.default_rng(seed))
+        run = record_video(prefetch(clip.source), model, filt, n, np.random.default_rng(seed))
     return len(run.rows) / run.wall
 
 

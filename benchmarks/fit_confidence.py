@@ -31,7 +31,7 @@ Check (``--check``)
     the shipped model (its confidence acted on) on every clip and seed: per clip, the frames in zero-IoU
     runs of at least 5 frames and the share of them reported lost (``visible=0``), the frames with
     IoU >= 0.5 and the share reported lost, the success AUC, the AUC with reported-lost frames scored
-    as empty boxes, and VOT-LT's precision, recall and F-score (:func:`vistrack.core.metrics.lt_scores`);
+    as empty boxes, and VOT-LT's precision, recall and F-score (:func:`vistrack.scoring.metrics.lt_scores`);
     with ``--opencv`` OpenCV's trackers beside it (NanoTrack, CSRT: "visible" is ``update``'s first value).
 
 Runs are cached under ``--cache`` (keyed by vistrack's code and calibration, the clip, start, seed and
@@ -50,8 +50,8 @@ import numpy as np
 from real_corpus import DATA, ROOT, find_clips, iter_jobs, lost_runs
 from tqdm import tqdm
 
-from vistrack.core.metrics import iou, lt_scores, success_auc
 from vistrack.models.box.confidence import CALIBRATION, FEATURES, MONOTONE, SEEN, Calibration
+from vistrack.scoring.metrics import iou, lt_scores, success_auc
 
 CACHE = Path.home() / ".cache" / "vistrack" / "fit_confidence"
 #: the model's options while the cues are gathered: the confidence computed, never acted on, no re-detection

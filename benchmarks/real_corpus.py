@@ -35,8 +35,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from vistrack.core.metrics import box_scores, iou
 from vistrack.io.video import find_groundtruth, groundtruth_origin, open_video, read_rects
+from vistrack.scoring.metrics import box_scores, iou
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "real"

@@ -141,9 +141,9 @@ def _otb(folder, rows, n=12, mode="bgr"):
 
 
 def build_fixtures(fx):
-    from vistrack.data_synth.contour import make_contour_clip
-    from vistrack.data_synth.landmarks import make_landmark_clip
-    from vistrack.data_synth.plate import make_plate_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
+    from vistrack.data_synth.landmark_clip import make_landmark_clip
+    from vistrack.data_synth.plate_clip import make_plate_clip
 
     fx.mkdir(parents=True)
     kw = dict(size=(128, 96), clutter="low", distractor=False)
@@ -820,7 +820,7 @@ def evald(clips, *opts, model=None, then=None):
 
 
 def old_clip(w):
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     make_contour_clip(w / "c1", frames=3, size=(96, 72), seed=1, clutter="low", distractor=False)
     (w / "state.json").write_text(json.dumps({k: v.hex() for k, v in _clip_state(w / "c1").items()}))
@@ -835,7 +835,7 @@ def _damage(text):
 
 
 def _resynth(w):
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     make_contour_clip(w / "suite" / "c1", frames=10, size=(128, 96), seed=9, clutter="low", distractor=False)
 

@@ -3,13 +3,13 @@
     python benchmarks/synth_longterm.py                  # seeds 1..5, the clips under ~/.cache/vistrack/longterm
     python benchmarks/synth_longterm.py --seeds 3 --gap 1.5
 
-For each seed, ``vistrack synth longterm --seed S`` (:func:`vistrack.data_synth.longterm.make_longterm_clip`,
+For each seed, ``vistrack synth longterm --seed S`` (:func:`vistrack.data_synth.longterm_clip.make_longterm_clip`,
 640 x 480, absences of ``--gap`` seconds: the object leaves the frame, comes back through another edge, hides
 behind a pillar and comes out on its other side) is tracked by vistrack's default box tracker
 (``vistrack.Tracker(seed=S)``) from the first ground-truth box. Per seed: the share of the frames without the
 object that the tracker reports lost (``visible=0``; target >= 90 %), and for each return of the object the
 frames until the tracker reports it again with a box overlapping the truth (IoU > 0; target <= 10 on every
-seed), VOT-LT's F-score (:func:`vistrack.core.metrics.lt_scores`) and the frames re-detected.
+seed), VOT-LT's F-score (:func:`vistrack.scoring.metrics.lt_scores`) and the frames re-detected.
 """
 
 from __future__ import annotations
@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 
 import vistrack
-from vistrack.core.metrics import iou, lt_scores
-from vistrack.data_synth.longterm import make_longterm_clip
+from vistrack.data_synth.longterm_clip import make_longterm_clip
 from vistrack.io.clips import load_clip
+from vistrack.scoring.metrics import iou, lt_scores
 
 CACHE = Path.home() / ".cache" / "vistrack" / "longterm"
 

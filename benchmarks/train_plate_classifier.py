@@ -19,10 +19,10 @@ import cv2
 import numpy as np
 from sklearn.linear_model import LogisticRegression
 
-from vistrack.core.metrics import iou
-from vistrack.data_synth.plate import detection_frames
+from vistrack.data_synth.plate_clip import detection_frames
 from vistrack.io.video import open_video
 from vistrack.models.plate.classifier import _WEIGHTS, rectangle_candidates, window_features
+from vistrack.scoring.metrics import iou
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 PLATE_FREE = ["girl_otb", "hand_vot2013", "crossing_otb", "soccer_otb", "ball1_vot2015", "head_carphone",

@@ -10,17 +10,17 @@ def rng():
 @pytest.fixture(scope="session")
 def synth_clip(tmp_path_factory):
     """``synth_clip(kind, **options)``: the folder of a clip rendered by ``vistrack.data_synth`` (``kind``
-    ``"contour"``: :func:`~vistrack.data_synth.contour.make_contour_clip`; ``"plate"``:
-    :func:`~vistrack.data_synth.plate.make_plate_clip`), made once per session for each set of options."""
+    ``"contour"``: :func:`~vistrack.data_synth.contour_clip.make_contour_clip`; ``"plate"``:
+    :func:`~vistrack.data_synth.plate_clip.make_plate_clip`), made once per session for each set of options."""
     made = {}
 
     def make(kind, **options):
         key = (kind, tuple(sorted(options.items())))
         if key not in made:
             if kind == "contour":
-                from vistrack.data_synth.contour import make_contour_clip as render
+                from vistrack.data_synth.contour_clip import make_contour_clip as render
             else:
-                from vistrack.data_synth.plate import make_plate_clip as render
+                from vistrack.data_synth.plate_clip import make_plate_clip as render
             out = tmp_path_factory.mktemp(kind) / "clip"
             render(out, **options)
             made[key] = out

@@ -78,7 +78,7 @@ if os.environ.get("VISTRACK_TEST_GATE"):
     import functools
     from pathlib import Path
 
-    import vistrack.engine.evaluation as evaluation
+    import vistrack.evaluation.experiment as evaluation
 
     gate = Path(os.environ["VISTRACK_TEST_GATE"])
     run_task = evaluation.run_task
@@ -97,7 +97,7 @@ if os.environ.get("VISTRACK_TEST_GATE"):
 
 class TaskGate:
     """Hold the engine's tasks at their start in every process given :attr:`env`: a ``sitecustomize``
-    wraps :func:`vistrack.engine.evaluation.run_task` to mark that it started and then wait on a file
+    wraps :func:`vistrack.evaluation.experiment.run_task` to mark that it started and then wait on a file
     lock that the gate holds until :meth:`open`. Use as a context manager (opened on exit)."""
 
     def __init__(self, folder):

@@ -7,8 +7,7 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-from vistrack.filters import FILTERS
-from vistrack.registry import comparisons
+from vistrack.registry import FILTERS, comparisons
 from vistrack.reproduce.tables import TABLES
 
 ROOT = Path(__file__).resolve().parents[1] / "vistrack"
@@ -64,19 +63,19 @@ def _constants(tree, value):
 
 
 def test_the_task_file_path_is_built_in_one_function():
-    """``OUT/tasks/<name>.json`` is :func:`vistrack.engine.tasks.task_path`'s alone: every runner, the
+    """``OUT/tasks/<name>.json`` is :func:`vistrack.batch.tasks.task_path`'s alone: every runner, the
     engine and every results loader go through it."""
     where = {name: lines for name, tree in _modules() if (lines := _constants(tree, "tasks"))}
-    assert list(where) == ["engine/tasks.py"] and len(where["engine/tasks.py"]) == 1
-    tree = dict(_modules())["engine/tasks.py"]
+    assert list(where) == ["batch/tasks.py"] and len(where["batch/tasks.py"]) == 1
+    tree = dict(_modules())["batch/tasks.py"]
     fn = next(f for f in tree.body if isinstance(f, ast.FunctionDef) and f.name == "task_path")
-    assert fn.lineno <= where["engine/tasks.py"][0] <= fn.end_lineno
+    assert fn.lineno <= where["batch/tasks.py"][0] <= fn.end_lineno
 
 
 def test_the_equal_time_timing_and_solving_are_one_function_each():
     """Every equal-time comparison (eval, the history-sampling, several-plate and bearings reproductions)
-    goes through :func:`vistrack.core.metrics.equal_time`, which alone solves for N, and times with
-    :func:`~vistrack.core.metrics.best_ms`, the one timing loop."""
+    goes through :func:`vistrack.scoring.metrics.equal_time`, which alone solves for N, and times with
+    :func:`~vistrack.scoring.metrics.best_ms`, the one timing loop."""
     solvers, timers = {}, {}
     for name, tree in _modules():
         for node in ast.walk(tree):
@@ -86,11 +85,12 @@ def test_the_equal_time_timing_and_solving_are_one_function_each():
                     solvers.setdefault(name, []).append(node.lineno)
                 if f == "best_ms":
                     timers.setdefault(name, []).append(node.lineno)
-    assert list(solvers) == ["core/metrics.py"]
-    assert set(timers) == {"track/loop.py", "engine/multi_target.py", "reproduce/bearings.py"}
+    assert list(solvers) == ["scoring/metrics.py"]
+    assert set(timers) == {"loop/stepper.py", "evaluation/multi_target.py", "reproduce/bearings.py"}
     callers = {name for name, tree in _modules() for n in ast.walk(tree)
                if isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == "equal_time"}
-    assert callers == {"engine/pipeline.py", "engine/multi_target.py", "reproduce/hs_sir.py", "reproduce/bearings.py"}
+    assert callers == {"evaluation/pipeline.py", "evaluation/multi_target.py", "reproduce/history_sampling.py",
+                       "reproduce/bearings.py"}
 
 
 def test_no_algorithm_list_outside_the_registry():

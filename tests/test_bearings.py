@@ -5,9 +5,10 @@ import pytest
 from scipy import integrate
 
 from vistrack.core.particles import ParticleSet
-from vistrack.data_synth.bearings import simulate
-from vistrack.filters import filter_steps, make_filter
+from vistrack.data_synth.bearings_sequence import simulate
+from vistrack.filters import filter_steps
 from vistrack.models.bearings.model import Bearings, gaussian_fit_to_cauchy, wrapped_cauchy_logpdf
+from vistrack.registry import make_filter
 
 
 def naive_logpdf(d, rho):

@@ -7,10 +7,11 @@ import numpy as np
 import pytest
 
 from vistrack import kernels
-from vistrack.data_synth.bearings import simulate
-from vistrack.filters import LIS, filter_steps, make_filter
+from vistrack.data_synth.bearings_sequence import simulate
+from vistrack.filters import LIS, filter_steps
 from vistrack.models.bearings.model import Bearings, wrapped_cauchy_logpdf
 from vistrack.models.bearings.xi import XiProposal
+from vistrack.registry import make_filter
 
 MODEL = Bearings(1)
 S = 0.5 * MODEL.sigma_eta  # the position's noise std under K

@@ -78,9 +78,9 @@ def test_same_seed_same_draws_and_bad_parameters():
 def test_models_learn_the_blob_from_the_first_frame():
     """Box and contour (through the builder) learn the target's colour; a contour built by hand
     says what it lacks in one line."""
-    from vistrack.filters import make_filter
     from vistrack.models.box.model import Box
     from vistrack.models.contour.model import Contour
+    from vistrack.registry import make_filter
 
     img, disc = scene()
     box = Box(img, (42, 12, 16, 16))  # the disc's bounding box: its corners are background

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import vistrack
-from vistrack.core.features import bin_integrals, box_sums, colour_bins, is_grey, n_colour_bins
+from vistrack.appearance.cues import Appearance
+from vistrack.appearance.features import bin_integrals, box_sums, colour_bins, is_grey, n_colour_bins
 from vistrack.core.particles import logsumexp
-from vistrack.models.box.appearance import Appearance
 from vistrack.models.box.model import Box
 
 H, W = 240, 320
@@ -137,7 +137,7 @@ def test_box_lis_weights_match_a_brute_force_posterior():
     pose = np.array([150.0, 110.0, 0.0])
     n = 6000
     prev = np.tile(np.concatenate([pose, pose]), (n, 1))
-    obs = model.observe(vistrack.core.features.FeatureMaps(frame), vistrack.ParticleSet(prev))
+    obs = model.observe(vistrack.appearance.features.FeatureMaps(frame), vistrack.ParticleSet(prev))
     rng = np.random.default_rng(0)
     x = model.predict(prev, rng)
     z, log_alpha, log_q = model.lis_proposal().sample(x, obs, rng, prev)
@@ -263,7 +263,7 @@ def test_working_image_places_content_where_to_work_reads_it():
     a bright square's centroid in the working image is at ``to_work`` of its frame centre on both
     axes. Resizing to the rounded size put it 0.38 / 0.34 working px short (the dashcam plate's
     upward offset, ``docs/experiments.md``)."""
-    from vistrack.models.box.appearance import AppearanceFrame
+    from vistrack.appearance.cues import AppearanceFrame
 
     frame = np.full((310, 320, 3), 20, np.uint8)
     frame[250:260, 280:290] = 220
@@ -278,7 +278,7 @@ def test_working_image_places_content_where_to_work_reads_it():
 def test_appearance_interpolation_option():
     import cv2
 
-    from vistrack.models.box.appearance import Appearance
+    from vistrack.appearance.cues import Appearance
 
     frames = clip_frames(1)
     box = obj_box(*path(0))

@@ -9,7 +9,7 @@ from scipy import stats
 
 import vistrack
 from cli_helpers import run
-from vistrack.models.box.correlation import CorrelationFilter, DCFResponse, dcf_features
+from vistrack.appearance.correlation import CorrelationFilter, DCFResponse, dcf_features
 from vistrack.models.box.correlation_proposal import CorrelationProposal
 
 
@@ -186,10 +186,10 @@ def test_correlation_proposal_weights_match_a_brute_force_posterior():
     """Proper weighting: one LIS step with the correlation proposal from particles at rest; the mean
     weight is the evidence ∫ r K and the weighted mean pose the posterior mean, both also by brute
     force on a grid of centres and log-scales."""
-    from vistrack.core.features import FeatureMaps
+    from vistrack.appearance.features import FeatureMaps
     from vistrack.core.particles import ParticleSet, logsumexp
-    from vistrack.filters import make_filter
     from vistrack.models.box.model import Box
+    from vistrack.registry import make_filter
 
     rng = np.random.default_rng(6)
     bg = cv2.GaussianBlur(rng.integers(70, 180, (120, 160, 3)).astype(np.uint8), (0, 0), 3)
@@ -303,7 +303,7 @@ def test_gradient_kernel_equals_opencv():
     """``gradient_cells`` (the Sobel gradient, ``cartToPolar`` and the binning in one pass) gives what OpenCV's
     calls and ``orientation_cells`` give, on every integer gradient a grey patch can have and on fractional
     patches of odd sizes (where the CPU's OpenCV computes as the kernel does: ``POLAR_EXACT``)."""
-    from vistrack.models.box import dcf_kernels as dk
+    from vistrack.appearance import dcf_kernels as dk
 
     if not dk.POLAR_EXACT:
         pytest.skip("OpenCV's cartToPolar here is not the fused-multiply-add polynomial")
@@ -330,7 +330,7 @@ def test_gradient_kernel_equals_opencv():
 def test_grey_patch_kernel_equals_opencv():
     """``grey_gradient_cells`` makes the grey patch as ``cv2.cvtColor`` does (on every colour) and its sums give
     ``cv2.meanStdDev``'s mean and deviation; the features of a BGR patch are those of its grey float patch."""
-    from vistrack.models.box import dcf_kernels as dk
+    from vistrack.appearance import dcf_kernels as dk
 
     v = np.arange(256)
     grey, sq = np.empty((256, 256), np.float32), np.empty((256, 256), np.float32)
@@ -353,7 +353,7 @@ def test_grey_patch_kernel_equals_opencv():
 
 
 def test_cumulative_kernel_equals_numpy_cumsum():
-    from vistrack.models.box.dcf_kernels import cumulative
+    from vistrack.appearance.dcf_kernels import cumulative
 
     rng = np.random.default_rng(10)
     for n in (0, 1, 2, 99, 5400):
@@ -365,7 +365,7 @@ def test_cell_probabilities_equal_the_numpy_path():
     """``DCFResponse.cell_log_p`` and ``cell_cumulative`` with the compiled arithmetic about numpy's exp and
     log (``cell_scores``, ``cell_probabilities``, ``cumulative``) against the numpy path, bit for bit."""
     from vistrack import kernels
-    from vistrack.models.box.correlation import DCFResponse
+    from vistrack.appearance.correlation import DCFResponse
 
     rng = np.random.default_rng(11)
     maps = rng.standard_normal((3, 72, 75)).astype(np.float32)

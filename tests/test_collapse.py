@@ -8,7 +8,7 @@ import pytest
 
 import vistrack
 from cli_helpers import run
-from vistrack.core.features import FeatureMaps
+from vistrack.appearance.features import FeatureMaps
 from vistrack.io.clips import read_groundtruth_csv
 from vistrack.models.collapse import REASONS, CollapseWatch
 from vistrack.registry.builders import model_from_box

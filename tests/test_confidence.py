@@ -8,10 +8,10 @@ from test_collapse import BOX, vanishing_frames
 
 import vistrack
 from cli_helpers import run
-from vistrack.core.longterm import lt_pooled
-from vistrack.core.metrics import lt_scores, reported_ious
 from vistrack.io.clips import read_groundtruth_csv
 from vistrack.models.box.confidence import FEATURES, MONOTONE, Calibration, apce, psr
+from vistrack.scoring.long_term_scores import lt_pooled
+from vistrack.scoring.metrics import lt_scores, reported_ious
 
 NOISE = 16  # frames of pure noise follow the object's frames from here
 

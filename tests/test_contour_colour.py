@@ -6,7 +6,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from vistrack.core.features import FeatureMaps, colour_bins
+from vistrack.appearance.features import FeatureMaps, colour_bins
 from vistrack.registry.builders import model_from_box
 
 H, W = 200, 260

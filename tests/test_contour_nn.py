@@ -4,10 +4,10 @@ import cv2
 import numpy as np
 import pytest
 
-from vistrack.core.features import FeatureMaps
-from vistrack.filters import make_filter
+from vistrack.appearance.features import FeatureMaps
 from vistrack.models.contour import nn
 from vistrack.models.contour.model import Contour, ellipse_template, pose_from
+from vistrack.registry import make_filter
 
 SIZE = (240, 180)
 NOISELESS = nn.NNSearchConfig(samples=3000, hidden=(32,), epochs=60, noise=0.0, miss=0.0, clutter=0.0)
@@ -97,8 +97,8 @@ def small_clip(synth_clip):
 
 def test_same_seed_same_network_and_track(small_clip):
     from vistrack.io.clips import load_clip
+    from vistrack.loop.stepper import step_frames
     from vistrack.registry.builders import build_model
-    from vistrack.track.loop import track
 
     cfg = nn.NNSearchConfig(samples=400, epochs=5)
     clip = load_clip(small_clip)
@@ -112,7 +112,7 @@ def test_same_seed_same_network_and_track(small_clip):
     def run():
         m = build_model("contour", clip, init_gt="")
         m.nn_search = a
-        return np.array([r.estimate for r in track(frames, make_filter("ls-n-ips-nn", m), 15,
+        return np.array([r.estimate for r in step_frames(frames, make_filter("ls-n-ips-nn", m), 15,
                                                    np.random.default_rng(3))])
 
     np.testing.assert_array_equal(run(), run())
@@ -145,7 +145,7 @@ def test_options_are_checked():
         model(search="cnn")
     from vistrack.models.box.model import Box
 
-    assert "ls-n-ips-nn" in __import__("vistrack.filters", fromlist=["ALGORITHMS"]).ALGORITHMS
+    assert "ls-n-ips-nn" in __import__("vistrack.registry", fromlist=["ALGORITHMS"]).ALGORITHMS
     with pytest.raises(ValueError, match=r"ls-n-ips-nn \(a learned local search\) needs a model with searcher"):
         make_filter("ls-n-ips-nn", Box.__new__(Box))
 

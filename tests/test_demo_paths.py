@@ -1,6 +1,6 @@
 """`vistrack demo` finds the real clip whichever the working folder (issue 37, item 4)."""
 
-from vistrack.engine.demo import REAL_CLIP, find_real_clip
+from vistrack.demo.steps import REAL_CLIP, find_real_clip
 
 
 def test_the_real_clip_is_found_from_a_folder_below_the_one_holding_shared(tmp_path, monkeypatch):

@@ -1,9 +1,9 @@
-"""Equal-time particle counts (vistrack.core.metrics: the one place eval and the reproductions get them)."""
+"""Equal-time particle counts (vistrack.scoring.metrics: the one place eval and the reproductions get them)."""
 
 import numpy as np
 import pytest
 
-from vistrack.core.metrics import equal_time_n, equal_time_search
+from vistrack.scoring.metrics import equal_time_n, equal_time_search
 
 
 def linear(fixed, per):

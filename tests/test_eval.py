@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
-from vistrack.data_synth.contour import make_contour_clip
+from vistrack.data_synth.contour_clip import make_contour_clip
 
 SUMMARY_KEYS = {"clip", "algo", "particles", "runs", "mean_error", "p_lost", "p_lost_final", "p_lost_per_frame",
                 "error_per_frame", "success_auc", "success_curve", "precision_20px", "frames_per_s", "mean_ess",
@@ -181,7 +181,7 @@ def test_engine_workers_keep_freed_memory():
     Dask's MALLOC_TRIM_THRESHOLD_) back into heap reuse; elsewhere it is a no-op."""
     import platform
 
-    from vistrack.core.runtime import keep_freed_memory
+    from vistrack.system.resources import keep_freed_memory
 
     if platform.libc_ver()[0] != "glibc":
         pytest.skip("no glibc: keep_freed_memory is a no-op")
@@ -192,7 +192,7 @@ def test_lost_rules_known_answers():
     """The plate rule (docs/architecture.md): lost where a plate is in view and none is reported, or the summed
     vertex error exceeds a third of the plate height; never in a frame without a plate. Without
     vertex truth, and for other models, the centre rule (50 px at 240-px width)."""
-    from vistrack.core.metrics import lost_frames
+    from vistrack.scoring.metrics import lost_frames
 
     square = np.array([[0, 0], [60, 0], [60, 30], [0, 30]], float) + 100  # width 60, aspect 2: height 30
     truth = {"frame": np.arange(5), "visible": np.array([1, 1, 1, 0, 1.0]), "scale": np.full(5, 60.0)}

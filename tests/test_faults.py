@@ -104,7 +104,7 @@ def test_particle_memory_check_known_answer():
 
 def test_track_csv_is_whole_after_a_write_error(tmp_path):
     """A write error mid-run (disk full) leaves the rows written so far, renamed into place."""
-    from vistrack.track.run import TrackCSV
+    from vistrack.session.recording import TrackCSV
 
     t = TrackCSV(tmp_path / "t.csv")
     t.write({"frame": 0, "cx": 1.0})
@@ -131,7 +131,7 @@ def test_truncated_and_empty_videos_are_clear_errors(tmp_path, capsys):
 def test_one_experiment_per_out_folder(tmp_path):
     """A second eval into a folder that a live process holds refuses with one line; a lock left by
     a dead process is taken over; the lock is gone after."""
-    from vistrack.engine.tasks import OutLocked, lock_out
+    from vistrack.batch.tasks import OutLocked, lock_out
 
     holder = subprocess.Popen([sys.executable, "-c", "import signal; signal.pause()"])  # alive until killed
     try:
@@ -151,7 +151,7 @@ def test_one_experiment_per_out_folder(tmp_path):
 
 
 def test_write_atomic_leaves_the_old_file_on_failure(tmp_path):
-    from vistrack.engine.tasks import write_atomic
+    from vistrack.batch.tasks import write_atomic
 
     p = tmp_path / "results.json"
     write_atomic(p, "old")
@@ -273,7 +273,7 @@ def test_eval_worker_killed_mid_grid_gives_the_uninterrupted_results(tmp_path, c
 
     from test_eval import strip_timing
 
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     make_contour_clip(tmp_path / "clips" / "c1", frames=12, size=(128, 96), seed=1, clutter="low", distractor=False)
     grid = ["eval", str(tmp_path / "clips"), "--algos", "lis,bootstrap", "--particles", "60", "--runs", "3",
@@ -319,8 +319,8 @@ def test_a_task_that_cannot_finish_is_one_error_line(tmp_path, runner, message):
     line naming the task, the finished task files kept for --resume."""
     import click
 
-    from vistrack.cli.grid import progress
-    from vistrack.engine.grid import run_grid
+    from vistrack.batch.cluster import run_grid
+    from vistrack.cli.progress import progress
 
     with pytest.raises(click.ClickException) as e, progress("tasks", quiet=True) as hooks:
         run_grid([{"name": "t1"}], tmp_path, workers=1, in_process=True, runner=runner, **hooks)
@@ -343,7 +343,7 @@ class _FakeClient:
 def test_workers_must_see_the_clips(tmp_path):
     """With a scheduler elsewhere, workers read the clips at the tasks' paths: checked before the grid,
     one line naming what a worker cannot see (they need no --out: the results come back through Dask)."""
-    from vistrack.engine.tasks import TaskFailed, check_shared
+    from vistrack.batch.tasks import TaskFailed, check_shared
 
     clip = tmp_path / "clip"
     clip.mkdir()
@@ -362,7 +362,7 @@ def test_eval_through_an_external_scheduler(tmp_path, capsys):
     from distributed import LocalCluster
     from test_eval import strip_timing
 
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     make_contour_clip(tmp_path / "c1", frames=6, size=(96, 72), seed=1, clutter="low", distractor=False)
     grid = ["eval", str(tmp_path / "c1"), "--algos", "bootstrap", "--particles", "20", "--runs", "2", "-q"]
@@ -384,7 +384,7 @@ def _clip_bytes(folder):
 def test_a_failed_synth_leaves_the_old_clip_whole(tmp_path, monkeypatch):
     """The writer fails mid-clip (disk full) while a clip is overwritten: the old clip is intact,
     no partial folder is left, the user's own files in the folder survive a successful overwrite."""
-    import vistrack.data_synth.contour as contour
+    import vistrack.data_synth.contour_clip as contour
     from vistrack.io.clips import find_clips
 
     clip = tmp_path / "suite" / "c1"
@@ -454,7 +454,7 @@ def test_run_outputs_never_overwrite_the_input(tmp_path, capsys, outputs, messag
 
 
 def test_clip_files_are_inputs_too(tmp_path, capsys):
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     make_contour_clip(tmp_path / "c", frames=2, size=(96, 72), seed=1, clutter="low", distractor=False)
     gt = (tmp_path / "c" / "groundtruth.csv").read_bytes()
@@ -470,8 +470,8 @@ def test_clip_files_are_inputs_too(tmp_path, capsys):
 def test_devices_are_written_directly_never_replaced(tmp_path):
     """``--track /dev/stdout`` and the like: the rows go to the device; the part-file-and-rename of a
     regular file would replace the device node (here a link to it stands for it)."""
-    from vistrack.engine.tasks import write_atomic
-    from vistrack.track.run import TrackCSV
+    from vistrack.batch.tasks import write_atomic
+    from vistrack.session.recording import TrackCSV
 
     for name in ("t.csv", "results.json"):
         (tmp_path / name).symlink_to("/dev/null")
@@ -490,7 +490,7 @@ def test_devices_are_written_directly_never_replaced(tmp_path):
 
 
 def test_eval_refuses_particles_beyond_memory_and_reports_unwritable_results(tmp_path, capsys):
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     make_contour_clip(tmp_path / "c1", frames=3, size=(96, 72), seed=1, clutter="low", distractor=False)
     grid = ["eval", str(tmp_path / "c1"), "--algos", "bootstrap", "--runs", "1", "--in-process", "-q"]
@@ -617,7 +617,7 @@ def test_absent_frames_count_alike_in_results_json_and_csv(tmp_path, capsys):
 def test_eval_refuses_a_folder_in_use_and_keeps_task_files_when_the_scheduler_is_away(tmp_path, capsys):
     import socket
 
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     make_contour_clip(tmp_path / "c1", frames=2, size=(96, 72), seed=1, clutter="low", distractor=False)
     out = tmp_path / "R"
@@ -640,7 +640,7 @@ def test_eval_refuses_a_folder_in_use_and_keeps_task_files_when_the_scheduler_is
 @pytest.mark.parametrize("text", ["{}", "[]", '{"clip": "c', "\xff\xfe", ""])
 def test_a_damaged_task_file_is_run_again(tmp_path, text):
     """``--resume`` reuses a task file only when it parses and carries this task's fingerprint."""
-    from vistrack.engine.tasks import stale_tasks, task_done
+    from vistrack.batch.tasks import stale_tasks, task_done
 
     task = {"name": "t", "algo": "lis", "particles": 10, "run": 0}
     (tmp_path / "tasks").mkdir()
@@ -651,7 +651,7 @@ def test_a_damaged_task_file_is_run_again(tmp_path, text):
 def test_a_task_file_written_by_other_code_is_run_again(tmp_path, monkeypatch):
     """The fingerprint covers vistrack's source: a result written before a change of the code (a
     report rule, a default; the version string unchanged) is not reused by ``--resume``."""
-    from vistrack.engine import tasks
+    from vistrack.batch import tasks
 
     task = {"name": "t", "algo": "lis", "particles": 10, "run": 0}
     tasks.write_task_result(tmp_path / "tasks" / "t.json", {"error": 1.0}, task)
@@ -663,7 +663,7 @@ def test_a_task_file_written_by_other_code_is_run_again(tmp_path, monkeypatch):
 def test_synth_sigterm_stops_cleanly(tmp_path):
     """SIGTERM (as Ctrl-C) stops any command: exit 143 with one line, the partial clip removed, the
     old clip as it was."""
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     make_contour_clip(tmp_path / "c1", frames=2, size=(96, 72), seed=1, clutter="low", distractor=False)
     old = _clip_bytes(tmp_path / "c1")
@@ -678,7 +678,7 @@ def test_synth_sigterm_stops_cleanly(tmp_path):
 
 
 def test_fit_plate_refuses_clips_without_plates(tmp_path, capsys):
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     make_contour_clip(tmp_path / "c1", frames=2, size=(96, 72), seed=1, clutter="low", distractor=False)
     code, _, err = run(["fit-plate", str(tmp_path)], capsys)
@@ -691,7 +691,7 @@ def test_local_workers_leave_ctrl_c_to_the_client():
     (the whole path: benchmarks/soak.py, 'eval Ctrl-C on the process group')."""
     import logging
 
-    from vistrack.engine.evaluation import dask_setup
+    from vistrack.evaluation.experiment import dask_setup
 
     saved, level = signal.getsignal(signal.SIGINT), logging.getLogger("distributed").level
     try:

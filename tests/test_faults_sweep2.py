@@ -105,7 +105,7 @@ def test_2_temporary_names_are_never_shared(tmp_path):
     """A part file already there (a killed run's rows) is neither written nor removed: the new
     writer takes a name of its own and renames it over the output."""
     from vistrack.io.outputs import temporary_name
-    from vistrack.track.run import TrackCSV
+    from vistrack.session.recording import TrackCSV
 
     (tmp_path / "t.csv.part").write_text("frame\n0\n")
     t = TrackCSV(tmp_path / "t.csv")
@@ -201,7 +201,7 @@ def test_7_short_result_files_are_said_and_scored_as_not_reported(tmp_path, caps
     image_folder(tmp_path / "c", 10)
     (tmp_path / "mt").mkdir()
     (tmp_path / "mt" / "c.txt").write_text("".join(f"{40 + 2 * i},50,25,19\n" for i in range(6)))
-    from vistrack.engine.evaluation import ResultsLengthWarning
+    from vistrack.evaluation.experiment import ResultsLengthWarning
 
     with pytest.warns(ResultsLengthWarning, match="has 6 lines for the 10 ground-truth frames.*scored as not reported"):
         code, _, err = run(["eval", str(tmp_path / "c"), "--algos", "", "--results-dir", str(tmp_path / "mt"),
@@ -305,7 +305,7 @@ def test_13_absurd_ground_truth_values_are_one_short_line(tmp_path, capsys):
 
 
 def test_13_a_plate_clip_without_a_plate_in_view_says_so(tmp_path, capsys):
-    from vistrack.data_synth.plate import NoPlateWarning
+    from vistrack.data_synth.plate_clip import NoPlateWarning
 
     with pytest.warns(NoPlateWarning, match=r"no plate comes wholly into view in the 3 frame\(s\)"):
         code, _, err = run(["synth", "plate", "--out", str(tmp_path / "p"), "--frames", "3", "--size", "160x120",
@@ -358,7 +358,7 @@ def test_14_binary_bom_and_nan_input_files(tmp_path, capsys):
 
 
 def test_14_eval_out_with_a_file_where_tasks_go_fails_before_the_grid(tmp_path, capsys, monkeypatch):
-    import vistrack.engine.grid as grid
+    import vistrack.batch.cluster as grid
 
     image_folder(tmp_path / "c", 3)
     (tmp_path / "E").mkdir()
@@ -428,10 +428,10 @@ def test_8_a_signal_between_the_track_row_and_the_video_frame(tmp_path, names, r
     video all hold frames 0-3."""
     import signal
 
-    from vistrack.filters import make_filter
     from vistrack.io.clips import load_clip
+    from vistrack.registry import make_filter
     from vistrack.registry.builders import build_model
-    from vistrack.track.run import stop_on_signals, track_video
+    from vistrack.session.recording import record_video, stop_on_signals
 
     image_folder(tmp_path / "c", 10)
     clip = load_clip(tmp_path / "c")
@@ -448,7 +448,7 @@ def test_8_a_signal_between_the_track_row_and_the_video_frame(tmp_path, names, r
     model.outline = outline_then_signal
     track, res, out = tmp_path / "t.csv", tmp_path / "r.txt", tmp_path / "a.mp4"
     with stop_on_signals():
-        done = track_video(iter(clip.source), model, make_filter("lis", model), 30, np.random.default_rng(0),
+        done = record_video(iter(clip.source), model, make_filter("lis", model), 30, np.random.default_rng(0),
                            track_path=track, results_path=res, out_path=out, video_info=(25.0, clip.source.size))
     assert done.stopped == reason
     assert [int(r["frame"]) for r in rows_of(track)] == [0, 1, 2, 3]
@@ -462,10 +462,10 @@ def test_8_a_second_signal_while_the_outputs_close_is_waited_for(tmp_path):
     closed whole all the same (before: the video was left unclosed, about 40 frames short)."""
     import signal
 
-    from vistrack.filters import make_filter
     from vistrack.io.clips import load_clip
+    from vistrack.registry import make_filter
     from vistrack.registry.builders import build_model
-    from vistrack.track.run import TrackCSV, track_video
+    from vistrack.session.recording import TrackCSV, record_video
 
     image_folder(tmp_path / "c", 6)
     clip = load_clip(tmp_path / "c")
@@ -479,7 +479,7 @@ def test_8_a_second_signal_while_the_outputs_close_is_waited_for(tmp_path):
     track, out = tmp_path / "t.csv", tmp_path / "a.mp4"
     TrackCSV.close = close_after_a_signal
     try:
-        done = track_video(iter(clip.source), model, make_filter("lis", model), 30, np.random.default_rng(0),
+        done = record_video(iter(clip.source), model, make_filter("lis", model), 30, np.random.default_rng(0),
                            track_path=track, out_path=out, video_info=(25.0, clip.source.size))
     except KeyboardInterrupt:
         pytest.fail("the signal escaped while the outputs were being closed")

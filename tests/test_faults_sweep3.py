@@ -171,8 +171,8 @@ def test_opencvs_silent_writer_is_checked(tmp_path, monkeypatch):
 def test_every_writer_keeps_the_earlier_file_on_a_failure(tmp_path, monkeypatch):
     """write_atomic (results.json, report.md, task files), the plots and the track CSV: a failed
     write removes the temporary file, keeps the earlier output and names it."""
-    import vistrack.engine.plots as plots
-    from vistrack.engine.tasks import write_atomic
+    import vistrack.reports.plots as plots
+    from vistrack.batch.tasks import write_atomic
     from vistrack.io.outputs import OutputError
     from vistrack.io.track_files import TrackCSV
 
@@ -214,8 +214,8 @@ def test_every_writer_keeps_the_earlier_file_on_a_failure(tmp_path, monkeypatch)
 
 
 def test_the_task_grid_is_checked_against_memory_known_answers():
-    from vistrack.core.runtime import TooLarge
-    from vistrack.engine.evaluation import TASK_BYTES, TASK_FRAME_BYTES, check_grid_size
+    from vistrack.evaluation.experiment import TASK_BYTES, TASK_FRAME_BYTES, check_grid_size
+    from vistrack.system.resources import TooLarge
 
     each = TASK_BYTES + TASK_FRAME_BYTES * 100
     room = 2 * each * 1000  # half of it holds 1000 tasks
@@ -247,7 +247,7 @@ def test_the_task_grid_is_checked_against_memory_known_answers():
 def test_sizes_are_checked_before_work_starts(tmp_path, argv, words):
     """Issue 47's unbounded-memory cases: one line naming the size and what fits, at once; nothing
     made (no results folder, no clip)."""
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     clip = tmp_path / "clip"
     make_contour_clip(clip, frames=3, size=(96, 72), seed=1, clutter="low", distractor=False)
@@ -265,14 +265,14 @@ def test_sizes_are_checked_before_work_starts(tmp_path, argv, words):
 def test_a_large_suite_is_named_lazily(tmp_path):
     """A suite's names are a range, not a list: a billion of them cost nothing, and an earlier
     suite's other clips are found by them all the same."""
-    from vistrack.data_synth.render import SuiteNames, prepare_suite
+    from vistrack.data_synth.scene import SuiteNames, prepare_suite
 
     names = SuiteNames("contour", 5, 10**9)
     assert len(names) == 10**9 and "contour-05" in names and "contour-1000000004" in names
     assert "contour-04" not in names and "contour-1000000005" not in names and "contour-5" not in names
     assert "plate-07" not in names and list(SuiteNames("plate", 9, 3)) == ["plate-09", "plate-10", "plate-11"]
     out = tmp_path / "s"
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     for s in (1, 2, 7):
         make_contour_clip(out / f"contour-{s:02d}", frames=2, size=(96, 72), seed=s, clutter="low", distractor=False)
@@ -487,7 +487,7 @@ def test_eval_scores_a_plate_clip_from_its_first_box_frame(tmp_path):
     report with that frame's truth (the reports were 7 frames off: every frame lost, no mean error)."""
     import json
 
-    from vistrack.data_synth.plate import make_plate_clip
+    from vistrack.data_synth.plate_clip import make_plate_clip
 
     make_plate_clip(tmp_path / "p", frames=40, size=(320, 240), seed=1, cars=1)
     code, _, err = run(["eval", tmp_path / "p", "--model", "plate", "--algos", "lis", "--particles", "50", "--runs",

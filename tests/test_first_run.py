@@ -18,7 +18,7 @@ import vistrack
 RECORD = """
 import sys
 from numba.core import event
-import vistrack.track.run as run
+import vistrack.session.recording as run
 
 seen = []
 
@@ -32,7 +32,7 @@ class Listener(event.Listener):
 
 
 event.register("numba:compile", Listener())
-track_video = run.track_video
+record_video = run.record_video
 
 
 def recorded(*args, ready=None, **kw):
@@ -40,12 +40,12 @@ def recorded(*args, ready=None, **kw):
         seen.append("ready")
         if ready:
             ready()
-    return track_video(*args, ready=mark, **kw)
+    return record_video(*args, ready=mark, **kw)
 
 
 from vistrack.cli import main
 
-sys.modules["vistrack.track.plan"].track_video = recorded  # run_plan calls it by this name
+sys.modules["vistrack.session.plan"].record_video = recorded  # execute calls it by this name
 try:
     main(sys.argv[1:])
 finally:
@@ -55,7 +55,7 @@ finally:
 
 @pytest.fixture(scope="module")
 def clip(tmp_path_factory):
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     folder = tmp_path_factory.mktemp("first") / "c"
     make_contour_clip(folder, frames=4, size=(96, 72), seed=1, clutter="low", distractor=False, model="box")

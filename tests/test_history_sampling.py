@@ -12,9 +12,10 @@ from scipy import stats
 from weighting_helpers import exact_moments, one_step_runs
 
 from vistrack.core.particles import ParticleSet
-from vistrack.filters import ALGORITHMS, RBHSSIR, make_filter
+from vistrack.filters import RBHSSIR
 from vistrack.filters.history import draw_rows
 from vistrack.models import AR2Toy, GaussMixtureToy
+from vistrack.registry import ALGORITHMS, make_filter
 
 FAMILY = ("basic-sir", "hs-sir", "rb-hs-sir", "rb-ss-hs-sir")
 N, COPIES, REPS = 120, 3, 150

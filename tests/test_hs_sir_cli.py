@@ -11,7 +11,7 @@ from cli_helpers import run
 
 @pytest.fixture(scope="module")
 def colour_clip(tmp_path_factory):
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     out = tmp_path_factory.mktemp("hs") / "clip"
     make_contour_clip(out, frames=12, size=(120, 90), seed=3, color=True)
@@ -81,7 +81,7 @@ def test_reproduce_hs_sir_json_and_plots(tmp_path, capsys):
 
 
 def test_equal_time_keeps_the_first_entry(colour_clip):
-    from vistrack.reproduce.hs_sir import equal_time_entries
+    from vistrack.reproduce.history_sampling import equal_time_entries
 
     entries, times = equal_time_entries(colour_clip, [("basic-sir", 60), ("rb-ss-hs-sir", 20)], frames=4)
     assert entries[0] == ("basic-sir", 60) and entries[1][0] == "rb-ss-hs-sir" and entries[1][1] >= 1
@@ -89,7 +89,7 @@ def test_equal_time_keeps_the_first_entry(colour_clip):
 
 
 def test_likelihood_params_parse_and_reject():
-    from vistrack.reproduce.hs_sir import likelihood_params
+    from vistrack.reproduce.history_sampling import likelihood_params
 
     assert likelihood_params("") == {}
     assert likelihood_params("sigma_edge=4, q_miss=0.5,measure_per_segment=1") == {
@@ -103,8 +103,8 @@ def test_likelihood_params_parse_and_reject():
 
 
 def test_likelihood_reaches_every_task_model(colour_clip, monkeypatch, tmp_path):
-    import vistrack.engine.evaluation as ev
-    from vistrack.reproduce.hs_sir import HSConfig, hs_tasks
+    import vistrack.evaluation.experiment as ev
+    from vistrack.reproduce.history_sampling import HSConfig, hs_tasks
 
     assert all("model_params" not in t for t in hs_tasks(HSConfig(clips=[colour_clip], runs=1)))
     tasks = hs_tasks(HSConfig(clips=[colour_clip], runs=1, likelihood={"sigma_edge": 3.0}))

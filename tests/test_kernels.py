@@ -17,11 +17,11 @@ import pytest
 
 from kernel_helpers import both
 from vistrack import kernels
-from vistrack.core.features import FeatureMaps, bin_integrals, colour_bins, remap_points
-from vistrack.filters import make_filter
+from vistrack.appearance.features import FeatureMaps, bin_integrals, colour_bins, remap_points
 from vistrack.io.clips import load_clip
+from vistrack.loop.stepper import FrameStepper, warm_up
+from vistrack.registry import make_filter
 from vistrack.registry.builders import build_model
-from vistrack.track.loop import FrameStepper, warm_up
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 
@@ -38,7 +38,7 @@ def track(clip, model_name, algo, n, frames, fast, seed=0, **build):
 
 @pytest.fixture(scope="module")
 def contour_clip(tmp_path_factory):
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     d = tmp_path_factory.mktemp("contour")
     make_contour_clip(d, frames=12, size=(320, 240), seed=3)
@@ -47,7 +47,7 @@ def contour_clip(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def plate_clip(tmp_path_factory):
-    from vistrack.data_synth.plate import make_plate_clip
+    from vistrack.data_synth.plate_clip import make_plate_clip
 
     d = tmp_path_factory.mktemp("plate")
     make_plate_clip(d, frames=40, size=(320, 240), seed=2, cars=1)
@@ -137,7 +137,7 @@ def test_plate_tracks_identical_with_kernels(plate_clip):
 
 
 def test_appearance_kernels_equal_the_numpy_path():
-    from vistrack.models.box.appearance import Appearance
+    from vistrack.appearance.cues import Appearance
 
     rng = np.random.default_rng(0)
     frame = cv2.GaussianBlur(rng.integers(0, 256, (120, 160, 3), dtype=np.uint8), (0, 0), 2)

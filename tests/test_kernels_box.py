@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 import vistrack
-import vistrack.models.box.appearance
+import vistrack.appearance.cues
 from kernel_helpers import both
 from vistrack import kernels
-from vistrack.core.features import FeatureMaps
+from vistrack.appearance.features import FeatureMaps
 from vistrack.core.particles import ParticleSet
 from vistrack.models.collapse import CollapseWatch
 
@@ -94,7 +94,7 @@ def test_region_of_interest_equals_the_numpy_path(tracked):
 
 def test_frame_features_equal_the_numpy_path():
     frames, box = moving_box_frames(1)
-    app = vistrack.models.box.appearance.Appearance(frames[0], box)
+    app = vistrack.appearance.cues.Appearance(frames[0], box)
     for roi in ((0, 0, 160, 120), (37, 21, 90, 70), (5, 5, 6, 9), (3, 3, 10, 4)):
         a, b = both(lambda: app.frame(frames[0], roi))
         for name in ("texture", "labels", "ii"):
@@ -184,7 +184,7 @@ def test_weights_are_computed_once_per_log_weights():
 def test_area_shrink_equals_opencv():
     import cv2
 
-    from vistrack.models.box.appearance import shrink
+    from vistrack.appearance.cues import shrink
 
     rng = np.random.default_rng(21)
     for _ in range(80):
@@ -202,7 +202,7 @@ def test_area_shrink_equals_opencv():
 
 
 def test_area_shrink_of_a_window_equals_that_part_of_the_whole():
-    from vistrack.models.box.frame_kernels import shrink_area
+    from vistrack.appearance.frame_kernels import shrink_area
 
     rng = np.random.default_rng(22)
     frame = cv2.GaussianBlur(rng.integers(0, 256, (200, 260, 3)).astype(np.uint8), (0, 0), 1.5)
@@ -228,10 +228,10 @@ def test_maps_made_over_a_window_equal_the_whole_regions():
     """The compiled maps made only where boxes read them (``AppearanceFrame.maps``): inside the window the
     texture and labels are the whole region's, every box inside counts what it counts there, and the
     likelihood of particles (some over the region's edge) is the same bit for bit."""
-    from vistrack.core.features import box_sums
+    from vistrack.appearance.features import box_sums
 
     frames, box = moving_box_frames(2)
-    app = vistrack.models.box.appearance.Appearance(frames[0], box, work_size=20.0)  # f < 1: a shrunk region
+    app = vistrack.appearance.cues.Appearance(frames[0], box, work_size=20.0)  # f < 1: a shrunk region
     roi = (10, 8, 150, 112)
     whole = app.frame(frames[1], roi)
     whole.texture  # noqa: B018 - made whole at once
@@ -258,7 +258,7 @@ def test_lent_maps_are_remade_after_the_next_frame_takes_them():
     """Two frames of one appearance share its map buffers (``MapBuffers``): the second frame's maps take them
     from the first, whose likelihood is then made afresh, not read from the second frame's maps."""
     frames, box = moving_box_frames(3)
-    app = vistrack.models.box.appearance.Appearance(frames[0], box, work_size=20.0)
+    app = vistrack.appearance.cues.Appearance(frames[0], box, work_size=20.0)
     states = np.array([[60.0, 40.0, 0.0], [66.0, 44.0, 0.1]])
     want = [app.loglik_states(app.frame(f, (0, 0, 160, 120)), states, app.size) for f in frames[1:]]
     a = app.frame(frames[1], (0, 0, 160, 120))
@@ -276,7 +276,7 @@ def test_window_of_boxes_known_answers():
     """``AppearanceFrame.window``: a box's working rows and columns (with its ring and two pixels to spare),
     the union of several, and the whole region for a box that is not finite."""
     frames, box = moving_box_frames(1)
-    app = vistrack.models.box.appearance.Appearance(frames[0], box, work_size=20.0)
+    app = vistrack.appearance.cues.Appearance(frames[0], box, work_size=20.0)
     obs = app.frame(frames[0], (10, 20, 150, 110))
     f, (hh, ww) = obs.f, obs.shape
     cx, cy, w, h = 60.0, 50.0, 20.0, 10.0

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from vistrack import kernels
-from vistrack.core.features import FeatureMaps
-from vistrack.filters import make_filter
+from vistrack.appearance.features import FeatureMaps
 from vistrack.io.clips import load_clip
+from vistrack.loop.stepper import FrameStepper
+from vistrack.registry import make_filter
 from vistrack.registry.builders import build_model
-from vistrack.track.loop import FrameStepper
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 

@@ -13,7 +13,7 @@ import pytest
 
 from kernel_helpers import both
 from vistrack import kernels
-from vistrack.core.features import FeatureMaps
+from vistrack.appearance.features import FeatureMaps
 from vistrack.io.clips import load_clip
 from vistrack.registry.builders import build_model
 
@@ -23,7 +23,7 @@ pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not inst
 @pytest.fixture(scope="module")
 def scene(tmp_path_factory):
     """A plate model, its observation of frame 12 and predicted states about the plate and elsewhere."""
-    from vistrack.data_synth.plate import make_plate_clip
+    from vistrack.data_synth.plate_clip import make_plate_clip
 
     d = tmp_path_factory.mktemp("plate")
     make_plate_clip(d, frames=14, size=(320, 240), seed=2, cars=1)

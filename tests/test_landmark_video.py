@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
-from vistrack.core.features import FeatureMaps, blob_peaks
-from vistrack.core.metrics import landmark_error
-from vistrack.data_synth.landmarks import draw_blob, make_landmark_clip
+from vistrack.appearance.features import FeatureMaps, blob_peaks
+from vistrack.data_synth.landmark_clip import draw_blob, make_landmark_clip
 from vistrack.io.clips import load_clip, read_groundtruth_csv
 from vistrack.io.video import open_video
+from vistrack.scoring.metrics import landmark_error
 
 
 @pytest.fixture(scope="module")
@@ -76,7 +76,7 @@ def test_run_landmarks_bad_input(clip_dir, capsys, args, message):
 
 
 def test_landmarks_without_a_start_is_a_clear_error(tmp_path, capsys):
-    from vistrack.data_synth.render import write_clip_files  # noqa: F401
+    from vistrack.data_synth.scene import write_clip_files  # noqa: F401
     from vistrack.io.video import VideoWriter
 
     with VideoWriter(tmp_path / "v.mp4", 30, (160, 120)) as w:

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from vistrack.data_synth.landmarks import observe, simulate
-from vistrack.filters import make_filter
+from vistrack.data_synth.landmark_clip import observe, simulate
 from vistrack.models.landmarks.model import Landmarks, regular_polygon, shape_step, tangent_basis
+from vistrack.registry import make_filter
 from vistrack.reproduce.landmarks import LandmarksConfig, landmarks_run, run_landmarks
 
 

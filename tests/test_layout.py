@@ -24,8 +24,8 @@ def test_no_function_over_60_lines():
 def test_no_probes_for_optional_parts():
     """Optional parts are protocols checked with ``offers`` (vistrack/core/hooks.py, the one place that
     looks); nothing else asks ``hasattr`` or ``getattr(x, name, default)`` of a model, a filter, a
-    proposal or an observation (vistrack/engine/opencv_trackers.py looks for OpenCV's trackers in ``cv2``)."""
-    allowed = {"core/hooks.py", "engine/opencv_trackers.py"}
+    proposal or an observation (vistrack/baselines/opencv.py looks for OpenCV's trackers in ``cv2``)."""
+    allowed = {"core/hooks.py", "baselines/opencv.py"}
     probes = []
     for p in ROOT.rglob("*.py"):
         if str(p.relative_to(ROOT)) in allowed:

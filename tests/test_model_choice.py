@@ -9,7 +9,7 @@ from clip_helpers import square_clip
 
 @pytest.fixture(scope="module")
 def contour_clip(tmp_path_factory):
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     folder = tmp_path_factory.mktemp("choice") / "c"
     make_contour_clip(folder, frames=4, size=(96, 72), seed=1, clutter="low", distractor=False)

@@ -12,9 +12,8 @@ import pytest
 
 import vistrack
 from cli_helpers import run
-from vistrack.filters import make_filter
 from vistrack.models.protocol import VideoModelBase
-from vistrack.registry import MODELS, ModelSpec, register
+from vistrack.registry import MODELS, ModelSpec, make_filter, register
 
 H, W = 120, 160
 _LOG2PI = np.log(2 * np.pi)

@@ -69,7 +69,7 @@ def test_degenerate_step_is_reported_and_recovered(rng):
 
 
 def test_make_filter_errors_are_clear():
-    from vistrack.filters import make_filter
+    from vistrack.registry import make_filter
 
     with pytest.raises(ValueError, match="unknown algorithm 'nope'"):
         make_filter("nope", GaussMixtureToy())
@@ -91,7 +91,7 @@ def test_ess_threshold_zero_never_resamples(rng):
 @pytest.mark.parametrize("algo", ["bootstrap", "lis", "lls", "avpf"])
 def test_a_step_hands_on_the_likelihood_of_its_particles(algo, rng):
     """``ParticleSet.loglik`` (what the birth reserve draws by) is ``log r`` at the new states."""
-    from vistrack.filters import make_filter
+    from vistrack.registry import make_filter
 
     model = GaussMixtureToy()
     filt = make_filter(algo, model)

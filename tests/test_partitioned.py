@@ -14,10 +14,11 @@ from weighting_helpers import one_step_runs
 import vistrack
 from cli_helpers import run
 from vistrack.core.particles import ParticleSet
-from vistrack.filters import ALGORITHMS, BranchedPartitioned, make_filter
+from vistrack.filters import BranchedPartitioned
 from vistrack.filters.branched_partitioned import cyclic_orderings
 from vistrack.models import Bearings, GaussMixtureToy
 from vistrack.models.partitions import IndependentTargets
+from vistrack.registry import ALGORITHMS, make_filter
 
 X_PREV = np.array([0.2, -0.1])
 Q = 1.0

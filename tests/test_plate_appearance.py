@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import vistrack
-from vistrack.core.features import FeatureMaps
+from vistrack.appearance.features import FeatureMaps
 from vistrack.registry.builders import model_from_box
 
 H, W = 240, 320
@@ -81,7 +81,7 @@ def test_the_first_view_anchors_the_adaptation(compiled):
     """A template that has drifted onto the road adapts on to it without an anchor; with the first view as
     anchor (the plate model's ``anchor_min_ncc`` 0.5) the road does not match the first plate: no adaptation."""
     from vistrack import kernels
-    from vistrack.models.box.appearance import Appearance
+    from vistrack.appearance.cues import Appearance
 
     img = draw_plate(road(), 160, 120)
     box = (160 - PW / 2, 120 - PH / 2, PW, PH)
@@ -98,7 +98,7 @@ def test_the_first_view_anchors_the_adaptation(compiled):
 
 def _rendered_plate_scene(cx, cy, width=120):
     """A rendered single-row plate (``width`` px) on the road at ``(cx, cy)``, BGR uint8 320 x 240 -> 480 x 360."""
-    from vistrack.data_synth.plate import render_plate
+    from vistrack.data_synth.plate_clip import render_plate
     from vistrack.models.plate.layout import LAYOUTS
 
     img = cv2.resize(road(3), (480, 360)).astype(np.float32)

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
-from vistrack.core.metrics import iou
-from vistrack.data_synth.plate import detection_frames
+from vistrack.data_synth.plate_clip import detection_frames
 from vistrack.models.plate.detect import Detection, PlateDetector, _split_touching, acquire, plate_from_row
+from vistrack.scoring.metrics import iou
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 DASHCAM = REAL / "plate_in_polo_dashcam" / "plate_in_polo_dashcam.mp4"

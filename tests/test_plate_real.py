@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vistrack.core.features import FeatureMaps
+from vistrack.appearance.features import FeatureMaps
 from vistrack.io.video import open_video, read_rects
 from vistrack.models.plate.detect import PlateDetector
 from vistrack.registry.builders import model_from_box
@@ -61,7 +61,7 @@ def test_from_the_first_box_the_angle_holds_and_the_plate_model_is_level_with_th
     than the ground truth, AUC 0.88 against the box model's 0.91): the plate model keeps its first view
     (``Plate.adapt_rate`` 0) and the correlation filter adapts."""
     import vistrack
-    from vistrack.core.metrics import iou, success_auc
+    from vistrack.scoring.metrics import iou, success_auc
 
     frames, gt = dashcam
     out = {}

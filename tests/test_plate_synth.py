@@ -46,7 +46,7 @@ def test_synth_plate_bad_size(tmp_path, capsys):
 def test_plate_likelihood_has_a_narrow_dominant_peak_at_the_plate(road):
     """Fig. 1.6: over a (u, w) grid at the true angle and scale, the maximum of r is at the
     true plate, and poses 15 % of the plate width away are far less likely."""
-    from vistrack.core.features import FeatureMaps
+    from vistrack.appearance.features import FeatureMaps
     from vistrack.models.plate.model import PlateLikelihood
 
     clip = load_clip(road)
@@ -70,7 +70,7 @@ def test_plate_line_scans_read_the_terms_the_weight_uses(road):
     """The LIS scans of ``r^h`` and ``r^v`` (§4.5.2) sum the same features as ``terms`` — the
     extra pixel sets of a term included — so with the scans' point density equal to the full
     one they agree exactly; every feature is in exactly one term."""
-    from vistrack.core.features import FeatureMaps
+    from vistrack.appearance.features import FeatureMaps
     from vistrack.models.plate.model import PlateLikelihood
 
     clip = load_clip(road)
@@ -92,10 +92,10 @@ def test_plate_scale_banded_weights_interpolate_in_log_s(road):
     """Scale-banded coefficients (``w_0`` at plate width ``s_0``, ``w_1`` at ``s_1``, linear in
     log s between them, constant outside): ``log r`` is the plain likelihood with ``w_0`` below
     ``s_0``, with ``w_1`` above ``s_1`` and the log-s mix of the two between — and it is the
-    regression score of :func:`~vistrack.models.plate.fit.design` with the fitted vector split by
-    :func:`~vistrack.models.plate.fit.split_weights`, so the fit and the filters agree."""
-    from vistrack.core.features import FeatureMaps
-    from vistrack.models.plate.fit import design, feature_likelihood, split_weights
+    regression score of :func:`~vistrack.models.plate.fitting.design` with the fitted vector split by
+    :func:`~vistrack.models.plate.fitting.split_weights`, so the fit and the filters agree."""
+    from vistrack.appearance.features import FeatureMaps
+    from vistrack.models.plate.fitting import design, feature_likelihood, split_weights
     from vistrack.models.plate.model import PlateLikelihood
 
     clip = load_clip(road)
@@ -147,8 +147,8 @@ def test_plate_log_odds_separate_plates_from_clutter(road640):
     2.0–3.1, so the report threshold of 2.5 — chosen on the training clips, where a sign scores
     up to 2.5 — misses some of its frames; the suite's plates score below 2.5 in under 1 % of
     their frames.)"""
-    from vistrack.core.features import FeatureMaps
-    from vistrack.models.plate.fit import scan_poses
+    from vistrack.appearance.features import FeatureMaps
+    from vistrack.models.plate.fitting import scan_poses
     from vistrack.models.plate.model import Plate
 
     clip = load_clip(road640)
@@ -189,7 +189,7 @@ def test_plate_lis_proposal_is_a_proper_density_on_the_window(entering):
     estimate's variance small.)"""
     import cv2
 
-    from vistrack.core.features import FeatureMaps
+    from vistrack.appearance.features import FeatureMaps
     from vistrack.models.plate.model import Plate
 
     g = np.random.default_rng(1)
@@ -252,7 +252,7 @@ def test_plate_entering_search_lands_births_on_the_plate(road640):
     the translation-and-coarse-scale search alone: births drawn about a plate (25 px, 12 px,
     0.1 rad, 20 % off) end within a third of the plate height (the 'not lost' tolerance) at
     least 1.5 times as often, and are never outside their window."""
-    from vistrack.core.features import FeatureMaps
+    from vistrack.appearance.features import FeatureMaps
     from vistrack.models.plate.model import Plate, PlateLISProposal
 
     clip = load_clip(road640)
@@ -290,10 +290,10 @@ def test_plate_lls_grid_finds_the_plate_and_lls_tracks_it(road):
     cars cross a 320-px frame in 15 frames, so its 35-px plates are motion-blurred and score
     log-odds 0.4–1.2, below the report threshold: births on road clutter scoring as much take
     the lead now and then — in 1 of 8 seeds with N = 100, 5 of 8 with N = 50.)"""
-    from vistrack.core.features import FeatureMaps
-    from vistrack.filters import make_filter
+    from vistrack.appearance.features import FeatureMaps
+    from vistrack.loop.stepper import step_frames
     from vistrack.models.plate.model import Plate
-    from vistrack.track.loop import track
+    from vistrack.registry import make_filter
 
     clip = load_clip(road)
     t = clip.truth
@@ -317,7 +317,7 @@ def test_plate_lls_grid_finds_the_plate_and_lls_tracks_it(road):
     src = [(i, f) for i, f in clip.source if k0 <= i < k0 + 15]
     on, errs = [], []
     for seed in range(4):
-        for res in track(src, filt, 100, np.random.default_rng(seed)):
+        for res in step_frames(src, filt, 100, np.random.default_rng(seed)):
             i = res.index
             if t["visible"][i] > 0:
                 on.append(np.hypot(res.estimate[0] - t["cx"][i], res.estimate[1] - t["cy"][i]) < 0.5 * t["scale"][i])
@@ -332,7 +332,7 @@ def test_plate_lls_grid_finds_the_plate_and_lls_tracks_it(road):
 def test_plate_sharpness_scales_log_r_but_not_the_report(road):
     """``sharpness`` multiplies ``log r`` (the learnt log-odds) everywhere the filters read it —
     full, sparse and line-scan evaluations — while ``visible`` still thresholds the log-odds."""
-    from vistrack.core.features import FeatureMaps
+    from vistrack.appearance.features import FeatureMaps
     from vistrack.models.plate.model import Plate
 
     clip = load_clip(road)
@@ -393,7 +393,7 @@ def test_plate_lis_weights_match_a_brute_force_posterior(road):
     window twice the plate size, plus the search over log s) from a Gaussian prior on (u, w, s)
     about the plate, the angle known. The mean weight estimates the evidence ∫ r p0 and the
     weighted mean of (u, w, s) the posterior mean — both also computed by brute force on a grid."""
-    from vistrack.core.features import FeatureMaps
+    from vistrack.appearance.features import FeatureMaps
     from vistrack.core.particles import logsumexp
     from vistrack.models.plate.model import Plate
 
@@ -448,7 +448,7 @@ def test_plate_lis_dynamics_window_weights_match_a_brute_force_posterior(road):
     factors about the predicted mean): one LIS step from a particle that follows the plate, with
     the angle and scale known. The mean weight is the evidence ∫ r N_uw and the weighted mean of
     (u, w) the posterior mean, both also by brute force on a grid; the box window agrees too."""
-    from vistrack.core.features import FeatureMaps
+    from vistrack.appearance.features import FeatureMaps
     from vistrack.core.particles import logsumexp
     from vistrack.models.plate.model import Plate, PlateLISProposal
 
@@ -554,7 +554,7 @@ def test_fit_plate_separates_plates_from_background_and_prints_the_coefficients(
     most true plates above log-odds 0 and almost no random or nearby pose; the command prints every
     feature's coefficient."""
     from cli_helpers import run
-    from vistrack.models.plate.fit import fit_plate_coefficients
+    from vistrack.models.plate.fitting import fit_plate_coefficients
     from vistrack.models.plate.model import PlateLikelihood
 
     code, _, err = run(["synth", "plate", "--out", str(tmp_path / "c1"), "--frames", "12", "--size", "320x240",

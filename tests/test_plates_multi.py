@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
-from vistrack.core.mot import FrameObjects, Identities, clear_mot, objects_by_frame
 from vistrack.core.particles import ParticleSet
 from vistrack.io.clips import load_clip, read_groundtruth_csv
 from vistrack.models.plate.layout import plate_vertices
+from vistrack.scoring.mot import FrameObjects, Identities, clear_mot, objects_by_frame
 
 OBJECT_HEADER = "frame,visible,id,cx,cy,w,h,angle_deg,scale,x0,y0,x1,y1,x2,y2,x3,y3,hidden"
 TRACK_HEADER = "frame,visible,id,cx,cy,w,h,angle_deg,scale,x0,y0,x1,y1,x2,y2,x3,y3,ess,ms,lost_reason"
@@ -109,7 +109,7 @@ def test_plates_kernels_and_likelihood_factorise():
     """The joint K and p_0 are the slots' in turn: K's density is the sum of the partitions'; births,
     deaths and moves keep the presence flag consistent; log r = Σ_j log π_j; a second present slot
     on the first one's plate pays the exclusion."""
-    from vistrack.core.features import FeatureMaps
+    from vistrack.appearance.features import FeatureMaps
 
     m = _model()
     rng = np.random.default_rng(3)
@@ -170,8 +170,8 @@ def test_run_targets_track_csv_format_and_same_seed(road, tmp_path, capsys):
 
 def test_target_rows_of_a_frame_with_plates():
     """Rows of reported plates: frame, visible 1, the id, the plate's columns, ess, ms, empty reason."""
-    from vistrack.track.loop import FrameResult
-    from vistrack.track.run import target_rows
+    from vistrack.loop.stepper import FrameResult
+    from vistrack.session.recording import target_rows
 
     m = _model(2)
     states = np.array([[100.0, 300, 0.0, 60, 100, 300, 0, 60, 3], [400.0, 320, 0.1, 80, 400, 320, 0.1, 80, 7]])
@@ -237,7 +237,7 @@ def test_a_missing_scorer_is_one_error_line_before_any_tracking(road, tmp_path, 
 @pytest.fixture(scope="module")
 def one_car(tmp_path_factory):
     """One car at the evaluation's frame size and about its speed; frame 36 has its plate mid-frame."""
-    from vistrack.data_synth.plate import make_plate_clip
+    from vistrack.data_synth.plate_clip import make_plate_clip
 
     out = tmp_path_factory.mktemp("one_car")
     make_plate_clip(out, frames=100, size=(640, 480), seed=5, cars=1)
@@ -251,7 +251,7 @@ def test_a_plate_covered_from_one_side_is_not_reported(one_car):
     whole-plate level, but the left half drops below ``report_half`` while the right stays above it,
     so the plate is reported only without the half test. The compiled and numpy paths agree."""
     from vistrack import kernels
-    from vistrack.core.features import FeatureMaps
+    from vistrack.appearance.features import FeatureMaps
     from vistrack.models.plate.plates import Plates
 
     t, k = one_car.truth, 36

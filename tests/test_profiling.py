@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from test_box import clip_frames, obj_box, path
-from vistrack.filters import make_filter
+from vistrack.loop.profiling import Timer
+from vistrack.registry import make_filter
 from vistrack.registry.builders import model_from_box
-from vistrack.track.profiling import Timer
-from vistrack.track.run import track_video
+from vistrack.session.recording import record_video
 
 
 def test_timer_counts_nested_calls_once():
@@ -41,7 +41,7 @@ def test_profiling_leaves_the_track_unchanged(model, algo):
     for profile in (True, False):
         m = model_from_box(model, frames[0], obj_box(*path(0)))
         f = make_filter(algo, m)
-        runs.append(track_video(enumerate(frames), m, f, 60, np.random.default_rng(3), profile=profile))
+        runs.append(record_video(enumerate(frames), m, f, 60, np.random.default_rng(3), profile=profile))
     with_p, without = runs
     assert [r["cx"] for r in with_p.rows] == [r["cx"] for r in without.rows]
     split = with_p.stage_split()

@@ -9,8 +9,8 @@ from cli_helpers import run
 from clip_helpers import square_clip
 from vistrack.cli.eval import eval_cmd
 from vistrack.cli.run import RUN_ALGOS
-from vistrack.data_synth.contour import make_contour_clip
-from vistrack.engine.evaluation import check_algos
+from vistrack.data_synth.contour_clip import make_contour_clip
+from vistrack.evaluation.experiment import check_algos
 from vistrack.registry import DEFAULT_MODEL, MODELS, all_algos
 
 
@@ -63,8 +63,7 @@ def test_eval_of_an_algorithm_the_model_does_not_run_is_one_line_naming_those_it
 def test_every_algorithm_a_model_lists_builds_on_it_and_no_other_does():
     """The derived lists are the truth: each algorithm listed for the box model builds a filter on a
     box model, and every registered one not listed (under any name of it) fails with one line."""
-    from vistrack.filters import FILTERS, make_filter
-    from vistrack.registry import model_from_box
+    from vistrack.registry import FILTERS, make_filter, model_from_box
 
     frame = np.full((72, 96, 3), 40, np.uint8)
     frame[20:40, 20:40] = (40, 60, 220)
@@ -110,7 +109,7 @@ def test_a_model_registered_without_algorithms_runs_what_its_protocols_offer():
 
 
 def test_a_filter_s_options_come_from_its_class():
-    from vistrack.filters import FILTERS
+    from vistrack.registry import FILTERS
 
     opts = {o.name: o for o in FILTERS["pf-eis-mt"].options}
     assert list(opts)[:2] == ["mt_dims", "mt_weight"] and opts["mt_weight"].default == "sampled"

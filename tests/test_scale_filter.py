@@ -85,7 +85,7 @@ class _Stub:
 
 
 def test_proposal_about_the_scale_filters_peak_integrates_to_one():
-    from vistrack.models.box.correlation import DCFResponse
+    from vistrack.appearance.correlation import DCFResponse
 
     rng = np.random.default_rng(0)
     resp = DCFResponse(rng.random((3, 5, 6)).astype(np.float32), [-0.1, 0.0, 0.1], centre=(40.0, 30.0),

@@ -22,7 +22,7 @@ def test_run_0_is_the_seed_itself_and_runs_are_independent():
 
 @pytest.fixture(scope="module")
 def clips(tmp_path_factory):
-    from vistrack.data_synth.contour import make_contour_clip
+    from vistrack.data_synth.contour_clip import make_contour_clip
 
     root = tmp_path_factory.mktemp("seeds")
     for k in (1, 2):
@@ -70,7 +70,7 @@ def test_eval_runs_1_on_a_single_clip_is_run_seed(clips, tmp_path):
 def test_the_reproductions_keep_their_streams():
     from types import SimpleNamespace
 
-    from vistrack.engine.evaluation import entry_tasks
+    from vistrack.evaluation.experiment import entry_tasks
 
     cfg = SimpleNamespace(clips=["a", "b"], entries=[("lis", 30)], runs=3, seed=4)
     tasks = entry_tasks(cfg, "contour")
@@ -86,7 +86,7 @@ def test_help_says_how_eval_runs_relate_to_run_seed():
 
 
 def test_a_deterministic_opencv_tracker_runs_once_mil_as_often_as_the_filters():
-    from vistrack.engine.evaluation import EvalConfig, task_list
+    from vistrack.evaluation.experiment import EvalConfig, task_list
 
     tasks = task_list(EvalConfig(clips=["c"], algos=["lis", "opencv-mil", "opencv-kcf"], particles=[30], runs=3,
                                  seed=1, model="box"), ["c"])

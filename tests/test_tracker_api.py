@@ -52,8 +52,8 @@ def _trax_boxes(clip_images, box, seed, n_frames):
     from trax.image import FileImage
     from trax.region import Rectangle
 
-    proc = subprocess.Popen([sys.executable, "-m", "vistrack.track.trax", "--seed", str(seed)], stdin=subprocess.PIPE,
-                            stdout=subprocess.PIPE)
+    proc = subprocess.Popen([sys.executable, "-m", "vistrack.api.trax_server", "--seed", str(seed)],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE)
     try:
         log = []  # vot-trax 4 needs a logger
         client = Client((proc.stdin.fileno(), proc.stdout.fileno()), timeout=120, log=log.append)
@@ -75,7 +75,7 @@ def _trax_boxes(clip_images, box, seed, n_frames):
 
 @pytest.mark.skipif(not (REAL / "car4_otb_first100" / "img").is_dir(), reason="shared real clips absent")
 def test_trax_client_gets_the_boxes_run_writes(tmp_path):
-    """vot-trax's own client drives `python -m vistrack.track.trax` over a real clip's frames; the boxes it
+    """vot-trax's own client drives `python -m vistrack.api.trax_server` over a real clip's frames; the boxes it
     receives are those of `vistrack run` on the same frames from the same box and seed."""
     from vistrack.cli import main
     from vistrack.io.clips import read_groundtruth_csv

@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-from vistrack.core.features import FeatureMaps, box_dog, box_sums
+from vistrack.appearance.features import FeatureMaps, box_dog, box_sums
 from vistrack.io.video import VideoDecodeWarning, VideoError, VideoWriter, find_groundtruth, open_video, read_rects
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
@@ -88,7 +88,7 @@ def test_smoothed_gradient_keeps_a_ramp_and_evens_out_blurred_edges():
     assert fm.sample_gradient(x, y, 1.5) == pytest.approx(g[5:8, 20:24])
 
 def test_box_sums_from_integral_images_match_direct_sums(rng):
-    """:func:`~vistrack.core.features.box_sums` (what the box model's colour maps read) against direct
+    """:func:`~vistrack.appearance.features.box_sums` (what the box model's colour maps read) against direct
     sums: boxes clipped to the map, an empty box summing to 0."""
     fm = FeatureMaps(rng.integers(0, 255, (50, 70, 3)).astype(np.uint8))
     ii = fm.integral("abs_gx")

@@ -21,12 +21,21 @@ PAGES = {
     "cli": ("Command line", ["vistrack.cli"],
             "The `vistrack` command: one module per command; each parses, calls one library function and prints."),
     "reproduce": ("Reproductions", ["vistrack.reproduce"],
-                  "The seeds' experiments as engine experiments: their configs, runners, results, tables and "
+                  "The seeds' experiments as batch experiments: their configs, runners, results, tables and "
                   "figures."),
-    "engine": ("Batch engine and evaluation", ["vistrack.engine"],
-               "The Dask grid with task files, `eval`'s pipeline, scores and reports, the demo."),
-    "track": ("One run: the tracking loop, run, Tracker", ["vistrack.track"],
-              "The frame loop, `vistrack run`'s set-up and session, the OpenCV-shaped `vistrack.Tracker`, TraX."),
+    "demo": ("The demo", ["vistrack.demo"], "`vistrack demo`: its clip, its comparisons and the real-clip step."),
+    "evaluation": ("Evaluation", ["vistrack.evaluation"],
+                   "`eval`: its experiment (tasks, the runner, scores) and its pipeline."),
+    "reports": ("Reports", ["vistrack.reports"], "`eval`'s files: tables, the HTML report and plots."),
+    "batch": ("Batch runs", ["vistrack.batch"],
+              "Running many tasks: the Dask cluster, the task files, the `--out` lock and resume."),
+    "session": ("A run of a video", ["vistrack.session"],
+                "`vistrack run`: the plan (model, algorithm, options checked), the recording of the track file and "
+                "annotated video, the summary."),
+    "api": ("Tracker and TraX", ["vistrack.api"],
+            "vistrack as a component: the OpenCV-shaped `vistrack.Tracker` and the TraX server."),
+    "baselines": ("Baselines", ["vistrack.baselines"], "The trackers vistrack is compared with."),
+    "loop": ("The frame loop", ["vistrack.loop"], "One filter step per frame, and the timing of its stages."),
     "registry": ("Registry", ["vistrack.registry"],
                  "Models and filters by name: which algorithms run on which model, the defaults, building a model "
                  "by name."),
@@ -43,11 +52,18 @@ PAGES = {
                  "Each family is a package under `vistrack/models/`: its model, likelihood, proposals, compiled "
                  "kernels and its builder (its registry entry)."),
     "proposals": ("Local proposals", ["vistrack.proposals"], "The local proposals models share."),
+    "appearance": ("Appearance", ["vistrack.appearance"],
+                   "Per-frame feature maps and the appearance cues the families share: colour against a ring, grey "
+                   "templates, correlation filters."),
     "io": ("Videos, clips and files", ["vistrack.io"],
            "Decoding and writing video, clip folders and ground truth, start boxes, track and result files."),
-    "core": ("Core", ["vistrack.core"],
-             "Particle sets, resampling, Gaussians, the step's kernel, feature maps, metrics, runtime settings."),
+    "scoring": ("Scoring", ["vistrack.scoring"],
+                "Scores of tracks against ground truth (errors, lost frames, success and precision, long-term and "
+                "multi-target scores) and their summaries over runs."),
+    "core": ("Particle core", ["vistrack.core"],
+             "Particle sets, resampling, Gaussians, the step's kernel, the optional hooks, random streams."),
     "kernels": ("Compiled kernels", ["vistrack.kernels"], "The numba kernels the model families share."),
+    "system": ("The process", ["vistrack.system"], "Memory and disk budgets, signals, the compile notice."),
 }
 
 

@@ -8,9 +8,9 @@ useful: the old names are gone).
 
 The next commits moved by hand: ``vistrack.models.builders`` -> ``vistrack.registry.builders``,
 ``vistrack.models.registry`` -> ``vistrack.registry.catalog`` (``vistrack.registry`` re-exports both),
-``vistrack.reproduce.multi_plate``'s tasks and scores -> ``vistrack.engine.multi_target``,
-``vistrack.cli.demo``'s clips and comparisons -> ``vistrack.engine.demo``, ``vistrack.filters.ALGORITHMS``
--> ``vistrack.filters.registry`` (re-exported), ``check_particle_memory`` -> ``vistrack.registry``.
+``vistrack.reproduce.multi_plate``'s tasks and scores -> ``vistrack.evaluation.multi_target``,
+``vistrack.cli.demo``'s clips and comparisons -> ``vistrack.demo.steps``, ``vistrack.filters.ALGORITHMS``
+-> ``vistrack.registry.filter_specs`` (re-exported), ``check_particle_memory`` -> ``vistrack.registry``.
 """
 
 from __future__ import annotations
@@ -27,10 +27,10 @@ MOVES = {
     "vistrack.gaussian": "vistrack.core.gaussian",
     "vistrack.transition": "vistrack.core.transition",
     "vistrack.hooks": "vistrack.core.hooks",
-    "vistrack.features": "vistrack.core.features",
-    "vistrack.metrics": "vistrack.core.metrics",
-    "vistrack.mot": "vistrack.core.mot",
-    "vistrack.runtime": "vistrack.core.runtime",
+    "vistrack.features": "vistrack.appearance.features",
+    "vistrack.metrics": "vistrack.scoring.metrics",
+    "vistrack.mot": "vistrack.scoring.mot",
+    "vistrack.runtime": "vistrack.system.resources",
     # io: videos, clips, the files a run reads and writes
     "vistrack.video": "vistrack.io.video",
     "vistrack.video_errors": "vistrack.io.video_errors",
@@ -46,20 +46,20 @@ MOVES = {
     "vistrack.builders": "vistrack.models.builders",
     "vistrack.models.kernel": "vistrack.core.transition",
     # one run: the frame loop, the session, the OpenCV-shaped Tracker, TraX
-    "vistrack.tracking": "vistrack.track.loop",
-    "vistrack.session": "vistrack.track.run",
-    "vistrack.run_summary": "vistrack.track.summary",
-    "vistrack.signals": "vistrack.track.signals",
-    "vistrack.profiling": "vistrack.track.profiling",
-    "vistrack.tracker": "vistrack.track.tracker",
-    "vistrack.trax": "vistrack.track.trax",
+    "vistrack.tracking": "vistrack.loop.stepper",
+    "vistrack.session": "vistrack.session.recording",
+    "vistrack.run_summary": "vistrack.session.run_summary",
+    "vistrack.signals": "vistrack.system.signals",
+    "vistrack.profiling": "vistrack.loop.profiling",
+    "vistrack.tracker": "vistrack.api.tracker",
+    "vistrack.trax": "vistrack.api.trax_server",
     # the batch engine
-    "vistrack.engine": "vistrack.engine.grid",
-    "vistrack.tasks": "vistrack.engine.tasks",
-    "vistrack.evaluation": "vistrack.engine.evaluation",
-    "vistrack.report": "vistrack.engine.report",
-    "vistrack.mot_report": "vistrack.engine.mot_report",
-    "vistrack.plots": "vistrack.engine.plots",
+    "vistrack.engine": "vistrack.batch.cluster",
+    "vistrack.tasks": "vistrack.batch.tasks",
+    "vistrack.evaluation": "vistrack.evaluation.experiment",
+    "vistrack.report": "vistrack.reports.eval_report",
+    "vistrack.mot_report": "vistrack.reports.mot_report",
+    "vistrack.plots": "vistrack.reports.plots",
     # near-collisions renamed
     "vistrack.reproduce.report": "vistrack.reproduce.tables",
     "vistrack.reproduce.plates": "vistrack.reproduce.multi_plate",

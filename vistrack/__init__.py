@@ -14,7 +14,7 @@ _PARTICLES = ("ParticleSet", "DegenerateWeightsWarning", "ess", "logsumexp", "no
 def __getattr__(name):
     """``vistrack.Tracker``, the particle core's names and ``__version__``, loaded on first use (PEP 562)."""
     if name == "Tracker":
-        from .track.tracker import Tracker
+        from .api.tracker import Tracker
 
         return Tracker
     if name in _PARTICLES:

@@ -10,15 +10,15 @@ import sys
 import warnings
 from contextlib import contextmanager
 
-from vistrack.track.signals import abort_on_interrupt, interrupt_aborts
+from vistrack.system.signals import abort_on_interrupt, interrupt_aborts
 
 with interrupt_aborts():  # Ctrl-C in the seconds the modules load: "Aborted.", 130, no traceback
     import click
 
     from vistrack import __version__
-    from vistrack.core.runtime import TooLarge, keep_freed_memory
     from vistrack.io.outputs import OutputError
-    from vistrack.track.run import Terminated, stop_on_signals
+    from vistrack.session.recording import Terminated, stop_on_signals
+    from vistrack.system.resources import TooLarge, keep_freed_memory
 
     from .demo import demo
     from .eval import eval_cmd
@@ -109,7 +109,7 @@ def _one_line_warnings():
 
 
 def _stopped(e):
-    """Exit on Ctrl-C (130) or SIGTERM (143; :class:`~vistrack.track.run.Terminated`), which click
+    """Exit on Ctrl-C (130) or SIGTERM (143; :class:`~vistrack.session.recording.Terminated`), which click
     may have wrapped in ``Abort``."""
     term = any(isinstance(x, Terminated) for x in (e, e.__cause__, e.__context__))
     click.echo("Terminated." if term else "Aborted.", err=True)

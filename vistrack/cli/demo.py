@@ -1,5 +1,5 @@
 """``vistrack demo``: the README's main job on a generated clip and a real one, in under 40 s
-(:mod:`vistrack.engine.demo`)."""
+(:mod:`vistrack.demo.steps`)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from vistrack.engine.demo import (
+from vistrack.demo.steps import (
     CLIP,
     CLIP_FOLDER,
     DEMO_ENTRIES,
@@ -20,8 +20,8 @@ from vistrack.engine.demo import (
 from vistrack.registry import DEFAULT_MODEL
 
 from .errors import one_line
-from .grid import progress
 from .options import SEED
+from .progress import progress
 from .run import run
 
 __all__ = ["demo"]

@@ -1,7 +1,7 @@
 """The library's refusals as the command line's one error line: an option that does not apply to the
 model (:class:`~vistrack.registry.OptionError`) is a usage error (exit 2), bad input (``ValueError``,
-``VideoError``) and an engine that cannot run or finish (:class:`~vistrack.engine.grid.EngineError`,
-:class:`~vistrack.engine.tasks.OutLocked`, :class:`~vistrack.engine.tasks.TaskFailed`) one
+``VideoError``) and an engine that cannot run or finish (:class:`~vistrack.batch.cluster.EngineError`,
+:class:`~vistrack.batch.tasks.OutLocked`, :class:`~vistrack.batch.tasks.TaskFailed`) one
 ``Error:`` line (exit 1)."""
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ from contextlib import contextmanager
 
 import click
 
-from vistrack.engine.grid import EngineError
-from vistrack.engine.tasks import OutLocked, TaskFailed
+from vistrack.batch.cluster import EngineError
+from vistrack.batch.tasks import OutLocked, TaskFailed
 from vistrack.io.outputs import OutputBusy
 from vistrack.registry import OptionError
 

@@ -6,15 +6,15 @@ from pathlib import Path
 
 import click
 
-from vistrack.engine.evaluation import OPENCV_TRACKERS
-from vistrack.engine.pipeline import eval_config, evaluate
-from vistrack.engine.report import averages
+from vistrack.evaluation.experiment import OPENCV_TRACKERS
+from vistrack.evaluation.pipeline import eval_config, evaluate
 from vistrack.io.results_format import FORMATS
 from vistrack.registry import DEFAULT_MODEL, MODELS, SEARCH_MODEL, algos_for, all_algos, default_comparison
+from vistrack.reports.eval_report import averages
 
 from .errors import one_line
-from .grid import progress
 from .options import SEED, IntList, StrList
+from .progress import progress
 
 __all__ = ["eval_cmd"]
 

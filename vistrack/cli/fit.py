@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from vistrack.models.plate.fit import fit_plate_coefficients
+from vistrack.models.plate.fitting import fit_plate_coefficients
 
 from .options import FloatList
 

@@ -8,16 +8,16 @@ from click.core import ParameterSource
 from vistrack.models.bearings.model import Bearings
 from vistrack.registry import algos_for, derived_algos
 from vistrack.reproduce.bearings import BearingsConfig, format_ship_table
+from vistrack.reproduce.clip_suites import experiment_clips
 from vistrack.reproduce.contour import ContourConfig
 from vistrack.reproduce.landmarks import STREAMS, LandmarksConfig
 from vistrack.reproduce.multi_plate import PlatesConfig
-from vistrack.reproduce.pipeline import reproduce as run_reproduction
 from vistrack.reproduce.plate import PlateConfig
-from vistrack.reproduce.suite import experiment_clips
+from vistrack.reproduce.reproduction import reproduce as run_reproduction
 
 from .errors import one_line
-from .grid import progress
 from .options import SEED, Fraction, IntList, Size, StrList
+from .progress import progress
 from .reproduce_common import (
     config_default,
     default_entries,

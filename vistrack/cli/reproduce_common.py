@@ -10,7 +10,7 @@ from contextlib import contextmanager
 import click
 from tqdm import tqdm
 
-from vistrack.filters.registry import get_filter_spec
+from vistrack.registry.filter_specs import get_filter_spec
 from vistrack.reproduce.tables import format_table
 
 from .options import SEED
@@ -73,7 +73,7 @@ def output_options(plots_help):
 
 class Entries(click.ParamType):
     """``algo:N`` pairs, comma-separated, e.g. ``ls-n-ips:30,bootstrap:2000``: registered algorithms
-    (:func:`vistrack.filters.registry.get_filter_spec`), positive counts."""
+    (:func:`vistrack.registry.filter_specs.get_filter_spec`), positive counts."""
 
     name = "ALGO:N,..."
 
@@ -127,7 +127,7 @@ def equal_time_line(unit):
 
 def results_lines(experiment, done):
     """What a reproduction prints: its table, the JSON file and the plots written
-    (:class:`~vistrack.reproduce.pipeline.Reproduction`)."""
+    (:class:`~vistrack.reproduce.reproduction.Reproduction`)."""
     lines = [format_table(experiment, done.out["results"])]
     if done.json_path:
         lines.append(f"results written to {done.json_path}")

@@ -1,17 +1,18 @@
-"""``vistrack reproduce hs-sir``: SIR with history sampling (thesis §3.2.5, :mod:`vistrack.reproduce.hs_sir`)."""
+"""``vistrack reproduce hs-sir``: SIR with history sampling (thesis §3.2.5,
+:mod:`vistrack.reproduce.history_sampling`)."""
 
 from __future__ import annotations
 
 import click
 
 from vistrack.registry import algos_for
-from vistrack.reproduce.hs_sir import HSConfig, likelihood_params
-from vistrack.reproduce.pipeline import reproduce
-from vistrack.reproduce.suite import experiment_clips
+from vistrack.reproduce.clip_suites import experiment_clips
+from vistrack.reproduce.history_sampling import HSConfig, likelihood_params
+from vistrack.reproduce.reproduction import reproduce
 
 from .errors import one_line
-from .grid import progress
 from .options import Size
+from .progress import progress
 from .reproduce_common import (
     default_entries,
     engine_options,
@@ -26,7 +27,7 @@ __all__ = ["Likelihood", "hs_sir"]
 
 
 class Likelihood(click.ParamType):
-    """``KEY=VALUE`` pairs, comma-separated (:func:`vistrack.reproduce.hs_sir.likelihood_params`)."""
+    """``KEY=VALUE`` pairs, comma-separated (:func:`vistrack.reproduce.history_sampling.likelihood_params`)."""
 
     name = "KEY=VALUE,..."
 

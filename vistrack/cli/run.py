@@ -10,17 +10,17 @@ from tqdm import tqdm
 
 from vistrack.core.resampling import SCHEMES
 from vistrack.core.seeds import run_seed
-from vistrack.filters import FILTERS, SIR, ParticleFilter
+from vistrack.filters import SIR, ParticleFilter
 from vistrack.filters.history import HistorySampling
-from vistrack.filters.registry import filter_options
 from vistrack.io.clips import sequence_name
 from vistrack.io.remote import is_url
 from vistrack.io.results_format import FORMATS, result_paths
 from vistrack.io.video import is_stream
-from vistrack.registry import DEFAULT_MODEL, DEFAULT_PARTICLES, MODELS, SEARCH_MODEL, all_algos, get_model_spec
-from vistrack.track.compiling import compile_notice
-from vistrack.track.plan import plan_run, run_plan
-from vistrack.track.summary import summary_lines
+from vistrack.registry import DEFAULT_MODEL, DEFAULT_PARTICLES, FILTERS, MODELS, SEARCH_MODEL, all_algos, get_model_spec
+from vistrack.registry.filter_specs import filter_options
+from vistrack.session.plan import execute, prepare
+from vistrack.session.run_summary import summary_lines
+from vistrack.system.compiling import compile_notice
 
 from .errors import one_line
 from .options import SEED, Box, Fraction, check_outputs, check_writable
@@ -42,7 +42,7 @@ class _Video(click.Path):
         return super().convert(value, param, ctx)
 
 
-#: the options every filter takes, with their defaults (:attr:`vistrack.filters.registry.FilterSpec.options`)
+#: the options every filter takes, with their defaults (:attr:`vistrack.registry.filter_specs.FilterSpec.options`)
 _FILTER_DEFAULTS = {o.name: o.default for o in filter_options(ParticleFilter)}
 #: every algorithm a registered model runs (the registry is the one list: ``eval --algos`` takes the same)
 RUN_ALGOS = all_algos()
@@ -67,7 +67,7 @@ def _history():
 
 
 def lost_notice(most=5):
-    """``notify(index, reason, detail)`` for :func:`~vistrack.track.run.track_video`: a line on stderr
+    """``notify(index, reason, detail)`` for :func:`~vistrack.session.recording.record_video`: a line on stderr
     (above the progress bar) for each of the first ``most`` frames where the object is lost."""
     said = []
 
@@ -190,7 +190,7 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
         raise click.UsageError("--results writes one box per frame: not with --targets (use --track)")
     with compile_notice(None if quiet else _say) as watch:  # the first run after an install compiles the kernels
         with one_line():
-            plan = plan_run(video, model=model_name, algo=algo, particles=particles, init=init, init_gt=init_gt,
+            plan = prepare(video, model=model_name, algo=algo, particles=particles, init=init, init_gt=init_gt,
                             template=template_path, layout=None if layout == "auto" else layout, no_colour=no_colour,
                             targets=targets, search=search, resample=resample, ess_threshold=ess_threshold,
                             max_frames=max_frames, notify=None if quiet else _say, watch=watch)
@@ -217,7 +217,7 @@ def _check_output_paths(video, track_path, out_path, results_path, results_forma
 
 
 def _track(plan, particles, seed, show_particles, quiet, outputs):
-    """:func:`~vistrack.track.plan.run_plan` with a progress bar (its length the frames to expect, the
+    """:func:`~vistrack.session.plan.execute` with a progress bar (its length the frames to expect, the
     frames searched before the first counted)."""
     label = f"{plan.algo} N={particles}"
     bar = tqdm(total=plan.total, unit="frame", disable=quiet, dynamic_ncols=True, desc=label, initial=len(plan.lead))
@@ -228,7 +228,7 @@ def _track(plan, particles, seed, show_particles, quiet, outputs):
 
     try:
         with one_line():
-            return run_plan(plan, particles, seed, label=label, show_particles=show_particles, progress=progress,
+            return execute(plan, particles, seed, label=label, show_particles=show_particles, progress=progress,
                             notify=None if quiet else lost_notice(), ready=bar.unpause, **outputs)
     except OSError as e:  # a full disk, an output that cannot be opened: the line names it
         raise click.ClickException(str(e)) from None

@@ -5,13 +5,13 @@ from __future__ import annotations
 import click
 from tqdm import tqdm
 
-from vistrack.data_synth.contour import CLUTTER, make_contour_clip
-from vistrack.data_synth.landmarks import make_landmark_clip
-from vistrack.data_synth.longterm import make_longterm_clip
+from vistrack.data_synth.contour_clip import CLUTTER, make_contour_clip
+from vistrack.data_synth.landmark_clip import make_landmark_clip
+from vistrack.data_synth.longterm_clip import make_longterm_clip
 from vistrack.data_synth.perturb import LIGHTS, Perturbation, perturb_clip, read_clip
-from vistrack.data_synth.plate import make_plate_clip
+from vistrack.data_synth.plate_clip import make_plate_clip
 from vistrack.data_synth.plate_composite import composite_plate_clip
-from vistrack.data_synth.render import out_folder
+from vistrack.data_synth.scene import out_folder
 from vistrack.data_synth.suite import SUITES, check_suite, make_suite
 
 from .options import SEED, Fraction, Ratio, Size
@@ -20,7 +20,7 @@ __all__ = ["synth"]
 
 
 def _out_dir(out, clip=True):
-    """``--out`` ready (:func:`vistrack.data_synth.render.out_folder`), with a note on stderr where a clip
+    """``--out`` ready (:func:`vistrack.data_synth.scene.out_folder`), with a note on stderr where a clip
     there is overwritten."""
     try:
         p, there = out_folder(out, clip)

@@ -29,7 +29,7 @@ def trax(model, algo, particles, seed):
       protocol = trax
       command = vistrack trax --seed 0
     """
-    from vistrack.track.trax import ClientError, SessionError, serve
+    from vistrack.api.trax_server import ClientError, SessionError, serve
 
     try:
         serve(model, algo, particles, seed)

@@ -39,7 +39,7 @@ import numpy as np
 
 from vistrack.io.video import VideoWriter, find_groundtruth, groundtruth_origin, open_video, read_rects
 
-from .render import atomic_clip, motion_blur
+from .scene import atomic_clip, motion_blur
 
 __all__ = ["Perturbation", "perturb_frames", "perturb_clip", "STRESS_PRESETS", "PerturbWarning", "DEFAULT_GAIN"]
 

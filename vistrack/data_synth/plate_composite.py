@@ -6,7 +6,7 @@ plate's centre sits at ``centre`` (shares of the car box's width and height) and
 and jitters by a few pixels from frame to frame; it is smoothed over ``2 smooth + 1`` frames (a
 moving average) so the plate moves as the car does. Per frame:
 
-1. The plate (:func:`~vistrack.data_synth.plate.render_plate`, 240 px wide) is shrunk to its box's
+1. The plate (:func:`~vistrack.data_synth.plate_clip.render_plate`, 240 px wide) is shrunk to its box's
    size rounded (``cv2.INTER_AREA``), then warped onto the box (bilinear; its alpha the same
    way) — exact: the plate's pixel edges land on frame pixel edges ``[x, x + w)``.
 2. The clip's light: the plate's grey levels are scaled by :func:`light_gains` (its white near the
@@ -30,8 +30,8 @@ from vistrack.io.video import VideoWriter
 from vistrack.models.plate.layout import LAYOUTS
 
 from .perturb import read_clip
-from .plate import render_plate
-from .render import atomic_clip
+from .plate_clip import render_plate
+from .scene import atomic_clip
 
 __all__ = ["composite_plate_clip", "plate_boxes", "light_gains", "composite_frame"]
 

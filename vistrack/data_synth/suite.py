@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .contour import make_contour_clip
-from .landmarks import make_landmark_clip
-from .plate import make_plate_clip
-from .render import SuiteNames, check_suite_disk, prepare_suite
+from .contour_clip import make_contour_clip
+from .landmark_clip import make_landmark_clip
+from .plate_clip import make_plate_clip
+from .scene import SuiteNames, check_suite_disk, prepare_suite
 
 __all__ = ["SUITES", "suite_names", "check_suite", "make_suite"]
 
@@ -19,14 +19,14 @@ SUITES = {"contour": (make_contour_clip, 300, (320, 240)), "plate": (make_plate_
 
 def suite_names(kind, clips, seed):
     """The clips' folder names: ``<kind>-<seed>`` for the seeds ``seed .. seed + clips - 1``
-    (:class:`~vistrack.data_synth.render.SuiteNames`: a range, named as asked for)."""
+    (:class:`~vistrack.data_synth.scene.SuiteNames`: a range, named as asked for)."""
     return SuiteNames(kind, seed, clips)
 
 
 def check_suite(out, kind, clips, frames=None, size=None):
-    """Raise :class:`~vistrack.core.runtime.TooLarge` (one line, before anything is made) when ``clips``
+    """Raise :class:`~vistrack.system.resources.TooLarge` (one line, before anything is made) when ``clips``
     clips of ``kind`` (``frames`` and ``size`` default to the kind's) would not fit on the disk holding
-    ``out`` (:func:`~vistrack.data_synth.render.check_suite_disk`)."""
+    ``out`` (:func:`~vistrack.data_synth.scene.check_suite_disk`)."""
     _, frames_default, size_default = SUITES[kind]
     check_suite_disk(out, clips, frames or frames_default, size or size_default)
 
@@ -35,7 +35,7 @@ def make_suite(out, kind, clips, seed, frames=None, size=None, progress=None):
     """``clips`` clips of ``kind`` (:data:`SUITES`) into the folder ``out``, from seeds ``seed``, ``seed +
     1``, ...; ``frames`` and ``size`` default to the kind's. Their size on disk is checked first
     (:func:`check_suite`); ``out`` then holds this suite alone
-    (:func:`~vistrack.data_synth.render.prepare_suite`: an earlier suite's other clips go; a folder holding
+    (:func:`~vistrack.data_synth.scene.prepare_suite`: an earlier suite's other clips go; a folder holding
     anything else is a ``ValueError``). ``progress(k)`` as frames are written. Returns the clip folders."""
     check_suite(out, kind, clips, frames, size)
     make, frames_default, size_default = SUITES[kind]

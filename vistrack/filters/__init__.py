@@ -1,6 +1,7 @@
 """Particle filters, one module per algorithm, all with ``step(particles, obs, rng)``.
 
-:mod:`.registry` names them (:data:`FILTERS`, :func:`make_filter`); aliases follow the literature's names.
+:mod:`vistrack.registry.filter_specs` names them (``FILTERS``, ``make_filter``); aliases follow the literature's
+names.
 """
 
 from .avpf import AVPF
@@ -19,7 +20,6 @@ from .pf_eis import PFEIS
 from .pf_eis_mt import PFEISMT
 from .rb_hs_sir import RBHSSIR
 from .rb_ss_hs_sir import RBSSHSSIR
-from .registry import ALGORITHMS, FILTERS, FilterSpec, make_filter
 from .sir import SIR
 
 __all__ = [
@@ -46,8 +46,4 @@ __all__ = [
     "PartitionedLIS",
     "BranchedPartitioned",
     "BranchedPartitionedLIS",
-    "ALGORITHMS",
-    "FILTERS",
-    "FilterSpec",
-    "make_filter",
 ]

@@ -79,7 +79,7 @@ class ParticleFilter:
     def required(cls):
         """Every protocol the filter needs of a model that builds all its parts: :attr:`needs`, the
         protocols of :attr:`model_parts` and :attr:`part_needs` (what the registry checks a model
-        class against, :mod:`vistrack.filters.registry`)."""
+        class against, :mod:`vistrack.registry.filter_specs`)."""
         parts = (protocol for protocol, _ in cls.model_parts.values())
         return tuple(dict.fromkeys((*cls.needs, *parts, *cls.part_needs)))
 

@@ -55,7 +55,7 @@ class Clip:
     @property
     def objects(self):
         """The per-object ground truth (``objects.csv``: a row per frame and object, with ids;
-        :mod:`vistrack.core.mot`) as columns, or ``None`` when the clip has none."""
+        :mod:`vistrack.scoring.mot`) as columns, or ``None`` when the clip has none."""
         path = self.folder / "objects.csv"
         return read_groundtruth_csv(path) if path.is_file() else None
 

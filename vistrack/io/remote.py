@@ -11,7 +11,7 @@ asked for again on every use: an unchanged copy is used as it is (:attr:`Remote.
 file is downloaded again, and a server that gives none is read anew every time. A partial download
 is never used (it goes to a temporary name and is renamed).
 
-The batch engine's workers (:mod:`vistrack.engine.grid`) need no filesystem in common with the
+The batch engine's workers (:mod:`vistrack.batch.cluster`) need no filesystem in common with the
 client: each fetches a clip given as a URL into its own cache. Errors are :class:`FetchError`, one
 line naming the URL and what failed (the connection, an HTTP status, a file that is not there).
 """

@@ -7,21 +7,21 @@ as the reference and as the fallback where numba is missing:
 
 - :mod:`~vistrack.kernels.sampling`: bilinear samples exactly as ``cv2.remap`` (``INTER_LINEAR``,
   1/32-pixel fixed point) and numpy's pairwise summation;
-- :mod:`~vistrack.kernels.appearance`: colour bins, per-bin integral images, the colour term and the
+- :mod:`~vistrack.appearance.cue_kernels`: colour bins, per-bin integral images, the colour term and the
   template correlation (the feature maps and the box, contour and plate appearance);
-- :mod:`~vistrack.kernels.grid`: the grid proposal's draws (:class:`~vistrack.proposals.grid.MapProposal`);
-- :mod:`~vistrack.kernels.laplace`: the bearings ξ proposal's Laplace parts, plain numpy that the
+- :mod:`~vistrack.kernels.map_draws`: the grid proposal's draws (:class:`~vistrack.proposals.map_proposal.MapProposal`);
+- :mod:`~vistrack.models.bearings.laplace_parts`: the bearings ξ proposal's Laplace parts, plain numpy that the
   bearings kernels compile.
 
 Each model family keeps its own kernels in its package (:mod:`vistrack.models.box.kernels`,
-:mod:`~vistrack.models.box.frame_kernels`, :mod:`~vistrack.models.box.dcf_kernels`,
+:mod:`~vistrack.appearance.frame_kernels`, :mod:`~vistrack.appearance.dcf_kernels`,
 :mod:`vistrack.models.contour.kernels`, :mod:`~vistrack.models.contour.search_kernels`,
 :mod:`vistrack.models.plate.kernels`, :mod:`~vistrack.models.plate.scan_kernels`,
 :mod:`vistrack.models.bearings.kernels`); this package holds what they share and :func:`use`.
 
 Every entry point releases the GIL (``nogil``): the decoding thread of ``vistrack run`` runs beside
 them. Kernels are compiled on first use and cached on disk (``cache=True``; loading them takes 0.1–1 s,
-which :func:`vistrack.track.loop.warm_up` does before a run's clock starts). Hot loops pass only
+which :func:`vistrack.loop.stepper.warm_up` does before a run's clock starts). Hot loops pass only
 scalars to helper functions: numba counts references on every call that passes an array, which
 cost more than the sampling itself. :func:`use` says whether
 the models call them: numba importable and the environment variable ``VISTRACK_NUMBA`` not ``0``;

@@ -338,7 +338,7 @@ class VideoModel(Protocol):
 
     def observe(self, maps, particles):
         """The frame's observation ``Y_t`` (what :meth:`StateSpaceModel.loglik` reads) from its
-        :class:`~vistrack.core.features.FeatureMaps`; ``particles``: the previous frame's
+        :class:`~vistrack.appearance.features.FeatureMaps`; ``particles``: the previous frame's
         :class:`~vistrack.core.particles.ParticleSet` (``None`` on the first frame)."""
 
     def adapt(self, obs, estimate):

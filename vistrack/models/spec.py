@@ -62,7 +62,7 @@ class ModelSpec:
         ``eval`` on a clip; ``None``: ``from_box`` at the start box (``init`` or the first
         ground-truth row) in the clip's first frame.
     lost_rule : {"centre", "plate"}
-        How ``eval`` decides a frame is lost (:func:`vistrack.core.metrics.lost_frames`).
+        How ``eval`` decides a frame is lost (:func:`vistrack.scoring.metrics.lost_frames`).
     bytes_per_particle : int
         Peak working memory of one step per particle (bytes; measured, rounded up), for
         :func:`vistrack.registry.catalog.check_particle_memory`.

@@ -1,7 +1,7 @@
 """Local proposals and windows shared by models and filters (models never import filters)."""
 
 from .blob import BlobProposal, GaussianColour, SubspaceProposal
-from .grid import MapProposal, categorical_rows
+from .map_proposal import MapProposal, categorical_rows
 from .mixture import GaussMixtureProposal
 from .window import Window
 

@@ -1,6 +1,6 @@
 """The one registry of vistrack's filters and models: what runs, under which name, on what.
 
-- :mod:`vistrack.filters.registry`: the algorithms by name (:class:`~vistrack.filters.registry.FilterSpec`:
+- :mod:`vistrack.registry.filter_specs`: the algorithms by name (:class:`~vistrack.registry.filter_specs.FilterSpec`:
   the class, the protocols it needs, its options with defaults and help);
 - :mod:`.catalog`: the models by name (:class:`~vistrack.models.spec.ModelSpec`: how to build one, its
   options) and which algorithms run on each, derived from the protocols its class offers;
@@ -10,7 +10,6 @@
 defaults from here.
 """
 
-from ..filters.registry import ALGORITHMS, FILTERS, FilterSpec, Option, get_filter_spec, make_filter, register_filter
 from ..models.spec import ModelOption, ModelSpec
 from .builders import build_model, model_from_box, read_support_points
 from .catalog import (
@@ -31,6 +30,7 @@ from .catalog import (
     model_params,
     register,
 )
+from .filter_specs import ALGORITHMS, FILTERS, FilterSpec, Option, get_filter_spec, make_filter, register_filter
 
 __all__ = ["FILTERS", "ALGORITHMS", "FilterSpec", "Option", "get_filter_spec", "make_filter", "register_filter",
            "ModelSpec", "ModelOption", "MODELS", "DEFAULT_MODEL", "SEARCH_MODEL", "DEFAULT_PARTICLES", "BASELINE",

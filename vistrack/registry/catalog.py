@@ -4,8 +4,8 @@
 An entry is a :class:`~vistrack.models.spec.ModelSpec`: the model's name, a one-line description,
 how to build it (from a box in the first frame and/or from a clip), its options and the class of
 the models it builds. The algorithms that run on it are derived, not listed: every algorithm of the
-filter registry (:data:`~vistrack.filters.registry.FILTERS`) whose protocols the class offers
-(:func:`~vistrack.filters.registry.runs_on`), in that registry's order, so the first is the model's
+filter registry (:data:`~vistrack.registry.filter_specs.FILTERS`) whose protocols the class offers
+(:func:`~vistrack.registry.filter_specs.runs_on`), in that registry's order, so the first is the model's
 default. Adding a model is its module plus one :func:`register` call; each built-in model's entry is
 its package's ``builder.SPEC`` (:mod:`vistrack.models.box.builder`, :mod:`~vistrack.models.contour.builder`,
 :mod:`~vistrack.models.plate.builder`, :mod:`~vistrack.models.landmarks.builder`).
@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import dataclasses
 
-from ..core.runtime import check_memory
-from ..filters.registry import FILTERS, get_filter_spec, runs_on
 from ..models.box.builder import SPEC as BOX
 from ..models.contour.builder import SPEC as CONTOUR
 from ..models.landmarks.builder import SPEC as LANDMARKS
 from ..models.plate.builder import SPEC as PLATE
 from ..models.spec import ModelSpec
+from ..system.resources import check_memory
+from .filter_specs import FILTERS, get_filter_spec, runs_on
 
 __all__ = ["ModelSpec", "MODELS", "DEFAULT_MODEL", "SEARCH_MODEL", "DEFAULT_PARTICLES", "BASELINE", "OptionError",
            "default_comparison", "check_particle_memory", "register", "get_model_spec", "algos_for",
@@ -45,7 +45,7 @@ class OptionError(ValueError):
 
 
 def derived_algos(model_class, seed="001"):
-    """The algorithms that run on ``model_class`` (:func:`~vistrack.filters.registry.runs_on`), in
+    """The algorithms that run on ``model_class`` (:func:`~vistrack.registry.filter_specs.runs_on`), in
     the filter registry's order, each under the names the models of ``seed`` use."""
     return tuple(n for n, f in FILTERS.items() if f.listed_on(seed) and runs_on(f, model_class))
 
@@ -121,7 +121,7 @@ def default_comparison():
 
 
 def check_particle_memory(n, bytes_per_particle, algo="", share=0.5, available=None, targets=1):
-    """Raise :class:`~vistrack.core.runtime.TooLarge` (one line) when ``n`` particles (of ``targets`` plate
+    """Raise :class:`~vistrack.system.resources.TooLarge` (one line) when ``n`` particles (of ``targets`` plate
     slots each) would need more than ``share`` of the available memory per frame: the model's
     ``bytes_per_particle`` (the peak working memory of one step, measured with tracemalloc: about 23 KB per
     particle for the box model, 16–39 KB for the contour, 37 KB for the plate) times the filter ``algo``'s

@@ -18,14 +18,14 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..core.metrics import best_ms, equal_time
+from ..batch.tasks import load_task_results, save_result
 from ..core.particles import DegenerateWeightsWarning
-from ..core.runtime import check_memory, prepare_worker
-from ..engine.tasks import load_task_results, save_result
-from ..filters import FILTERS, filter_steps, make_filter
+from ..filters import filter_steps
 from ..models.bearings.model import LIS_PROPOSALS, Bearings, simulate
-from ..registry import derived_algos
+from ..registry import FILTERS, derived_algos, make_filter
 from ..registry.comparisons import BEARINGS
+from ..scoring.metrics import best_ms, equal_time
+from ..system.resources import check_memory, prepare_worker
 
 __all__ = ["BearingsConfig", "run_bearings", "run_bearing_task", "sequence", "DEFAULT_ALGOS", "format_ship_table"]
 
@@ -108,8 +108,8 @@ class BearingsConfig:
     def equal_time(self, runs=3, repeats=3, steps=4):
         """``(algo, N)`` pairs at equal time per run (as ``eval --equal-time``): for every N of
         :attr:`particles`, the first algorithm at N and every other at the N whose time per run is
-        closest to it (:func:`~vistrack.core.metrics.equal_time` with the secant search, ``steps``
-        steps). Times are the best of ``repeats`` timings (:func:`~vistrack.core.metrics.best_ms`), in
+        closest to it (:func:`~vistrack.scoring.metrics.equal_time` with the secant search, ``steps``
+        steps). Times are the best of ``repeats`` timings (:func:`~vistrack.scoring.metrics.best_ms`), in
         CPU time of this thread, of ``runs`` runs on the first sequence. Returns ``(pairs, {"algo:N": ms
         per run})``, the times at the answers."""
         model = Bearings(self.ships, proposal=self.proposal)
@@ -129,7 +129,7 @@ class BearingsConfig:
         return pairs, times
 
     def check_size(self, available=None):
-        """Raise :class:`~vistrack.core.runtime.TooLarge` (one line) when the errors gathered
+        """Raise :class:`~vistrack.system.resources.TooLarge` (one line) when the errors gathered
         (:data:`VALUE_BYTES` per ship, step, run, sequence and pair), the runs' seed streams that
         every task makes and one step's particles would not fit in memory."""
         pairs = self.pairs()
@@ -190,7 +190,7 @@ def _timed_run(filt, obs, n, seed):
 
 def run_bearing_task(task, out_dir):
     """Engine runner: sequence ``task["sequence"]``, its result written under ``out_dir``
-    (:func:`~vistrack.engine.tasks.save_result`)."""
+    (:func:`~vistrack.batch.tasks.save_result`)."""
     prepare_worker()
     cfg = BearingsConfig(**task["config"])
     res = _sequence_runs(cfg, Bearings(cfg.ships, proposal=cfg.proposal), task["sequence"])

@@ -1,6 +1,6 @@
 """Contour tracking experiment (thesis 001, §4.3.2, Table 4.1) on synthetic clips.
 
-Runs through the evaluation engine (:mod:`vistrack.engine.evaluation`): every
+Runs through the evaluation engine (:mod:`vistrack.evaluation.experiment`): every
 (clip, algorithm, N, run) is one task that writes its own file, so the
 experiment resumes after an interruption and runs on any Dask cluster. Run
 ``r`` on clip ``c`` uses ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]``
@@ -11,11 +11,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..core.summaries import pooled_summary
-from ..engine.evaluation import entries_config, entry_tasks, run_task
-from ..engine.tasks import load_task_results
+from ..batch.tasks import load_task_results
+from ..evaluation.experiment import entries_config, entry_tasks, run_task
 from ..registry import check_algo, get_filter_spec
 from ..registry.comparisons import CONTOUR
+from ..scoring.aggregate import pooled_summary
 
 __all__ = ["ContourConfig"]
 
@@ -23,7 +23,7 @@ __all__ = ["ContourConfig"]
 @dataclass
 class ContourConfig:
     """The contour experiment (Table 4.1): ``runs`` per clip and ``(algo, N)`` entry, root ``seed``.
-    An :class:`~vistrack.engine.grid.Experiment` (:meth:`tasks`, :attr:`runner`, :meth:`results`).
+    An :class:`~vistrack.batch.cluster.Experiment` (:meth:`tasks`, :attr:`runner`, :meth:`results`).
 
     Attributes
     ----------
@@ -54,16 +54,16 @@ class ContourConfig:
             check_algo(self.model, algo, self.several)
 
     def tasks(self):
-        """The experiment's tasks (:func:`~vistrack.engine.evaluation.entry_tasks`)."""
+        """The experiment's tasks (:func:`~vistrack.evaluation.experiment.entry_tasks`)."""
         return entry_tasks(self, self.model)
 
     @property
     def runner(self):
-        """:func:`~vistrack.engine.evaluation.run_task`: a task of ``eval`` with the thesis's lost rule."""
+        """:func:`~vistrack.evaluation.experiment.run_task`: a task of ``eval`` with the thesis's lost rule."""
         return run_task
 
     def results(self, tasks, out_dir):
         """``{"config", "results"}``: pooled summaries per (algo, N) over clips and runs, in the order of the
-        entries (:func:`~vistrack.core.summaries.pooled_summary`)."""
+        entries (:func:`~vistrack.scoring.aggregate.pooled_summary`)."""
         return {"config": entries_config(self), "results": pooled_summary(load_task_results(tasks, out_dir))}
 

@@ -21,13 +21,13 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..batch.tasks import load_task_results, save_result
 from ..core.particles import DegenerateWeightsWarning, ParticleSet
-from ..core.runtime import check_memory, prepare_worker
-from ..engine.tasks import load_task_results, save_result
-from ..filters import make_filter
-from ..filters.registry import get_filter_spec
 from ..models.landmarks.model import Landmarks, simulate
+from ..registry import make_filter
 from ..registry.comparisons import LANDMARKS, SEED_000_ORDER
+from ..registry.filter_specs import get_filter_spec
+from ..system.resources import check_memory, prepare_worker
 from .bearings import VALUE_BYTES
 
 __all__ = ["LandmarksConfig", "PAPER", "STREAMS", "run_landmarks", "landmarks_run", "run_landmark_task"]
@@ -86,7 +86,7 @@ class LandmarksConfig:
         self.check_size()
 
     def check_size(self, available=None):
-        """Raise :class:`~vistrack.core.runtime.TooLarge` (one line) when the errors gathered
+        """Raise :class:`~vistrack.system.resources.TooLarge` (one line) when the errors gathered
         (:data:`~vistrack.reproduce.bearings.VALUE_BYTES` per step, run and algorithm), the tasks
         and one step's particles (PF-EIS's ``dim x dim`` matrices each) would not fit in memory."""
         per_step = VALUE_BYTES * self.runs * len(self.algos)
@@ -127,7 +127,7 @@ class LandmarksConfig:
 
 def _filter(cfg, algo, model):
     """``algo`` on ``model`` with the config's resampling and, for a filter that takes it
-    (:attr:`~vistrack.filters.registry.FilterSpec.options`), its ``mt_dims``."""
+    (:attr:`~vistrack.registry.filter_specs.FilterSpec.options`), its ``mt_dims``."""
     kw = {"mt_dims": cfg.mt_dims} if any(o.name == "mt_dims" for o in get_filter_spec(algo).options) else {}
     return make_filter(algo, model, resample=cfg.resample, **kw)
 
@@ -164,7 +164,7 @@ def _one_run(cfg, model, r, seed_seq):
 
 
 def run_landmark_task(task, out_dir):
-    """Engine runner: one run, its result written under ``out_dir`` (:func:`~vistrack.engine.tasks.save_result`)."""
+    """Engine runner: one run, its result written under ``out_dir`` (:func:`~vistrack.batch.tasks.save_result`)."""
     prepare_worker()
     cfg = LandmarksConfig(**task["config"])
     res = _one_run(cfg, cfg.model(), task["run"], task["seed_seq"])

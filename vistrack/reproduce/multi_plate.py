@@ -2,7 +2,7 @@
 clips with up to three plates in view (``make_plate_clip(overlap=True)``).
 
 Every (clip, algorithm, N, run) is one task of the evaluation engine, ``eval --targets``'s
-(:mod:`vistrack.engine.multi_target`: the reported plates with their ids per frame, scored against
+(:mod:`vistrack.evaluation.multi_target`: the reported plates with their ids per frame, scored against
 the clip's ``objects.csv``). Run ``r`` on clip ``c`` uses ``SeedSequence(seed).spawn(clips)[c].spawn(runs)[r]``
 for every algorithm. The results pool the scores of every run per algorithm and N.
 """
@@ -12,10 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..core.mot import pool_scores, require_motmetrics
-from ..engine.evaluation import entries_config
-from ..engine.multi_target import plates_equal_time, run_plates_task, score_plates_tasks
+from ..evaluation.experiment import entries_config
+from ..evaluation.multi_target import plates_equal_time, run_plates_task, score_plates_tasks
 from ..registry.comparisons import PLATES
+from ..scoring.mot import pool_scores, require_motmetrics
 from .contour import ContourConfig
 
 __all__ = ["PlatesConfig", "plates_results"]
@@ -36,7 +36,7 @@ class PlatesConfig(ContourConfig):
 
     def validate(self):
         """As the contour experiment's, and the MOT scorer installed (one ``ValueError`` line before any
-        tracking, :func:`~vistrack.core.mot.require_motmetrics`)."""
+        tracking, :func:`~vistrack.scoring.mot.require_motmetrics`)."""
         super().validate()
         try:
             require_motmetrics()
@@ -52,7 +52,7 @@ class PlatesConfig(ContourConfig):
 
     @property
     def runner(self):
-        """:func:`~vistrack.engine.multi_target.run_plates_task`."""
+        """:func:`~vistrack.evaluation.multi_target.run_plates_task`."""
         return run_plates_task
 
     def results(self, tasks, out_dir):
@@ -60,12 +60,12 @@ class PlatesConfig(ContourConfig):
         return {"config": entries_config(self), "results": plates_results(self, tasks, out_dir)}
 
     def equal_time(self, frames=60):
-        """:func:`~vistrack.engine.multi_target.plates_equal_time` on the first clip."""
+        """:func:`~vistrack.evaluation.multi_target.plates_equal_time` on the first clip."""
         return plates_equal_time(self.clips[0], self.entries, self.targets, frames)
 
 
 def plates_results(cfg, tasks, out_dir):
-    """Per (algo, N), in the order of the entries: :func:`~vistrack.core.mot.pool_scores` over every clip
+    """Per (algo, N), in the order of the entries: :func:`~vistrack.scoring.mot.pool_scores` over every clip
     and run, the number of clips, and per clip the mean MOTA and IDF1."""
     by_entry = {}
     for r in score_plates_tasks(tasks, out_dir):

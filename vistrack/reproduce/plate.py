@@ -1,7 +1,7 @@
 """License-plate tracking experiment (thesis 001, §4.5.3, Figs. 4.15–4.16) on synthetic road clips.
 
 Every (clip, algorithm, N, run) is one task of the evaluation engine
-(:mod:`vistrack.engine.evaluation`): the tracker starts with no box — plates are
+(:mod:`vistrack.evaluation.experiment`): the tracker starts with no box — plates are
 acquired through the entering-car component — and the task records per
 frame whether a plate is reported (``Plate.visible``), the reported
 vertices and the time spent. Run ``r`` on clip ``c`` uses
@@ -23,16 +23,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.metrics import plate_frame_measures
+from ..batch.tasks import load_task_results, save_result
 from ..core.particles import DegenerateWeightsWarning
-from ..core.runtime import prepare_worker
-from ..engine.evaluation import entries_config
-from ..engine.tasks import load_task_results, save_result
-from ..filters import make_filter
+from ..evaluation.experiment import entries_config
 from ..io.clips import load_clip
-from ..registry import build_model
+from ..loop.stepper import step_frames
+from ..registry import build_model, make_filter
 from ..registry.comparisons import PLATE
-from ..track.loop import track
+from ..scoring.metrics import plate_frame_measures
+from ..system.resources import prepare_worker
 from .contour import ContourConfig
 
 __all__ = ["PlateConfig", "run_plate_task", "plate_results"]
@@ -71,7 +70,7 @@ def run_plate_task(task, out_dir):
     reported, verts, ms, ess, ll = [], [], [], [], []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DegenerateWeightsWarning)
-        for res in track(clip.source, filt, task["particles"], rng):
+        for res in step_frames(clip.source, filt, task["particles"], rng):
             reported.append(int(res.visible))
             ll.append(round(float(model.loglik(res.obs, res.estimate[None])[0]), 3))
             verts.append(np.round(model.vertices(res.estimate)[0].ravel(), 3).tolist())

@@ -68,7 +68,7 @@ def write_plots(experiment, out, plots_dir, title=""):
     ``out`` is ``{"results": [...], "curves": {...}}`` as the experiment modules return it
     (bearings and landmarks plot their curves, contour and plate their per-frame results).
     """
-    from ..engine import plots
+    from ..reports import plots
 
     os.makedirs(plots_dir, exist_ok=True)
     path = lambda name: os.path.join(plots_dir, name)  # noqa: E731

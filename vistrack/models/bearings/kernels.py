@@ -14,7 +14,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ...kernels.laplace import laplace_parts
+from .laplace_parts import laplace_parts
 
 __all__ = ["xi_move", "xi_look_ahead"]
 

@@ -1,18 +1,16 @@
-"""The box model: any object from a box (colour + template appearance, a correlation filter).
+"""The box model: any object from a box (colour + template appearance, a correlation filter, a scale filter).
 
 - :mod:`.model`: :class:`Box`, the state, dynamics, likelihood and local moves;
-- :mod:`.appearance`, :mod:`.appearance_map`, :mod:`.target_colour`: the appearance learned from the
-  first frame (colour against the ring around the box, a grey template), shared with the contour's
-  colour term and the plate model;
-- :mod:`.correlation`: the correlation filter, LIS's proposal and a likelihood term;
+- :mod:`.correlation_proposal`: LIS's proposal from the correlation filter's response;
+- :mod:`.scale_filter`: DSST's scale filter, a term of the likelihood and the proposal's scale;
+- :mod:`.lost`, :mod:`.confidence`: what is reported lost, the calibrated confidence, re-detection;
 - :mod:`.builder`: how ``run``, ``eval`` and :class:`vistrack.Tracker` build it (its registry entry);
-- compiled kernels beside their numpy paths: :mod:`.kernels`, :mod:`.frame_kernels`,
-  :mod:`.dcf_kernels` (the colour and template kernels shared with the other models are in
-  :mod:`vistrack.kernels.appearance`).
+- compiled kernels beside their numpy paths: :mod:`.kernels`, :mod:`.scale_kernels`.
+
+The appearance cues it shares with the contour and plate models (colour against a ring, the grey
+template, the correlation filter) are in :mod:`vistrack.appearance`.
 """
 
-from .appearance import Appearance
-from .correlation import CorrelationFilter
 from .model import Box
 
-__all__ = ["Appearance", "Box", "CorrelationFilter"]
+__all__ = ["Box"]

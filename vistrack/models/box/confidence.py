@@ -13,16 +13,16 @@ Cues (:data:`FEATURES`), each what the filter knows already on a frame, read at 
 ``peak``
     ``F_max``, the response's peak (about 1 on the object the filter learnt).
 ``response``
-    The response at the estimate (:meth:`~vistrack.models.box.correlation.DCFResponse.read`).
+    The response at the estimate (:meth:`~vistrack.appearance.correlation.DCFResponse.read`).
 ``ncc_first``
     The correlation of the estimate's grey and gradient patch with the *first frame's* template
-    (:meth:`~vistrack.models.box.appearance.Appearance.anchor_ncc`).
+    (:meth:`~vistrack.appearance.cues.Appearance.anchor_ncc`).
 ``colour_first``
     The Bhattacharyya coefficient ``Σ_u sqrt(h_u q⁰_u)`` of the estimate's colour histogram with the
-    first frame's ``q⁰`` (background-weighted, :class:`~vistrack.models.box.target_colour.TargetColour`).
+    first frame's ``q⁰`` (background-weighted, :class:`~vistrack.appearance.target_colour.TargetColour`).
 ``ncc``, ``colour``
     The same two against the model as adapted so far (the template and ``q`` of
-    :class:`~vistrack.models.box.appearance.Appearance`, which adapt on frames where the object is
+    :class:`~vistrack.appearance.cues.Appearance`, which adapt on frames where the object is
     reported).
 ``contrast``
     The first frame's back-projection inside the box less in the ring about it

@@ -1,7 +1,7 @@
 """LIS's importance function from a correlation filter's response (thesis 001, §4.5).
 
 The observation goes into the proposal: with probability ``β`` a particle's new pose is drawn from
-the correlation filter's response over the search region (:class:`~vistrack.models.box.correlation.DCFResponse`,
+the correlation filter's response over the search region (:class:`~vistrack.appearance.correlation.DCFResponse`,
 the best scale's map), else from the dynamics ``K``. The response map's cells are drawn with
 probabilities ``p_c = (1 - s) e_c / Σ e + s / C`` (``e = exp(t (y - max y))``, ``C`` cells), the
 centre uniformly inside the cell (side ``a`` frame px) and the log-scale from
@@ -35,7 +35,7 @@ class CorrelationProposal:
     ----------
     model : object
         Supplies ``dcf_share`` (``β``), ``dcf_tempering`` (``(t, s)``) and ``dcf_scale_std`` (``σ_l``);
-        the observation supplies ``obs.dcf`` (a :class:`~vistrack.models.box.correlation.DCFResponse` or
+        the observation supplies ``obs.dcf`` (a :class:`~vistrack.appearance.correlation.DCFResponse` or
         ``None``: then ``z = x``, the bootstrap step) and ``obs.dcf_share`` (``β`` of this frame).
     kernel : Transition
         The step's ``K``.
@@ -109,7 +109,7 @@ class CorrelationProposal:
         u = rng.random((n, 4))
         e = rng.standard_normal(n)
         if kernels.use():  # draws and density in one compiled pass, the same arithmetic
-            from .dcf_kernels import correlation_draws
+            from ...appearance.dcf_kernels import correlation_draws
 
             t, s = self.model.dcf_tempering
             (ox, oy), a = resp.cell_origin()

@@ -5,9 +5,8 @@ the same order (``tests/test_kernels_box.py`` states each tolerance):
 
 - :func:`ar2_predict` and :func:`ar2_logpdf`: ``Box.predict`` (the normal draws made by numpy,
   in the same order) and ``Box.transition_logpdf``;
-- :func:`box_loglik`: ``Box.loglik`` (the boxes, the colour term and the template correlation);
 - :func:`lis_predict` and :func:`lis_weigh`: ``LIS.propose`` with the map proposal
-  (:func:`~vistrack.kernels.grid.grid_points`, :func:`~vistrack.kernels.grid.map_sample`)
+  (:func:`~vistrack.kernels.map_draws.grid_points`, :func:`~vistrack.kernels.map_draws.map_sample`)
   and the likelihood and transition densities in two calls about the proposal map.
 
 ``exp`` and ``log`` are the C library's here and in numpy's scalar loops (equal where numpy has
@@ -21,12 +20,12 @@ import math
 import numpy as np
 from numba import njit
 
-from ...kernels.appearance import colour_loglik, ncc
-from ...kernels.grid import grid_points, map_sample
+from ...appearance.cue_kernels import box_loglik
+from ...kernels.map_draws import grid_points, map_sample
 
-__all__ = ["ar2_predict", "ar2_logpdf", "box_loglik", "map_scores", "lis_predict", "lis_weigh"]
+__all__ = ["ar2_predict", "ar2_logpdf", "lis_predict", "lis_weigh"]
 
-_LOG2PI = float(np.log(2.0 * np.pi))  # as vistrack.core.gaussian and vistrack.proposals.grid
+_LOG2PI = float(np.log(2.0 * np.pi))  # as vistrack.core.gaussian and vistrack.proposals.map_proposal
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -64,48 +63,9 @@ def ar2_logpdf(new, old, damping, sigma, out):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def box_loglik(states, size0, ii, texture, x0, y0, f, ring, bg_weight, q, bp, lam_c, kappa, gx, gy, template,
-               lam_t, out):
-    """``Box.loglik``: ``log r (N,)`` of ``states (N, >=3)`` whose boxes are ``(cx, cy, w_0 e^l, h_0 e^l)``:
-    the colour term (:func:`~vistrack.kernels.appearance.colour_loglik`) plus ``λ_t (ncc - 1)``
-    (:func:`~vistrack.kernels.appearance.ncc`)."""
-    n = states.shape[0]
-    boxes = np.empty((n, 4))
-    for i in range(n):
-        e = math.exp(states[i, 2])
-        boxes[i, 0], boxes[i, 1] = states[i, 0], states[i, 1]
-        boxes[i, 2], boxes[i, 3] = size0[0] * e, size0[1] * e
-    rc = colour_loglik(ii, x0, y0, f, boxes, ring, bg_weight, q, bp, lam_c, kappa, np.empty(n))
-    c = ncc(texture, boxes, gx, gy, x0, y0, f, template, np.empty(n))
-    for i in range(n):
-        out[i] = rc[i] + lam_t * (c[i] - 1.0)
-    return out
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def map_scores(ncc, s_in, s_out, g, area_in, area_ring, lam_t, lam_c, out):
-    """The end of ``Appearance.proposal_map`` in float32, as numpy computes it with Python-float
-    scalars: ``λ_t (nan_to_num(ncc) - 1) + λ_c (s_in / area_in - (s_out shifted by g - s_in) / area_ring)``
-    into ``out (hh, ww)`` (``ncc``'s shape; ``s_out`` read ``g`` rows and columns back, 0 before)."""
-    one, lt, lc = np.float32(1.0), np.float32(lam_t), np.float32(lam_c)
-    ai, ar = np.float32(area_in), np.float32(area_ring)
-    big = np.finfo(np.float32).max
-    for i in range(out.shape[0]):
-        for j in range(out.shape[1]):
-            v = ncc[i, j]
-            if np.isnan(v):
-                v = np.float32(0.0)
-            elif np.isinf(v):
-                v = big if v > 0 else -big
-            o = s_out[i - g, j - g] if i >= g and j >= g else np.float32(0.0)
-            out[i, j] = lt * (v - one) + lc * (s_in[i, j] / ai - (o - s_in[i, j]) / ar)
-    return out
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def lis_predict(prev, damping, sigma, noise, window_sd, offsets, x0, y0, f, x, sig, uw, vw, span):
     """The first half of the box's LIS proposal step (``LIS.propose`` with :class:`MapProposal
-    <vistrack.proposals.grid.MapProposal>`): the prediction ``x (N, 6)`` (:func:`ar2_predict`),
+    <vistrack.proposals.map_proposal.MapProposal>`): the prediction ``x (N, 6)`` (:func:`ar2_predict`),
     the window stds ``sig (N,)`` (``Box.window_std``: ``window_sd e^{l}``) and the grid points
     and their span (:func:`grid_points`). Returns ``span``."""
     ar2_predict(prev, damping, sigma, noise, x)

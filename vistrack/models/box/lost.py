@@ -46,7 +46,7 @@ class LostAndFound:
             Frames reported lost in a row before each frame is searched whole (:meth:`_redetect`).
         search_crop : float or None
             That search correlates the filter's taps over the object's box grown this many times
-            (:meth:`~vistrack.models.box.correlation.CorrelationFilter.search`; ``None``: all its taps, the
+            (:meth:`~vistrack.appearance.correlation.CorrelationFilter.search`; ``None``: all its taps, the
             surroundings learnt with it too).
         search_peaks : int
             The best places of that search whose confidence is computed; the most confident is the

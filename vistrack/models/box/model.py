@@ -9,12 +9,12 @@ Dynamics (AR(2), as the contour and plate models)
     ``σ_c = sigma_xy · sqrt(w_0 h_0)``), a random walk ``l_t = l_{t-1} + σ_l ε`` on the
     log-scale. The prior ``p_0`` is a Gaussian about the first box with zero velocity.
 Likelihood
-    :class:`~vistrack.models.box.appearance.Appearance`: colour histogram against the ring
+    :class:`~vistrack.appearance.cues.Appearance`: colour histogram against the ring
     around the box (Bhattacharyya; the ring's weight ``κ`` 0.5 with the filter, 1 without)
     + normalised cross-correlation with a grey template,
     learned from the first frame and adapted on confident frames; with the correlation filter
     (``dcf``, on by default), plus ``λ_dcf`` times its response at the state
-    (:class:`~vistrack.models.box.correlation.CorrelationFilter`: gradient-orientation and
+    (:class:`~vistrack.appearance.correlation.CorrelationFilter`: gradient-orientation and
     brightness-normalised grey features, a 3-scale search about the dynamics' prediction,
     adapted on frames where the object is reported, anchored to the first frame's filter).
 Local moves (thesis 001, §4.3–4.5)
@@ -38,6 +38,8 @@ from __future__ import annotations
 import numpy as np
 
 from ... import kernels
+from ...appearance.correlation import CorrelationFilter
+from ...appearance.cues import Appearance
 from ...core.gaussian import diag_logpdf
 from ...core.transition import is_prior
 from ...proposals import MapProposal
@@ -45,8 +47,6 @@ from ...proposals.translation import TranslationMoves
 from ..collapse import CollapseCheck
 from ..innovation import ARInnovation
 from ..protocol import VideoModelBase
-from .appearance import Appearance
-from .correlation import CorrelationFilter
 from .correlation_proposal import CorrelationProposal
 from .lost import LostAndFound
 from .moves import BoxMoves
@@ -83,7 +83,7 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         AUC on the real clips (girl 0.632 against 0.650, 12 seeds; hand 0.39 against 0.44, 24 and 36 seeds;
         car4 0.813 against 0.819): 1 by default (``docs/experiments.md``, speed).
     dcf : bool
-        Learn a correlation filter (:class:`~vistrack.models.box.correlation.CorrelationFilter`) whose
+        Learn a correlation filter (:class:`~vistrack.appearance.correlation.CorrelationFilter`) whose
         response is LIS's proposal (:class:`~vistrack.models.box.correlation_proposal.CorrelationProposal`) and a
         term ``λ_dcf y`` of ``log r``; ``False``: the colour/template map proposal alone.
     lambda_dcf : float
@@ -102,7 +102,7 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
     confidence, lost_confidence, redetect, reentry, redetect_after, search_crop, search_peaks
         What is reported lost and how it is found again: :meth:`~vistrack.models.box.lost.LostAndFound.init_lost`.
     dcf_options : dict or None
-        Passed to :class:`~vistrack.models.box.correlation.CorrelationFilter` (its ``padding``: ``4 sigma_xy``
+        Passed to :class:`~vistrack.appearance.correlation.CorrelationFilter` (its ``padding``: ``4 sigma_xy``
         unless given, so that the search region about the dynamics' prediction holds 4 innovation stds).
     scale_filter : bool or dict
         Learn DSST's scale filter (:class:`~vistrack.models.box.scale_filter.ScaleFilter`, a dict: its
@@ -116,7 +116,7 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         without it, 0.556–0.563 with it; each part alone less: ``benchmarks/tune_box.py``,
         ``docs/experiments.md``).
     **appearance
-        Passed to :class:`~vistrack.models.box.appearance.Appearance` (with the filter, ``lambda_colour`` 12,
+        Passed to :class:`~vistrack.appearance.cues.Appearance` (with the filter, ``lambda_colour`` 12,
         ``lambda_template`` 8 and ``kappa`` 0.5 unless given).
     """
 
@@ -266,7 +266,7 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
 
     # -- observation --------------------------------------------------------------------
     def observe(self, maps, particles):
-        """The frame's :class:`~vistrack.models.box.appearance.AppearanceFrame` over the region the
+        """The frame's :class:`~vistrack.appearance.cues.AppearanceFrame` over the region the
         particles can reach: their predicted boxes grown by 4 innovation stds, the LIS window's
         reach (not with the correlation filter: its proposal has no window) and the velocity (the
         first box and the prior's spread on the first frame); with the
@@ -280,7 +280,7 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
             reach = 4 * self.prior_std[0] * (1 + self.window)
             roi = self.app.roi(self.boxes(states), reach)
         elif kernels.use():
-            from .frame_kernels import predicted_roi
+            from ...appearance.frame_kernels import predicted_roi
 
             roi = predicted_roi(np.ascontiguousarray(particles.states, float), self._d, self.size0,
                                 4 * self.sigma[0], self._reach, float(self.app.ring), np.empty(4, np.int64))

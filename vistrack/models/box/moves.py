@@ -1,6 +1,6 @@
 """The box model's local moves (thesis 001 §4.3–4.5): the window on the centre (LLS, LIS), the
 colour/template map as LIS's grid proposal (the proposal before the correlation filter, ``dcf=False``,
-and on the first frame: :meth:`~vistrack.models.box.appearance.Appearance.proposal_map` tempered, read by
+and on the first frame: :meth:`~vistrack.appearance.cues.Appearance.proposal_map` tempered, read by
 :class:`~vistrack.proposals.MapProposal`, and LIS's whole step with it in two compiled calls), and the
 mean-shift local search ``LS_λ``. A mixin of :class:`~vistrack.models.box.model.Box`."""
 
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core.features import remap_points
+from ...appearance.features import remap_points
 from ...core.transition import is_prior
 from ...proposals import Window
 

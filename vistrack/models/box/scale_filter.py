@@ -1,6 +1,6 @@
 """A one-dimensional correlation filter over scales (DSST's scale filter): the box model's scale cue.
 
-The translation filter (:mod:`~vistrack.models.box.correlation`) sees the object with a margin of
+The translation filter (:mod:`~vistrack.appearance.correlation`) sees the object with a margin of
 background at three scales; its peak value moves little with the object's size and, on footage where
 the object deforms (a walker, a car under changing light), drifts towards larger boxes. Danelljan et
 al. (*Accurate scale estimation for robust visual tracking*, BMVC 2014) learn a second filter over
@@ -18,7 +18,7 @@ object's size; the box model reads it as a term of ``log r`` in the state's log-
 between samples) and draws its proposal's log-scale about its peak.
 
 Samples
-    The features (:func:`~vistrack.models.box.correlation.dcf_features`) are computed once a frame, on
+    The features (:func:`~vistrack.appearance.correlation.dcf_features`) are computed once a frame, on
     one patch about the centre that holds the largest sample (the box at ``a^{S//2}``) and a margin,
     at the resolution where the box at the reference scale is the model's size (about
     ``model_area`` px). Sample ``k``'s cells are the feature map read bilinearly at the cells' centres
@@ -96,7 +96,7 @@ class ScaleFilter:
     sigma : float
         The label's std in samples.
     n_orient : int
-        Orientation channels of :func:`~vistrack.models.box.correlation.dcf_features`.
+        Orientation channels of :func:`~vistrack.appearance.correlation.dcf_features`.
     window : bool
         Multiply the samples by a Hann window over the scales (DSST's; without it the 18 real clips'
         mean AUC falls by 0.013, ``docs/experiments.md``).

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core.features import FeatureMaps, is_grey
+from ...appearance.features import FeatureMaps, is_grey
 from ...io.starts import first_frame, initial_truth, start_frame
 from ...io.video import VideoError
 from ..protocol import LocalSearch

@@ -1,13 +1,13 @@
 """The contour model's colour term (real footage; beyond the seeds): the box model's colour
-term (:class:`~vistrack.models.box.appearance.TargetColour`) on points inside the curve against a
+term (:class:`~vistrack.appearance.cues.TargetColour`) on points inside the curve against a
 band outside it (:mod:`~vistrack.models.contour.model` module docstring)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ...core.features import is_grey
-from ..box.appearance import TargetColour
+from ...appearance.cues import TargetColour
+from ...appearance.features import is_grey
 
 __all__ = ["ContourColour"]
 
@@ -36,11 +36,11 @@ class ContourColour:
         frame : ndarray of shape (H, W, 3) uint8 BGR, or (H, W)
             The first frame.
         lambda_colour, kappa : float
-            ``λ_c``, ``κ`` of :class:`~vistrack.models.box.appearance.TargetColour`.
+            ``λ_c``, ``κ`` of :class:`~vistrack.appearance.cues.TargetColour`.
         band : tuple of float
             Offsets of the outside sample points along the normals, as shares of the size.
         grey : bool or None
-            Grey-level bins; ``None``: :func:`~vistrack.core.features.is_grey` of the frame.
+            Grey-level bins; ``None``: :func:`~vistrack.appearance.features.is_grey` of the frame.
 
         Returns
         -------
@@ -48,7 +48,7 @@ class ContourColour:
         """
         import cv2
 
-        from ...core.features import colour_bins, n_colour_bins
+        from ...appearance.features import colour_bins, n_colour_bins
 
         self.colour_grey = is_grey(frame) if grey is None else bool(grey)
         self.n_bins = n_colour_bins(self.colour_grey)

@@ -1,7 +1,7 @@
 """The contour model's measurement lines (:mod:`~vistrack.models.contour.model`), compiled.
 
 Shapes: ``N`` poses, ``M`` lines, ``L`` samples per line. ``gxy (H, W, 2)`` float32 is the
-gradient map (:meth:`~vistrack.core.features.FeatureMaps.gradient`); points ``q`` and unit normals
+gradient map (:meth:`~vistrack.appearance.features.FeatureMaps.gradient`); points ``q`` and unit normals
 ``nrm`` ``(N, M, 2)`` are float32, as the numpy path casts them; offsets ``off (K, L)`` float32
 with ``K`` 1 (shared) or ``N`` (per pose).
 

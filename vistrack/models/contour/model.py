@@ -57,7 +57,7 @@ from __future__ import annotations
 import numpy as np
 
 from ... import kernels
-from ...core.features import remap_points
+from ...appearance.features import remap_points
 from ...core.gaussian import diag_logpdf
 from ...proposals.translation import TranslationMoves
 from ..collapse import CollapseCheck

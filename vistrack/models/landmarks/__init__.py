@@ -7,6 +7,6 @@
 """
 
 from .model import Landmarks
-from .video import LandmarkVideo
+from .video_model import LandmarkVideo
 
 __all__ = ["LandmarkVideo", "Landmarks"]

@@ -7,7 +7,7 @@ import numpy as np
 from ...io.starts import initial_truth
 from ...io.video import VideoError
 from ..spec import ModelOption, ModelSpec
-from .video import LandmarkVideo
+from .video_model import LandmarkVideo
 
 __all__ = ["SPEC"]
 

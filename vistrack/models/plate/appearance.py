@@ -14,7 +14,7 @@ __all__ = ["PlateAppearance"]
 class PlateAppearance:
     """What :class:`~vistrack.models.plate.model.Plate` learns of a real plate (module docstring)."""
 
-    #: :class:`~vistrack.models.box.appearance.Appearance` of the plate in the first frame
+    #: :class:`~vistrack.appearance.cues.Appearance` of the plate in the first frame
     #: (:meth:`learn_appearance`); ``None``: the plate likelihood alone
     app = None
 
@@ -23,19 +23,19 @@ class PlateAppearance:
         in the first ``frame``: ``log r = log r_plate + log r_app`` on the parallelogram's
         bounding box. The plate likelihood was fitted to rendered plates; the learned colour
         and template follow a plate of any colour and font (a yellow plate, a white plate on
-        a white car). Returns the :class:`~vistrack.models.box.appearance.Appearance`."""
-        from ..box.appearance import Appearance
+        a white car). Returns the :class:`~vistrack.appearance.cues.Appearance`."""
+        from ...appearance.cues import Appearance
 
         self.app = Appearance(frame, box, **{"anchor_min_ncc": self.anchor_min_ncc, "adapt_rate": self.adapt_rate,
                                              **params})
         if self.lambda_dcf:
-            from ..box.correlation import CorrelationFilter
+            from ...appearance.correlation import CorrelationFilter
 
             self.cf = CorrelationFilter(frame, box, **self.dcf_options)
             self._s0 = float(box[2])
         return self.app
 
-    #: the box model's correlation filter (:class:`~vistrack.models.box.correlation.CorrelationFilter`) on the
+    #: the box model's correlation filter (:class:`~vistrack.appearance.correlation.CorrelationFilter`) on the
     #: plate's box, learned with the appearance; its response at a state's centre and width is the term
     #: ``λ_dcf y`` of ``log r`` (``lambda_dcf``; 0: none)
     cf = None
@@ -47,10 +47,10 @@ class PlateAppearance:
         s = np.atleast_2d(states)
         return np.stack([s[:, 0], s[:, 1], np.log(s[:, 3] / self._s0)], axis=1)
 
-    #: the first view as anchor (:class:`~vistrack.models.box.appearance.Appearance`'s ``anchor_min_ncc``):
+    #: the first view as anchor (:class:`~vistrack.appearance.cues.Appearance`'s ``anchor_min_ncc``):
     #: the learned appearance adapts only on frames whose estimate also matches the first frame's plate
     anchor_min_ncc = 0.5
-    #: the learned appearance's adaptation rate (:class:`~vistrack.models.box.appearance.Appearance`'s
+    #: the learned appearance's adaptation rate (:class:`~vistrack.appearance.cues.Appearance`'s
     #: ``adapt_rate``): 0, the first view kept. The template reads the parallelogram's axis-aligned
     #: box, which grows with the angle; adapted (0.1, the box model's rate), it learns the taller box
     #: of a slightly tilted estimate and the angle drifts to 2 degrees on the dashcam clip (the

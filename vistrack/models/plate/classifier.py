@@ -14,7 +14,7 @@ Classifier
     A logistic regression over the standardised features, ``score = b + Σ_f c_f (x_f - μ_f) / σ_f``
     (log-odds of a plate); its coefficients are in ``plate_classifier.npz`` beside this module,
     made by ``benchmarks/train_plate_classifier.py`` (scikit-learn, used only there) from
-    rendered plates (:func:`~vistrack.data_synth.plate.detection_frames`, both layouts) over
+    rendered plates (:func:`~vistrack.data_synth.plate_clip.detection_frames`, both layouts) over
     synthetic road scenes and over frames of the plate-free real clips, and the candidates of
     plate-free frames — seeds and frames disjoint from the tests' and from the search's first
     30 frames.

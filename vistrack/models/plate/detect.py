@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ...core.metrics import iou
+from ...scoring.metrics import iou
 
 __all__ = ["Detection", "PlateDetector", "PlateSearch", "ROW_IN_PLATE", "acquire", "plate_from_row", "refine_outline"]
 

@@ -22,7 +22,7 @@ import cv2
 import numpy as np
 
 from ... import kernels
-from ...core.features import remap_points
+from ...appearance.features import remap_points
 from .layout import LAYOUTS, plate_points
 from .observation import PlateObservation
 
@@ -36,7 +36,7 @@ BORDER = np.array(_BORDER, np.float32)
 
 def plate_map(maps):
     """The 4-channel map ``(|∇_x I|, |∇_y I|, |G_s I|, |G_l I|)`` of a frame's
-    :class:`~vistrack.core.features.FeatureMaps`, each channel over its frame mean (float32 ``(H, W, 4)``).
+    :class:`~vistrack.appearance.features.FeatureMaps`, each channel over its frame mean (float32 ``(H, W, 4)``).
     Compiled where numba is (:func:`vistrack.models.plate.kernels.plate_map`, equal), into the maps'
     buffer pool."""
     if kernels.use():
@@ -141,7 +141,7 @@ class PlateLikelihood:
     sets that have a coefficient, each in the term its layout entry names.
     ``weights="thesis"`` is the thesis's form above, every
     coefficient ``±κ``; ``weights="learnt"`` (default where the layout has them)
-    are coefficients fitted on synthetic clips (:mod:`~vistrack.models.plate.fit`),
+    are coefficients fitted on synthetic clips (:mod:`~vistrack.models.plate.fitting`),
     for which ``log r`` is the log-odds of a plate at the pose.
 
     Parameters
@@ -236,7 +236,7 @@ class PlateLikelihood:
 
     def maps(self, obs):
         """The 4-channel map ``(|∇_x I|, |∇_y I|, |G_s I|, |G_l I|)``, each over its frame mean: a
-        :class:`PlateObservation`'s, else computed from the :class:`~vistrack.core.features.FeatureMaps`
+        :class:`PlateObservation`'s, else computed from the :class:`~vistrack.appearance.features.FeatureMaps`
         (:func:`plate_map`)."""
         return obs.plate if isinstance(obs, PlateObservation) else plate_map(obs)
 

@@ -42,7 +42,7 @@ class Plate(PlateAppearance, VideoModelBase):
     enter_mean, enter_std : array_like of 4 floats
         The entering-car Gaussian over ``(u, w, θ, s)``. Default: ``u`` over the frame (0.5 W,
         sd 0.35 W); ``w``, ``θ``, ``s`` from the plates of the 16 training clips
-        (:mod:`~vistrack.models.plate.fit`'s seeds): their mean ``w`` 0.69 H and ``s`` 0.125 W,
+        (:mod:`~vistrack.models.plate.fitting`'s seeds): their mean ``w`` 0.69 H and ``s`` 0.125 W,
         with twice their spread (sd 0.025 H and 0.010 W there: 0.05 H and 0.02 W) and ``θ`` sd
         0.1 rad (0.06 there). With these, births at the suite's entering frames end within a third
         of the plate height 16 % of the time, against 9.4 % with 0.1 H and 0.03 W, which leave most
@@ -72,14 +72,14 @@ class Plate(PlateAppearance, VideoModelBase):
         / 100 % of 300 appearances.
     lambda_dcf : float
         ``λ_dcf``: with a learned appearance (:meth:`learn_appearance`, real footage), the weight of the
-        box model's correlation filter's response (:class:`~vistrack.models.box.correlation.CorrelationFilter`
+        box model's correlation filter's response (:class:`~vistrack.appearance.correlation.CorrelationFilter`
         on the plate's box, about 1 at the plate) in ``log r``, read at the state's centre and width
         (:meth:`dcf_states`; the angle is the plate likelihood's and the template's). 0: no filter.
         20: on the 10 plate clips of ``benchmarks/bench_plate_real.py`` from the first box (with the
         first view kept, :attr:`adapt_rate`) the mean AUC is 0.916 against 0.911 without the filter,
         the 6-px shaken dashcam's 0.903 against 0.846; 60 lowers the shaken clips (docs/experiments.md).
     dcf_options : dict or None
-        Passed to :class:`~vistrack.models.box.correlation.CorrelationFilter` (the box model's defaults).
+        Passed to :class:`~vistrack.appearance.correlation.CorrelationFilter` (the box model's defaults).
     """
 
     dim = 9

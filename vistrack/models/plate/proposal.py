@@ -147,7 +147,7 @@ class PlateLISProposal:
         ``centre ± half`` (``(n, 2)`` each), as ``(map, a)`` for :func:`map_values`; ``None`` without
         a learned appearance (:meth:`~vistrack.models.plate.model.Plate.learn_appearance`).
 
-        The map is :meth:`Appearance.proposal_map <vistrack.models.box.appearance.Appearance.proposal_map>`
+        The map is :meth:`Appearance.proposal_map <vistrack.appearance.cues.Appearance.proposal_map>`
         (the box model's LIS map: template correlation and back-projection contrast) for the
         median box of ``x``, over the windows. The scans of ``r_plate^h``, ``r_plate^v`` alone
         put most draws on the rendered-plate likelihood's modes: on a plate unlike the rendered

@@ -1,0 +1,1 @@
+"""The trackers vistrack is compared with (OpenCV's)."""

@@ -1,0 +1,1 @@
+"""``vistrack demo``: its clip, its comparisons and the real-clip step."""

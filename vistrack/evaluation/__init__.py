@@ -1,0 +1,1 @@
+"""``eval``: its experiment (tasks, runner, scores) and its pipeline."""

@@ -1,0 +1,1 @@
+"""``eval``'s files: tables, the HTML report and plots."""

@@ -1,0 +1,1 @@
+"""Scores of tracks against ground truth and their summaries over runs."""

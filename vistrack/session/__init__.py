@@ -1,0 +1,1 @@
+"""``vistrack run``: one video tracked, with its track file, annotated video and summary."""

@@ -1,0 +1,2 @@
+"""The process: memory and disk budgets (:mod:`.resources`), signals (:mod:`.signals`) and the compile
+notice (:mod:`.compiling`)."""
