@@ -51,12 +51,14 @@ import cv2
 import numpy as np
 from real_corpus import (
     DATA,
+    NANOTRACK_V3,
     OPENCV,
     SCORE_CACHE,
     cached_scores,
     find_clips,
     load_clip,
     opencv_tracker,
+    run_nanotrack_v3,
     run_opencv,
     run_vistrack,
     sre_starts,
@@ -72,22 +74,22 @@ from vistrack.system.resources import keep_freed_memory
 STRESS_CACHE = Path.home() / ".cache" / "vistrack" / "bench_real"
 CANDIDATES = Path(__file__).with_name("box_candidates.json")
 DEFAULT = "vistrack"
-#: the trackers run from the robustness starts (issue 43 compares vistrack with these)
-SRE_TRACKERS = (DEFAULT, "Nano", "CSRT")
+#: the trackers run from the robustness starts (issues 43 and 51 compare vistrack with these)
+SRE_TRACKERS = (DEFAULT, "Nano", "CSRT", NANOTRACK_V3)
 #: ``--entries``: more vistrack configurations by name (``lis-100``: ``{"algo": "lis", "particles": 100}``)
 ENTRIES = {}
 
 
 def parse_entries(spec):
-    """``[model/]algo:N,...`` -> ``{name: Tracker options}``."""
+    """``[model/]algo:N,...`` -> ``{name: Tracker options}`` (``algo:N``: the default model's)."""
     out = {}
     for e in (e.strip() for e in spec.split(",") if e.strip()):
         name, n = e.split(":")
-        model, algo = name.split("/") if "/" in name else ("box", name)
-        opts = {"algo": algo, "particles": int(n)}
-        if model != "box":
+        opts = {"algo": name.split("/")[-1], "particles": int(n)}
+        if "/" in name:
+            model = name.split("/")[0]
             opts.update(model=model, **({"layout": "single-row"} if model == "plate" else {}))
-        out[f"{algo}-{n}" if model == "box" else f"{model}/{algo}-{n}"] = opts
+        out[f"{name}-{n}"] = opts
     return out
 
 
@@ -139,22 +141,29 @@ def accuracy(clips, trackers, seeds, *, sre=False, workers=2, cache=SCORE_CACHE)
 
 
 def _tracking_seconds(frames, start, tracker):
-    return (run_vistrack(frames, start, 1) if tracker == DEFAULT else run_opencv(frames, start, tracker)).seconds
+    if tracker == DEFAULT:
+        return run_vistrack(frames, start, 1).seconds
+    if tracker in ENTRIES:
+        return run_vistrack(frames, start, 1, ENTRIES[tracker]).seconds
+    return (run_nanotrack_v3(frames, start) if tracker == NANOTRACK_V3 else run_opencv(frames, start, tracker)).seconds
 
 
 def speed(clips, reps=3, kcf=True):
-    """Per clip ``{"clip", "frames", "vistrack_fps", "nano_fps", "ratio", "decode_s", "vistrack_e2e", "kcf_e2e"}``:
-    tracking-only frames/s in this process, the fastest of ``reps`` alternating runs of each."""
+    """Per clip ``{"clip", "frames", "vistrack_fps", "nano_fps", "ratio", "v3_fps", "ratio_v3", "entries_fps",
+    "decode_s", "vistrack_e2e", "kcf_e2e"}``: tracking-only frames/s in this process, the fastest of ``reps``
+    alternating runs of each (vistrack's defaults, the ``--entries``, NanoTrack v2 and v3, KCF)."""
     cv2.setNumThreads(1)
     has_nano, has_kcf = opencv_tracker("Nano") is not None, kcf and opencv_tracker("KCF") is not None
     out = []
     for clip in tqdm(clips, desc="speed", unit="clip", file=sys.stderr):
         frames = np.ascontiguousarray(clip.frames())
         n = len(frames)
-        _tracking_seconds(frames[:5], clip.user_box, DEFAULT)  # compiled kernels loaded before any clock
-        best = {DEFAULT: np.inf, "Nano": np.inf, "KCF": np.inf}
+        trackers = [DEFAULT, *ENTRIES] + ["Nano"] * has_nano + [NANOTRACK_V3] + ["KCF"] * has_kcf
+        for tr in trackers:  # compiled kernels and networks loaded before any clock
+            _tracking_seconds(frames[:5], clip.user_box, tr)
+        best = dict.fromkeys(trackers, np.inf)
         for _ in range(reps):
-            for tr in [DEFAULT] + ["Nano"] * has_nano + ["KCF"] * has_kcf:
+            for tr in trackers:
                 best[tr] = min(best[tr], _tracking_seconds(frames, clip.user_box, tr))
         t0 = time.perf_counter()
         for k, _ in enumerate(open_video(clip.video)):
@@ -163,7 +172,9 @@ def speed(clips, reps=3, kcf=True):
         decode = time.perf_counter() - t0
         out.append({"clip": clip.name, "frames": n, "vistrack_fps": n / best[DEFAULT],
                     "nano_fps": n / best["Nano"] if has_nano else None,
-                    "ratio": best["Nano"] / best[DEFAULT] if has_nano else None, "decode_s": decode,
+                    "ratio": best["Nano"] / best[DEFAULT] if has_nano else None,
+                    "v3_fps": n / best[NANOTRACK_V3], "ratio_v3": best[NANOTRACK_V3] / best[DEFAULT],
+                    "entries_fps": {e: n / best[e] for e in ENTRIES}, "decode_s": decode,
                     "vistrack_e2e": n / (best[DEFAULT] + decode),
                     "kcf_e2e": n / (best["KCF"] + decode) if has_kcf else None})
     return out
@@ -229,6 +240,34 @@ def checks(rows, cv=None, spd=None):
     return out
 
 
+def checks_learned(rows, cv=None, spd=None, v3=NANOTRACK_V3):
+    """Issue 51's acceptance checks of the default tracker against NanoTrack v3 (authors' logic): ``[(text, ok)]``."""
+    out = []
+    m, s = means(rows).get("none", {}), means(rows, "sre").get("none", {})
+    v = m.get(DEFAULT)
+    if v is None or v3 not in m:
+        return out
+    out.append((f"mean AUC {v:.3f} >= NanoTrack v3's {m[v3]:.3f} + 0.03", v >= m[v3] + 0.03))
+    get = {(r["clip"], r["tracker"]): r["auc"] for r in rows if r["stress"] == "none"}
+    worse = [f"{c} {a:.3f} vs {get[(c, v3)]:.3f}" for (c, t), a in get.items()
+             if t == DEFAULT and (c, v3) in get and a < get[(c, v3)] - 0.05]
+    out.append(("every clip >= v3's - 0.05" + (f" (not: {'; '.join(worse)})" if worse else ""), not worse))
+    if cv is not None:
+        held = cv[3].mean()
+        out.append((f"leave-one-clip-out mean {held:.3f} within 0.02 of the in-sample {v:.3f}", abs(v - held) <= 0.02))
+    if s.get(DEFAULT) is not None and v3 in s:
+        out.append((f"robustness starts: mean AUC {s[DEFAULT]:.3f} >= v3's {s[v3]:.3f} + 0.03",
+                    s[DEFAULT] >= s[v3] + 0.03))
+    if spd:
+        ratios = [(r["clip"], r["ratio_v3"]) for r in spd]
+        med = float(np.median([x for _, x in ratios]))
+        low = [f"{c} {x:.2f}x" for c, x in ratios if x < 0.8]
+        out.append((f"tracking frames/s, median clip: {med:.2f}x v3's", med >= 1.0))
+        out.append((f"every clip >= 0.8x v3's (lowest {min(x for _, x in ratios):.2f}x"
+                    + (f"; below: {', '.join(low)}" if low else "") + ")", not low))
+    return out
+
+
 def markdown(rows, seeds, command, cv=None, spd=None):
     """README's table: a row per clip (AUC from user starts, robustness starts, frames/s) and the means."""
     trackers = list(dict.fromkeys(r["tracker"] for r in rows))
@@ -241,7 +280,7 @@ def markdown(rows, seeds, command, cv=None, spd=None):
     head = (["clip", "vistrack AUC (worst seed)"] + (["left-out AUC"] if cv else [])
             + (["vistrack SRE"] if has_sre else [])
             + [f"{t} AUC" + (" (SRE)" if has_sre and t in SRE_TRACKERS else "") for t in others]
-            + (["frames/s: vistrack / NanoTrack"] if spd else []))
+            + (["frames/s: vistrack / v3 / v2"] if spd else []))
     lines = [f"Success AUC from the start box a user types (the first ground-truth line in whole pixels), vistrack "
              f"seeds {seeds[0]}–{seeds[-1]} (worst seed in brackets), OpenCV {cv2.__version__}'s trackers once"
              + ("; SRE: the mean over OTB's 12 robustness starts" if has_sre else "")
@@ -262,7 +301,8 @@ def markdown(rows, seeds, command, cv=None, spd=None):
             cells.append("–" if o is None else f"{o['auc']:.3f}{sre}")
         if spd:
             f = fps.get(c)
-            cells.append(f"{f['vistrack_fps']:.0f} / {f['nano_fps']:.0f}" if f and f["nano_fps"] else "–")
+            cells.append(f"{f['vistrack_fps']:.0f} / {f['v3_fps']:.0f} / " + (f"{f['nano_fps']:.0f}" if f["nano_fps"]
+                                                                                  else "–") if f else "–")
         lines.append("| " + " | ".join(cells) + " |")
     m, s = means(rows).get("none", {}), means(rows, "sre").get("none", {})
     cells = ["**mean**", f"**{m.get(DEFAULT, float('nan')):.3f}**"]
@@ -312,9 +352,14 @@ def print_report(rows, cv, spd):
     for r in spd or []:
         nano = f"NanoTrack {r['nano_fps']:.0f}, ratio {r['ratio']:.2f}x" if r["nano_fps"] else "no NanoTrack"
         kcf = f", e2e {r['vistrack_e2e']:.0f} vs KCF {r['kcf_e2e']:.0f}" if r["kcf_e2e"] else ""
-        print(f"speed {r['clip']:<26} vistrack {r['vistrack_fps']:.0f} frames/s, {nano}{kcf}")
+        print(f"speed {r['clip']:<26} vistrack {r['vistrack_fps']:.0f} frames/s, v3 {r['v3_fps']:.0f} "
+              f"({r['ratio_v3']:.2f}x), {nano}{kcf}"
+              + "".join(f", {e} {f:.0f}" for e, f in r["entries_fps"].items()))
     print("issue 43 checks:")
     for text, ok in checks(rows, cv, spd):
+        print(f"  [{'ok' if ok else 'NO'}] {text}")
+    print("issue 51 checks (against NanoTrack v3, authors' logic):")
+    for text, ok in checks_learned(rows, cv, spd):
         print(f"  [{'ok' if ok else 'NO'}] {text}")
 
 
@@ -363,7 +408,7 @@ def main():
                                      np.array([c["configurations"].index(n) for n in c["chosen"]]),
                                      np.array(c["held_out"]))
     else:
-        rows = accuracy(variants, [DEFAULT, *ENTRIES, *cvs], seeds, sre=args.sre, workers=args.workers)
+        rows = accuracy(variants, [DEFAULT, *ENTRIES, NANOTRACK_V3, *cvs], seeds, sre=args.sre, workers=args.workers)
         cv = cross_validated(clips, seeds, args.candidates, args.workers) if args.candidates else None
     spd = speed(clips, args.reps) if args.speed else None
     print_report(rows, cv, spd)

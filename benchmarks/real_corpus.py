@@ -49,6 +49,8 @@ SRE_SHIFTS = [(dx, dy) for dx in (-0.1, 0.0, 0.1) for dy in (-0.1, 0.0, 0.1) if 
 SRE_SCALES = (0.8, 0.9, 1.1, 1.2)
 #: OpenCV's trackers by name (KCF and CSRT need opencv-contrib-python-headless; Nano needs the weights)
 OPENCV = ("MIL", "KCF", "CSRT", "Nano")
+#: NanoTrack v3 with its authors' tracker logic (vistrack.baselines.nanotrack), on the weights vistrack ships
+NANOTRACK_V3 = "NanoV3"
 
 
 @dataclass
@@ -213,6 +215,22 @@ def run_vistrack(frames, start, seed, options=None, n_frames=None, probe=False):
                reasons.astype(str), cand if probe else None, cand_boxes if probe else None)
 
 
+def run_nanotrack_v3(frames, start, n_frames=None):
+    """NanoTrack v3 with its authors' tracker logic (:class:`vistrack.baselines.nanotrack.NanoTrackV3`) from
+    ``start``: deterministic, always reports the object."""
+    from vistrack.baselines.nanotrack import NanoTrackV3
+
+    n = len(frames) if n_frames is None else n_frames
+    tr = NanoTrackV3()
+    boxes = np.zeros((n, 4))
+    t0 = time.perf_counter()
+    tr.init(np.asarray(frames[0]), tuple(int(v) for v in start))
+    boxes[0] = start
+    for i in range(1, n):
+        boxes[i] = tr.update(np.asarray(frames[i]))[1]
+    return Run(boxes, np.ones(n, bool), np.full(n, np.nan), time.perf_counter() - t0)
+
+
 def run_opencv(frames, start, name, n_frames=None):
     """OpenCV's tracker ``name`` from ``start``; a failed ``update`` holds its last box and reports not visible."""
     n = len(frames) if n_frames is None else n_frames
@@ -237,6 +255,8 @@ def _job(args):
     cv2.setNumThreads(1)
     if tracker in ("vistrack", "vistrack-probe"):
         run = run_vistrack(frames, start, seed, options, probe=tracker == "vistrack-probe")
+    elif tracker == NANOTRACK_V3:
+        run = run_nanotrack_v3(frames, start)
     else:
         run = run_opencv(frames, start, tracker)
     return box_scores(run.boxes, clip.truth[: len(run.boxes)]), run

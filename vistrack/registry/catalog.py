@@ -19,6 +19,7 @@ from ..models.box.builder import SPEC as BOX
 from ..models.contour.builder import SPEC as CONTOUR
 from ..models.landmarks.builder import SPEC as LANDMARKS
 from ..models.plate.builder import SPEC as PLATE
+from ..models.siam.builder import SPEC as SIAM
 from ..models.spec import ModelSpec
 from ..system.resources import check_memory
 from .filter_specs import FILTERS, get_filter_spec, runs_on
@@ -77,7 +78,7 @@ def register(spec):
 #: the registered models by name: the built-in ones (each package's ``builder.SPEC``), then any added
 #: by :func:`register`
 MODELS: dict[str, ModelSpec] = {}
-for _spec in (BOX, CONTOUR, PLATE, LANDMARKS):
+for _spec in (BOX, SIAM, CONTOUR, PLATE, LANDMARKS):
     register(_spec)
 
 
