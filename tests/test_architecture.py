@@ -7,7 +7,7 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-from vistrack.registry import FILTERS, comparisons
+from vistrack.registry import BASELINES, FILTERS, LAYOUTS, MODELS, comparisons
 from vistrack.reproduce.tables import TABLES
 
 ROOT = Path(__file__).resolve().parents[1] / "vistrack"
@@ -109,3 +109,46 @@ def test_the_seeds_comparisons_name_registered_algorithms():
     algos += [a for k in comparisons.LANDMARKS.values() for a in k]
     assert set(algos) <= set(FILTERS)
     assert all(isinstance(n, int) and n > 0 for _, n in entries)
+
+
+def test_no_tracker_or_layout_list_outside_the_registry():
+    """A comparison tracker's name appears in the registry alone (its entry, what the seeds and the demo
+    compare); no module outside the registry and the plate family lists two plate layouts (``--layout``'s
+    choices are the registry's ``LAYOUTS``)."""
+    trackers = [f"{name}:{line}" for name, tree in _modules() if not name.startswith("registry/")
+                for a in BASELINES for line in _constants(tree, a)]
+    assert trackers == []
+    layouts = [f"{name}:{node.lineno}" for name, tree in _modules()
+               if not name.startswith(("registry/", "models/plate/")) for node in ast.walk(tree)
+               if isinstance(node, (ast.List, ast.Tuple, ast.Set, ast.Dict))
+               and len({e.value for e in (node.keys if isinstance(node, ast.Dict) else node.elts)
+                        if isinstance(e, ast.Constant) and e.value in LAYOUTS}) > 1]
+    assert layouts == []
+
+
+def _text(node):
+    return ast.unparse(node)
+
+
+def test_no_branch_on_a_model_name_outside_its_family():
+    """No ``model == "box"``-style test outside the registry and that model's own package: what a summary or
+    a report needs of a model is in its registry entry (``ModelSpec``). Nor does a module outside the registry
+    and the families list two models' names (the compile times, for one, are each entry's); the
+    reproductions' experiments and the synthetic clip kinds, named after the models they are for, are their
+    own lists (``reproduce/``, ``data_synth/``)."""
+    branches, lists = [], []
+    for name, tree in _modules():
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Compare):
+                sides = [node.left, *node.comparators]
+                named = {e.value for s in sides for e in ast.walk(s) if isinstance(e, ast.Constant)
+                         and e.value in MODELS}
+                if named and "model" in _text(node) and not name.startswith("registry/") and not all(
+                        name.startswith(f"models/{m}/") for m in named):
+                    branches.append(f"{name}:{node.lineno} {_text(node)}")
+            if isinstance(node, (ast.List, ast.Tuple, ast.Set, ast.Dict)) and not name.startswith(
+                    ("registry/", "models/", "reproduce/", "data_synth/")):
+                elts = node.keys if isinstance(node, ast.Dict) else node.elts
+                if len({e.value for e in elts if isinstance(e, ast.Constant) and e.value in MODELS}) > 1:
+                    lists.append(f"{name}:{node.lineno}")
+    assert branches == [] and lists == []

@@ -48,6 +48,8 @@ class PlateConfig(ContourConfig):
     acquire_within: int = 10
 
     table = "plate"
+    #: the folder of its task files when ``--out`` is not given
+    results_dir = "plate-results"
     model = "plate"
 
     @property
@@ -64,7 +66,7 @@ def run_plate_task(task, out_dir):
     """Engine runner: track one plate clip once (no initial box); write the per-frame record."""
     prepare_worker()
     clip = load_clip(task["clip"])
-    model = build_model("plate", clip)
+    model = build_model(task["model"], clip)
     filt = make_filter(task["algo"], model)
     rng = np.random.default_rng(task["seed_seq"])
     reported, verts, ms, ess, ll = [], [], [], [], []
