@@ -5,12 +5,15 @@ equal-time timing and the algorithm names each live in one place."""
 from __future__ import annotations
 
 import ast
+import importlib
+import re
 from pathlib import Path
 
 from vistrack.registry import BASELINES, FILTERS, LAYOUTS, MODELS, comparisons
 from vistrack.reproduce.tables import TABLES
 
 ROOT = Path(__file__).resolve().parents[1] / "vistrack"
+ARCHITECTURE = ROOT.parent / "docs" / "architecture.md"
 MAX_COMMAND_LINES = 25
 
 
@@ -152,3 +155,45 @@ def test_no_branch_on_a_model_name_outside_its_family():
                 if len({e.value for e in elts if isinstance(e, ast.Constant) and e.value in MODELS}) > 1:
                     lists.append(f"{name}:{node.lineno}")
     assert branches == [] and lists == []
+
+
+def test_file_names_repeat_only_in_the_family_roles():
+    """No two modules of vistrack/ share a file name, but the roles parallel model families hold, as
+    docs/architecture.md lists them (each family's ``model.py``, ...)."""
+    text = ARCHITECTURE.read_text(encoding="utf-8")
+    roles = set(re.findall(r"`(\w+\.py)`", text.split("A file name repeats only")[1].split("\n\n")[0]))
+    names = {}
+    for p in ROOT.rglob("*.py"):
+        if p.name != "__init__.py":
+            names.setdefault(p.name, []).append(p.relative_to(ROOT).as_posix())
+    repeated = {n: sorted(where) for n, where in names.items() if len(where) > 1 and n not in roles}
+    assert repeated == {}
+    families = {n: where for n, where in names.items() if n in roles}
+    assert all(w.startswith("models/") and w.count("/") == 2 for where in families.values() for w in where)
+
+
+def _stems(name):
+    """The words of an exported name, each cut to its stem (``Stepper`` and ``step_frames`` share ``step``)."""
+    words = re.findall(r"[A-Z]+(?![a-z])|[A-Z]?[a-z]+|\d+", name)
+    out = set()
+    for w in (w.lower() for w in words):
+        for suffix in ("ing", "er", "ed", "s"):
+            if w.endswith(suffix) and len(w) - len(suffix) >= 3:
+                w = w[:-len(suffix)]
+                break
+        out.add(w[:-1] if len(w) > 3 and w[-1] == w[-2] else w)
+    return out
+
+
+def test_the_run_loop_and_api_exports_share_no_stem():
+    """What was ``track/`` (``track()``, ``Tracker``, ``track_video``, ``RunPlan``, ``run_plan``, ``plan_run``) is
+    now three packages, and the names they export share no word: one word per idea."""
+    seen, shared = {}, []
+    for package in ("vistrack.session", "vistrack.loop", "vistrack.api"):
+        for name in importlib.import_module(package).__all__:
+            for stem in _stems(name):
+                if stem in seen:
+                    shared.append(f"{seen[stem]} and {package}.{name} share {stem!r}")
+                seen[stem] = f"{package}.{name}"
+    assert _stems("FrameStepper") & _stems("step_frames") == {"frame", "step"}
+    assert shared == []

@@ -6,7 +6,7 @@ import pytest
 
 from vistrack.appearance.features import FeatureMaps
 from vistrack.io.clips import load_clip
-from vistrack.loop.stepper import step_frames
+from vistrack.loop import Stepper
 from vistrack.models.contour.model import BSpline, Contour, ellipse_template, pose_from, pose_params
 from vistrack.registry import make_filter
 from vistrack.registry.builders import build_model
@@ -135,7 +135,7 @@ def test_algorithms_track_a_synthetic_clip(small_clip, algo, n):
     filt = make_filter(algo, model)
     t = clip.truth
     err = np.array([center_error(r.estimate[0], r.estimate[1], t["cx"][r.index], t["cy"][r.index])
-                    for r in step_frames(frames, filt, n, np.random.default_rng(1))])
+                    for r in Stepper(filt, n, np.random.default_rng(1)).steps(frames)])
     assert err.max() < 10, err.round(1)
     assert err.mean() < 3.0
 
@@ -146,7 +146,7 @@ def test_same_seed_same_track(small_clip):
 
     def run(seed):
         filt = make_filter("ls-n-ips", build_model("contour", clip, init_gt=""))
-        return np.array([r.estimate for r in step_frames(frames, filt, 20, np.random.default_rng(seed))])
+        return np.array([r.estimate for r in Stepper(filt, 20, np.random.default_rng(seed)).steps(frames)])
 
     np.testing.assert_array_equal(run(5), run(5))
     assert not np.array_equal(run(5), run(6))

@@ -97,7 +97,7 @@ def small_clip(synth_clip):
 
 def test_same_seed_same_network_and_track(small_clip):
     from vistrack.io.clips import load_clip
-    from vistrack.loop.stepper import step_frames
+    from vistrack.loop import Stepper
     from vistrack.registry.builders import build_model
 
     cfg = nn.NNSearchConfig(samples=400, epochs=5)
@@ -112,8 +112,8 @@ def test_same_seed_same_network_and_track(small_clip):
     def run():
         m = build_model("contour", clip, init_gt="")
         m.nn_search = a
-        return np.array([r.estimate for r in step_frames(frames, make_filter("ls-n-ips-nn", m), 15,
-                                                   np.random.default_rng(3))])
+        return np.array([r.estimate for r in Stepper(make_filter("ls-n-ips-nn", m), 15,
+                                                     np.random.default_rng(3)).steps(frames)])
 
     np.testing.assert_array_equal(run(), run())
 

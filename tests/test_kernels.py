@@ -19,7 +19,7 @@ from kernel_helpers import both
 from vistrack import kernels
 from vistrack.appearance.features import FeatureMaps, bin_integrals, colour_bins, remap_points
 from vistrack.io.clips import load_clip
-from vistrack.loop.stepper import FrameStepper, warm_up
+from vistrack.loop import Stepper, warm_up
 from vistrack.registry import make_filter
 from vistrack.registry.builders import build_model
 
@@ -31,7 +31,7 @@ def track(clip, model_name, algo, n, frames, fast, seed=0, **build):
     with kernels.numpy_paths(not fast), warnings.catch_warnings():
         warnings.simplefilter("ignore")
         model = build_model(model_name, clip, **build)
-        stepper = FrameStepper(make_filter(algo, model), n, np.random.default_rng(seed))
+        stepper = Stepper(make_filter(algo, model), n, np.random.default_rng(seed))
         return model, stepper, [stepper.step(i, f).particles.states.copy()
                                 for (i, f), _ in zip(clip.source, range(frames))]
 
@@ -164,7 +164,7 @@ def test_warm_up_leaves_the_track_as_it_was(contour_clip):
         model = build_model("contour", contour_clip, init_gt="")
         filt = make_filter("ls-n-ips", model)
         warm_up(filt, 30, dict(contour_clip.source)[0])
-        stepper = FrameStepper(filt, 30, np.random.default_rng(0))
+        stepper = Stepper(filt, 30, np.random.default_rng(0))
         b = [stepper.step(i, f).particles.states.copy() for (i, f), _ in zip(contour_clip.source, range(5))]
     np.testing.assert_array_equal(np.array(b), np.array(a))
 

@@ -12,7 +12,7 @@ import pytest
 from vistrack import kernels
 from vistrack.appearance.features import FeatureMaps
 from vistrack.io.clips import load_clip
-from vistrack.loop.stepper import FrameStepper
+from vistrack.loop import Stepper
 from vistrack.registry import make_filter
 from vistrack.registry.builders import build_model
 
@@ -56,7 +56,7 @@ def test_fused_search_tracks_identical(clip):
             warnings.simplefilter("ignore")
             model = build_model("contour", clip, init_gt="")
             model.fused_search = fused
-            stepper = FrameStepper(make_filter("ls-n-ips", model), 30, np.random.default_rng(7))
+            stepper = Stepper(make_filter("ls-n-ips", model), 30, np.random.default_rng(7))
             return np.array([stepper.step(i, f).particles.states for i, f in clip.source])
 
     np.testing.assert_array_equal(states(True), states(False))

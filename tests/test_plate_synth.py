@@ -291,7 +291,7 @@ def test_plate_lls_grid_finds_the_plate_and_lls_tracks_it(road):
     log-odds 0.4–1.2, below the report threshold: births on road clutter scoring as much take
     the lead now and then — in 1 of 8 seeds with N = 100, 5 of 8 with N = 50.)"""
     from vistrack.appearance.features import FeatureMaps
-    from vistrack.loop.stepper import step_frames
+    from vistrack.loop import Stepper
     from vistrack.models.plate.model import Plate
     from vistrack.registry import make_filter
 
@@ -317,7 +317,7 @@ def test_plate_lls_grid_finds_the_plate_and_lls_tracks_it(road):
     src = [(i, f) for i, f in clip.source if k0 <= i < k0 + 15]
     on, errs = [], []
     for seed in range(4):
-        for res in step_frames(src, filt, 100, np.random.default_rng(seed)):
+        for res in Stepper(filt, 100, np.random.default_rng(seed)).steps(src):
             i = res.index
             if t["visible"][i] > 0:
                 on.append(np.hypot(res.estimate[0] - t["cx"][i], res.estimate[1] - t["cy"][i]) < 0.5 * t["scale"][i])

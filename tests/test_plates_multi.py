@@ -170,7 +170,7 @@ def test_run_targets_track_csv_format_and_same_seed(road, tmp_path, capsys):
 
 def test_target_rows_of_a_frame_with_plates():
     """Rows of reported plates: frame, visible 1, the id, the plate's columns, ess, ms, empty reason."""
-    from vistrack.loop.stepper import FrameResult
+    from vistrack.loop import FrameResult
     from vistrack.session.recording import target_rows
 
     m = _model(2)

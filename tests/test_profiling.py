@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from test_box import clip_frames, obj_box, path
-from vistrack.loop.profiling import Timer
+from vistrack.loop import Timer
 from vistrack.registry import make_filter
 from vistrack.registry.builders import model_from_box
 from vistrack.session.recording import record_video

@@ -6,8 +6,8 @@ import json
 import numpy as np
 import pytest
 
-from clip_helpers import square_clip
 from cli_helpers import run
+from clip_helpers import square_clip
 from vistrack.registry import BASELINES, BaselineSpec, check_baseline, get_baseline_spec, is_baseline, runs_once
 
 

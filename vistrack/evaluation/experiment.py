@@ -37,7 +37,7 @@ from ..io.clips import GroundTruthWarning, load_clip, sequence_name
 from ..io.remote import is_url, url_version
 from ..io.results_format import find_result_file, read_result_file
 from ..io.video import VideoError
-from ..loop.stepper import step_frames
+from ..loop.stepper import Stepper
 from ..registry import (
     ALGORITHMS,
     BASELINES,
@@ -285,7 +285,7 @@ def run_task(task, out_dir):
         filt = make_filter(algo, model)
         rng = np.random.default_rng(task["seed_seq"])
         est, ms, ess, index, shown, conf = [], [], [], [], [], []
-        for res in step_frames(frames, filt, n, rng):
+        for res in Stepper(filt, n, rng).steps(frames):
             index.append(res.index)
             est.append(res.estimate)
             ms.append(res.ms)

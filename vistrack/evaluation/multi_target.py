@@ -17,7 +17,7 @@ import numpy as np
 from ..batch.tasks import load_task_results, save_result
 from ..core.particles import DegenerateWeightsWarning
 from ..io.clips import load_clip
-from ..loop.stepper import step_frames
+from ..loop.stepper import Stepper
 from ..registry import build_model, make_filter, targets_model
 from ..scoring.metrics import best_ms, equal_time
 from ..scoring.mot import FrameObjects, clear_mot, objects_by_frame
@@ -34,7 +34,7 @@ def track_plates(clip, algo, n, targets, rng, frames=None):
     source = clip.source if frames is None else frames
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DegenerateWeightsWarning)
-        for res in step_frames(source, filt, n, rng):
+        for res in Stepper(filt, n, rng).steps(source):
             ids, states = res.targets
             yield res, ids, model.target_outline(states), states[:, 3]
 

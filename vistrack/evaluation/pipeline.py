@@ -14,7 +14,7 @@ from pathlib import Path
 from ..batch.cluster import run_experiment
 from ..batch.tasks import lock_out, task_path
 from ..io.clips import find_clips, load_clip
-from ..loop.stepper import ms_per_frame
+from ..loop.stepper import filter_ms
 from ..registry import (
     MODELS,
     OptionError,
@@ -154,7 +154,7 @@ def eval_equal_time(cfg, frames=30):
         raise ValueError(f"--equal-time times the algorithms on the first clip, {cfg.clips[0]}, which has "
                          f"{len(fr)} frame(s) to track: it needs at least 3")
     model = build_model(cfg.model, clip, init_gt="")
-    entries, _ = equal_time(lambda a, n: ms_per_frame(fr, model, a, n), [(a, n_ref) for a in cfg.algos],
+    entries, _ = equal_time(lambda a, n: filter_ms(fr, model, a, n), [(a, n_ref) for a in cfg.algos],
                             min_slope=0.1, checks=3)
     for algo, n in entries[1:]:
         try:

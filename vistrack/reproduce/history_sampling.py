@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..io.clips import load_clip
-from ..loop.stepper import ms_per_frame
+from ..loop.stepper import filter_ms
 from ..registry import build_model
 from ..registry.comparisons import HISTORY_SAMPLING
 from ..scoring.metrics import equal_time
@@ -98,4 +98,4 @@ def equal_time_entries(clip_path, entries, frames=20, likelihood=None):
             break
         fr.append((i, f))
     model = build_model(HSConfig.model, clip, init_gt="", **(likelihood or {}))
-    return equal_time(lambda algo, n: ms_per_frame(fr, model, algo, n), entries)
+    return equal_time(lambda algo, n: filter_ms(fr, model, algo, n), entries)
