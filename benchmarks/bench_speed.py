@@ -34,7 +34,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-from real_corpus import opencv_tracker  # noqa: E402 (run from benchmarks/)
+from real_corpus import opencv_tracker  # run from benchmarks/
 
 import vistrack
 from vistrack.data_synth.contour_clip import make_contour_clip

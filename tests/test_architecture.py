@@ -197,3 +197,28 @@ def test_the_run_loop_and_api_exports_share_no_stem():
                 seen[stem] = f"{package}.{name}"
     assert _stems("FrameStepper") & _stems("step_frames") == {"frame", "step"}
     assert shared == []
+
+
+def _table_rows(text, first_cell):
+    """``{name: the line's text}`` of the markdown table whose header starts with ``| first_cell |``."""
+    table = text.split(f"| {first_cell} |", 1)[1].split("\n\n", 1)[0]
+    return {m.group(1): m.group(2) for m in re.finditer(r"^\| `([\w]+)/` \| (.*) \|$", table, re.M)}
+
+
+def test_every_module_is_named_in_its_package_line():
+    """docs/architecture.md names every module's package and role: each package of vistrack/ has a line in
+    its layer table (each model family in the families' table), the line names every module of the package,
+    and holds one role (no "also")."""
+    text = ARCHITECTURE.read_text(encoding="utf-8")
+    layers, families = _table_rows(text, "layer"), _table_rows(text, "family")
+    missing, mixed = [], [name for name, line in {**layers, **families}.items() if re.search(r"\balso\b", line)]
+    for p in sorted(ROOT.rglob("*.py")):
+        parts = p.relative_to(ROOT).parts
+        if len(parts) == 1 or p.name == "__init__.py":
+            continue
+        family = parts[0] == "models" and len(parts) == 3
+        line = (families if family else layers).get(parts[1] if family else parts[0])
+        if line is None or not re.search(rf"`{re.escape(p.stem)}`|\b{re.escape(p.stem)}\b", line):
+            missing.append("/".join(parts))
+    assert missing == [] and mixed == []
+    assert set(layers) == {p.name for p in ROOT.iterdir() if (p / "__init__.py").is_file()}

@@ -45,7 +45,10 @@ def test_reproduce_bearings_writes_json_and_plots(tmp_path, capsys):
     # same seed, same numbers
     js2 = tmp_path / "r2.json"
     run(argv[:-4] + ["--json", str(js2)], capsys)
-    strip = lambda d: [{k: v for k, v in r.items() if k != "ms_per_run"} for r in d["results"]]  # noqa: E731
+
+    def strip(d):
+        return [{k: v for k, v in r.items() if k != "ms_per_run"} for r in d["results"]]
+
     assert strip(json.loads(js2.read_text())) == strip(data)
     # an interrupted reproduction resumed (one sequence file lost) gives the same numbers,
     # and so does the in-process loop of the library

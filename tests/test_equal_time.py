@@ -32,7 +32,10 @@ def test_a_noisy_slope_cannot_pick_a_huge_count():
 
 def test_the_checks_scale_an_over_budget_pick_down():
     # a line through 100 and 200 underestimates the cost of large N (cubic here)
-    t = lambda n: 1.0 + 1e-6 * n ** 3  # noqa: E731
+
+    def t(n):
+        return 1.0 + 1e-6 * n ** 3
+
     budget = 50.0
     n0 = equal_time_n(t, 100, budget)[0]
     n3 = equal_time_n(t, 100, budget, checks=3)[0]
@@ -40,7 +43,10 @@ def test_the_checks_scale_an_over_budget_pick_down():
 
 
 def test_the_secant_search_finds_the_count_of_a_curved_cost():
-    t = lambda n: 0.5 + 0.002 * n ** 1.3  # noqa: E731
+
+    def t(n):
+        return 0.5 + 0.002 * n ** 1.3
+
     budget = t(5000)
     n, tn = equal_time_search(t, 100, budget, steps=6)
     assert tn == t(n) and abs(np.log(tn / budget)) < 0.02

@@ -76,7 +76,6 @@ def test_run_landmarks_bad_input(clip_dir, capsys, args, message):
 
 
 def test_landmarks_without_a_start_is_a_clear_error(tmp_path, capsys):
-    from vistrack.data_synth.scene import write_clip_files  # noqa: F401
     from vistrack.io.video import VideoWriter
 
     with VideoWriter(tmp_path / "v.mp4", 30, (160, 120)) as w:

@@ -67,7 +67,10 @@ def test_laplace_gradient_hessian_and_mode_match_finite_differences(moved, free)
     c = model.c_prior_mean(prev) + rng.normal(0, 0.02, (6, model.dc))
     motion = (s, th) if free == "c" else None
     x = c if free == "c" else np.column_stack([s, th, c])
-    obj = lambda v: model.objective(y, prev, v, free=free, motion=motion, derivs=False)  # noqa: E731
+
+    def obj(v):
+        return model.objective(y, prev, v, free=free, motion=motion, derivs=False)
+
     _, grad, hess, gn = model.objective(y, prev, x, free=free, motion=motion)
     eps = 1e-6
     for d in range(x.shape[1]):
@@ -176,7 +179,10 @@ def test_reproduce_landmarks_cli_json_plot_and_resume(tmp_path, capsys):
     tasks[1].unlink()
     code, _, err = cli(base + ["--resume", "--json", str(tmp_path / "b.json")])
     assert code == 0, err
-    strip = lambda d: [{k: v for k, v in r.items() if k != "ms_per_run"} for r in d["results"]]  # noqa: E731
+
+    def strip(d):
+        return [{k: v for k, v in r.items() if k != "ms_per_run"} for r in d["results"]]
+
     assert strip(json.loads((tmp_path / "b.json").read_text())) == strip(data)
     code, _, err = cli(["reproduce", "landmarks", "--algos", "lis", "-q"])
     assert code != 0 and "unknown algorithm 'lis' for landmarks" in err

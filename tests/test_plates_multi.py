@@ -90,7 +90,10 @@ def test_objects_by_frame_reads_placeholder_rows():
 
 def test_identities_follow_moving_boxes_and_start_new_ones():
     ids = Identities(memory=3)
-    box = lambda x: [x, 100, 60, 30]  # noqa: E731
+
+    def box(x):
+        return [x, 100, 60, 30]
+
     assert ids.assign(0, [box(0), box(300)]).tolist() == [0, 1]
     assert ids.assign(1, [box(310), box(10)]).tolist() == [1, 0]  # by position, whatever the order
     assert ids.assign(2, [box(20)]).tolist() == [0]  # id 1 unseen, remembered

@@ -3,16 +3,14 @@ both tables (they repeat exactly for the same seed). Frames/s and OpenCV's MIL v
 and are given there as ranges; frames/s depend on the machine and its load, so they are not checked
 here: `python benchmarks/readme_demo.py --check` compares them with README's."""
 
-import sys
 from pathlib import Path
 
 import pytest
+from readme_demo import tables
 
 from cli_helpers import run
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
-from readme_demo import tables  # noqa: E402
 
 pytestmark = pytest.mark.skipif(not (ROOT.parent / "shared" / "data" / "real" / "girl_otb").is_dir(),
                                 reason="the demo's real clip (../shared/data/real/girl_otb) is absent")

@@ -1,16 +1,10 @@
 """The benchmark corpus and the tuning command's cross-validation (issue 43): start boxes as a user
 types them, OTB's robustness starts, and leave-one-clip-out choices that are known and repeat."""
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-
-from real_corpus import find_clips, lost_runs, sre_starts, user_box  # noqa: E402
-from tune_box import candidates, cross_validate  # noqa: E402
+from real_corpus import find_clips, lost_runs, sre_starts, user_box
+from tune_box import candidates, cross_validate
 
 
 def test_leave_one_clip_out_choice_is_known_and_repeats():

@@ -37,8 +37,8 @@ PAGES = {
     "baselines": ("Baselines", ["vistrack.baselines"], "The trackers vistrack is compared with."),
     "loop": ("The frame loop", ["vistrack.loop"], "One filter step per frame, and the timing of its stages."),
     "registry": ("Registry", ["vistrack.registry"],
-                 "Models and filters by name: which algorithms run on which model, the defaults, building a model "
-                 "by name."),
+                 "Everything by name: models, filters, comparison trackers and plate layouts, which algorithms run "
+                 "on which model, the defaults, building a model by name."),
     "data_synth": ("Synthetic data", ["vistrack.data_synth"],
                    "Synthetic clips and sequences with exact ground truth, stressed copies of real clips."),
     "filters": ("Filters", ["vistrack.filters"],

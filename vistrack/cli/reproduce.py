@@ -28,6 +28,7 @@ from .reproduce_common import (
     results_lines,
     suite_options,
 )
+from .reproduce_hs_sir import hs_sir
 
 __all__ = ["reproduce"]
 
@@ -199,7 +200,5 @@ def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targ
     click.echo(f"{len(clips)} clips x {runs} runs" + (f", K = {targets} plate slots" if overlap else ""))
     click.echo(results_lines(experiment, done))
 
-
-from .reproduce_hs_sir import hs_sir  # noqa: E402
 
 reproduce.add_command(hs_sir)

@@ -36,11 +36,12 @@ from contextlib import contextmanager
 __all__ = ["AVAILABLE", "use", "numpy_paths"]
 
 try:
-    import numba  # noqa: F401
-
-    AVAILABLE = True
+    import numba
 except ImportError:  # pragma: no cover - numba is a dependency; the numpy paths still work
-    AVAILABLE = False
+    numba = None
+
+#: whether numba can be imported (the kernels can be compiled)
+AVAILABLE = numba is not None
 
 _state = {"on": AVAILABLE and os.environ.get("VISTRACK_NUMBA", "1") != "0"}
 

@@ -52,7 +52,10 @@ def _mot_line(run, objects, model):
     frames = int(max(r["frame"] for r in run.rows)) + 1
     truth = objects_by_frame(objects)[:frames]
     s = clear_mot(truth, objects_by_frame(cols, len(truth)), model.layout.aspect)
-    fmt = lambda v: "n/a" if v is None else f"{v:.3f}"  # noqa: E731
+
+    def fmt(v):
+        return "n/a" if v is None else f"{v:.3f}"
+
     return (f"vs ground truth (objects.csv, {s['objects']} plates over the frames): MOTA {fmt(s['mota'])}, IDF1 "
             f"{fmt(s['idf1'])}, {s['switches']} identity switches, {s['false_positives']} false positives, "
             f"{s['misses']} misses; {s['empty_frame_reports']} plates reported in the {s['frames_without']} frames "
