@@ -35,6 +35,7 @@ def test_opencv_trackers_are_entries():
         get_baseline_spec("opencv-nano")
 
 
+@pytest.mark.slow
 def test_one_entry_adds_a_tracker_to_eval(still, tmp_path):
     assert is_baseline("still") and runs_once("still")
     square_clip(tmp_path / "clips" / "sq", 6)
