@@ -1,6 +1,6 @@
 """Write the API reference pages (``docs/api/*.md``): one page per package of vistrack, a section per
 public module (mkdocstrings ``::: module``), so that the reference covers every public module;
-``tests/test_docs.py`` checks that it does. Run from the repository root after adding a module::
+``tests/project/test_docs.py`` checks that it does. Run from the repository root after adding a module::
 
     python tools/api_pages.py
 """

@@ -1,6 +1,6 @@
 """`vistrack run` on a URL and a camera (issue 37, item 5): an mp4 served over HTTP on 127.0.0.1 by
 `python -m http.server`, tracked like the file with --max-frames; a camera index that is not there is
-one line. What URLs do besides (range requests, the cache, errors): tests/test_urls.py."""
+one line. What URLs do besides (range requests, the cache, errors): tests/io/test_urls.py."""
 
 import socket
 import subprocess

@@ -2,7 +2,7 @@
 
 Each kernel computes what a numpy path of a model computes — the same samples, the same
 arithmetic in the same order where that can be had, so that tracks stay identical — and is
-tested against it (``tests/test_kernels.py``, which states each tolerance). The numpy paths stay
+tested against it (``tests/kernels/test_kernels.py``, which states each tolerance). The numpy paths stay
 as the reference and as the fallback where numba is missing:
 
 - :mod:`~vistrack.kernels.sampling`: bilinear samples exactly as ``cv2.remap`` (``INTER_LINEAR``,
