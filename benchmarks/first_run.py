@@ -2,7 +2,7 @@
 small synthetic clip of each model with its default algorithm, once with an empty kernel cache
 (``NUMBA_CACHE_DIR``: as after a fresh install) and once with the cache it left; the difference in
 CPU seconds (the compile is one thread: on an idle machine the wall time is about the same) is the
-compile time, the figure ``vistrack.system.compiling.COMPILE_SECONDS`` gives in its message. A first
+compile time, the figure of the model's registry entry (``ModelSpec.compile_seconds``) in the message. A first
 run says "compiling kernels" where the model has compiled kernels; a second run never does.
 
     python benchmarks/first_run.py [--models box,contour,plate,landmarks] [--repeat 1]

@@ -43,8 +43,8 @@ from pathlib import Path
 
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # this script reads damaged files too
 
-import cv2  # noqa: E402
-import numpy as np  # noqa: E402
+import cv2
+import numpy as np
 
 OUTCOMES = ["clear error", "correct", "misleading error", "traceback", "silent wrong", "data loss", "hang", "skipped"]
 W, H, FRAMES = 160, 120, 40

@@ -1,5 +1,33 @@
+"""Shared fixtures, the ``slow`` marker's rule, and the kernels compiled once before the suite.
+
+``slow`` (registered in pyproject.toml) marks a test that runs a command end to end (a subprocess, a grid on
+Dask, the demo, the docs build), tracks a clip over many frames or checks a proposal against a brute-force
+posterior: each took over 2 s on the busy 2-core development machine. ``pytest -m "not slow"`` is the quick
+check (under a minute there); the fault sweeps (``test_faults*.py``, every test a command under a fault) are
+slow as a whole until issue 55 files them by what they break.
+"""
+
 import numpy as np
 import pytest
+
+from kernel_helpers import compile_kernels
+
+
+def pytest_sessionstart(session):
+    """Compile the kernels once before the tests, in the process that starts pytest-xdist's workers (before
+    it starts them: this hook runs before xdist's own): numba's disk cache then holds them, and every worker
+    loads them instead of compiling them inside whichever test touches one first. Nothing without workers
+    (``-n 0``, a test or two): a test that needs a kernel compiles it as before."""
+    config = session.config
+    if not hasattr(config, "workerinput") and config.getoption("numprocesses", None):
+        compile_kernels()
+
+
+def pytest_collection_modifyitems(items):
+    """The fault sweeps' tests are slow (module docstring)."""
+    for item in items:
+        if item.path.name.startswith("test_faults"):
+            item.add_marker(pytest.mark.slow)
 
 
 @pytest.fixture

@@ -271,8 +271,7 @@ def test_eval_worker_killed_mid_grid_gives_the_uninterrupted_results(tmp_path, c
     its own seed stream, and results.json equals an uninterrupted run's (but for the frame rates)."""
     import json
 
-    from test_eval import strip_timing
-
+    from eval_helpers import strip_timing
     from vistrack.data_synth.contour_clip import make_contour_clip
 
     make_contour_clip(tmp_path / "clips" / "c1", frames=12, size=(128, 96), seed=1, clutter="low", distractor=False)
@@ -360,8 +359,8 @@ def test_eval_through_an_external_scheduler(tmp_path, capsys):
     import json
 
     from distributed import LocalCluster
-    from test_eval import strip_timing
 
+    from eval_helpers import strip_timing
     from vistrack.data_synth.contour_clip import make_contour_clip
 
     make_contour_clip(tmp_path / "c1", frames=6, size=(96, 72), seed=1, clutter="low", distractor=False)

@@ -9,7 +9,7 @@ code written for ``cv2.TrackerMIL``; other frames a user may pass (``uint16``, f
 0..255, ``(H, W, 1)``, BGRA, nested lists) are converted once (:func:`vistrack.io.frames.as_frame`),
 and a frame of another size or kind than the first is an error, as in ``vistrack run``. It runs the
 same code as ``vistrack run`` (:func:`~vistrack.registry.builders.model_from_box`,
-:class:`~vistrack.loop.stepper.FrameStepper`): the same options and seed give the same track. Every
+:class:`~vistrack.loop.stepper.Stepper`): the same options and seed give the same track. Every
 argument is checked when the tracker is made: a bad one is one ``ValueError`` naming it.
 """
 
@@ -23,7 +23,7 @@ import numpy as np
 
 from ..core.resampling import SCHEMES
 from ..io.frames import as_frame
-from ..loop.stepper import FrameStepper
+from ..loop.stepper import Stepper
 from ..registry import (
     DEFAULT_MODEL,
     DEFAULT_PARTICLES,
@@ -118,7 +118,7 @@ class Tracker:
         self.model = model_from_box(self.model_name, frame, box, **self.model_options)
         self._format = fmt
         filt = make_filter(self.algo, self.model, **self.filter_options)
-        self._stepper = FrameStepper(filt, self.n, np.random.default_rng(self.seed))
+        self._stepper = Stepper(filt, self.n, np.random.default_rng(self.seed))
         self._index = 0
         self.result = self._stepper.step(0, frame)
         return True

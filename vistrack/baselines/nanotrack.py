@@ -18,11 +18,13 @@ vistrack's ``siam`` model adds (:mod:`vistrack.models.siam`).
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from ..models.siam.network import CONTEXT, EXEMPLAR, INSTANCE, SiamNetwork, cell_points, context_side, crop
 
-__all__ = ["NanoTrackV3", "SETTINGS"]
+__all__ = ["NanoTrackV3", "SETTINGS", "track_nanotrack_v3"]
 
 #: the authors' settings (NanoTrack/models/config/configv3.yaml)
 SETTINGS = {"window_influence": 0.455, "penalty_k": 0.138, "lr": 0.348}
@@ -88,3 +90,26 @@ class NanoTrackV3:
 
 def _change(r):
     return np.maximum(r, 1.0 / r)
+
+
+def track_nanotrack_v3(box, frames):
+    """One run of :class:`NanoTrackV3` from ``box`` ``(x, y, w, h)`` on the first of ``frames`` (``(index, BGR or
+    grey frame)`` pairs): ``(boxes (F, 4), ms (F,), index (F,))``, ``x, y, w, h`` per frame, the milliseconds of each
+    call, the frames' indices (the shape of :func:`~vistrack.baselines.opencv.track_opencv`)."""
+    import cv2
+
+    tracker = NanoTrackV3()
+    boxes, ms, index = [], [], []
+    for k, (i, frame) in enumerate(frames):
+        f = np.asarray(frame)
+        f = cv2.cvtColor(f, cv2.COLOR_GRAY2BGR) if f.ndim == 2 else f
+        index.append(i)
+        t0 = time.perf_counter()
+        if k == 0:
+            tracker.init(f, box)
+            b = tuple(float(v) for v in box)
+        else:
+            b = tracker.update(f)[1]
+        ms.append((time.perf_counter() - t0) * 1e3)
+        boxes.append(b)
+    return np.array(boxes, float), np.array(ms), np.array(index, int)

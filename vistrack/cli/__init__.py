@@ -17,8 +17,8 @@ with interrupt_aborts():  # Ctrl-C in the seconds the modules load: "Aborted.", 
 
     from vistrack import __version__
     from vistrack.io.outputs import OutputError
-    from vistrack.session.recording import Terminated, stop_on_signals
     from vistrack.system.resources import TooLarge, keep_freed_memory
+    from vistrack.system.signals import Terminated, stop_on_signals
 
     from .demo import demo
     from .eval import eval_cmd
@@ -109,7 +109,7 @@ def _one_line_warnings():
 
 
 def _stopped(e):
-    """Exit on Ctrl-C (130) or SIGTERM (143; :class:`~vistrack.session.recording.Terminated`), which click
+    """Exit on Ctrl-C (130) or SIGTERM (143; :class:`~vistrack.system.signals.Terminated`), which click
     may have wrapped in ``Abort``."""
     term = any(isinstance(x, Terminated) for x in (e, e.__cause__, e.__context__))
     click.echo("Terminated." if term else "Aborted.", err=True)

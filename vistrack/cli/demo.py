@@ -13,6 +13,7 @@ from vistrack.demo.steps import (
     DEMO_ENTRIES,
     REAL_CLIP,
     REAL_ENTRIES,
+    DemoConfig,
     compare,
     make_demo_clip,
     real_excerpt,
@@ -20,7 +21,7 @@ from vistrack.demo.steps import (
 from vistrack.registry import DEFAULT_MODEL
 
 from .errors import one_line
-from .options import SEED
+from .options import SEED, option
 from .progress import progress
 from .run import run
 
@@ -57,20 +58,17 @@ def _made(out, paths):
 
 
 @click.command()
-@click.option("--out", "out_dir", default="vistrack-demo", show_default=True, type=click.Path(file_okay=False),
-              help="Folder for clips, annotated videos, tracks, tables and plots.")
-@click.option("--frames", default=100, show_default=True, type=click.IntRange(min=10),
-              help="Number of frames to generate.")
-@click.option("--runs", default=4, show_default=True, type=click.IntRange(min=1),
-              help="Monte-Carlo runs per algorithm in the comparisons.")
-@click.option("--seed", default=0, show_default=True, type=SEED,
-              help="Random seed: the same seed gives the same output, bit for bit.")
+@option("--out", "out_dir", source=DemoConfig, key="out", type=click.Path(file_okay=False),
+        help="Folder for clips, annotated videos, tracks, tables and plots.")
+@option("--frames", source=DemoConfig, type=click.IntRange(min=10), help="Number of frames to generate.")
+@option("--runs", source=DemoConfig, type=click.IntRange(min=1),
+        help="Monte-Carlo runs per algorithm in the comparisons.")
+@option("--seed", source=DemoConfig, type=SEED, help="Random seed: the same seed gives the same output, bit for bit.")
 @click.option("--real-clip", "real_clip", default=None, metavar="DIR",
               help="A real clip with box ground truth (any layout run reads); '' skips it. Default: "
                    "$VISTRACK_REAL_DATA/girl_otb, else shared/data/real/girl_otb in the working folder, the "
                    "package's folder or a folder above either (a clone's ../shared); skipped when none is found.")
-@click.option("--real-frames", default=60, show_default=True, type=click.IntRange(min=10),
-              help="Frames of the real clip to track.")
+@option("--real-frames", source=DemoConfig, type=click.IntRange(min=10), help="Frames of the real clip to track.")
 @click.pass_context
 def demo(ctx, out_dir, frames, runs, seed, real_clip, real_frames):
     """Generate a clip of an object that jumps in heavy clutter, track it with the box model's
@@ -90,7 +88,7 @@ def demo(ctx, out_dir, frames, runs, seed, real_clip, real_frames):
         made += [out / f"jumps-{algo}.mp4", out / f"jumps-{algo}.csv"]
         click.echo(f"  {algo} N={n}:")
         ctx.invoke(run, video=str(clip), model_name=DEFAULT_MODEL, algo=algo, particles=n, seed=seed, init_gt="",
-                   out_path=str(made[-2]), track_path=str(made[-1]), quiet=False, show_particles=10)
+                   out_path=str(made[-2]), track_path=str(made[-1]), quiet=False)
     click.echo(f"3/4 comparing them over {_runs(runs)} (as vistrack eval does): " + _entries(DEMO_ENTRIES))
     with progress("eval") as hooks:
         click.echo(compare(clip, DEMO_ENTRIES, DEFAULT_MODEL, runs, seed, out / "eval", **hooks))

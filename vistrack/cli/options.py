@@ -1,16 +1,19 @@
-"""Shared click parameter types."""
+"""Shared click parameter types, and options whose defaults are read from the library (:func:`option`)."""
 
 from __future__ import annotations
 
+import dataclasses
+import inspect
 import os
+from collections.abc import Mapping
 
 import click
 
 from vistrack.io.outputs import check_writable as writable
 from vistrack.io.video_errors import quoted
 
-__all__ = ["Ratio",
-           "IntList", "FloatList", "StrList", "Box", "Size", "Fraction", "SEED", "check_writable", "check_outputs"]
+__all__ = ["Ratio", "IntList", "FloatList", "StrList", "Box", "Size", "Fraction", "SEED", "check_writable",
+           "check_outputs", "Sourced", "option", "default_of", "joined", "size_text"]
 
 #: ``--seed``: numpy takes any non-negative integer
 SEED = click.IntRange(min=0)
@@ -193,3 +196,49 @@ class Ratio(click.ParamType):
         if not (0 < a < float("inf") and 0 < b < float("inf")):
             self.fail(f"expected two positive numbers A:B, got {value!r}", param, ctx)
         return a, b
+
+
+def default_of(source, key):
+    """The default of ``key`` where the library keeps it, ``source``: a config dataclass (its field's default,
+    or its factory's value; or a class attribute), a function or class (its keyword's default), a mapping (its
+    item) or any other object (its attribute: a registry constant, an entry's field)."""
+    if isinstance(source, type) and dataclasses.is_dataclass(source):
+        field = {f.name: f for f in dataclasses.fields(source)}.get(key)
+        if field is not None:
+            return field.default if field.default is not dataclasses.MISSING else field.default_factory()
+        return getattr(source, key)
+    if isinstance(source, Mapping):
+        return source[key]
+    if callable(source):
+        p = inspect.signature(source).parameters.get(key)
+        if p is not None and p.default is not p.empty:
+            return p.default
+    return getattr(source, key)
+
+
+class Sourced(click.Option):
+    """A click option whose default is read from the library (:func:`default_of` of ``source`` and ``key``,
+    by default the option's own name), never typed out beside it: ``shown`` turns it into what the command
+    line takes (``[100, 750]`` into ``100,750``)."""
+
+    def __init__(self, param_decls, *, source, key=None, shown=None, **attrs):
+        self.source, self.key = source, key or click.Option(param_decls).name
+        self.shown = shown
+        value = default_of(source, self.key)
+        super().__init__(param_decls, default=value if shown is None else shown(value), **attrs)
+
+
+def option(*param_decls, source, key=None, shown=None, **attrs):
+    """``click.option`` with its default read from ``source`` (:class:`Sourced`) and shown in ``--help``."""
+    attrs.setdefault("show_default", True)
+    return click.option(*param_decls, cls=Sourced, source=source, key=key, shown=shown, **attrs)
+
+
+def joined(values):
+    """``[100, 750]`` as ``--particles`` takes it: ``100,750``."""
+    return ",".join(str(v) for v in values)
+
+
+def size_text(size):
+    """``(320, 240)`` as ``--size`` takes it: ``320x240``."""
+    return f"{size[0]}x{size[1]}"

@@ -8,6 +8,7 @@ import sys
 import click
 from tqdm import tqdm
 
+from vistrack import registry
 from vistrack.core.resampling import SCHEMES
 from vistrack.core.seeds import run_seed
 from vistrack.filters import SIR, ParticleFilter
@@ -16,14 +17,24 @@ from vistrack.io.clips import sequence_name
 from vistrack.io.remote import is_url
 from vistrack.io.results_format import FORMATS, result_paths
 from vistrack.io.video import is_stream
-from vistrack.registry import DEFAULT_MODEL, DEFAULT_PARTICLES, FILTERS, MODELS, SEARCH_MODEL, all_algos, get_model_spec
-from vistrack.registry.filter_specs import filter_options
+from vistrack.registry import (
+    DEFAULT_MODEL,
+    FILTERS,
+    LAYOUTS,
+    MODELS,
+    SEARCH_MODEL,
+    all_algos,
+    get_model_spec,
+    run_option,
+    targets_model,
+)
 from vistrack.session.plan import execute, prepare
+from vistrack.session.recording import record_video
 from vistrack.session.run_summary import summary_lines
 from vistrack.system.compiling import compile_notice
 
 from .errors import one_line
-from .options import SEED, Box, Fraction, check_outputs, check_writable
+from .options import SEED, Box, Fraction, check_outputs, check_writable, option
 
 __all__ = ["run"]
 
@@ -42,8 +53,8 @@ class _Video(click.Path):
         return super().convert(value, param, ctx)
 
 
-#: the options every filter takes, with their defaults (:attr:`vistrack.registry.filter_specs.FilterSpec.options`)
-_FILTER_DEFAULTS = {o.name: o.default for o in filter_options(ParticleFilter)}
+#: ``--layout``'s default: the layout decided from the clip, the box or the plate found (the plate model's option)
+AUTO_LAYOUT = run_option("--layout").default
 #: every algorithm a registered model runs (the registry is the one list: ``eval --algos`` takes the same)
 RUN_ALGOS = all_algos()
 
@@ -91,9 +102,9 @@ def _say(line):
               help="Tracking model, any registered one [default: the clip's meta.json model; else " + DEFAULT_MODEL
                    + " when --init or --init-gt is given (any object: colour and template learned from the first "
                    "frame); else " + SEARCH_MODEL + ", which finds plates by itself].")
-@click.option("--layout", type=click.Choice(["auto", "jp", "single-row"]), default="auto", show_default=True,
-              help="Plate layout: auto decides between the two-row Japanese (jp) and the single-row layout from "
-                   "the clip, the --init box's aspect ratio or the plate found.")
+@option("--layout", source=run_option("--layout"), key="default", type=click.Choice([AUTO_LAYOUT, *LAYOUTS]),
+        help="Plate layout: auto decides between the two-row Japanese (jp) and the single-row layout from the clip, "
+             "the --init box's aspect ratio or the plate found.")
 @click.option("--algo", default=None, type=click.Choice(RUN_ALGOS),
               help="Particle filter [default: " + _defaults() + "]. " + _history() + ", whose innovations come "
                    "from the image only: the colour-blob proposal (the target's Gaussian colour learned from the "
@@ -101,14 +112,13 @@ def _say(line):
 @click.option("--search", type=click.Choice(["lms", "nn"]), default=None,
               help="LS-N-IPS on contour: the local search, LMS or the neural network trained on simulated "
                    "measurements (thesis §4.3.1; trained on first use, cached; see train-search) [default: lms].")
-@click.option("-n", "--particles", default=DEFAULT_PARTICLES, show_default=True, type=click.IntRange(min=1),
-              help="Number of particles N.")
-@click.option("--seed", default=0, show_default=True, type=SEED,
-              help="Random seed: the same seed gives the same track, bit for bit. eval --seed S tracks a clip in "
-                   "its run 0 as run --seed S does (eval --runs 1 --seed S: this track), in its run r as "
-                   "--seed S --run r.")
-@click.option("--run", "run_no", default=0, show_default=True, type=SEED,
-              help="Track as eval's run R does under the same --seed (run 0 is --seed alone).")
+@option("-n", "--particles", source=registry, key="DEFAULT_PARTICLES", type=click.IntRange(min=1),
+        help="Number of particles N.")
+@option("--seed", source=execute, type=SEED,
+        help="Random seed: the same seed gives the same track, bit for bit. eval --seed S tracks a clip in its run 0 "
+             "as run --seed S does (eval --runs 1 --seed S: this track), in its run r as --seed S --run r.")
+@option("--run", "run_no", source=run_seed, key="run", type=SEED,
+        help="Track as eval's run R does under the same --seed (run 0 is --seed alone).")
 @click.option("--init", type=Box(), help="Start from this box in the first frame: x,y,w,h in 0-based pixels (the "
                                         "top-left pixel is 0,0; OTB's and LaSOT's ground-truth files count from 1: "
                                         "use --init-gt to start from them). The contour is the "
@@ -129,19 +139,18 @@ def _say(line):
                    "object is not reported). otb: this file, 1-based pixels as the OTB toolkit and pytracking "
                    "write them; got10k: the submission layout in this folder (SEQ/SEQ_001.txt, 0-based, and "
                    "SEQ/SEQ_time.txt); vot: this folder's SEQ/SEQ_001.txt (0-based, '1' on the first frame).")
-@click.option("--results-format", "results_format", type=click.Choice(FORMATS), default="otb", show_default=True,
-              help="Format of --results (OTB is 1-based; GOT-10k and VOT 0-based).")
-@click.option("--show-particles", default=10, show_default=True, type=click.IntRange(min=0),
-              help="Draw the K highest-weight particles in the annotated video.")
-@click.option("--resample", default=_FILTER_DEFAULTS["resample"], show_default=True,
-              type=click.Choice(list(SCHEMES)),
-              help="Resampling scheme of the particle filter.")
+@option("--results-format", "results_format", source=record_video, type=click.Choice(FORMATS),
+        help="Format of --results (OTB is 1-based; GOT-10k and VOT 0-based).")
+@option("--show-particles", source=execute, type=click.IntRange(min=0),
+        help="Draw the K highest-weight particles in the annotated video.")
+@option("--resample", source=ParticleFilter, type=click.Choice(list(SCHEMES)),
+        help="Resampling scheme of the particle filter.")
 @click.option("--ess-threshold", default=None, type=Fraction(),
               help="Resample when ESS < threshold·N [default: every frame].")
 @click.option("--targets", type=click.IntRange(min=1), default=None,
               help="Plate: track up to K plates at once, one slot each (found by themselves, no --init); the track "
                    "CSV has a row per frame and plate with its id. Default algorithm: "
-                   + get_model_spec(SEARCH_MODEL).multi_algos[0] + ".")
+                   + get_model_spec(targets_model()).multi_algos[0] + ".")
 @click.option("--max-frames", type=click.IntRange(min=1), help="Stop after this many frames.")
 @click.option("--no-colour", "no_colour", is_flag=True,
               help="Contour: edges only (no colour term, which is on for colour video). Plate: the plate "
@@ -191,9 +200,10 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
     with compile_notice(None if quiet else _say) as watch:  # the first run after an install compiles the kernels
         with one_line():
             plan = prepare(video, model=model_name, algo=algo, particles=particles, init=init, init_gt=init_gt,
-                            template=template_path, layout=None if layout == "auto" else layout, no_colour=no_colour,
-                            targets=targets, search=search, resample=resample, ess_threshold=ess_threshold,
-                            max_frames=max_frames, notify=None if quiet else _say, watch=watch)
+                            template=template_path, layout=None if layout == AUTO_LAYOUT else layout,
+                            no_colour=no_colour, targets=targets, search=search, resample=resample,
+                            ess_threshold=ess_threshold, max_frames=max_frames, notify=None if quiet else _say,
+                            watch=watch)
         if plan.start:
             _say(f"note: the ground truth has no box before frame {plan.start}: tracking starts there (frames 0-"
                  f"{plan.start - 1} get rows with visible=0, lost_reason \"not started\"; scores count from frame "

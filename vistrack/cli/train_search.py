@@ -5,11 +5,10 @@ from __future__ import annotations
 import click
 
 from vistrack.models.contour import builder as contour
-from vistrack.models.contour.nn import NNSearchConfig
 from vistrack.registry import read_support_points
 
 from .errors import one_line
-from .options import SEED, Size
+from .options import SEED, Size, option, size_text
 
 __all__ = ["train_search"]
 
@@ -17,11 +16,10 @@ __all__ = ["train_search"]
 @click.command("train-search")
 @click.option("--template", "template_path", required=True, type=click.Path(dir_okay=False),
               help="Contour support points in pixels as tracked (x y per line, JSON, or a clip's meta.json).")
-@click.option("--size", default="320x240", show_default=True, type=Size(),
-              help="Frame size of the video (λ's translation scales with the frame width).")
-@click.option("--samples", default=NNSearchConfig.samples, show_default=True, type=click.IntRange(min=100),
-              help="Simulated training poses.")
-@click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the simulation and the network.")
+@option("--size", source=contour.train_search, shown=size_text, type=Size(),
+        help="Frame size of the video (λ's translation scales with the frame width).")
+@option("--samples", source=contour.train_search, type=click.IntRange(min=100), help="Simulated training poses.")
+@option("--seed", source=contour.train_search, type=SEED, help="Seed of the simulation and the network.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False),
               help="Write the network here [default: the cache, $VISTRACK_CACHE or ~/.cache/vistrack].")
 def train_search(template_path, size, samples, seed, out_path):

@@ -31,7 +31,7 @@ def check_suite(out, kind, clips, frames=None, size=None):
     check_suite_disk(out, clips, frames or frames_default, size or size_default)
 
 
-def make_suite(out, kind, clips, seed, frames=None, size=None, progress=None):
+def make_suite(out, kind, clips=10, seed=1, frames=None, size=None, progress=None):
     """``clips`` clips of ``kind`` (:data:`SUITES`) into the folder ``out``, from seeds ``seed``, ``seed +
     1``, ...; ``frames`` and ``size`` default to the kind's. Their size on disk is checked first
     (:func:`check_suite`); ``out`` then holds this suite alone

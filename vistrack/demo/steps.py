@@ -13,12 +13,12 @@ from ..data_synth.contour_clip import make_contour_clip
 from ..evaluation.experiment import EvalConfig
 from ..evaluation.pipeline import evaluate
 from ..io.clips import excerpt_clip
-from ..registry import DEFAULT_MODEL, get_model_spec
-from ..registry.comparisons import DEMO
+from ..registry import DEFAULT_MODEL, DEFAULT_PARTICLES, get_model_spec
+from ..registry.comparisons import DEMO, DEMO_REAL
 from ..reports.eval_report import averages
 
-__all__ = ["DEMO_ENTRIES", "CLIP", "CLIP_FOLDER", "REAL_ENTRIES", "REAL_CLIP", "Excerpt", "find_real_clip",
-           "make_demo_clip", "real_excerpt", "compare"]
+__all__ = ["DemoConfig", "DEMO_ENTRIES", "CLIP", "CLIP_FOLDER", "REAL_ENTRIES", "REAL_CLIP", "Excerpt",
+           "find_real_clip", "make_demo_clip", "real_excerpt", "compare"]
 
 #: the comparison on the generated clip (:data:`~vistrack.registry.comparisons.DEMO`)
 DEMO_ENTRIES = DEMO
@@ -27,9 +27,24 @@ DEMO_ENTRIES = DEMO
 CLIP = {"size": (320, 240), "clutter": "high", "distractor": False, "jump_prob": 0.04, "jump_size": (0.12, 0.16)}
 #: where the generated clip goes in the demo's folder
 CLIP_FOLDER = Path("clips") / "jumps"
-#: the real clip: vistrack's default tracker (the default model's default algorithm) beside OpenCV's MIL
-REAL_ENTRIES = ((get_model_spec(DEFAULT_MODEL).default_algo, 100), ("opencv-mil", 1))
+#: the real clip: vistrack's default tracker (the default model's default algorithm at the default N) beside
+#: OpenCV's MIL (:data:`~vistrack.registry.comparisons.DEMO_REAL`)
+REAL_ENTRIES = ((get_model_spec(DEFAULT_MODEL).default_algo, DEFAULT_PARTICLES), *DEMO_REAL)
 REAL_CLIP = Path("shared") / "data" / "real" / "girl_otb"
+
+
+@dataclass(frozen=True)
+class DemoConfig:
+    """``vistrack demo``'s options with their defaults: the folder it writes into, the generated clip's frames,
+    the runs of each comparison, the root seed and the frames of the real clip (``real_clip``: ``None``, found
+    by :func:`find_real_clip`; ``""``: none)."""
+
+    out: str = "vistrack-demo"
+    frames: int = 100
+    runs: int = 4
+    seed: int = 0
+    real_clip: str | None = None
+    real_frames: int = 60
 
 
 @dataclass

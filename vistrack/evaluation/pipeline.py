@@ -14,15 +14,23 @@ from pathlib import Path
 from ..batch.cluster import run_experiment
 from ..batch.tasks import lock_out, task_path
 from ..io.clips import find_clips, load_clip
-from ..loop.stepper import ms_per_frame
-from ..registry import MODELS, OptionError, build_model, check_particle_memory, clip_model, get_model_spec
+from ..loop.stepper import filter_ms
+from ..registry import (
+    MODELS,
+    OptionError,
+    build_model,
+    check_particle_memory,
+    clip_model,
+    get_model_spec,
+    is_baseline,
+    targets_model,
+)
 from ..registry.builders import start_frame
 from ..reports.eval_report import write_eval_outputs
 from ..reports.mot_report import write_mot_outputs
 from ..scoring.metrics import equal_time
 from ..scoring.mot import require_motmetrics
 from .experiment import (
-    OPENCV_TRACKERS,
     EvalConfig,
     check_algos,
     check_task_grid,
@@ -75,12 +83,12 @@ def eval_config(clips, *, algos, particles, runs, seed, model=None, targets=None
     clip_paths = find_clips(clips)
     if model is None and targets is None:
         model = clips_model(clip_paths)
-    spec = get_model_spec(model or "plate")
+    spec = get_model_spec(model if targets is None else targets_model(model))
     if targets is not None:
         _check_targets(model, clip_paths, results_dirs)
     check_algos(algos, spec.name, targets is not None)
     for a in algos:  # one task's working memory (tasks run side by side: one per worker)
-        for n in ([] if a in OPENCV_TRACKERS else particles):
+        for n in ([] if is_baseline(a) else particles):
             check_particle_memory(n, spec.bytes_per_particle, a)
     # without algorithms (--algos "" with --results-dir) no particle count was used: none is recorded
     cfg = EvalConfig(clips=clip_paths, algos=list(algos), particles=list(particles) if algos else [], runs=runs,
@@ -146,7 +154,7 @@ def eval_equal_time(cfg, frames=30):
         raise ValueError(f"--equal-time times the algorithms on the first clip, {cfg.clips[0]}, which has "
                          f"{len(fr)} frame(s) to track: it needs at least 3")
     model = build_model(cfg.model, clip, init_gt="")
-    entries, _ = equal_time(lambda a, n: ms_per_frame(fr, model, a, n), [(a, n_ref) for a in cfg.algos],
+    entries, _ = equal_time(lambda a, n: filter_ms(fr, model, a, n), [(a, n_ref) for a in cfg.algos],
                             min_slope=0.1, checks=3)
     for algo, n in entries[1:]:
         try:

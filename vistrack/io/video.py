@@ -26,6 +26,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from .video_errors import FrameOrderWarning, VideoDecodeWarning, VideoError, quoted
+from .video_writer import VideoWriter  # the writer's home; re-exported (__all__)
+
 # FFmpeg's own lines for a damaged stream ("header damaged", one per packet) are noise: a skipped
 # frame is counted and reported once (VideoDecodeWarning). Read when the first capture opens.
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
@@ -49,10 +52,6 @@ IMAGE_EXT = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".ppm", ".pgm"}
 VIDEO_EXT = {".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"}
 #: files FFmpeg's text/data demuxers would "decode", which are never videos here
 TEXT_EXT = {".txt", ".csv", ".json", ".md", ".rst", ".xml", ".yaml", ".yml", ".log", ".py", ".html", ".srt"}
-
-
-from .video_errors import FrameOrderWarning, VideoDecodeWarning, VideoError, quoted  # noqa: E402
-from .video_writer import CONTAINERS, VideoWriter  # noqa: E402,F401  (the writer's home; re-exported)
 
 
 class VideoSource:
@@ -370,7 +369,7 @@ def prefetch(frames, size=8):
                 if stop.is_set():
                     return
             q.put(("end", done))
-        except BaseException as e:  # handed to the consumer
+        except BaseException as e:  # noqa: BLE001 - handed to the consumer, which raises it
             q.put(("error", e))
 
     t = threading.Thread(target=work, name="vistrack-decode", daemon=True)

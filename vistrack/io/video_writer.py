@@ -115,7 +115,7 @@ class VideoWriter:
                 self._open_h264(fps)
                 self.codec = "h264"
                 return
-            except Exception as e:  # PyAV missing, or FFmpeg without an H.264 encoder
+            except Exception as e:  # noqa: BLE001 - PyAV missing, or FFmpeg without an H.264 encoder
                 if codec == "h264":
                     raise VideoError(f"cannot write H.264 to {self._final}: {e}") from None
                 self.note = (f"H.264 not available ({type(e).__name__}: {e}); wrote MPEG-4 Part 2 (mp4v), which "
@@ -129,7 +129,7 @@ class VideoWriter:
     def _open_h264(self, fps):
         from fractions import Fraction
 
-        import av  # noqa: PLC0415  (optional: PyAV)
+        import av  # optional: PyAV
 
         # the index (moov) first, so that a browser plays the file while it loads
         fmt = {".mp4": "mp4", ".m4v": "mp4", ".mov": "mov", ".mkv": "matroska"}[self.container]
@@ -243,7 +243,7 @@ class VideoWriter:
         self.abandon()
         try:
             self.close()
-        except Exception:  # noqa: BLE001
+        except Exception:  # noqa: BLE001 - the error that ended the run is the one to raise
             pass
 
 

@@ -1,6 +1,6 @@
 """When a track has lost its object: the collapse test behind ``visible=0`` and ``lost_reason``.
 
-The frame loop (:class:`~vistrack.loop.stepper.FrameStepper`) asks the model once per frame,
+The frame loop (:class:`~vistrack.loop.stepper.Stepper`) asks the model once per frame,
 in order, :meth:`check_lost(obs, estimate) <CollapseCheck.check_lost>`; the answer is the
 track CSV's ``visible`` and ``lost_reason`` columns and what ``vistrack run`` says when it
 loses the object. A model whose estimate collapses is reported lost with one of

@@ -78,6 +78,15 @@ class ModelSpec:
         algorithms are listed under (``condensation`` on the thesis's models, ``pf-gordon`` on the paper's).
     options : tuple of ModelOption
         Its builder's options that ``run`` sets (with their flags).
+    summary : callable or None
+        ``summary(rows, truth, model) -> str or None``: ``run``'s line against ground truth of the model's
+        own kind (the plate's vertices, the landmarks), from the track rows and the ground truth's
+        columns; ``None`` (or ``None`` returned, where the truth has no such columns): the box scores of
+        :mod:`vistrack.session.run_summary`, as ``eval`` scores a task.
+    compile_seconds : float or None
+        CPU seconds its compiled kernels take to compile on a first run with its default filter (the
+        2-core development machine: ``python benchmarks/first_run.py``), for the notice a first run
+        prints; ``None``: not measured (the notice gives the largest of the registered models').
     """
 
     name: str
@@ -93,6 +102,8 @@ class ModelSpec:
     targets_class: type | None = None
     seed: str = "001"
     options: tuple = ()
+    summary: Callable | None = None
+    compile_seconds: float | None = None
 
     @property
     def default_algo(self):

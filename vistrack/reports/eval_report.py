@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..baselines.opencv import OPENCV_RANDOMISED, OPENCV_TRACKERS
 from ..batch.tasks import write_atomic
+from ..registry import BASELINES, get_model_spec, is_baseline
 from ..scoring.aggregate import summarize
 
 __all__ = ["CSV_COLUMNS", "task_row", "write_eval_outputs", "averages"]
@@ -36,7 +36,7 @@ def task_row(r):
     truth has no object (OTB/VOT absent frames) count in neither. ``mean_error`` is over the
     frames not lost, ``mean_error_all`` over every frame with the object in view and an estimate;
     empty where there is none."""
-    s = summarize([r], not_filters=OPENCV_TRACKERS)[0]
+    s = summarize([r], not_filters=BASELINES)[0]
     row = {"clip": r["clip"], "algo": r["algo"], "particles": r["particles"], "run": r["run"], "frames": r["frames"]}
     row.update({k: "" if s[k] is None else s[k] for k in CSV_COLUMNS[5:]})
     return row
@@ -97,8 +97,8 @@ def _runs_line(labels):
         n = sorted({s["runs"] for s in ss})
         runs = "/".join(str(v) for v in n)
         algo = ss[0]["algo"]
-        note = (" (randomised inside OpenCV, not seeded)" if algo in OPENCV_RANDOMISED else " (deterministic)"
-                if algo in OPENCV_TRACKERS else " (a result file)" if not ss[0].get("particle_filter", True) else "")
+        note = (f" ({BASELINES[algo].runs_note})" if is_baseline(algo)
+                else " (a result file)" if not ss[0].get("particle_filter", True) else "")
         parts.append(f"{k}: {runs} run{'s' if n != [1] else ''}{note}")
     return "; ".join(parts)
 
@@ -182,7 +182,7 @@ def _annotated_videos(out, results, max_trackers=8, width=480, least=320):
     if not clips:
         return []
     first = [r for r in results if r["clip"] == clips[0] and r["run"] == 0 and r.get("boxes")]
-    first = list({_label({**r, "particle_filter": r["algo"] not in OPENCV_TRACKERS and not r.get("external")}): r
+    first = list({_label({**r, "particle_filter": not is_baseline(r["algo"]) and not r.get("external")}): r
                   for r in first}.items())[:max_trackers]
     if not first:
         return []
@@ -333,9 +333,13 @@ def _table(labels, first):
     return "\n".join(out)
 
 
+#: what eval counts as lost, by the model's lost rule (:attr:`~vistrack.models.spec.ModelSpec.lost_rule`)
+LOST_RULES = {"centre": "centre error above half the larger side of the true box",
+              "plate": "plate: no plate reported, or the vertex error above a third of the plate height"}
+
+
 def _lost_note(cfg):
-    rule = ("plate: no plate reported, or the vertex error above a third of the plate height" if cfg.model == "plate"
-            else "centre error above half the larger side of the true box")
+    rule = LOST_RULES[get_model_spec(cfg.model).lost_rule]
     return (f"Lost: {rule} (thesis reproductions use the thesis's rules: `vistrack reproduce`). Reported lost: the "
             "share of the frames with the object that the tracker reported lost (vistrack's `visible=0`, an OpenCV "
             "tracker's failed `update`). Long-term F: VOT-LT's tracking F-score (precision over the frames the tracker "

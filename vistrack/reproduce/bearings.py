@@ -52,6 +52,8 @@ class BearingsConfig:
     entries: list | None = None
 
     table = "bearings"
+    #: the folder of its task files when ``--out`` is not given
+    results_dir = "bearings-results"
 
     def pairs(self):
         """The ``(algo, N)`` pairs to run: :attr:`entries`, else every algorithm at every N."""

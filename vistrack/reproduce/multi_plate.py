@@ -31,6 +31,8 @@ class PlatesConfig(ContourConfig):
     targets: int = 3
 
     table = "plates"
+    #: the folder of its task files when ``--out`` is not given
+    results_dir = "plate-overlap-results"
     model = "plate"
     several = True
 

@@ -25,6 +25,7 @@ from ..registry import (
     build_model,
     check_algo,
     check_particle_memory,
+    compile_seconds,
     get_model_spec,
     make_filter,
     model_params,
@@ -100,7 +101,7 @@ def prepare(video, *, model=None, algo=None, particles=DEFAULT_PARTICLES, init=N
     if notify:  # which model and algorithm, and why: one line
         notify(choice.line(particles))
     if watch is not None:
-        watch.message = compile_message(name)
+        watch.message = compile_message(compile_seconds(name))
     flags = {"--targets": targets, "--template": template and read_support_points(template),
              "--layout": layout, "--no-colour": no_colour or None, "--search": search}
     params = model_params(name, flags, algo)
@@ -162,7 +163,7 @@ def _find_plate(plan, video, notify):
     plan.frames = itertools.chain([found[:2]], plan.frames)
 
 
-def execute(plan, particles, seed, *, label="", show_particles=10, progress=None, notify=None, ready=None, **outputs):
+def execute(plan, particles, seed=0, *, label="", show_particles=10, progress=None, notify=None, ready=None, **outputs):
     """Track ``plan`` with ``particles`` particles from ``seed`` (an integer or a ``SeedSequence``:
     :func:`~vistrack.core.seeds.run_seed`): :func:`~vistrack.session.recording.record_video` over its frames from its
     start (``outputs``: ``track_path``, ``out_path``, ``results_path``, ``results_format``, ``sequence``;

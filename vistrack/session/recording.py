@@ -32,14 +32,12 @@ from ..io.render import annotate, annotate_targets
 from ..io.results_format import result_paths
 from ..io.track_files import TrackCSV
 from ..io.video_writer import VideoWriter
-from ..loop.profiling import STAGES, Timer, profile_stages
-from ..loop.stepper import step_frames, top_particles, warm_up
-from ..system.signals import HARD_STOP, Terminated, deferred_signals, stop_on_signals, stop_reason
-from .run_summary import summary_lines
+from ..loop.profiling import STAGES, Timer, instrument
+from ..loop.stepper import Stepper, top_particles, warm_up
+from ..system.signals import deferred_signals, stop_on_signals, stop_reason
 
-# TrackCSV, summary_lines and the signal handling live in track_files, run_summary and signals (re-exported)
-__all__ = ["TrackCSV", "SessionLog", "track_row", "target_rows", "record_video", "summary_lines", "Terminated",
-           "stop_on_signals", "deferred_signals", "HARD_STOP"]
+# stop_on_signals (vistrack.system.signals) re-exported for tests/test_faults_sweep2.py, which imports it from here
+__all__ = ["SessionLog", "record_video", "track_row", "target_rows", "stop_on_signals"]
 
 
 @dataclass
@@ -167,9 +165,9 @@ def record_video(frames, model, filt, particles, rng, *, track_path=None, out_pa
         _record_lead(run, lead, model, outs, writer, label)
         t0, failed = time.perf_counter(), False
         try:
-            with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
+            with warnings.catch_warnings(), (instrument(model, filt, run.timer) if profile else nullcontext()):
                 warnings.simplefilter("ignore", DegenerateWeightsWarning)
-                _track_loop(run, step_frames(frames, filt, particles, rng), model, outs, writer, stop,
+                _track_loop(run, Stepper(filt, particles, rng).steps(frames), model, outs, writer, stop,
                             first=lead[-1][0] + 1 if len(lead) else 0, start=start, frame_count=frame_count,
                             show_particles=show_particles, label=label, notify=notify, progress=progress)
         except (KeyboardInterrupt, SystemError) as e:  # Terminated is a KeyboardInterrupt

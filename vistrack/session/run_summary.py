@@ -6,17 +6,19 @@ from __future__ import annotations
 import numpy as np
 
 from ..loop.profiling import STAGES
+from ..registry import get_model_spec
 from ..scoring.aggregate import summarize
-from ..scoring.metrics import landmark_error, plate_frame_measures, score_frames
+from ..scoring.metrics import score_frames
 
 __all__ = ["summary_lines"]
 
 
 def summary_lines(run, particles, *, model_name, model, truth, frame_width, objects=None):
     """The summary ``vistrack run`` prints: speed and ESS, then the comparison with ground
-    truth when there is one (landmark error; plate lost/vertex error/false reports; success
-    AUC, precision at 20 px and centre error for box-level truth; for several targets, MOTA and
-    IDF1 against ``objects``, the columns of the clip's ``objects.csv``)."""
+    truth when there is one (the model's own, :attr:`~vistrack.models.spec.ModelSpec.summary`: the
+    landmark error, the plate's lost frames, vertex error and false reports; else success AUC,
+    precision at 20 px and centre error for box-level truth; for several targets, MOTA and IDF1 against
+    ``objects``, the columns of the clip's ``objects.csv``)."""
     rows, n = run.rows, len(run.rows)
     ms = np.array([r["ms"] for r in rows if r["ess"] > 0] or [np.nan])  # not the frames searched (lead)
     lines = [f"{n} frames, {n / max(run.wall, 1e-9):.0f} frames/s end to end ({1e3 / ms.mean():.0f} frames/s in "
@@ -32,18 +34,10 @@ def summary_lines(run, particles, *, model_name, model, truth, frame_width, obje
         return lines + ([] if objects is None else [_mot_line(run, objects, model)])
     if truth is None:
         return lines
-    if model_name == "landmarks" and "lx0" in truth:
-        err = landmark_error(rows, truth, model.k)
-        lines.append(f"vs ground truth: mean landmark error {err.mean():.2f} px (per frame: median "
-                     f"{np.median(err):.2f}, max {err.max():.2f})")
-    elif model_name == "plate" and "x0" in truth:
-        rec = {"reported": [r["visible"] for r in rows],
-               "vertices": [[r[f"{c}{i}"] for i in range(4) for c in "xy"] for r in rows]}
-        has, err, lost, false = plate_frame_measures(rec, truth, model.layout.aspect)
-        ok = has & ~lost
-        mean = f"{np.nanmean(err[ok]):.2f} px" if ok.any() else "n/a (never tracked)"
-        lines.append(f"vs ground truth: plate lost in {int(lost.sum())} of {int(has.sum())} plate frames; mean vertex "
-                     f"error {mean} when tracked; {int(false.sum())} frames reported a plate where there was none")
+    spec = get_model_spec(model_name)
+    own = spec.summary(rows, truth, model) if spec.summary is not None else None
+    if own is not None:
+        lines.append(own)
     elif "w" in truth and "cx" in truth:
         lines.append(_box_summary(rows, truth, frame_width))
     return lines
@@ -58,7 +52,10 @@ def _mot_line(run, objects, model):
     frames = int(max(r["frame"] for r in run.rows)) + 1
     truth = objects_by_frame(objects)[:frames]
     s = clear_mot(truth, objects_by_frame(cols, len(truth)), model.layout.aspect)
-    fmt = lambda v: "n/a" if v is None else f"{v:.3f}"  # noqa: E731
+
+    def fmt(v):
+        return "n/a" if v is None else f"{v:.3f}"
+
     return (f"vs ground truth (objects.csv, {s['objects']} plates over the frames): MOTA {fmt(s['mota'])}, IDF1 "
             f"{fmt(s['idf1'])}, {s['switches']} identity switches, {s['false_positives']} false positives, "
             f"{s['misses']} misses; {s['empty_frame_reports']} plates reported in the {s['frames_without']} frames "

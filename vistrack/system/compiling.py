@@ -13,17 +13,13 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 
-__all__ = ["COMPILE_SECONDS", "compile_notice", "compile_message", "CompileWatch"]
-
-#: CPU seconds the kernels of each registered model take to compile on a first run, with its default
-#: filter (the 2-core development machine: ``python benchmarks/first_run.py``; the landmarks model has
-#: no compiled kernels); another model: the largest
-COMPILE_SECONDS = {"box": 18, "contour": 5, "plate": 14}
+__all__ = ["compile_notice", "compile_message", "CompileWatch"]
 
 
-def compile_message(model):
-    """``compiling kernels (first run only, about N s)`` for the registered model named ``model``."""
-    seconds = COMPILE_SECONDS.get(model, max(COMPILE_SECONDS.values()))
+def compile_message(seconds):
+    """``compiling kernels (first run only, about N s)``: ``seconds``, what a model's kernels take to compile
+    (its registry entry's :attr:`~vistrack.models.spec.ModelSpec.compile_seconds`,
+    :func:`vistrack.registry.catalog.compile_seconds`)."""
     return f"compiling kernels (first run only, about {seconds} s)"
 
 

@@ -96,7 +96,7 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         ``σ_l`` of the proposal's log-scale about the best scale of the search.
     collapse_drop : float
         With the filter, the collapse test's ``drop`` (:attr:`collapse_options`: 55 without it): ``log r``
-        at the estimate falls by 43-47 on the synthetic clip of ``tests/test_box_dcf.py`` when the object
+        at the estimate falls by 43-47 on the synthetic clip of ``tests/models/box/test_box_dcf.py`` when the object
         vanishes; 28 (the 7-clip mean AUC 0.690 against 0.685 with 35, and with the filter's rate 0.004
         0.695 and the hand held on 6 of 6 seeds: ``docs/experiments.md``).
     confidence, lost_confidence, redetect, reentry, redetect_after, search_crop, search_peaks

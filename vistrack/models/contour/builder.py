@@ -82,7 +82,7 @@ def _contour(clip, size, init, init_gt, template, params):
 
 
 
-def train_search(points, size, *, samples=NNSearchConfig.samples, seed=0, path=None, notify=None):
+def train_search(points, size=(320, 240), *, samples=NNSearchConfig.samples, seed=0, path=None, notify=None):
     """The neural-network local search of LS-N-IPS (thesis 001 §4.3.1, Fig. 4.5) for the contour of support
     points ``points`` (``(n, 2)`` pixels as tracked) on frames of ``size``: trained on ``samples`` simulated
     poses from ``seed`` and cached (``path``, else the cache), or loaded where it is there; ``(network,
@@ -93,7 +93,7 @@ def train_search(points, size, *, samples=NNSearchConfig.samples, seed=0, path=N
 
 SPEC = ModelSpec("contour", description="B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
                  from_box=_contour_from_box, from_clip=_contour_from_clip, bytes_per_particle=48_000,
-                 model_class=Contour, options=(
+                 model_class=Contour, compile_seconds=5, options=(
                      ModelOption("template", None, "support points (n, 2) in pixels instead of the ellipse",
                                  flag="--template"),
                      ModelOption("colour", "auto", "the colour term: on for colour video (auto), True or False",
