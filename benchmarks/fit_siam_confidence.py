@@ -17,7 +17,8 @@ Fit
     a logistic regression (scikit-learn, L2, ``C = --C``) on the standardised cues, each clip weighted alike;
     a cue of :data:`~vistrack.models.siam.lost.MONOTONE` whose weight comes out negative is dropped and the
     rest refitted. The threshold is the largest at which at most ``--max-lost`` (3 %) of the frames with
-    IoU >= 0.5 fall below it; the candidates' calibration takes the same threshold.
+    IoU >= 0.5 fall below it; the candidates' is the lowest at which ``--precision`` (80 %) of the candidates at
+    or above it overlap the object.
 Leave-one-clip-out
     each clip scored by the fit on the others: ROC AUC, and at that threshold the share of the frames in
     zero-IoU runs of at least 5 frames below it and of the frames with IoU >= 0.5 below it.
@@ -166,13 +167,24 @@ def candidates_data(runs):
     return np.concatenate(X), np.concatenate(y).astype(int), np.array(G)
 
 
-def calibrate(runs, C, max_lost):
+def calibrate(runs, C, max_lost, precision=0.8):
     X, y, ious, groups, _ = frames_data(runs)
     cal = fit(X, y, groups, FEATURES, FEATURES, C)
     cal.threshold = choose_threshold(cal(X), ious, groups, max_lost)
     cX, cy, cg = candidates_data(runs)
-    cand = fit(cX, cy, cg, SEEN, SEEN, C, cal.threshold)
+    cand = fit(cX, cy, cg, SEEN, SEEN, C)
+    cand.threshold = candidate_threshold(cand(cX), cy, cg, precision)
     return cal, cand
+
+
+def candidate_threshold(conf, y, groups, precision):
+    """The lowest threshold at which at least ``precision`` of the candidates at or above it are right (each clip
+    weighted alike): a lost object's candidate is taken from there."""
+    w = _weights(groups)
+    order = np.argsort(-conf)
+    hits = np.cumsum((w * y)[order]) / np.cumsum(w[order])
+    ok = np.flatnonzero(hits >= precision)
+    return float(conf[order][ok[-1]]) if len(ok) else 1.0
 
 
 def leave_one_out(runs, clips, C, max_lost):
@@ -198,6 +210,7 @@ def main(argv=None):
     ap.add_argument("--probe", type=int, default=10, help="a wide search's candidates every PROBE frames")
     ap.add_argument("--C", type=float, default=1.0)
     ap.add_argument("--max-lost", type=float, default=0.03)
+    ap.add_argument("--precision", type=float, default=0.8, help="of the candidates taken (their threshold)")
     ap.add_argument("--options", default="{}", help="the siam model's options (JSON) while gathering")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--dry-run", action="store_true")
@@ -213,9 +226,10 @@ def main(argv=None):
     print(f"pooled: {tot[:, 2].sum() / max(tot[:, 0].sum(), 1):.3f} of {int(tot[:, 0].sum())} frames in zero-IoU runs "
           f"reported lost, {tot[:, 3].sum() / max(tot[:, 1].sum(), 1):.3f} of {int(tot[:, 1].sum())} frames with "
           "IoU >= 0.5 (leave-one-clip-out)")
-    cal, cand = calibrate(runs, args.C, args.max_lost)
+    cal, cand = calibrate(runs, args.C, args.max_lost, args.precision)
     print("frame calibration:", dict(zip(cal.names, np.round(cal.coef, 3))), "threshold", round(cal.threshold, 4))
-    print("candidate calibration:", dict(zip(cand.names, np.round(cand.coef, 3))))
+    print("candidate calibration:", dict(zip(cand.names, np.round(cand.coef, 3))), "threshold",
+          round(cand.threshold, 4))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump({"leave_one_out": rows, "threshold": cal.threshold}, fh, indent=1)

@@ -292,7 +292,7 @@ def test_a_large_suite_is_named_lazily(tmp_path):
     (dict(ess_threshold=-1), "ess_threshold must be a number in [0, 1]"),
     (dict(ess_threshold=5), "ess_threshold must be a number in [0, 1]"),
     (dict(resample="best"), "unknown resampling scheme 'best'; choose from"),
-    (dict(frobnicate=3), "unknown option 'frobnicate' for the box model; its options include"),
+    (dict(model="box", frobnicate=3), "unknown option 'frobnicate' for the box model; its options include"),
     (dict(model="plate", frobnicate=3), "unknown option 'frobnicate' for the plate model; its options include"),
 ], ids=lambda v: str(v)[:30])
 def test_the_tracker_checks_every_argument_when_it_is_made(kw, words):
@@ -307,8 +307,8 @@ def test_the_tracker_names_the_options_it_takes():
     import vistrack
 
     with pytest.raises(ValueError, match="lambda_dcf, lambda_scale, lost_confidence, map_stride"):
-        vistrack.Tracker(frobnicate=3)
-    vistrack.Tracker(lambda_dcf=30.0, lambda_template=2.0)  # the model's own and its appearance's
+        vistrack.Tracker(model="box", frobnicate=3)
+    vistrack.Tracker(model="box", lambda_dcf=30.0, lambda_template=2.0)  # the model's own and its appearance's
 
 
 def _api_frames(n=5):
@@ -393,7 +393,7 @@ def _vistrack(argv, stdin=subprocess.DEVNULL, **kw):
 def test_trax_checks_its_options_before_the_hello():
     p = _vistrack(["trax", "--model", "nonsense"])
     assert p.stdout == "" and p.stderr.startswith("Error: unknown model 'nonsense'") and p.stderr.count("\n") == 1
-    p = _vistrack(["trax", "--algo", "pf-eis"])
+    p = _vistrack(["trax", "--model", "box", "--algo", "pf-eis"])
     assert p.stdout == "" and "does not run on the box model" in p.stderr and p.stderr.count("\n") == 1
 
 

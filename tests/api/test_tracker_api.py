@@ -10,6 +10,7 @@ import pytest
 
 import vistrack
 from path_helpers import REAL
+from vistrack.registry import DEFAULT_MODEL
 
 
 def frames(n=6):
@@ -36,7 +37,7 @@ def test_box_is_integers_that_opencv_draws_and_the_estimate_keeps_the_floats():
 def test_reprs_are_one_short_line():
     fr = frames()
     t = vistrack.Tracker(seed=1)
-    assert repr(t) == "Tracker(model='box', algo='lis', particles=100, seed=1; not started)"
+    assert repr(t) == f"Tracker(model='{DEFAULT_MODEL}', algo='lis', particles=100, seed=1; not started)"
     t.init(fr[0], (30, 30, 25, 25))
     t.update(fr[1])
     for text in (repr(t), repr(t.result)):

@@ -174,7 +174,7 @@ def test_partitioned_on_a_model_without_partitions_is_one_clear_line(capsys):
                                          r"GaussMixtureToy does not supply them$"):
         make_filter("partitioned", GaussMixtureToy())
     with pytest.raises(ValueError, match="algorithm 'branched-partitioned' does not run on the box model"):
-        vistrack.Tracker(algo="branched-partitioned")
+        vistrack.Tracker(model="box", algo="branched-partitioned")
     code, out, err = run(["reproduce", "bearings", "--ships", "2", "--algos", "ls-n-ips", "-q"], capsys)
     assert code != 0 and err.strip() == ("Error: ls-n-ips needs a model with local_search (LocalSearch); "
                                          "Bearings does not supply it")

@@ -65,8 +65,8 @@ def test_run_writes_lost_reason_and_says_when_it_loses_the_object(tmp_path, caps
     for k, f in enumerate(vanishing_frames()):
         cv2.imwrite(str(video / f"{k:04d}.png"), f)
     track = tmp_path / "t.csv"
-    code, out, err = run(["run", str(video), "--init", ",".join(map(str, BOX)), "-n", "60", "--track", str(track)],
-                         capsys)
+    code, out, err = run(["run", str(video), "--model", "box", "--init", ",".join(map(str, BOX)), "-n", "60",
+                          "--track", str(track)], capsys)
     assert code == 0, err
     with open(track, newline="") as f:
         rows = list(csv.DictReader(f))

@@ -5,6 +5,7 @@ import pytest
 
 from cli_helpers import run
 from clip_helpers import square_clip
+from vistrack.registry.catalog import DEFAULT_MODEL, DEFAULT_MODEL_WHY
 
 
 @pytest.fixture(scope="module")
@@ -23,8 +24,8 @@ def said(err):
 def test_the_clip_s_meta_json_model_is_said(contour_clip):
     code, _, err = run(["run", contour_clip, "--init-gt", "-n", "30"])
     assert code == 0, err
-    assert said(err) == [f"tracking with the contour model (named in {contour_clip / 'meta.json'}; --model box "
-                         "tracks any object) and lis (the contour model's default), N=30"]
+    assert said(err) == [f"tracking with the contour model (named in {contour_clip / 'meta.json'}; --model "
+                         f"{DEFAULT_MODEL} tracks any object) and lis (the contour model's default), N=30"]
 
 
 def test_the_options_are_said(contour_clip):
@@ -37,8 +38,8 @@ def test_the_default_is_said_and_quiet_says_nothing(tmp_path):
     square_clip(tmp_path / "sq", 4)
     code, _, err = run(["run", tmp_path / "sq" / "sq.mp4", "--init", "20,20,20,20", "-n", "30"])
     assert code == 0, err
-    assert said(err) == ["tracking with the box model (the default with a start box: any object, its appearance "
-                         "learned from the box) and lis (the box model's default), N=30"]
+    assert said(err) == [f"tracking with the {DEFAULT_MODEL} model ({DEFAULT_MODEL_WHY}) and lis (the {DEFAULT_MODEL} "
+                         "model's default), N=30"]
     code, _, err = run(["run", tmp_path / "sq" / "sq.mp4", "--init", "20,20,20,20", "-q"])
     assert code == 0 and not said(err), err
 

@@ -59,7 +59,7 @@ class NanoTrackV3:
         self.size = np.array([w, h])
         self.fill = np.asarray(frame, float).reshape(-1, frame.shape[-1]).mean(axis=0)
         self.net.set_exemplar(crop(frame, self.centre, round(float(context_side(w, h, CONTEXT))), EXEMPLAR,
-                                   self.fill))
+                                   self.fill), fixed=False)  # the head as the authors run it: both inputs each frame
         self.score = 1.0
 
     def update(self, frame):

@@ -11,6 +11,7 @@ from vistrack.demo.steps import (
     CLIP,
     CLIP_FOLDER,
     DEMO_ENTRIES,
+    DEMO_MODEL,
     REAL_CLIP,
     REAL_ENTRIES,
     DemoConfig,
@@ -41,8 +42,9 @@ def _step4(real, real_clip, real_frames, runs):
                 "OTB's Girl; or set VISTRACK_REAL_DATA to the folder holding girl_otb)")
     took = f"the first {real_frames} frames" if real.frames >= real_frames else \
         f"all {real.frames} frames (fewer than --real-frames {real_frames})"
-    return (f"4/4 {took} of {real.real} ({real.folder}): vistrack's default box tracker "
-            f"({REAL_ENTRIES[0][0].upper()} N={REAL_ENTRIES[0][1]}) beside OpenCV MIL, {_runs(runs)} each")
+    return (f"4/4 {took} of {real.real} ({real.folder}): vistrack's default tracker (the {DEFAULT_MODEL} model, "
+            f"{REAL_ENTRIES[0][0].upper()} N={REAL_ENTRIES[0][1]}) beside " + _entries(REAL_ENTRIES[1:])
+            + f", {_runs(runs)} each")
 
 
 def _runs(n):
@@ -74,7 +76,7 @@ def demo(ctx, out_dir, frames, runs, seed, real_clip, real_frames):
     """Generate a clip of an object that jumps in heavy clutter, track it with the box model's
     LS-N-IPS, LIS and bootstrap at about equal time per frame (annotated videos, track CSVs, a
     comparison over runs with table and plots); then track the first frames of a real clip with
-    vistrack's default box tracker and OpenCV's MIL.
+    vistrack's default tracker, NanoTrack v3 and OpenCV's MIL.
 
     Everything goes into OUT (./vistrack-demo by default).
     """
@@ -87,11 +89,11 @@ def demo(ctx, out_dir, frames, runs, seed, real_clip, real_frames):
     for algo, n in DEMO_ENTRIES:
         made += [out / f"jumps-{algo}.mp4", out / f"jumps-{algo}.csv"]
         click.echo(f"  {algo} N={n}:")
-        ctx.invoke(run, video=str(clip), model_name=DEFAULT_MODEL, algo=algo, particles=n, seed=seed, init_gt="",
+        ctx.invoke(run, video=str(clip), model_name=DEMO_MODEL, algo=algo, particles=n, seed=seed, init_gt="",
                    out_path=str(made[-2]), track_path=str(made[-1]), quiet=False)
     click.echo(f"3/4 comparing them over {_runs(runs)} (as vistrack eval does): " + _entries(DEMO_ENTRIES))
     with progress("eval") as hooks:
-        click.echo(compare(clip, DEMO_ENTRIES, DEFAULT_MODEL, runs, seed, out / "eval", **hooks))
+        click.echo(compare(clip, DEMO_ENTRIES, DEMO_MODEL, runs, seed, out / "eval", **hooks))
         real = real_excerpt(real_clip, out / "clips", real_frames)
         click.echo(_step4(real, real_clip, real_frames, runs))
         if real is not None:

@@ -1,6 +1,6 @@
 """What ``vistrack demo`` shows: a generated clip of an object that jumps in heavy clutter, the box
 model's LS-N-IPS, LIS and bootstrap compared on it at about equal time per frame, then the first
-frames of a real clip with vistrack's default tracker beside OpenCV's MIL (:func:`compare`: ``eval``'s
+frames of a real clip with vistrack's default tracker beside NanoTrack v3 and OpenCV's MIL (:func:`compare`: ``eval``'s
 pipeline in this process)."""
 
 from __future__ import annotations
@@ -14,10 +14,10 @@ from ..evaluation.experiment import EvalConfig
 from ..evaluation.pipeline import evaluate
 from ..io.clips import excerpt_clip
 from ..registry import DEFAULT_MODEL, DEFAULT_PARTICLES, get_model_spec
-from ..registry.comparisons import DEMO, DEMO_REAL
+from ..registry.comparisons import DEMO, DEMO_MODEL, DEMO_REAL
 from ..reports.eval_report import averages
 
-__all__ = ["DemoConfig", "DEMO_ENTRIES", "CLIP", "CLIP_FOLDER", "REAL_ENTRIES", "REAL_CLIP", "Excerpt",
+__all__ = ["DemoConfig", "DEMO_ENTRIES", "DEMO_MODEL", "CLIP", "CLIP_FOLDER", "REAL_ENTRIES", "REAL_CLIP", "Excerpt",
            "find_real_clip", "make_demo_clip", "real_excerpt", "compare"]
 
 #: the comparison on the generated clip (:data:`~vistrack.registry.comparisons.DEMO`)
@@ -79,7 +79,7 @@ def make_demo_clip(out, frames, seed):
     except OSError as e:
         raise ValueError(f"cannot create {out}: {e.strerror}") from None
     # its meta.json names the model the demo tracks it with, which run and eval then take by default
-    make_contour_clip(out / CLIP_FOLDER, frames=frames, seed=seed + 1, model=DEFAULT_MODEL, **CLIP)
+    make_contour_clip(out / CLIP_FOLDER, frames=frames, seed=seed + 1, model=DEMO_MODEL, **CLIP)
     return out / CLIP_FOLDER
 
 

@@ -60,7 +60,7 @@ class FrameResult:
         return not self.lost_reason
 
     def __repr__(self):
-        est = np.array2string(np.asarray(self.estimate, float), precision=2, separator=", ")
+        est = np.array2string(np.asarray(self.estimate, float), precision=2, separator=", ", max_line_width=10**6)
         lost = f", lost_reason={self.lost_reason!r}" if self.lost_reason else ""
         return (f"FrameResult(index={self.index}, estimate={est}, ess={self.ess:.1f}, ms={self.ms:.2f}, "
                 f"particles={self.particles.n}{lost})")

@@ -26,14 +26,20 @@ from ..models.spec import ModelSpec
 from ..system.resources import check_memory
 from .filter_specs import FILTERS, get_filter_spec, runs_on
 
-__all__ = ["ModelSpec", "MODELS", "LAYOUTS", "DEFAULT_MODEL", "SEARCH_MODEL", "DEFAULT_PARTICLES", "REFERENCE_ALGO",
-           "OptionError", "default_comparison", "check_particle_memory", "register", "get_model_spec", "algos_for",
-           "all_algos", "check_algo", "clip_model", "model_params", "derived_algos", "targets_model",
-           "compile_seconds", "run_option"]
+__all__ = ["ModelSpec", "MODELS", "LAYOUTS", "DEFAULT_MODEL", "DEFAULT_MODEL_WHY", "SEARCH_MODEL",
+           "DEFAULT_PARTICLES", "REFERENCE_ALGO", "OptionError", "default_comparison", "check_particle_memory",
+           "register", "get_model_spec", "algos_for", "all_algos", "check_algo", "clip_model", "model_params",
+           "derived_algos", "targets_model", "compile_seconds", "run_option"]
 
 #: the model ``run``, ``eval``, ``demo``, ``trax`` and ``vistrack.Tracker`` use when neither the user
-#: nor the clip (its ``meta.json``) names one: any object, from a box
-DEFAULT_MODEL = "box"
+#: nor the clip (its ``meta.json``) names one: any object, from a box; of the two models that track any object
+#: (``siam``, a learned likelihood, and ``box``, hand-crafted), the one with the higher leave-one-clip-out
+#: success AUC over the real clips with ground truth (``python benchmarks/bench_real.py``, docs/experiments.md)
+DEFAULT_MODEL = "siam"
+#: why, in ``run``'s model-choice line
+DEFAULT_MODEL_WHY = ("the default with a start box: any object, a learned network's response as its likelihood, "
+                     "chosen over the box model by the leave-one-clip-out AUC on the real clips; --model box needs no "
+                     "network")
 #: the model ``run`` uses on a video when neither the user (no model, no box) nor the clip names one:
 #: the plate model, which finds plates by itself
 SEARCH_MODEL = "plate"

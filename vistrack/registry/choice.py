@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .catalog import DEFAULT_MODEL, MODELS, SEARCH_MODEL, get_model_spec
+from .catalog import DEFAULT_MODEL, DEFAULT_MODEL_WHY, MODELS, SEARCH_MODEL, get_model_spec
 
 __all__ = ["Choice", "choose"]
 
@@ -46,7 +46,7 @@ def choose(clip, *, model=None, algo=None, init=None, init_gt=None, targets=None
         if name != DEFAULT_MODEL:
             why += f"; --model {DEFAULT_MODEL} tracks any object"
     elif init is not None or init_gt is not None:
-        name, why = DEFAULT_MODEL, "the default with a start box: any object, its appearance learned from the box"
+        name, why = DEFAULT_MODEL, DEFAULT_MODEL_WHY
     else:
         name, why = SEARCH_MODEL, ("no --init and no model in meta.json: it looks for a license plate in the first "
                                    "30 frames; to track any other object give --init x,y,w,h")

@@ -7,7 +7,7 @@ tracker names sits outside the registry.
 from __future__ import annotations
 
 __all__ = ["CONTOUR", "HISTORY_SAMPLING", "PLATE", "PLATES", "BEARINGS", "LANDMARKS", "SEED_000_ORDER", "DEMO",
-           "DEMO_REAL"]
+           "DEMO_MODEL", "DEMO_REAL"]
 
 #: thesis 001 Table 4.1 (a contour in clutter with a distractor): LS-N-IPS with 30 particles against the
 #: bootstrap filter with 2000
@@ -27,6 +27,9 @@ SEED_000_ORDER = ("pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt")
 #: ``vistrack demo``: the box model's LS-N-IPS, LIS and bootstrap at about equal time per frame on a clip of
 #: sudden jumps in heavy clutter (docs/experiments.md)
 DEMO = (("ls-n-ips", 30), ("lis", 30), ("bootstrap", 150))
+#: the model of that comparison: the box model, on which the three run
+DEMO_MODEL = "box"
 #: ``vistrack demo``'s real clip: the comparison trackers beside vistrack's default tracker (the default model's
-#: default algorithm at the default N): OpenCV's MIL, which every OpenCV build has
-DEMO_REAL = (("opencv-mil", 1),)
+#: default algorithm at the default N): NanoTrack v3 with its authors' logic, and OpenCV's MIL, which every OpenCV
+#: build has
+DEMO_REAL = (("nanotrack-v3", 1), ("opencv-mil", 1))

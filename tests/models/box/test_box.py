@@ -163,7 +163,7 @@ def test_tracker_bad_input_is_a_clear_error():
     with pytest.raises(ValueError, match="finite"):
         vistrack.Tracker().init(frame, (np.nan, 10, 5, 20))
     with pytest.raises(ValueError, match="does not run on the box model"):
-        vistrack.Tracker(algo="pf-eis")
+        vistrack.Tracker(model="box", algo="pf-eis")
     with pytest.raises(ValueError, match="unknown model"):
         vistrack.Tracker(model="nope")
     with pytest.raises(RuntimeError, match="init"):

@@ -14,14 +14,15 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["lis_step", "mode_mean"]
+__all__ = ["lis_step", "mode_mean", "cell_boxes_into", "cloud_stats", "map_cues", "pose_terms", "mixture_into"]
 
 _LOG_2PI = math.log(2.0 * math.pi)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _log_k(new, old, damping, sig_c, jump, eps, sig_s, sig_a):
-    """``log K(new|old)`` of one particle (:meth:`Siam.transition_logpdf`; ``jump``: ``σ_j / σ_c``, ``eps``: ``ε_j``)."""
+    """``log K(new|old)`` of one particle (:meth:`Siam.transition_logpdf`; ``jump``: ``σ_j / σ_c``, ``eps``:
+    ``ε_j``)."""
     sc = sig_c * math.exp((old[2] + old[3]) / 2)
     dx = new[0] - (old[0] + damping * (old[0] - old[4]))
     dy = new[1] - (old[1] + damping * (old[1] - old[5]))
@@ -39,8 +40,9 @@ def _log_k(new, old, damping, sig_c, jump, eps, sig_s, sig_a):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _loglik(z, logit, boxes, cx, cy, k, half, floor, lam, bs0, bs1, w0, h0, gate):
-    """``log r`` of one particle (:meth:`Siam.loglik`): ``λ`` times the bilinear logit plus the box agreement."""
+def _terms(z, logit, boxes, cx, cy, k, half, floor, bs0, bs1, w0, h0, gate):
+    """``(ℓ, a)`` of one pose ``z``: the logit bilinearly interpolated at its centre (``floor`` outside the map) and
+    its box's agreement with the nearest cell's (:meth:`Siam.loglik`, :meth:`Siam.box_agreement`)."""
     m = logit.shape[0]
     u = (z[0] - cx) * k + half
     v = (z[1] - cy) * k + half
@@ -50,9 +52,9 @@ def _loglik(z, logit, boxes, cx, cy, k, half, floor, lam, bs0, bs1, w0, h0, gate
         fu, fv = uc - j0, vc - i0
         top = logit[i0, j0] * (1 - fu) + logit[i0, j0 + 1] * fu
         bottom = logit[i0 + 1, j0] * (1 - fu) + logit[i0 + 1, j0 + 1] * fu
-        ll = lam * (top * (1 - fv) + bottom * fv)
+        lg = top * (1 - fv) + bottom * fv
     else:
-        ll = lam * floor
+        lg = floor
     cu = int(min(max(np.rint(u), 0.0), m - 1.0))
     cv = int(min(max(np.rint(v), 0.0), m - 1.0))
     b = boxes[cv * m + cu]
@@ -63,16 +65,31 @@ def _loglik(z, logit, boxes, cx, cy, k, half, floor, lam, bs0, bs1, w0, h0, gate
     agree = -0.5 * (dx * dx + dy * dy + d2 * d2 + d3 * d3)
     if gate:
         agree = agree / (1.0 + math.exp(-logit[cv, cu]))
-    return ll + agree
+    return lg, agree
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def lis_step(prev, e_k, u_k, u, e, beta, damping, sig_c, jump, eps, sig_s, sig_a, cum, log_pi, mu, sd, logit, boxes, cx, cy, k, half,
-             floor, lam, bs0, bs1, w0, h0, gate, z, x, incr, ll):
-    """One LIS step of the siam model over ``prev (N, 8)``: the prediction ``x`` (``K``'s normals ``e_k (N, 4)``),
-    ``u_k (N,)``: the centre's component where ``eps`` > 0), the draw ``z`` (uniforms ``u (N, 2)``, normals ``e (N, 4)``: the response mixture ``(cum (C,), log π, μ (C, 4),
-    σ (C, 4))`` with probability ``β``, else ``z = x``), ``log r(z)`` into ``ll`` and the log increment
-    ``log r - log q + log K(z)`` into ``incr`` (``-inf`` where ``log K(x)`` is not finite)."""
+def _loglik(z, logit, boxes, cx, cy, k, half, floor, lam, bs0, bs1, w0, h0, gate):
+    """``log r`` of one particle (:meth:`Siam.loglik`): ``λ`` times the bilinear logit plus the box agreement."""
+    lg, agree = _terms(z, logit, boxes, cx, cy, k, half, floor, bs0, bs1, w0, h0, gate)
+    return lam * lg + agree
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def pose_terms(z, logit, boxes, cx, cy, k, half, floor, bs0, bs1, w0, h0, gate, out):
+    """``(ℓ, a)`` of one pose into ``out (2,)`` (:func:`_terms`; the confidence's cues)."""
+    out[0], out[1] = _terms(z, logit, boxes, cx, cy, k, half, floor, bs0, bs1, w0, h0, gate)
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def lis_step(prev, e_k, u_k, u, e, beta, damping, sig_c, jump, eps, sig_s, sig_a, cum, log_pi, mu, sd, logit, boxes,
+             cx, cy, k, half, floor, lam, bs0, bs1, w0, h0, gate, z, x, incr, ll):
+    """One LIS step of the siam model over ``prev (N, 8)``: the prediction ``x`` (``K``'s normals ``e_k (N, 4)``;
+    ``u_k (N,)``: the centre's component where ``eps`` > 0), the draw ``z`` (uniforms ``u (N, 2)``, normals
+    ``e (N, 4)``: the response mixture ``(cum (C,), log π, μ (C, 4), σ (C, 4))`` with probability ``β``, else
+    ``z = x``), ``log r(z)`` into ``ll`` and the log increment ``log r - log q + log K(z)`` into ``incr``
+    (``-inf`` where ``log K(x)`` is not finite)."""
     n = prev.shape[0]
     c = cum.shape[0]
     log_b = math.log(beta) if beta > 0 else -np.inf
@@ -154,3 +171,100 @@ def mode_mean(states, w, side0, radius, out):
     for q in range(d):
         out[q] /= tot
     return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def cell_boxes_into(ltrb, points, cx, cy, scale, w0, h0, out):
+    """:func:`~vistrack.models.siam.observation.cell_boxes` into ``out (M*M, 4)``: each cell's box
+    ``(cx, cy, log w/w_0, log h/h_0)`` from the head's distances ``ltrb (4, M, M)``."""
+    m = ltrb.shape[1]
+    for i in range(m):
+        for j in range(m):
+            k = i * m + j
+            le, to, ri, bo = float(ltrb[0, i, j]), float(ltrb[1, i, j]), float(ltrb[2, i, j]), float(ltrb[3, i, j])
+            out[k, 0] = cx + (points[k, 0] + (ri - le) / 2) / scale
+            out[k, 1] = cy + (points[k, 1] + (bo - to) / 2) / scale
+            out[k, 2] = math.log(max(le + ri, 1e-3) / scale / w0)
+            out[k, 3] = math.log(max(to + bo, 1e-3) / scale / h0)
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def cloud_stats(states, w, damping, out):
+    """The weighted mean of the dynamics' mean predictions ``(cx, cy, lw, lh)`` into ``out[:4]`` and the cloud's
+    weighted centre spread ``sqrt(Σ w |c - c̄|²)`` into ``out[4]`` (:meth:`Siam.observe`)."""
+    n = states.shape[0]
+    mx = my = 0.0
+    for q in range(4):
+        out[q] = 0.0
+    for i in range(n):
+        s = states[i]
+        out[0] += w[i] * (s[0] + damping * (s[0] - s[4]))
+        out[1] += w[i] * (s[1] + damping * (s[1] - s[5]))
+        out[2] += w[i] * s[2]
+        out[3] += w[i] * s[3]
+        mx += w[i] * s[0]
+        my += w[i] * s[1]
+    v = 0.0
+    for i in range(n):
+        dx, dy = states[i, 0] - mx, states[i, 1] - my
+        v += w[i] * (dx * dx + dy * dy)
+    out[4] = math.sqrt(v)
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def map_cues(logit, half_psr, half_rival, out):
+    """The logit map's peak, its peak-to-sidelobe ratio (outside ``(2 half_psr + 1)²`` about the peak) and the peak's
+    lead over the best cell outside ``(2 half_rival + 1)²`` into ``out (3,)`` (:func:`~vistrack.models.siam.lost.psr`,
+    :func:`~vistrack.models.siam.lost.rival`)."""
+    m0, m1 = logit.shape
+    bi, bj, best = 0, 0, -np.inf
+    for i in range(m0):
+        for j in range(m1):
+            if logit[i, j] > best:
+                best, bi, bj = logit[i, j], i, j
+    s = s2 = 0.0
+    cnt = 0
+    second = -np.inf
+    for i in range(m0):
+        for j in range(m1):
+            v = logit[i, j]
+            if abs(i - bi) > half_psr or abs(j - bj) > half_psr:
+                s += v
+                s2 += v * v
+                cnt += 1
+            if (abs(i - bi) > half_rival or abs(j - bj) > half_rival) and v > second:
+                second = v
+    out[0] = best
+    if cnt > 0:
+        mean = s / cnt
+        var = max(s2 / cnt - mean * mean, 0.0)
+        out[1] = (best - mean) / math.sqrt(var) if var > 0 else 0.0
+    else:
+        out[1] = 0.0
+    out[2] = best - second if second > -np.inf else 0.0
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def mixture_into(flat, boxes, tempering, sc, sl, w0, h0, log_pi, mu, sd):
+    """:func:`~vistrack.models.siam.proposal.mixture_parts`: the ``C`` (``len(log_pi)``) strongest cells of the
+    logits ``flat (M*M,)`` (ties by index), their weights ``log π`` and Gaussians ``μ``, ``σ`` (``(C, 4)``)."""
+    c = log_pi.shape[0]
+    top = np.argsort(-flat, kind="mergesort")[:c]
+    amax = tempering * flat[top[0]]
+    acc = 0.0
+    for q in range(c):
+        acc += math.exp(tempering * flat[top[q]] - amax)
+    norm = amax + math.log(acc)
+    for q in range(c):
+        k = top[q]
+        log_pi[q] = tempering * flat[k] - norm
+        for j in range(4):
+            mu[q, j] = boxes[k, j]
+        sd[q, 0] = sc * math.exp(boxes[k, 2]) * w0
+        sd[q, 1] = sc * math.exp(boxes[k, 3]) * h0
+        sd[q, 2] = sl
+        sd[q, 3] = sl
+    return log_pi

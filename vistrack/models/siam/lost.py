@@ -7,12 +7,14 @@ Confidence
     reported lost (``visible=0``, ``low-confidence``) below the calibration's threshold, and ``out-of-frame``
     when the estimate's centre leaves the frame.
 Re-detection
-    after ``redetect_after`` frames reported lost in a row, every ``search_every``-th lost frame is searched
-    wider: one ``511 × 511`` crop about the last reported place at twice the search crop's side, through the
-    head made for its ``32 × 32`` features (:class:`~vistrack.models.siam.network.SiamNetwork`, ``wide``: its
-    logits differ from a normal crop's, so they only name candidates); the ``search_peaks`` best places are
-    confirmed each with a normal search crop about them (one batch through the network), and the most
-    confident confirmation is taken when its confidence clears the threshold: the frame's observation is
+    after ``redetect_after`` frames reported lost in a row, a lost frame is searched wider, then again after
+    ``search_every`` frames, the gap doubling up to ``search_cap`` while the object stays lost (a search costs
+    about six frames' network, so that a long loss costs little more than tracking): one ``511 × 511`` crop
+    about the last reported place at twice the search crop's side, through the head made for its ``32 × 32``
+    features (:class:`~vistrack.models.siam.network.SiamNetwork`, ``wide``: its logits differ from a normal
+    crop's, so they only name candidates); the ``search_peaks`` best places are confirmed each with a normal
+    search crop about them (one batch through the network), and the most confident confirmation is taken when
+    its confidence clears the candidates' threshold: the frame's observation is
     that crop, the particles are re-seeded about the place found and the frame is marked ``redetected``.
 """
 
@@ -22,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ... import kernels
 from ...core.particles import ParticleSet
 from ..calibration import Calibration
 from .network import INSTANCE, WIDE, crop
@@ -62,12 +65,13 @@ class SiamLost:
     """The siam model's confidence, lost test and re-detection (module docstring); the model calls
     :meth:`init_lost` from its constructor."""
 
-    def init_lost(self, confidence, lost_confidence, redetect_after, search_every, search_peaks):
+    def init_lost(self, confidence, lost_confidence, redetect_after, search_every, search_peaks, search_cap):
         """Set up the confidence (``True``: the package's calibrations, a pair of
         :class:`~vistrack.models.calibration.Calibration` (an estimate's, a candidate's) or the path of an ``.npz``
-        holding them; ``False``: none), the threshold (``lost_confidence``; ``None``: the calibration's) and the re-detection (after
-        ``redetect_after`` lost frames, every ``search_every``-th lost frame, ``search_peaks`` candidates;
-        ``redetect_after=None``: never)."""
+        holding them; ``False``: none), the threshold (``lost_confidence``; ``None``: the calibration's) and the
+        re-detection (after ``redetect_after`` lost frames, then after ``search_every`` more, the gap doubling up to
+        ``search_cap`` frames while the object stays lost; ``search_peaks`` candidates; ``redetect_after=None``:
+        never)."""
         cal = (None, None)
         if confidence is True and CALIBRATION.is_file():
             confidence = CALIBRATION
@@ -80,11 +84,14 @@ class SiamLost:
         self.lost_confidence = lost_confidence
         self.redetect = None if redetect_after is None else int(redetect_after)
         self.search_every, self.search_peaks = max(1, int(search_every)), int(search_peaks)
+        self.search_cap = max(self.search_every, int(search_cap))
+        self._next_search, self._search_gap = self.redetect, self.search_every
         self.features = None  # the last frame's cues
         self.conf_value = None
         self._lost_run = 0
         self._level = []  # log r at the reported estimates (the drop cue's running level)
         self._reported = None  # the last reported pose (cx, cy, lw, lh)
+        self._ll, self._ll_obs = None, None  # log r at the last estimate whose cues were read, and its frame
         self._pred = None
 
     @property
@@ -98,21 +105,31 @@ class SiamLost:
     def response_cues(self, obs, pose):
         """The cues of :data:`SEEN` ``(5,)`` of a pose ``(4,)`` on the frame observed as ``obs``: the map's peak
         logit, the logit at the pose, its box's agreement with the head's, the map's PSR and the peak's lead."""
-        s = np.concatenate([pose, pose])[None]
-        logit = float(obs.logit_at(s[:, :2], float(obs.logit.min()))[0])
-        agree = float(self.box_agreement(obs, s)[0])
+        logit, agree = self.pose_terms(obs, pose)
+        if kernels.use():
+            from .kernels import map_cues
+
+            peak, sharp, lead = map_cues(obs.logit, 2, 3, np.empty(3))
+            return np.array([peak, logit, agree, sharp, lead])
         return np.array([float(obs.logit.max()), logit, agree, psr(obs.logit), rival(obs.logit)])
 
     def cues(self, obs, state, particles):
         """The cue vector ``(len(FEATURES),)`` of the estimate ``state (8,)`` with the frame's ``particles``."""
         s = np.asarray(state, float)
         seen = self.response_cues(obs, s[:4])
-        ll = float(self.loglik(obs, s[None])[0])
-        level = np.median(self._level) if self._level else ll
-        w = particles.weights
-        c = particles.states[:, :2] - w @ particles.states[:, :2]
+        ll = self._ll = self.lambda_logit * seen[1] + seen[2]  # log r at the estimate
+        self._ll_obs = obs
+        level = _median(self._level) if self._level else ll
         side = self.side0 * np.exp((s[2] + s[3]) / 2)
-        spread = float(np.sqrt(w @ np.einsum("ij,ij->i", c, c)))
+        if kernels.use():
+            from .kernels import cloud_stats
+
+            spread = float(cloud_stats(np.ascontiguousarray(particles.states, float), particles.weights, 0.0,
+                                       np.empty(5))[4])
+        else:
+            w = particles.weights
+            c = particles.states[:, :2] - w @ particles.states[:, :2]
+            spread = float(np.sqrt(w @ np.einsum("ij,ij->i", c, c)))
         pred = self._pred if self._pred is not None else s[:4]
         step = float(np.hypot(*(s[:2] - pred[:2])) / (self.sigma_xy * side))
         return np.concatenate([seen, [float(np.clip(ll - level, -50.0, 20.0)), particles.ess / particles.n,
@@ -146,15 +163,16 @@ class SiamLost:
             out = "", ""
         self._lost_run = self._lost_run + 1 if out[0] else 0
         if not out[0]:
+            self._next_search, self._search_gap = self.redetect, self.search_every
             self._reported = s[:4].copy()
-            self._level = (self._level + [float(self.loglik(obs, s[None])[0])])[-30:]
+            ll = self._ll if self._ll_obs is obs else float(self.loglik(obs, s[None])[0])
+            self._level = (self._level + [ll])[-30:]
         return out
 
     # -- found -----------------------------------------------------------------------------------------------
     def searching(self):
         """Whether this frame is one the re-detection searches (module docstring)."""
-        return (self.redetect is not None and self._reported is not None and self._lost_run >= self.redetect
-                and (self._lost_run - self.redetect) % self.search_every == 0)
+        return self.redetect is not None and self._reported is not None and self._lost_run >= self._next_search
 
     def search(self, frame):
         """The wide search's candidates, confirmed: a list of ``(confidence, SiamFrame, pose (4,))``, best first
@@ -198,10 +216,12 @@ class SiamLost:
         """The observation of a searched frame whose best confirmation clears the threshold (``found`` set, marked
         ``redetected``), else ``None``."""
         found = self.search(frame)
+        self._next_search = self._lost_run + self._search_gap  # the next search, the gap doubling to search_cap
+        self._search_gap = min(2 * self._search_gap, self.search_cap)
         if not found:
             return None
         conf, obs, pose = found[0]
-        if conf is None or conf < self.threshold:
+        if conf is None or conf < self.candidate_calibration.threshold:
             return None
         obs.found = pose
         return obs
@@ -217,6 +237,13 @@ class SiamLost:
     def redetected(self, obs):
         """Whether the frame observed as ``obs`` is a search's find."""
         return bool(obs.redetected and obs.found is not None)
+
+
+def _median(values):
+    """The median of a short list (as ``np.median``)."""
+    s = sorted(values)
+    k = len(s) // 2
+    return s[k] if len(s) % 2 else (s[k - 1] + s[k]) / 2.0
 
 
 def _points(m):

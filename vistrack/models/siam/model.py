@@ -28,17 +28,21 @@ Estimate
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ... import kernels
 from ...core.gaussian import diag_logpdf
 from ..protocol import VideoModelBase
-from .network import CONTEXT, EXEMPLAR, INSTANCE, SiamNetwork, context_side, crop
-from .observation import SiamFrame, cell_boxes
 from .lost import SiamLost
+from .network import CONTEXT, EXEMPLAR, INSTANCE, SiamNetwork, cell_points, context_side, crop
+from .observation import SiamFrame, cell_boxes
 from .proposal import ResponseProposal
 
 __all__ = ["Siam"]
+
+_POINTS = cell_points(15)
 
 
 class Siam(SiamLost, VideoModelBase):
@@ -82,8 +86,12 @@ class Siam(SiamLost, VideoModelBase):
     widen : float
         The search crop's side grows with the cloud's centre spread: ``s_x · max(1, min(widen, 1 + 2 spread / s_x))``
         (``1``: never).
-    confidence, lost_confidence, redetect_after, search_every, search_peaks
+    confidence, lost_confidence, redetect_after, search_every, search_peaks, search_cap
         What is reported lost and how it is found again (:meth:`~vistrack.models.siam.lost.SiamLost.init_lost`).
+    exemplar_rate, exemplar_every, exemplar_confidence : float, int, float
+        The exemplar's update (:meth:`adapt`): every ``exemplar_every``-th frame whose confidence is at least
+        ``exemplar_confidence``, ``z ← (1 - η) z + η z_t`` with the exemplar features ``z_t`` of the estimate's box,
+        ``η`` = ``exemplar_rate`` (0: the first frame's exemplar throughout).
     network : SiamNetwork or None
         The network (a new one on the package's weights by default).
     """
@@ -91,11 +99,11 @@ class Siam(SiamLost, VideoModelBase):
     dim = 8
 
     def __init__(self, frame, box, *, sigma_xy=0.15, sigma_jump=0.6, jump_share=0.1, jump_when_lost=False,
-                 sigma_scale=0.05,
-                 sigma_aspect=0.1, damping=0.5, prior_std=(0.04, 0.02), lambda_logit=1.0, box_std=(0.03, 0.05), box_gate=False,
-                 share=0.7, cells=12, tempering=1.0, spread=(0.08, 0.05), mode_radius=0.5, widen=1.0,
-                 confidence=True, lost_confidence=None, redetect_after=3, search_every=3, search_peaks=3,
-                 network=None):
+                 sigma_scale=0.05, sigma_aspect=0.1, damping=0.5, prior_std=(0.04, 0.02), lambda_logit=1.0,
+                 box_std=(0.03, 0.05), box_gate=False, share=0.7, cells=12, tempering=1.0, spread=(0.08, 0.05),
+                 mode_radius=0.5, widen=1.0, confidence=True, lost_confidence=None, redetect_after=3, search_every=3,
+                 search_peaks=3, search_cap=24,
+                 exemplar_rate=0.0, exemplar_every=5, exemplar_confidence=0.9, network=None):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
             raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
@@ -118,9 +126,12 @@ class Siam(SiamLost, VideoModelBase):
         self.mode_radius, self.widen = float(mode_radius), float(widen)
         self.net = network or SiamNetwork()
         self.fill = frame.reshape(-1, 3).mean(axis=0)
-        self.net.set_exemplar(crop(frame, self.init_pose[:2], float(context_side(w, h, CONTEXT)), EXEMPLAR,
-                                   self.fill))
-        self.init_lost(confidence, lost_confidence, redetect_after, search_every, search_peaks)
+        self.z0 = self.net.set_exemplar(crop(frame, self.init_pose[:2], float(context_side(w, h, CONTEXT)), EXEMPLAR,
+                                             self.fill)).copy()
+        self.exemplar_rate, self.exemplar_every = float(exemplar_rate), max(1, int(exemplar_every))
+        self.exemplar_confidence = float(exemplar_confidence)
+        self._since_update = 0
+        self.init_lost(confidence, lost_confidence, redetect_after, search_every, search_peaks, search_cap)
 
     # -- geometry --------------------------------------------------------------------------------------------
     def sizes(self, states):
@@ -191,7 +202,8 @@ class Siam(SiamLost, VideoModelBase):
         centre = -0.5 * r2 / sc ** 2 - 2 * np.log(sc)
         if self._jump > 0:
             sj = sc * self.sigma_jump / self.sigma_xy
-            centre = np.logaddexp(np.log1p(-self._jump) + centre, np.log(self._jump) - 0.5 * r2 / sj ** 2 - 2 * np.log(sj))
+            jump = np.log(self._jump) - 0.5 * r2 / sj ** 2 - 2 * np.log(sj)
+            centre = np.logaddexp(np.log1p(-self._jump) + centre, jump)
         dl = new[:, 2:4] - mean[:, 2:4]
         ds = (dl[:, 0] + dl[:, 1]) / 2 / self.sigma_scale
         da = (dl[:, 0] - dl[:, 1]) / self.sigma_aspect
@@ -201,16 +213,43 @@ class Siam(SiamLost, VideoModelBase):
     def search_side(self, pose, spread=0.0):
         """The search crop's side (frame px) about ``pose`` ``(cx, cy, lw, lh)``: the authors' ``s_x`` of its box,
         widened by the cloud's centre ``spread`` (px) up to :attr:`widen` times."""
-        w, h = self.size0 * np.exp(pose[2:4])
-        s_x = float(context_side(w, h, CONTEXT)) * INSTANCE / EXEMPLAR
+        w, h = self.size0[0] * math.exp(pose[2]), self.size0[1] * math.exp(pose[3])
+        p = CONTEXT * (w + h)
+        s_x = math.sqrt((w + p) * (h + p)) * INSTANCE / EXEMPLAR  # the authors' s_z (context_side), scaled
         return s_x * max(1.0, min(self.widen, 1.0 + 2.0 * spread / s_x))
 
     def respond(self, frame, centre, side):
         """The network's response over the search crop of ``side`` px about ``centre``: a :class:`SiamFrame`."""
         logit, ltrb = self.net.search(crop(frame, centre, side, INSTANCE, self.fill))
         scale = INSTANCE / round(side)
-        return SiamFrame(frame, np.asarray(centre, float), scale, logit[0].astype(float),
-                         cell_boxes(ltrb[0], centre, scale, self.size0), self.size0)
+        centre = np.array(centre, float)
+        if kernels.use():
+            from .kernels import cell_boxes_into
+
+            boxes = cell_boxes_into(ltrb[0], _POINTS, centre[0], centre[1], scale, self.size0[0], self.size0[1],
+                                    np.empty((ltrb.shape[2] * ltrb.shape[3], 4)))
+        else:
+            boxes = cell_boxes(ltrb[0], centre, scale, self.size0)
+        return SiamFrame(frame, centre, scale, logit[0].astype(float), boxes, self.size0)
+
+    def pose_terms(self, obs, pose):
+        """``(ℓ, a)``: the logit at the centre of one ``pose`` ``(>=4,)`` and its box's agreement (the confidence's
+        cues; ``log r = λ ℓ + a``)."""
+        z = np.ascontiguousarray(pose, float)
+        if kernels.use():
+            from .kernels import pose_terms
+
+            return tuple(pose_terms(z, *self.frame_args(obs), np.empty(2)))
+        s = np.concatenate([z[:4], z[:4]])[None]
+        return float(obs.logit_at(s[:, :2], float(obs.logit.min()))[0]), float(self.box_agreement(obs, s)[0])
+
+    def frame_args(self, obs):
+        """What the compiled likelihood reads of a frame's response (:mod:`~vistrack.models.siam.kernels`): the
+        logit map, the cells' boxes, the crop's geometry, the logit floor, ``σ_b``, ``σ_bl``, ``w_0``, ``h_0``, the
+        gate."""
+        return (obs.logit, obs.boxes, float(obs.centre[0]), float(obs.centre[1]), obs.scale / obs.cell_px,
+                float(obs.size // 2), float(obs.logit.min()), self.box_std[0], self.box_std[1], float(self.size0[0]),
+                float(self.size0[1]), self.box_gate)
 
     def observe(self, maps, particles):
         """The frame's :class:`SiamFrame`: one search crop about the mean of the dynamics' predictions
@@ -224,9 +263,16 @@ class Siam(SiamLost, VideoModelBase):
             if found is not None:
                 return found
         w = particles.weights
-        pred = self._pred = w @ self.predict_mean(particles.states)[:, :4]
-        c = particles.states[:, :2] - w @ particles.states[:, :2]
-        spread = float(np.sqrt(w @ np.einsum("ij,ij->i", c, c)))
+        if kernels.use():
+            from .kernels import cloud_stats
+
+            stats = cloud_stats(np.ascontiguousarray(particles.states, float), w, self.damping, np.empty(5))
+            pred = self._pred = stats[:4]
+            spread = float(stats[4])
+        else:
+            pred = self._pred = w @ self.predict_mean(particles.states)[:, :4]
+            c = particles.states[:, :2] - w @ particles.states[:, :2]
+            spread = float(np.sqrt(w @ np.einsum("ij,ij->i", c, c)))
         size = self.init_pose[2:] if self._reported is None else self._reported[2:]
         return self.respond(frame, pred[:2], self.search_side(np.r_[pred[:2], size], spread))
 
@@ -266,6 +312,19 @@ class Siam(SiamLost, VideoModelBase):
         k = int(np.argmax(mass))
         sel = near[k] * w
         return sel @ s / sel.sum()
+
+    def adapt(self, obs, estimate):
+        """Update the exemplar on a confident frame (the model's ``exemplar_*`` options); returns whether it did."""
+        self._since_update += 1
+        if (self.exemplar_rate <= 0 or self.conf_value is None or self.conf_value < self.exemplar_confidence
+                or self._since_update < self.exemplar_every):
+            return False
+        s = np.ravel(estimate)
+        w, h = self.size0 * np.exp(s[2:4])
+        z = self.net.features(crop(obs.frame, s[:2], float(context_side(w, h, CONTEXT)), EXEMPLAR, self.fill))
+        self.net.z = (1 - self.exemplar_rate) * self.net.z + self.exemplar_rate * z
+        self._since_update = 0
+        return True
 
     def lis_proposal(self, kernel=None):
         """LIS's proposal for a step with ``kernel``: the response mixture mixed with it

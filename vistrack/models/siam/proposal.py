@@ -37,13 +37,19 @@ def mixture_parts(obs, cells, tempering, spread):
     if key not in obs._cache:
         flat = obs.logit.ravel()
         c = min(int(cells), flat.size)
-        top = np.argpartition(-flat, c - 1)[:c]
-        top = top[np.argsort(-flat[top], kind="stable")]
-        a = tempering * flat[top]
-        log_pi = a - (a.max() + np.log(np.exp(a - a.max()).sum()))
-        mu = obs.boxes[top]
-        size = np.exp(mu[:, 2:]) * obs.size0
-        sd = np.concatenate([spread[0] * size, np.full((c, 2), spread[1])], axis=1)
+        if kernels.use():
+            from .kernels import mixture_into
+
+            log_pi, mu, sd = np.empty(c), np.empty((c, 4)), np.empty((c, 4))
+            mixture_into(flat, obs.boxes, float(tempering), float(spread[0]), float(spread[1]), float(obs.size0[0]),
+                         float(obs.size0[1]), log_pi, mu, sd)
+        else:
+            top = np.argsort(-flat, kind="stable")[:c]  # the strongest cells, ties by index
+            a = tempering * flat[top]
+            log_pi = a - (a.max() + np.log(np.exp(a - a.max()).sum()))
+            mu = obs.boxes[top]
+            size = np.exp(mu[:, 2:]) * obs.size0
+            sd = np.concatenate([spread[0] * size, np.full((c, 2), spread[1])], axis=1)
         obs._cache[key] = (log_pi, mu, sd)
     return obs._cache[key]
 
@@ -116,11 +122,10 @@ class ResponseProposal:
         e = rng.standard_normal((n, 4))
         log_pi, mu, sd = self.parts(obs)
         z, x, incr, ll = np.empty((n, 8)), np.empty((n, 8)), np.empty(n), np.empty(n)
+        (logit, boxes, cx, cy, k, half, floor, bs0, bs1, w0, h0, gate) = m.frame_args(obs)
         lis_step(np.ascontiguousarray(prev, float), e_k, u_k, u, e, float(m.share), m.damping, m.sigma_xy * m.side0,
-                 m.sigma_jump / m.sigma_xy, m._jump, m.sigma_scale, m.sigma_aspect, np.cumsum(np.exp(log_pi)), log_pi, mu, sd, obs.logit, obs.boxes,
-                 float(obs.centre[0]), float(obs.centre[1]), obs.scale / obs.cell_px, float(obs.size // 2),
-                 float(obs.logit.min()), m.lambda_logit, m.box_std[0], m.box_std[1], float(obs.size0[0]),
-                 float(obs.size0[1]), m.box_gate, z, x, incr, ll)
+                 m.sigma_jump / m.sigma_xy, m._jump, m.sigma_scale, m.sigma_aspect, np.cumsum(np.exp(log_pi)), log_pi,
+                 mu, sd, logit, boxes, cx, cy, k, half, floor, m.lambda_logit, bs0, bs1, w0, h0, gate, z, x, incr, ll)
         return z, incr, x, ll
 
     def _sample(self, x, obs, rng, prev):
