@@ -171,10 +171,46 @@ def calibrate(runs, C, max_lost, precision=0.8):
     X, y, ious, groups, _ = frames_data(runs)
     cal = fit(X, y, groups, FEATURES, FEATURES, C)
     cal.threshold = choose_threshold(cal(X), ious, groups, max_lost)
+    cal.threshold, cal.hold = choose_hold(cal, runs, max_lost)
     cX, cy, cg = candidates_data(runs)
     cand = fit(cX, cy, cg, SEEN, SEEN, C)
     cand.threshold = candidate_threshold(cand(cX), cy, cg, precision)
     return cal, cand
+
+
+def reported_lost(conf, threshold, hold):
+    """Which frames ``(T,)`` a run with confidences ``conf (T,)`` (NaN: none, the state kept) reports lost: below
+    ``threshold``, and once lost until the confidence reaches ``threshold + hold`` (:class:`SiamLost`'s rule)."""
+    lost = np.zeros(len(conf), bool)
+    state = False
+    for i, c in enumerate(conf):
+        if np.isfinite(c):
+            state = c < (threshold + hold if state else threshold)
+        lost[i] = state
+    return lost
+
+
+def choose_hold(cal, runs, max_lost, lower=(0.0, 0.05, 0.1, 0.15), holds=(0.0, 0.05, 0.1, 0.15, 0.2, 0.25)):
+    """``(threshold, hold)``: of the thresholds ``lower`` below ``cal``'s and the holds above them, the pair that
+    reports the most frames of zero-IoU runs lost while at most ``max_lost`` of the IoU >= 0.5 frames are (each
+    clip alike; the runs' confidences replayed through :func:`reported_lost`)."""
+    conf = []
+    for _, feats, ious, _, _, truth in runs:
+        c = np.full(len(ious), np.nan)
+        ok = np.isfinite(feats).all(axis=1)
+        c[ok] = cal(feats[ok])
+        conf.append((c, lost_runs_from_iou(ious, truth), (ious >= 0.5) & (truth[:, 2] > 0)))
+    best = (-1.0, cal.threshold, 0.0)
+    for d in lower:
+        for h in holds:
+            t = cal.threshold - d
+            hit = np.array([(reported_lost(c, t, h) & lr).sum() for c, lr, _ in conf])
+            bad = np.array([(reported_lost(c, t, h) & g).sum() for c, _, g in conf])
+            n_lr = sum(lr.sum() for _, lr, _ in conf)
+            n_g = sum(g.sum() for _, _, g in conf)
+            if bad.sum() <= max_lost * n_g and hit.sum() / max(n_lr, 1) > best[0]:
+                best = (hit.sum() / max(n_lr, 1), t, h)
+    return best[1], best[2]
 
 
 def candidate_threshold(conf, y, groups, precision):
@@ -187,20 +223,35 @@ def candidate_threshold(conf, y, groups, precision):
     return float(conf[order][ok[-1]]) if len(ok) else 1.0
 
 
+def run_confidence(cal, feats):
+    """The confidence ``(T,)`` of a run's cue rows (NaN where a frame has none)."""
+    c = np.full(len(feats), np.nan)
+    ok = np.isfinite(feats).all(axis=1)
+    c[ok] = cal(feats[ok])
+    return c
+
+
 def leave_one_out(runs, clips, C, max_lost):
-    """Per clip: (ROC AUC, share of zero-IoU-run frames below the threshold, share of IoU >= 0.5 frames below)."""
+    """Per clip, by the calibration fitted on the other clips: ``(ROC AUC, share of the frames in zero-IoU runs
+    reported lost, share of the IoU >= 0.5 frames reported lost, the two counts, the two lost counts)``."""
     from sklearn.metrics import roc_auc_score
 
     rows = {}
     for c in clips:
         cal, _ = calibrate([r for r in runs if r[0] != c.name], C, max_lost)
-        X, y, ious, _, lost = frames_data([r for r in runs if r[0] == c.name])
-        conf = cal(X)
+        confs, ys, n = [], [], np.zeros(4, int)
+        for _, feats, ious, _, _, truth in (r for r in runs if r[0] == c.name):
+            conf = run_confidence(cal, feats)
+            lost = reported_lost(conf, cal.threshold, cal.hold)
+            lr, good = lost_runs_from_iou(ious, truth), (ious >= 0.5) & (truth[:, 2] > 0)
+            n += [lr.sum(), good.sum(), (lost & lr).sum(), (lost & good).sum()]
+            keep = np.isfinite(conf) & (truth[:, 2] > 0)
+            confs.append(conf[keep])
+            ys.append(ious[keep] > 0)
+        y, conf = np.concatenate(ys), np.concatenate(confs)
         auc = float(roc_auc_score(y, conf)) if 0 < y.sum() < len(y) else float("nan")
-        low = conf < cal.threshold
-        rows[c.name] = (auc, float(low[lost].mean()) if lost.any() else float("nan"),
-                        float(low[ious >= 0.5].mean()) if (ious >= 0.5).any() else float("nan"),
-                        int(lost.sum()), int((ious >= 0.5).sum()), int((low[lost]).sum()), int(low[ious >= 0.5].sum()))
+        rows[c.name] = (auc, n[2] / n[0] if n[0] else float("nan"), n[3] / n[1] if n[1] else float("nan"),
+                        *(int(v) for v in n))
     return rows
 
 
@@ -227,7 +278,8 @@ def main(argv=None):
           f"reported lost, {tot[:, 3].sum() / max(tot[:, 1].sum(), 1):.3f} of {int(tot[:, 1].sum())} frames with "
           "IoU >= 0.5 (leave-one-clip-out)")
     cal, cand = calibrate(runs, args.C, args.max_lost, args.precision)
-    print("frame calibration:", dict(zip(cal.names, np.round(cal.coef, 3))), "threshold", round(cal.threshold, 4))
+    print("frame calibration:", dict(zip(cal.names, np.round(cal.coef, 3))), "threshold", round(cal.threshold, 4),
+          "hold", round(cal.hold, 3))
     print("candidate calibration:", dict(zip(cand.names, np.round(cand.coef, 3))), "threshold",
           round(cand.threshold, 4))
     if args.json:

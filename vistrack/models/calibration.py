@@ -32,6 +32,9 @@ class Calibration:
         The object is reported lost below this confidence, and a search's candidate taken at or above it.
     features : tuple of str
         The order of the cue vectors it is applied to (the model's ``FEATURES``, or a prefix of them).
+    hold : float
+        Hysteresis: an object reported lost is reported again only at a confidence of ``threshold + hold`` or
+        more (a long loss's frames stay lost through a passing rise of the confidence).
     """
 
     names: tuple
@@ -41,8 +44,9 @@ class Calibration:
     intercept: float
     threshold: float
     features: tuple = ()
+    hold: float = 0.0
 
-    #: the arrays of one calibration in the file, each saved as ``<part>_<key>``
+    #: the arrays of one calibration in the file, each saved as ``<part>_<key>`` (``hold``: where present)
     KEYS = ("names", "mean", "scale", "coef", "intercept", "threshold")
 
     @classmethod
@@ -51,8 +55,9 @@ class Calibration:
         applied to cue vectors ordered as ``features``."""
         with np.load(path, allow_pickle=False) as d:
             v = [d[f"{part}_{k}"] for k in cls.KEYS]
+            hold = float(d[f"{part}_hold"]) if f"{part}_hold" in d else 0.0
         return cls(tuple(str(n) for n in v[0]), *(a.astype(float) for a in v[1:4]), float(v[4]), float(v[5]),
-                   tuple(features))
+                   tuple(features), hold)
 
     @classmethod
     def save_all(cls, path, parts, **extra):
@@ -62,7 +67,7 @@ class Calibration:
         for part, c in parts.items():
             arrays.update({f"{part}_names": np.array(c.names), f"{part}_mean": c.mean, f"{part}_scale": c.scale,
                            f"{part}_coef": c.coef, f"{part}_intercept": np.float64(c.intercept),
-                           f"{part}_threshold": np.float64(c.threshold)})
+                           f"{part}_threshold": np.float64(c.threshold), f"{part}_hold": np.float64(c.hold)})
         np.savez(path, **arrays, **extra)
 
     def index(self):

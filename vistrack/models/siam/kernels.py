@@ -176,12 +176,12 @@ def mode_mean(states, w, side0, radius, out):
 @njit(cache=True, nogil=True, error_model="numpy")
 def cell_boxes_into(ltrb, points, cx, cy, scale, w0, h0, out):
     """:func:`~vistrack.models.siam.observation.cell_boxes` into ``out (M*M, 4)``: each cell's box
-    ``(cx, cy, log w/w_0, log h/h_0)`` from the head's distances ``ltrb (4, M, M)``."""
+    ``(cx, cy, log w/w_0, log h/h_0)`` from the head's distances ``ltrb (4, M, M)`` (float64)."""
     m = ltrb.shape[1]
     for i in range(m):
         for j in range(m):
             k = i * m + j
-            le, to, ri, bo = float(ltrb[0, i, j]), float(ltrb[1, i, j]), float(ltrb[2, i, j]), float(ltrb[3, i, j])
+            le, to, ri, bo = ltrb[0, i, j], ltrb[1, i, j], ltrb[2, i, j], ltrb[3, i, j]
             out[k, 0] = cx + (points[k, 0] + (ri - le) / 2) / scale
             out[k, 1] = cy + (points[k, 1] + (bo - to) / 2) / scale
             out[k, 2] = math.log(max(le + ri, 1e-3) / scale / w0)

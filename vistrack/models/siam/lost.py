@@ -33,11 +33,11 @@ from .observation import SiamFrame, cell_boxes
 __all__ = ["FEATURES", "MONOTONE", "CALIBRATION", "SiamLost", "psr"]
 
 #: the cues of an estimate, in the order of a feature vector
-FEATURES = ("peak", "logit", "agree", "psr", "rival", "drop", "ess", "spread", "motion", "size")
-#: cues whose weight must not be negative (a stronger, sharper response never lowers the confidence)
-MONOTONE = ("peak", "logit", "agree", "psr", "rival", "drop")
+FEATURES = ("peak", "logit", "agree", "psr", "rival", "colour", "drop", "ess", "spread", "motion", "size")
+#: cues whose weight must not be negative (a stronger, sharper response, closer colours never lower the confidence)
+MONOTONE = ("peak", "logit", "agree", "psr", "rival", "colour", "drop")
 #: the cues a candidate of a search has (no particle cloud, no dynamics)
-SEEN = FEATURES[:5]
+SEEN = FEATURES[:6]
 #: the calibration shipped with the package
 CALIBRATION = Path(__file__).with_name("confidence.npz")
 
@@ -95,6 +95,12 @@ class SiamLost:
         self._pred = None
 
     @property
+    def hold(self):
+        """How much higher than :attr:`threshold` the confidence of an object reported lost must rise for it to be
+        reported again (the calibration's ``hold``; 0 with ``lost_confidence`` given or without a calibration)."""
+        return 0.0 if self.calibration is None or self.lost_confidence is not None else self.calibration.hold
+
+    @property
     def threshold(self):
         """The confidence below which the object is reported lost (0 without a calibration)."""
         if self.calibration is None:
@@ -103,15 +109,17 @@ class SiamLost:
 
     # -- the cues ----------------------------------------------------------------------------------------------
     def response_cues(self, obs, pose):
-        """The cues of :data:`SEEN` ``(5,)`` of a pose ``(4,)`` on the frame observed as ``obs``: the map's peak
-        logit, the logit at the pose, its box's agreement with the head's, the map's PSR and the peak's lead."""
+        """The cues of :data:`SEEN` ``(6,)`` of a pose ``(4,)`` on the frame observed as ``obs``: the map's peak
+        logit, the logit at the pose, its box's agreement with the head's, the map's PSR, the peak's lead and the
+        colours' match with the first box's."""
         logit, agree = self.pose_terms(obs, pose)
+        colour = self.colour_match(obs, pose)
         if kernels.use():
             from .kernels import map_cues
 
             peak, sharp, lead = map_cues(obs.logit, 2, 3, np.empty(3))
-            return np.array([peak, logit, agree, sharp, lead])
-        return np.array([float(obs.logit.max()), logit, agree, psr(obs.logit), rival(obs.logit)])
+            return np.array([peak, logit, agree, sharp, lead, colour])
+        return np.array([float(obs.logit.max()), logit, agree, psr(obs.logit), rival(obs.logit), colour])
 
     def cues(self, obs, state, particles):
         """The cue vector ``(len(FEATURES),)`` of the estimate ``state (8,)`` with the frame's ``particles``."""
@@ -157,8 +165,10 @@ class SiamLost:
         w, h = self.frame_size
         if not (0 <= s[0] < w and 0 <= s[1] < h):
             out = "out-of-frame", f"centre ({s[0]:.1f}, {s[1]:.1f}) outside the {w}x{h} frame"
-        elif self.conf_value is not None and self.conf_value < self.threshold:
-            out = "low-confidence", f"confidence {self.conf_value:.3f}, below the threshold {self.threshold:.3f}"
+        elif self.conf_value is not None and self.conf_value < self.threshold + (self.hold if self._lost_run else 0):
+            level = self.threshold + (self.hold if self._lost_run else 0)
+            out = "low-confidence", (f"confidence {self.conf_value:.3f}, below the threshold {level:.3f}"
+                                     + (" (a lost object's)" if self._lost_run else ""))
         else:
             out = "", ""
         self._lost_run = self._lost_run + 1 if out[0] else 0
@@ -200,10 +210,10 @@ class SiamLost:
         crops = np.stack([crop(frame, c[:2], sd, INSTANCE, self.fill) for c, sd in zip(centres, sides)])
         logits, ltrbs = self.net.search(crops)
         out = []
-        for c, sd, lg, lt in zip(centres, sides, logits, ltrbs):
+        for c, sd, lg, lt, patch in zip(centres, sides, logits, ltrbs, crops):
             sc = INSTANCE / round(sd)
             obs = SiamFrame(frame, c[:2].copy(), sc, lg.astype(float), cell_boxes(lt, c[:2], sc, self.size0),
-                            self.size0, redetected=True)
+                            self.size0, patch, redetected=True)
             k = int(np.argmax(obs.logit))
             pose = np.r_[obs.boxes[k, :2], last[2:]]
             cal = self.candidate_calibration

@@ -37,7 +37,7 @@ from ...core.gaussian import diag_logpdf
 from ..protocol import VideoModelBase
 from .lost import SiamLost
 from .network import CONTEXT, EXEMPLAR, INSTANCE, SiamNetwork, cell_points, context_side, crop
-from .observation import SiamFrame, cell_boxes
+from .observation import SiamFrame, cell_boxes, colour_histogram
 from .proposal import ResponseProposal
 
 __all__ = ["Siam"]
@@ -126,8 +126,12 @@ class Siam(SiamLost, VideoModelBase):
         self.mode_radius, self.widen = float(mode_radius), float(widen)
         self.net = network or SiamNetwork()
         self.fill = frame.reshape(-1, 3).mean(axis=0)
-        self.z0 = self.net.set_exemplar(crop(frame, self.init_pose[:2], float(context_side(w, h, CONTEXT)), EXEMPLAR,
-                                             self.fill)).copy()
+        s_z = float(context_side(w, h, CONTEXT))
+        exemplar = crop(frame, self.init_pose[:2], s_z, EXEMPLAR, self.fill)
+        self.z0 = self.net.set_exemplar(exemplar).copy()
+        half = 0.5 * EXEMPLAR / round(s_z) * np.array([w, h])  # the box in the exemplar crop
+        c = (EXEMPLAR - 1) / 2
+        self.colour0 = colour_histogram(exemplar, (c - half[0], c - half[1], c + half[0], c + half[1]))
         self.exemplar_rate, self.exemplar_every = float(exemplar_rate), max(1, int(exemplar_every))
         self.exemplar_confidence = float(exemplar_confidence)
         self._since_update = 0
@@ -220,17 +224,18 @@ class Siam(SiamLost, VideoModelBase):
 
     def respond(self, frame, centre, side):
         """The network's response over the search crop of ``side`` px about ``centre``: a :class:`SiamFrame`."""
-        logit, ltrb = self.net.search(crop(frame, centre, side, INSTANCE, self.fill))
+        patch = crop(frame, centre, side, INSTANCE, self.fill)
+        logit, ltrb = self.net.search(patch)
         scale = INSTANCE / round(side)
         centre = np.array(centre, float)
         if kernels.use():
             from .kernels import cell_boxes_into
 
-            boxes = cell_boxes_into(ltrb[0], _POINTS, centre[0], centre[1], scale, self.size0[0], self.size0[1],
+            boxes = cell_boxes_into(ltrb[0].astype(float), _POINTS, centre[0], centre[1], scale, self.size0[0], self.size0[1],
                                     np.empty((ltrb.shape[2] * ltrb.shape[3], 4)))
         else:
             boxes = cell_boxes(ltrb[0], centre, scale, self.size0)
-        return SiamFrame(frame, centre, scale, logit[0].astype(float), boxes, self.size0)
+        return SiamFrame(frame, centre, scale, logit[0].astype(float), boxes, self.size0, patch)
 
     def pose_terms(self, obs, pose):
         """``(ℓ, a)``: the logit at the centre of one ``pose`` ``(>=4,)`` and its box's agreement (the confidence's
@@ -242,6 +247,16 @@ class Siam(SiamLost, VideoModelBase):
             return tuple(pose_terms(z, *self.frame_args(obs), np.empty(2)))
         s = np.concatenate([z[:4], z[:4]])[None]
         return float(obs.logit_at(s[:, :2], float(obs.logit.min()))[0]), float(self.box_agreement(obs, s)[0])
+
+    def colour_match(self, obs, pose):
+        """The Bhattacharyya coefficient ``Σ sqrt(p q_0)`` of the colours in ``pose``'s box on the search crop with
+        the first box's (a cue of the confidence: a look-alike of other colours scores low)."""
+        if obs.crop is None:
+            return 1.0
+        half = 0.5 * obs.scale * self.size0 * np.exp(np.asarray(pose[2:4], float))
+        c = (np.asarray(pose[:2], float) - obs.centre) * obs.scale + (obs.crop.shape[1] - 1) / 2
+        p = colour_histogram(obs.crop, (c[0] - half[0], c[1] - half[1], c[0] + half[0], c[1] + half[1]))
+        return float(np.sqrt(p * self.colour0).sum())
 
     def frame_args(self, obs):
         """What the compiled likelihood reads of a frame's response (:mod:`~vistrack.models.siam.kernels`): the

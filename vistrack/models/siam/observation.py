@@ -16,7 +16,25 @@ import numpy as np
 
 from .network import STRIDE, cell_points
 
-__all__ = ["SiamFrame", "cell_boxes"]
+__all__ = ["SiamFrame", "cell_boxes", "colour_histogram"]
+
+#: colour bins per channel of :func:`colour_histogram` (BGR, 4 x 4 x 4)
+COLOUR_BINS = 4
+
+
+def colour_histogram(image, box):
+    """The normalised BGR histogram ``(64,)`` (4 bins a channel) of the pixels of ``image (3, S, S)`` (float,
+    0..255) inside ``box`` ``(x0, y0, x1, y1)`` (pixels of the image, clipped to it); uniform where it is empty."""
+    s = image.shape[1]
+    x0, y0 = max(0, int(box[0])), max(0, int(box[1]))
+    x1, y1 = min(s, int(np.ceil(box[2]))), min(s, int(np.ceil(box[3])))
+    n = COLOUR_BINS ** 3
+    if x1 <= x0 or y1 <= y0:
+        return np.full(n, 1.0 / n)
+    q = (image[:, y0:y1, x0:x1] * (COLOUR_BINS / 256.0)).astype(np.intp)
+    idx = (q[0] * COLOUR_BINS + q[1]) * COLOUR_BINS + q[2]
+    h = np.bincount(idx.ravel(), minlength=n).astype(float)
+    return h / h.sum()
 
 _POINTS = cell_points(15)
 
@@ -52,6 +70,8 @@ class SiamFrame:
         The head's box per cell, row by row, in the state's coordinates (:func:`cell_boxes`).
     size0 : ndarray (2,)
         The first box's size ``(w_0, h_0)`` (the state's log-sizes are relative to it).
+    crop : ndarray (3, S, S) float32 or None
+        The search crop the network saw (BGR; :func:`~vistrack.models.siam.network.crop`).
     redetected : bool
         Whether this frame's crop is a lost object's re-detection (:mod:`~vistrack.models.siam.lost`).
     found : ndarray (4,) or None
@@ -64,6 +84,7 @@ class SiamFrame:
     logit: np.ndarray
     boxes: np.ndarray
     size0: np.ndarray
+    crop: np.ndarray | None = None
     redetected: bool = False
     found: np.ndarray | None = None
     _cache: dict = field(default_factory=dict, repr=False)
