@@ -1,7 +1,7 @@
-"""vistrack's defaults beside OpenCV's trackers on every real clip with ground truth: the table of record
-(issues 34 and 43).
+"""vistrack's defaults beside NanoTrack v3 and OpenCV's trackers on every real clip with ground truth: the table
+of record (issues 34, 43 and 51).
 
-    python benchmarks/bench_real.py --seeds 3 --sre --speed             # the table of record
+    python benchmarks/bench_real.py --seeds 3 --sre --speed --entries box/lis:100   # the table of record
     python benchmarks/bench_real.py --seeds 1                           # user starts only, one seed
     python benchmarks/bench_real.py --seeds 3 --sre --speed --readme README.md --json real.json
     python benchmarks/bench_real.py --seeds 3 --stress ramp,blur        # also stressed copies (issue 34)
@@ -17,13 +17,16 @@ Starts (``real_corpus.py``)
 Trackers
     vistrack's defaults (``vistrack.Tracker(seed=s)``, what ``vistrack run VIDEO --init X,Y,W,H``
     runs) for seeds 1..``--seeds``; OpenCV's MIL, KCF, CSRT (KCF and CSRT need
-    opencv-contrib-python-headless) and NanoTrack (``cv2.TrackerNano`` with the ONNX weights in
-    ``../shared/data/baselines/nanotrack``), each run once (they are deterministic); a tracker that is
-    missing is skipped with a note. ``--entries [model/]algo:N,...`` adds vistrack configurations.
+    opencv-contrib-python-headless), NanoTrack v2 (``cv2.TrackerNano`` with the ONNX weights in
+    ``../shared/data/baselines/nanotrack``) and NanoTrack v3 with its authors' tracker logic
+    (:class:`vistrack.baselines.nanotrack.NanoTrackV3`, ``NanoV3``), each run once (they are deterministic); a
+    tracker that is missing is skipped with a note. ``--entries [model/]algo:N,...`` adds vistrack
+    configurations (``box/lis:100``: the box model, the hand-crafted one, beside the default).
 Cross-validation (``--candidates FILE``)
-    the box model's configurations tried (``benchmarks/box_candidates.json``; the defaults first) run on
-    every clip and seed (as ``tune_box.py`` runs them); for each clip the configuration best on the *other*
-    clips is scored on it: the leave-one-clip-out mean, printed beside the defaults' in-sample mean.
+    the default model's configurations tried (``benchmarks/siam_candidates.json``; the defaults first; the box
+    model's are ``box_candidates.json``, ``tune_box.py --model box``) run on every clip and seed (as
+    ``tune_box.py`` runs them); for each clip the configuration best on the *other* clips is scored on it: the
+    leave-one-clip-out mean, printed beside the defaults' in-sample mean.
 Speed (``--speed``)
     per clip, in this one process, single-threaded, from the same decoded frames held in memory:
     vistrack (seed 1) and NanoTrack alternately, ``--reps`` times each, the fastest of each;
@@ -72,7 +75,8 @@ from vistrack.io.video import open_video
 from vistrack.system.resources import keep_freed_memory
 
 STRESS_CACHE = Path.home() / ".cache" / "vistrack" / "bench_real"
-CANDIDATES = Path(__file__).with_name("box_candidates.json")
+#: the configurations of the default model tried (its defaults first), for the leave-one-clip-out mean
+CANDIDATES = Path(__file__).with_name("siam_candidates.json")
 DEFAULT = "vistrack"
 #: the trackers run from the robustness starts (issues 43 and 51 compare vistrack with these)
 SRE_TRACKERS = (DEFAULT, "Nano", "CSRT", NANOTRACK_V3)

@@ -72,11 +72,13 @@ def cross_validate(scores):
     return chosen, scores[chosen, np.arange(n_clips)]
 
 
-def evaluate(cands, clips, seeds, *, sre=False, cache=SCORE_CACHE, workers=2):
+def evaluate(cands, clips, seeds, *, sre=False, cache=SCORE_CACHE, workers=2, model=None):
     """``{(name, clip, start_index): [AUC per seed]}`` for every candidate (start 0: the user's box;
-    1.. the robustness starts with ``sre``), cached (:func:`real_corpus.cached_scores`)."""
+    1.. the robustness starts with ``sre``), cached (:func:`real_corpus.cached_scores`); ``model``: the
+    candidates' model (``None``: vistrack's default)."""
     jobs, where = [], []
     for name, opts in cands:
+        opts = {"model": model, **opts} if model else opts
         for c in clips:
             starts = [c.user_box] + (sre_starts(c.user_box) if sre else [])
             for si, start in enumerate(starts):
@@ -99,6 +101,7 @@ def main(argv=None):
     ap.add_argument("--clips", default="", help="clip folder names (default: every one with ground truth)")
     ap.add_argument("--data", default=str(DATA))
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--model", default="box", help="the model the configurations are options of (default box)")
     ap.add_argument("--cache", default=str(SCORE_CACHE), help="the cache of finished runs ('' none)")
     ap.add_argument("--json", default=None, help="write the scores, folds and choices here")
     args = ap.parse_args(argv)
@@ -109,7 +112,8 @@ def main(argv=None):
     if not clips:
         sys.exit(f"no clip with groundtruth_rect.txt under {args.data}")
     seeds = list(range(1, args.seeds + 1))
-    res = evaluate(cands, clips, seeds, sre=args.sre, cache=args.cache or None, workers=args.workers)
+    res = evaluate(cands, clips, seeds, sre=args.sre, cache=args.cache or None, workers=args.workers,
+                   model=args.model)
     names = [c.name for c in clips]
     scores = np.array([[np.mean(res[(n, c, 0)]) for c in names] for n, _ in cands])
     chosen, held = cross_validate(scores)
