@@ -12,8 +12,9 @@ Dynamics ``K`` (AR(2) on the centre, as the box, contour and plate models)
     Gaussian about the first box with zero velocity.
 Observation ``Y_t`` (:class:`~vistrack.models.siam.observation.SiamFrame`)
     one search crop per frame, NanoTrack v3's (:mod:`~vistrack.models.siam.network`), centred on the mean of
-    the dynamics' predictions and sized by the predicted box (the authors' ``s_x``), widened while the cloud is
-    spread: the head's logit ``ℓ`` and box ``b`` per cell.
+    the dynamics' predictions and sized by the last reported box (the authors' ``s_x``; ``widen``: wider while
+    the cloud is spread, off by default: it cost 0.16 of the mean AUC, the object smaller than the exemplar in
+    the crop): the head's logit ``ℓ`` and box ``b`` per cell.
 Likelihood ``log r`` (vectorised over particles)
     ``λ ℓ(c)`` — the logit bilinearly interpolated at the particle's centre ``c`` (the map's lowest value
     outside the crop) — plus the agreement of the particle's box with the head's box ``b`` of the cell nearest
@@ -92,6 +93,9 @@ class Siam(SiamLost, VideoModelBase):
         The exemplar's update (:meth:`adapt`): every ``exemplar_every``-th frame whose confidence is at least
         ``exemplar_confidence``, ``z ← (1 - η) z + η z_t`` with the exemplar features ``z_t`` of the estimate's box,
         ``η`` = ``exemplar_rate`` (0: the first frame's exemplar throughout).
+    hold_when_lost : bool
+        While the object is reported lost, the search crop stays about the last place it was reported (where a
+        hidden object comes back), not about the cloud's prediction.
     network : SiamNetwork or None
         The network (a new one on the package's weights by default).
     """
@@ -102,8 +106,8 @@ class Siam(SiamLost, VideoModelBase):
                  sigma_scale=0.05, sigma_aspect=0.1, damping=0.5, prior_std=(0.04, 0.02), lambda_logit=1.0,
                  box_std=(0.03, 0.05), box_gate=False, share=0.7, cells=12, tempering=1.0, spread=(0.08, 0.05),
                  mode_radius=0.5, widen=1.0, confidence=True, lost_confidence=None, redetect_after=3, search_every=3,
-                 search_peaks=3, search_cap=24,
-                 exemplar_rate=0.0, exemplar_every=5, exemplar_confidence=0.9, network=None):
+                 search_peaks=3, search_cap=24, exemplar_rate=0.0, exemplar_every=5, exemplar_confidence=0.9,
+                 hold_when_lost=False, network=None):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
             raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
@@ -124,11 +128,12 @@ class Siam(SiamLost, VideoModelBase):
         self.share, self.cells, self.tempering = float(share), int(cells), float(tempering)
         self.spread = tuple(float(v) for v in spread)
         self.mode_radius, self.widen = float(mode_radius), float(widen)
+        self.hold_when_lost = bool(hold_when_lost)
         self.net = network or SiamNetwork()
         self.fill = frame.reshape(-1, 3).mean(axis=0)
         s_z = float(context_side(w, h, CONTEXT))
         exemplar = crop(frame, self.init_pose[:2], s_z, EXEMPLAR, self.fill)
-        self.z0 = self.net.set_exemplar(exemplar).copy()
+        self.net.set_exemplar(exemplar)
         half = 0.5 * EXEMPLAR / round(s_z) * np.array([w, h])  # the box in the exemplar crop
         c = (EXEMPLAR - 1) / 2
         self.colour0 = colour_histogram(exemplar, (c - half[0], c - half[1], c + half[0], c + half[1]))
@@ -231,8 +236,8 @@ class Siam(SiamLost, VideoModelBase):
         if kernels.use():
             from .kernels import cell_boxes_into
 
-            boxes = cell_boxes_into(ltrb[0].astype(float), _POINTS, centre[0], centre[1], scale, self.size0[0], self.size0[1],
-                                    np.empty((ltrb.shape[2] * ltrb.shape[3], 4)))
+            boxes = cell_boxes_into(ltrb[0].astype(float), _POINTS, centre[0], centre[1], scale, self.size0[0],
+                                    self.size0[1], np.empty((ltrb.shape[2] * ltrb.shape[3], 4)))
         else:
             boxes = cell_boxes(ltrb[0], centre, scale, self.size0)
         return SiamFrame(frame, centre, scale, logit[0].astype(float), boxes, self.size0, patch)
@@ -289,7 +294,9 @@ class Siam(SiamLost, VideoModelBase):
             c = particles.states[:, :2] - w @ particles.states[:, :2]
             spread = float(np.sqrt(w @ np.einsum("ij,ij->i", c, c)))
         size = self.init_pose[2:] if self._reported is None else self._reported[2:]
-        return self.respond(frame, pred[:2], self.search_side(np.r_[pred[:2], size], spread))
+        centre = self._reported[:2] if self.hold_when_lost and self._lost_run and self._reported is not None \
+            else pred[:2]
+        return self.respond(frame, centre, self.search_side(np.r_[centre, size], spread))
 
     def loglik(self, obs, states):
         """``log r`` of ``states (N, 8)`` -> ``(N,)``: ``λ`` times the logit at the centre plus the agreement
