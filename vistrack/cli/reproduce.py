@@ -11,7 +11,7 @@ from vistrack.reproduce.bearings import BearingsConfig, format_ship_table
 from vistrack.reproduce.clip_suites import experiment_clips
 from vistrack.reproduce.contour import ContourConfig
 from vistrack.reproduce.landmarks import STREAMS, LandmarksConfig
-from vistrack.reproduce.multi_plate import PlatesConfig
+from vistrack.reproduce.multi_plate import PLATE_OUT, PlatesConfig, plate_experiment
 from vistrack.reproduce.plate import PlateConfig
 from vistrack.reproduce.reproduction import reproduce as run_reproduction
 
@@ -167,7 +167,7 @@ def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, schedule
 @click.option("--equal-time", is_flag=True,
               help="With --overlap: set every N after the first so that its time per frame matches the first "
                    "entry's (timed on 60 frames of the first clip, from a quarter of the way in).")
-@engine_options("plate-results")
+@engine_options(PLATE_OUT[False])
 @output_options("Write P(lost) vs frame PNG here.")
 @click.pass_context
 def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targets, equal_time, workers, scheduler,
@@ -195,10 +195,9 @@ def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targ
     with making_clips(make, frames, quiet) as made, one_line():
         clips = experiment_clips(experiment, clips_dir, make, frames, Size().convert(size, None, None), made,
                                  grid=(entries, runs))
-    chosen = {"entries": entries} if "entries" in given or not overlap else {}  # else the experiment's own
-    cfg = PlatesConfig(clips, runs=runs, seed=seed, targets=targets, **chosen) if overlap else \
-        PlateConfig(clips, runs=runs, seed=seed, **chosen)
-    out = out_dir if "out_dir" in given or not overlap else "plate-overlap-results"
+    cfg, out = plate_experiment(clips, runs=runs, seed=seed, overlap=overlap, targets=targets,
+                                entries=entries if "entries" in given or not overlap else None,
+                                out=out_dir if "out_dir" in given else None)
     with progress(experiment, quiet) as hooks:
         done = run_reproduction(cfg, out, json_path=json_path, plots_dir=plots_dir, equal_time=equal_time,
                                 on_equal_time=equal_time_line("frame"), scheduler=scheduler, workers=workers,

@@ -17,8 +17,9 @@ from ..evaluation.multi_target import plates_equal_time, run_plates_task, score_
 from ..registry.comparisons import PLATES
 from ..scoring.mot import pool_scores, require_motmetrics
 from .contour import ContourConfig
+from .plate import PlateConfig
 
-__all__ = ["PlatesConfig", "plates_results"]
+__all__ = ["PlatesConfig", "plates_results", "plate_experiment"]
 
 
 @dataclass
@@ -78,3 +79,17 @@ def plates_results(cfg, tasks, out_dir):
         out.append({"algo": algo, "particles": n, "clips": len(per_clip), **pool_scores(rows),
                     "per_clip": {c: [pool_scores(v)["mota"], pool_scores(v)["idf1"]] for c, v in per_clip.items()}})
     return out
+
+
+#: where ``reproduce plate`` writes its task files unless ``--out`` is given: one plate, several (``--overlap``)
+PLATE_OUT = {False: "plate-results", True: "plate-overlap-results"}
+
+
+def plate_experiment(clips, *, runs, seed, overlap=False, targets=3, entries=None, out=None):
+    """``(config, out)`` of ``vistrack reproduce plate``: a :class:`~vistrack.reproduce.plate.PlateConfig` of one
+    plate, or with ``overlap`` a :class:`PlatesConfig` of ``targets`` slots; ``entries`` ``None``: the
+    experiment's own; ``out`` ``None``: its folder (:data:`PLATE_OUT`)."""
+    chosen = {} if entries is None else {"entries": entries}
+    cfg = PlatesConfig(clips, runs=runs, seed=seed, targets=targets, **chosen) if overlap else \
+        PlateConfig(clips, runs=runs, seed=seed, **chosen)
+    return cfg, PLATE_OUT[bool(overlap)] if out is None else out
