@@ -95,7 +95,9 @@ def test_the_first_run_says_it_compiles_once_and_the_next_compiles_nothing(clip,
     assert [d for d, _ in counts] == sorted(d for d, _ in counts)
     tracking = [k for k, line in enumerate(lines) if "frame/s" in line]
     assert said[-1] < tracking[0], err  # the count finished before the tracking bar appears
-    assert "compile" in events and events[events.index("listed"):] == ["listed", "ready"], events  # all listed
+    assert "compile" in events, events
+    # every kernel compiled in the list (else: python tools/kernel_manifest.py, after a kernel changed)
+    assert events[events.index("listed"):] == ["listed", "ready"], events
     err, events = vistrack_run()
     assert "compiling kernels" not in err and events == ["listed", "ready"], (err, events)
 

@@ -194,7 +194,7 @@ def perturb(clip, out, light, gain, blur, shake, zoom, drop, seed, quiet):
     except ValueError as e:
         raise click.ClickException(str(e)) from None
     out = _out_dir(out)
-    with tqdm(total=len(gt), unit="frame", disable=quiet, desc=f"synth perturb {p.name}") as bar:
+    with tqdm(total=p.kept(len(gt)), unit="frame", disable=quiet, desc=f"synth perturb {p.name}") as bar:
         n = _make(perturb_clip, out, clip=clip, p=p, progress=bar.update)
     if not quiet:
         click.echo(f"wrote {out} ({p.name}: {n} of {len(gt)} frames, ground truth transformed)")
