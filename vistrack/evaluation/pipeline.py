@@ -52,17 +52,19 @@ class Evaluation:
     chosen: dict | None = None
     #: the annotated videos written (``OUT/videos/<tracker>.mp4``)
     videos: list = dataclasses.field(default_factory=list)
+    #: the other files written into ``OUT``, by name
+    files: tuple = ("results.json", "results.csv", "report.md", "report.html")
 
     def wrote(self):
         """The line that names every file written: ``wrote OUT/results.json, results.csv, report.md,
         report.html, 6 plots and 3 annotated videos (videos/)``."""
         out = self.report.parent
-        names = ["results.csv", "report.md"] + (["report.html"] if (out / "report.html").is_file() else [])
+        names = list(self.files[1:])
         counted = [f"{len(self.plots)} plot{'s' * (len(self.plots) != 1)}"] if self.plots else []
         if self.videos:
             counted.append(f"{len(self.videos)} annotated video{'s' * (len(self.videos) != 1)} (videos/)")
         *first, last = names + counted
-        return f"wrote {out / 'results.json'}, {', '.join(first)} and {last}"
+        return f"wrote {out / self.files[0]}, {', '.join(first)} and {last}"
 
 
 def clips_model(clips):
@@ -202,7 +204,8 @@ def evaluate(cfg, out, *, results_dirs=(), results_format="otb", equal_time=Fals
     with lock_out(out):
         results = run_experiment(run, out, **engine)
         if cfg.targets is not None:
-            return Evaluation(write_mot_outputs(out, cfg, results, cfg.targets, chosen), [], out / "report.md", chosen)
+            return Evaluation(write_mot_outputs(out, cfg, results, cfg.targets, chosen), [], out / "report.md", chosen,
+                              files=("results.json", "results.csv", "report.md"))
         results += [score_result_file(c, f, name, results_format)
                     for name, c, f in result_files(results_dirs, cfg.clips, results_format)]
         summaries = summarize(results)
