@@ -6,15 +6,17 @@ call, with their argument types, so that a run compiles exactly those before it 
     python tools/kernel_manifest.py --check    # exit 1 if it differs from what the code calls
 
 Each model and algorithm tracks a few frames of clips of its kind (a small and a large frame, so that
-the paths taken by frame size are seen) in a fresh process, as ``vistrack run`` does (the plan, the
-warm-up on a blank frame, the frames); a kernel counts when Python calls it (compiled at the top
-level, or loaded from numba's cache), not when another kernel does.
+the paths taken by frame size are seen) in a fresh process with an empty kernel cache, as ``vistrack
+run`` does (the plan, the warm-up on a blank frame, the frames); a kernel counts when Python calls it
+(numba compiles it at the top level), not when another kernel does. Every run compiles from scratch:
+about 15 minutes on two busy cores.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -26,21 +28,19 @@ sys.path.insert(0, str(ROOT))
 
 #: in a child process: track CLIP with MODEL and ALGO (TARGETS plates) for a few frames; print the kernels called
 CHILD = r"""
-import importlib, json, pkgutil, sys
+import json, sys
 from numba.core import event
-from numba.core.registry import CPUDispatcher
-import vistrack
 from vistrack.session.plan import execute, prepare
 from vistrack.system.compiling import signature_text
 
 clip, model, algo, targets, from_gt = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5] == "1"
-top, nested, depth = [], set(), [0]
+top, depth = [], [0]
 
 
 class Listener(event.Listener):
     def on_start(self, ev):
-        key = (ev.data["dispatcher"], tuple(ev.data["args"]))
-        (top.append(key) if depth[0] == 0 else nested.add(key))
+        if depth[0] == 0:  # compiled because Python called it (the cache is empty: everything compiles)
+            top.append((ev.data["dispatcher"], tuple(ev.data["args"])))
         depth[0] += 1
 
     def on_end(self, ev):
@@ -52,21 +52,10 @@ targets = int(targets) or None
 plan = prepare(clip, model=model, algo=algo, particles=60, init_gt="" if from_gt else None, targets=targets,
                max_frames=6)
 execute(plan, 60, 0)
-found = []
-for d, args in top:
-    found.append((d.py_func.__module__, d.py_func.__name__, args))
-for mod in pkgutil.walk_packages(vistrack.__path__, "vistrack."):
-    m = sys.modules.get(mod.name)
-    for k, d in (vars(m).items() if m else ()):
-        if isinstance(d, CPUDispatcher) and d.__module__ == mod.name:
-            found += [(mod.name, k, args) for args in d.overloads if (d, args) not in nested]
 out = []
-for module, name, args in found:
-    try:
-        item = [module, name, signature_text(args)]
-    except ValueError:  # a constant's type: a kernel another calls (loaded with it), not Python
-        continue
-    if item not in out:
+for d, args in top:
+    item = [d.py_func.__module__, d.py_func.__name__, signature_text(args)]
+    if d.py_func.__module__.startswith("vistrack.") and item not in out:
         out.append(item)
 print("KERNELS " + json.dumps(out))
 """
@@ -100,8 +89,9 @@ KIND = {"box": "contour", "contour": "contour", "plate": "plate", "landmarks": "
 def called(clip, model, algo, targets=0, from_gt=True):
     """The kernels a run of ``model`` and ``algo`` on ``clip`` (from its first ground-truth box, or without
     one: the plate search) calls: ``[[module, name, argument types]]``."""
-    res = subprocess.run([sys.executable, "-c", CHILD, str(clip), model, algo, str(targets), str(int(from_gt))],
-                         capture_output=True, text=True, cwd=ROOT)
+    with tempfile.TemporaryDirectory() as cache:  # empty: every kernel Python calls compiles, and is seen
+        res = subprocess.run([sys.executable, "-c", CHILD, str(clip), model, algo, str(targets), str(int(from_gt))],
+                             capture_output=True, text=True, cwd=ROOT, env={**os.environ, "NUMBA_CACHE_DIR": cache})
     if res.returncode:
         raise SystemExit(f"{model}/{algo} on {clip}: {res.stderr[-2000:]}")
     line = next(ln for ln in res.stdout.splitlines() if ln.startswith("KERNELS "))
