@@ -316,7 +316,7 @@ def test_13_a_plate_clip_without_a_plate_in_view_says_so(tmp_path, capsys):
 def test_13_demo_says_how_many_real_frames_it_took(tmp_path, capsys, monkeypatch):
     import sys
 
-    demo = sys.modules["vistrack.cli.demo"]  # the package's ``demo`` is the command
+    demo = sys.modules["vistrack.demo.steps"]
     calls = []
     monkeypatch.setattr(demo, "compare",
                         lambda clip, entries, model, runs, seed, out, **hooks: calls.append(clip) or "table")

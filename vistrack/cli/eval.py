@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import click
 
 from vistrack.batch.cluster import run_grid
@@ -15,16 +13,17 @@ from vistrack.reports.eval_report import averages
 
 from .errors import one_line
 from .options import SEED, IntList, StrList, joined, option
-from .progress import progress
+from .progress import Bars, progress
 
 __all__ = ["eval_cmd"]
 
 
-def _chosen(quiet):
-    """``on_equal_time``: the particle counts of equal time on one line (nothing with ``quiet``)."""
-    if quiet:
+def _chosen(bars):
+    """``on_equal_time``: the particle counts of equal time on one line (nothing with ``quiet``), after the bar
+    shown is closed."""
+    if bars.quiet:
         return None
-    return lambda chosen: click.echo("equal time per frame: " + ", ".join(f"{a} N={n}" for a, n in chosen.items()))
+    return lambda chosen: bars.echo("equal time per frame: " + ", ".join(f"{a} N={n}" for a, n in chosen.items()))
 
 
 #: ``eval --help``
@@ -91,11 +90,10 @@ def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, sc
         cfg = eval_config(clips, algos=algos, particles=particles, runs=runs, seed=seed, model=model, targets=targets,
                           results_dirs=results_dirs)
     engine = dict(scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process, resume=resume)
-    with progress("eval", quiet) as hooks:
+    bars = Bars(quiet)
+    with progress("eval", quiet, bars) as hooks:
         done = evaluate(cfg, out_dir, results_dirs=results_dirs, results_format=results_format, equal_time=equal_time,
-                        on_equal_time=_chosen(quiet), **engine, **hooks)
+                        on_equal_time=_chosen(bars), compiling_progress=bars.compiling, **engine, **hooks)
     if not quiet:
         click.echo(averages(out_dir))
-        wrote = "results.csv and report.md" if targets is not None else \
-            f"results.csv, report.md and {len(done.plots)} plots"
-        click.echo(f"wrote {Path(out_dir) / 'results.json'}, {wrote}")
+        click.echo(done.wrote())

@@ -142,11 +142,6 @@ def check_writable(path, what, create=False):
         raise click.ClickException(str(e)) from None
 
 
-#: files of a clip folder that ``run`` reads (besides the frames of ``img/``, ``color/`` or the folder itself)
-CLIP_INPUTS = {"video.mp4", "groundtruth.csv", "groundtruth_rect.txt", "groundtruth.txt", "meta.json"}
-IMAGE_SUFFIXES = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp"}
-
-
 def check_outputs(outputs, video, inputs=()):
     """Raise ``click.ClickException`` when two of ``outputs`` (``{option: path or None}``) are one
     file, or one would overwrite what ``video`` reads: the video file itself, or a clip folder's
@@ -154,10 +149,10 @@ def check_outputs(outputs, video, inputs=()):
     file). Files are compared by identity (:func:`vistrack.io.outputs.file_id`: a hard or symbolic
     link of an input is that input), names that do not exist yet by their real path. Devices such
     as ``/dev/null`` may be shared."""
+    from vistrack.io.clip_files import overwrites_input
     from vistrack.io.outputs import file_id, input_files
 
     read = {file_id(p): p for p in input_files(video, inputs)}
-    video = os.path.realpath(video)
     seen = {}
     for opt, path in outputs.items():
         if path is None:
@@ -169,12 +164,9 @@ def check_outputs(outputs, video, inputs=()):
         if key in seen:
             raise click.ClickException(f"{seen[key]} and {opt} name the same file {path}")
         seen[key] = opt
-        parent, name = os.path.split(real)
-        reads = real == video or (os.path.isdir(video) and (
-            (parent == video and (name in CLIP_INPUTS or os.path.splitext(name)[1].lower() in IMAGE_SUFFIXES))
-            or (os.path.dirname(parent) == video and os.path.basename(parent) in ("img", "color"))))
-        if reads:
-            raise click.ClickException(f"{opt} {path} would overwrite the input it reads ({name}); write elsewhere")
+        if overwrites_input(real, video):
+            raise click.ClickException(f"{opt} {path} would overwrite the input it reads ({os.path.basename(real)}); "
+                                       "write elsewhere")
         if key in read:  # a hard or symbolic link, another spelling
             raise click.ClickException(f"{opt} {path} would overwrite the input it reads ({read[key]}, the same file "
                                        "under another name); write elsewhere")

@@ -12,7 +12,7 @@ from vistrack.reproduce.bearings import BearingsConfig, format_ship_table
 from vistrack.reproduce.clip_suites import experiment_clips
 from vistrack.reproduce.contour import ContourConfig
 from vistrack.reproduce.landmarks import PAPER, STREAMS, LandmarksConfig
-from vistrack.reproduce.multi_plate import PlatesConfig
+from vistrack.reproduce.multi_plate import PlatesConfig, plate_experiment
 from vistrack.reproduce.plate import PlateConfig
 from vistrack.reproduce.reproduction import reproduce as run_reproduction
 
@@ -189,10 +189,9 @@ def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targ
     experiment = "plates" if overlap else "plate"
     with making_clips(make, frames, quiet) as made, one_line():
         clips = experiment_clips(experiment, clips_dir, make, frames, size, made, grid=(entries, runs))
-    chosen = {"entries": entries} if "entries" in given or not overlap else {}  # else the experiment's own
-    cfg = PlatesConfig(clips, runs=runs, seed=seed, targets=targets, **chosen) if overlap else \
-        PlateConfig(clips, runs=runs, seed=seed, **chosen)
-    out = out_dir if "out_dir" in given or not overlap else PlatesConfig.results_dir
+    cfg, out = plate_experiment(clips, runs=runs, seed=seed, overlap=overlap, targets=targets,
+                                entries=entries if "entries" in given or not overlap else None,
+                                out=out_dir if "out_dir" in given else None)
     with progress(experiment, quiet) as hooks:
         done = run_reproduction(cfg, out, json_path=json_path, plots_dir=plots_dir, equal_time=equal_time,
                                 on_equal_time=equal_time_line("frame"), scheduler=scheduler, workers=workers,

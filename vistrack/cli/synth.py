@@ -154,7 +154,8 @@ def longterm(out, size, seed, gap, quiet):
     """
     out = _out_dir(out)
     with tqdm(unit="frame", disable=quiet, desc="synth longterm") as bar:
-        meta = _make(make_longterm_clip, out, size=size, seed=seed, gap=gap, progress=bar.update)
+        meta = _make(make_longterm_clip, out, size=size, seed=seed, gap=gap, progress=bar.update,
+                     frames=lambda n: bar.reset(total=n))
     if not quiet:
         click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({meta['frames']} frames, {size[0]}x{size[1]}, "
                    f"absent in frames " + ", ".join(f"{a}-{b}" for a, b in meta["absent"]) + ")")
@@ -193,7 +194,7 @@ def perturb(clip, out, light, gain, blur, shake, zoom, drop, seed, quiet):
     except ValueError as e:
         raise click.ClickException(str(e)) from None
     out = _out_dir(out)
-    with tqdm(total=len(gt), unit="frame", disable=quiet, desc=f"synth perturb {p.name}") as bar:
+    with tqdm(total=p.kept(len(gt)), unit="frame", disable=quiet, desc=f"synth perturb {p.name}") as bar:
         n = _make(perturb_clip, out, clip=clip, p=p, progress=bar.update)
     if not quiet:
         click.echo(f"wrote {out} ({p.name}: {n} of {len(gt)} frames, ground truth transformed)")

@@ -11,6 +11,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from vistrack.io.clip_files import CLIP_FILES, FRAME_FOLDERS, IMAGE_EXT, SYNTH_RECORDS, VIDEO_EXT
 from vistrack.io.clips import write_track_csv
 from vistrack.system.resources import check_disk
 
@@ -19,8 +20,7 @@ __all__ = ["smooth_noise", "clutter_background", "motion_blur", "lighting", "add
            "SuiteNames"]
 
 #: names in a clip folder that a run reads as part of the clip: never carried from an old folder into a new clip
-CLIP_NAMES = {"video.mp4", "groundtruth.csv", "groundtruth_rect.txt", "groundtruth.txt", "meta.json", "objects.csv",
-              "img", "color"}
+CLIP_NAMES = {*CLIP_FILES, *FRAME_FOLDERS}
 #: the largest side MPEG-4 Part 2 (mp4v) encodes
 MAX_SIDE = 8190
 
@@ -154,8 +154,6 @@ def check_video_size(size):
         raise ValueError(f"frame size {w}x{h}: the clip's MPEG-4 video has at most {MAX_SIDE} pixels a side")
 
 
-#: the record each ``vistrack synth`` command writes beside its clip, and what it names
-SYNTH_RECORDS = {"meta.json": ("kind", "model"), "perturb.json": ("source",), "composite.json": ("source",)}
 
 
 def is_synth_clip(folder):
@@ -182,7 +180,7 @@ def _check_clip_out(out):
     if not out.is_dir() or is_synth_clip(out):
         return
     theirs = sorted(e.name for e in out.iterdir() if not e.name.startswith("."))
-    clip = [n for n in theirs if n in CLIP_NAMES or Path(n).suffix.lower() in (".mp4", ".avi", ".jpg", ".png")]
+    clip = [n for n in theirs if n in CLIP_NAMES or Path(n).suffix.lower() in VIDEO_EXT | IMAGE_EXT]
     if clip:
         raise ValueError(f"{out} holds {', '.join(clip[:3])}{', ...' if len(clip) > 3 else ''}, not a clip vistrack "
                          "synth wrote: the new clip would be mixed with them; give an empty or new folder")

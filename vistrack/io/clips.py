@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .clip_files import FRAME_FOLDERS, GROUNDTRUTH_FILES
 from .outputs import replacing
 from .remote import is_url
 from .video import VideoError, find_groundtruth, groundtruth_origin, open_video, read_rects
@@ -271,9 +272,8 @@ def excerpt_clip(src, dst, frames):
 def _is_clip(p):
     """A clip folder: a synthetic clip, or images (``img/``, VOT's ``color/``, or in the folder) or a
     video with box ground truth of a known layout (OTB, VOT, GOT-10k, LaSOT)."""
-    return ((p / "video.mp4").is_file() or (p / "img").is_dir() or (p / "color").is_dir()
-            or (p / "groundtruth_rect.txt").is_file() or (p / "groundtruth.txt").is_file()
-            or (p / "groundtruth.csv").is_file())
+    return ((p / "video.mp4").is_file() or any((p / f).is_dir() for f in FRAME_FOLDERS)
+            or any((p / g).is_file() for g in (*GROUNDTRUTH_FILES, "groundtruth.csv")))
 
 
 def _dataset_clips(p):

@@ -24,6 +24,8 @@ import os
 from contextlib import contextmanager
 from pathlib import Path
 
+from .clip_files import CLIP_FILES, FRAME_FOLDERS
+
 __all__ = ["OutputBusy", "OutputError", "same_file", "file_id", "check_writable", "input_files", "OutputLock",
            "temporary_name", "is_device", "replacing", "left_note"]
 
@@ -135,10 +137,6 @@ def is_device(path):
     return p.exists() and not p.is_file() and not p.is_dir()
 
 
-#: files of a clip folder that a run reads besides the frames
-CLIP_FILES = ("video.mp4", "groundtruth.csv", "groundtruth_rect.txt", "groundtruth.txt", "meta.json", "objects.csv")
-
-
 def input_files(video, extra=()):
     """The regular files a run of ``video`` (a video file, an image folder or a clip folder) may
     read, plus ``extra`` (a template, an ``--init-gt`` file): the video itself, its folder's
@@ -149,7 +147,7 @@ def input_files(video, extra=()):
     out = [p] if p.is_file() else []
     out += [folder / n for n in CLIP_FILES]
     if p.is_dir():
-        for sub in (folder, folder / "img", folder / "color"):
+        for sub in (folder, *(folder / f for f in FRAME_FOLDERS)):
             try:
                 out += [e for e in sub.iterdir() if e.is_file()]
             except OSError:

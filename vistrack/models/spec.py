@@ -83,10 +83,6 @@ class ModelSpec:
         own kind (the plate's vertices, the landmarks), from the track rows and the ground truth's
         columns; ``None`` (or ``None`` returned, where the truth has no such columns): the box scores of
         :mod:`vistrack.session.run_summary`, as ``eval`` scores a task.
-    compile_seconds : float or None
-        CPU seconds its compiled kernels take to compile on a first run with its default filter (the
-        2-core development machine: ``python benchmarks/first_run.py``), for the notice a first run
-        prints; ``None``: not measured (the notice gives the largest of the registered models').
     """
 
     name: str
@@ -103,7 +99,6 @@ class ModelSpec:
     seed: str = "001"
     options: tuple = ()
     summary: Callable | None = None
-    compile_seconds: float | None = None
 
     @property
     def default_algo(self):

@@ -28,7 +28,7 @@ from .filter_specs import FILTERS, get_filter_spec, runs_on
 __all__ = ["ModelSpec", "MODELS", "LAYOUTS", "DEFAULT_MODEL", "SEARCH_MODEL", "DEFAULT_PARTICLES", "REFERENCE_ALGO",
            "OptionError", "default_comparison", "check_particle_memory", "register", "get_model_spec", "algos_for",
            "all_algos", "check_algo", "clip_model", "model_params", "derived_algos", "targets_model",
-           "compile_seconds", "run_option"]
+           "run_option"]
 
 #: the model ``run``, ``eval``, ``demo``, ``trax`` and ``vistrack.Tracker`` use when neither the user
 #: nor the clip (its ``meta.json``) names one: any object, from a box
@@ -127,16 +127,6 @@ def targets_model(name=None):
     """The model that tracks several targets at once (``run``/``eval --targets``): ``name``, else the first
     registered model with a several-target form (:attr:`~vistrack.models.spec.ModelSpec.targets_class`)."""
     return name or next(n for n, s in MODELS.items() if s.targets_class is not None)
-
-
-def compile_seconds(name):
-    """About how many seconds the kernels of model ``name`` take to compile on a first run
-    (:attr:`~vistrack.models.spec.ModelSpec.compile_seconds`; not measured, or not registered: the most of
-    any registered model)."""
-    spec = MODELS.get(name)
-    if spec is not None and spec.compile_seconds is not None:
-        return spec.compile_seconds
-    return max(s.compile_seconds for s in MODELS.values() if s.compile_seconds is not None)
 
 
 def check_particle_memory(n, bytes_per_particle, algo="", share=0.5, available=None, targets=1):

@@ -14,4 +14,4 @@ def from_box(frame, box, **params):
 
 
 SPEC = ModelSpec("box", description="any object from a box: colour + template appearance learned from the first frame",
-                 from_box=from_box, bytes_per_particle=32_000, model_class=Box, compile_seconds=18)
+                 from_box=from_box, bytes_per_particle=32_000, model_class=Box)
