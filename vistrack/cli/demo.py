@@ -13,6 +13,7 @@ from vistrack.demo.steps import (
     DEMO_ENTRIES,
     REAL_CLIP,
     REAL_ENTRIES,
+    check_demo,
     compare,
     make_demo_clip,
     real_excerpt,
@@ -81,6 +82,8 @@ def demo(ctx, out_dir, frames, runs, seed, real_clip, real_frames):
     Everything goes into OUT (./vistrack-demo by default).
     """
     out, made, (w, h) = Path(out_dir), [], CLIP["size"]
+    with one_line():
+        check_demo(frames, runs, real_frames)
     click.echo(f"1/4 generating a {frames}-frame {w}x{h} clip in {out / CLIP_FOLDER}: a textured object in heavy "
                "clutter that jumps 38-51 px every 25 frames or so")
     with one_line():

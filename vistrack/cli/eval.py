@@ -13,7 +13,7 @@ from vistrack.registry import DEFAULT_MODEL, MODELS, SEARCH_MODEL, algos_for, al
 from vistrack.reports.eval_report import averages
 
 from .errors import one_line
-from .options import SEED, IntList, StrList
+from .options import SEED, IntList, StrList, check_outputs
 from .progress import progress
 
 __all__ = ["eval_cmd"]
@@ -87,6 +87,7 @@ per task) and PNG plots.
 def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, scheduler, workers, timeout, in_process,
              resume, results_dirs, results_format, out_dir, quiet):
     """``vistrack eval``: :data:`EVAL_HELP`."""
+    check_outputs({"--out": out_dir}, None, [*clips, *results_dirs])
     with one_line():
         cfg = eval_config(clips, algos=algos, particles=particles, runs=runs, seed=seed, model=model, targets=targets,
                           results_dirs=results_dirs)

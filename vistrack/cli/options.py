@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-
 import click
 
 from vistrack.io.outputs import check_writable as writable
@@ -139,42 +137,20 @@ def check_writable(path, what, create=False):
         raise click.ClickException(str(e)) from None
 
 
-#: files of a clip folder that ``run`` reads (besides the frames of ``img/``, ``color/`` or the folder itself)
-CLIP_INPUTS = {"video.mp4", "groundtruth.csv", "groundtruth_rect.txt", "groundtruth.txt", "meta.json"}
-IMAGE_SUFFIXES = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp"}
-
-
-def check_outputs(outputs, video, inputs=()):
+def check_outputs(outputs, video=None, inputs=()):
     """Raise ``click.ClickException`` when two of ``outputs`` (``{option: path or None}``) are one
-    file, or one would overwrite what ``video`` reads: the video file itself, or a clip folder's
-    video, ground truth, meta.json or frames, or one of ``inputs`` (a template, an ``--init-gt``
-    file). Files are compared by identity (:func:`vistrack.io.outputs.file_id`: a hard or symbolic
-    link of an input is that input), names that do not exist yet by their real path. Devices such
-    as ``/dev/null`` may be shared."""
-    from vistrack.io.outputs import file_id, input_files
+    file, or one would overwrite what the command reads: ``video`` (a video file, or a clip, image or
+    clips folder: its video, ground truth, meta.json or frames) or one of ``inputs`` (a template, an
+    ``--init-gt`` file, the source of a stressed copy). Files are compared by identity (a hard or
+    symbolic link of an input is that input), names that do not exist yet by their real path; devices
+    such as ``/dev/null`` may be shared (:func:`vistrack.io.outputs.check_outputs`). The inputs stay
+    declared for the command: every writer refuses them too."""
+    from vistrack.io.outputs import check_outputs as check
 
-    read = {file_id(p): p for p in input_files(video, inputs)}
-    video = os.path.realpath(video)
-    seen = {}
-    for opt, path in outputs.items():
-        if path is None:
-            continue
-        real = os.path.realpath(path)
-        if os.path.exists(real) and not os.path.isfile(real):
-            continue
-        key = file_id(real) or real
-        if key in seen:
-            raise click.ClickException(f"{seen[key]} and {opt} name the same file {path}")
-        seen[key] = opt
-        parent, name = os.path.split(real)
-        reads = real == video or (os.path.isdir(video) and (
-            (parent == video and (name in CLIP_INPUTS or os.path.splitext(name)[1].lower() in IMAGE_SUFFIXES))
-            or (os.path.dirname(parent) == video and os.path.basename(parent) in ("img", "color"))))
-        if reads:
-            raise click.ClickException(f"{opt} {path} would overwrite the input it reads ({name}); write elsewhere")
-        if key in read:  # a hard or symbolic link, another spelling
-            raise click.ClickException(f"{opt} {path} would overwrite the input it reads ({read[key]}, the same file "
-                                       "under another name); write elsewhere")
+    try:
+        check(outputs, [video, *inputs])
+    except ValueError as e:
+        raise click.ClickException(str(e)) from None
 
 
 class Ratio(click.ParamType):

@@ -19,6 +19,7 @@ from .errors import one_line
 from .options import SEED, Fraction, IntList, Size, StrList
 from .progress import progress
 from .reproduce_common import (
+    check_suite_outputs,
     config_default,
     default_entries,
     engine_options,
@@ -103,6 +104,7 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
     scaled) at the last frame and averaged over frames, the mean error of
     runs not lost, and the filter's time per frame.
     """
+    check_suite_outputs("contour", clips_dir, json_path)
     with making_clips(make, frames, quiet) as made, one_line():
         clips = experiment_clips("contour", clips_dir, make, frames, Size().convert(size, None, None), made,
                                  grid=(entries, runs))
@@ -192,6 +194,7 @@ def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targ
     if not overlap and (equal_time or "targets" in given):
         raise click.UsageError("--targets and --equal-time are for --overlap")
     experiment = "plates" if overlap else "plate"
+    check_suite_outputs(experiment, clips_dir, json_path)
     with making_clips(make, frames, quiet) as made, one_line():
         clips = experiment_clips(experiment, clips_dir, make, frames, Size().convert(size, None, None), made,
                                  grid=(entries, runs))

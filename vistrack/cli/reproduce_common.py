@@ -11,12 +11,13 @@ import click
 from tqdm import tqdm
 
 from vistrack.registry.filter_specs import get_filter_spec
+from vistrack.reproduce.clip_suites import SUITES
 from vistrack.reproduce.tables import format_table
 
-from .options import SEED
+from .options import SEED, check_outputs
 
 __all__ = ["Entries", "engine_options", "suite_options", "output_options", "making_clips", "equal_time_line",
-           "results_lines", "default_entries", "config_default"]
+           "results_lines", "default_entries", "config_default", "check_suite_outputs"]
 
 
 def _stacked(opts):
@@ -134,3 +135,9 @@ def results_lines(experiment, done):
     if done.plots:
         lines.append(f"plot{'s' if len(done.plots) > 1 else ''} written to {' and '.join(done.plots)}")
     return "\n".join(lines)
+
+
+def check_suite_outputs(experiment, clips_dir, json_path):
+    """Before any clip is made or tracked: ``--json`` must not be a file of the clips it reads (the
+    experiment's ``--clips``, or its default folder; :func:`~vistrack.cli.options.check_outputs`)."""
+    check_outputs({"--json": json_path}, clips_dir or SUITES[experiment][0])

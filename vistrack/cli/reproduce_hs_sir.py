@@ -14,6 +14,7 @@ from .errors import one_line
 from .options import Size
 from .progress import progress
 from .reproduce_common import (
+    check_suite_outputs,
     default_entries,
     engine_options,
     equal_time_line,
@@ -75,6 +76,7 @@ def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, likel
     prints P(lost) (centre error > 50 px at 240-px width) at the last frame and
     averaged, the mean error of runs not lost and the time per frame.
     """
+    check_suite_outputs("hs-sir", clips_dir, json_path)
     with making_clips(make, frames, quiet) as made, one_line():
         clips = experiment_clips("hs-sir", clips_dir, make, frames, Size().convert(size, None, None), made,
                                  grid=(entries, runs))

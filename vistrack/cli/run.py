@@ -213,7 +213,7 @@ def _check_output_paths(video, track_path, out_path, results_path, results_forma
     elif results_path is not None and os.path.exists(results_path) and not os.path.isdir(results_path):
         raise click.ClickException(f"--results {results_path}: the {results_format} layout is a folder "
                                    "(SEQ/SEQ_001.txt inside it), not a file")
-    check_outputs({"--track": track_path, "--out": out_path, "--results": results_path}, video, inputs=inputs)
+    check_outputs({"--track": track_path, "--out": out_path, "--results": results_path}, video, inputs)
 
 
 def _track(plan, particles, seed, show_particles, quiet, outputs):

@@ -14,7 +14,7 @@ from vistrack.data_synth.plate_composite import composite_plate_clip
 from vistrack.data_synth.scene import out_folder
 from vistrack.data_synth.suite import SUITES, check_suite, make_suite
 
-from .options import SEED, Fraction, Ratio, Size
+from .options import SEED, Fraction, Ratio, Size, check_outputs
 
 __all__ = ["synth"]
 
@@ -187,6 +187,7 @@ def perturb(clip, out, light, gain, blur, shake, zoom, drop, seed, quiet):
       vistrack synth perturb ../shared/data/real/girl_otb --out girl-ramp --light ramp
       vistrack synth perturb CLIP --out C2 --blur 9 --shake 6 --zoom 1:0.6 --drop 2 --seed 1
     """
+    check_outputs({"--out": out}, clip)
     try:
         p = Perturbation(light=light, gain=gain, blur=blur, shake=shake, zoom=zoom, drop=drop, seed=seed)
         video, gt = read_clip(clip)
@@ -224,6 +225,7 @@ def plate_on_car(clip, out, layout, width, upscale, blur, noise, seed, quiet):
       vistrack synth plate-on-car ../shared/data/real/car4_otb_first100 --out car4-jp --layout jp
       vistrack synth plate-on-car ../shared/data/real/car4_otb_first100 --out car4-eu --upscale 2
     """
+    check_outputs({"--out": out}, clip)
     try:
         read_clip(clip)
     except ValueError as e:

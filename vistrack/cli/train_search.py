@@ -9,7 +9,7 @@ from vistrack.models.contour.nn import NNSearchConfig
 from vistrack.registry import read_support_points
 
 from .errors import one_line
-from .options import SEED, Size
+from .options import SEED, Size, check_outputs, check_writable
 
 __all__ = ["train_search"]
 
@@ -33,10 +33,13 @@ def train_search(template_path, size, samples, seed, out_path):
     Example:
       vistrack train-search --template clip/meta.json --size 320x240
     """
+    check_writable(out_path, "--out")
+    check_outputs({"--out": out_path}, None, [template_path])
     with one_line():
         _, info = contour.train_search(read_support_points(template_path), size, samples=samples, seed=seed,
                                        path=out_path, notify=lambda m: click.echo(m, err=True))
     if info["trained"]:
-        click.echo(f"trained in {info['seconds']:.1f} s ({info['cpu_seconds']:.1f} s CPU): {info['path']}")
+        click.echo(f"trained in {info['seconds']:.1f} s ({info['cpu_seconds']:.1f} s CPU): "
+                   + (info["path"] if info["kept"] else "not kept (the cache cannot be written; see above)"))
     else:
         click.echo(f"already trained: {info['path']}")

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..data_synth.contour_clip import make_contour_clip
-from ..evaluation.experiment import EvalConfig
+from ..evaluation.experiment import EvalConfig, check_grid_size
 from ..evaluation.pipeline import evaluate
 from ..io.clips import excerpt_clip
 from ..registry import DEFAULT_MODEL, get_model_spec
@@ -18,7 +18,7 @@ from ..registry.comparisons import DEMO
 from ..reports.eval_report import averages
 
 __all__ = ["DEMO_ENTRIES", "CLIP", "CLIP_FOLDER", "REAL_ENTRIES", "REAL_CLIP", "Excerpt", "find_real_clip",
-           "make_demo_clip", "real_excerpt", "compare"]
+           "check_demo", "make_demo_clip", "real_excerpt", "compare"]
 
 #: the comparison on the generated clip (:data:`~vistrack.registry.comparisons.DEMO`)
 DEMO_ENTRIES = DEMO
@@ -53,6 +53,14 @@ def find_real_clip():
         if (base / REAL_CLIP).exists():
             return base / REAL_CLIP
     return None
+
+
+def check_demo(frames, runs, real_frames):
+    """Before anything is made: the demo's two comparisons (``runs`` runs of :data:`DEMO_ENTRIES` on a clip
+    of ``frames`` frames, of :data:`REAL_ENTRIES` on ``real_frames``) checked against memory
+    (:func:`~vistrack.evaluation.experiment.check_grid_size`: a one-line ``TooLarge``)."""
+    check_grid_size(1, DEMO_ENTRIES, runs, frames)
+    check_grid_size(1, REAL_ENTRIES, runs, real_frames)
 
 
 def make_demo_clip(out, frames, seed):

@@ -105,8 +105,9 @@ def prepare(video, *, model=None, algo=None, particles=DEFAULT_PARTICLES, init=N
              "--layout": layout, "--no-colour": no_colour or None, "--search": search}
     params = model_params(name, flags, algo)
     check_algo(name, algo, targets is not None, who=f"--algo {algo}")
-    check_particle_memory(particles, spec.bytes_per_particle, algo, targets=targets or 1)
+    # built first: what the model refuses by sense (more plates than a frame holds) before what memory allows
     built = build_model(name, clip, init=init, init_gt=init_gt, **params)
+    check_particle_memory(particles, spec.bytes_per_particle, algo, targets=targets or 1)
     if search == "nn":  # train (once per template) or load before the first frame
         network_for(built, notify=notify)
     plan = Plan(clip, name, algo, built, frames=_frames(clip.source, max_frames))
