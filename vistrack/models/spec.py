@@ -78,6 +78,10 @@ class ModelSpec:
         algorithms are listed under (``condensation`` on the thesis's models, ``pf-gordon`` on the paper's).
     options : tuple of ModelOption
         Its builder's options that ``run`` sets (with their flags).
+    passes_on : tuple of type
+        Classes its model passes keyword options on to (the box model's ``**appearance`` to
+        :class:`~vistrack.appearance.cues.Appearance`): their documented parameters are options of the model
+        too, each checked against its declared type and range (:mod:`vistrack.registry.option_types`).
     """
 
     name: str
@@ -93,6 +97,7 @@ class ModelSpec:
     targets_class: type | None = None
     seed: str = "001"
     options: tuple = ()
+    passes_on: tuple = ()
 
     @property
     def default_algo(self):
