@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -224,16 +225,18 @@ _FLOATS = (float, np.float64, np.float32)
 
 
 def format_value(v):
-    """A track-CSV cell: integers and flags as integers, numbers with 3 decimals, text as is."""
+    """A track-CSV cell: integers and flags as integers, numbers with 3 decimals, text as is; a number
+    that is not finite (a plate frame's geometry where no plate is in view) an empty cell, which
+    :func:`read_groundtruth_csv` reads back as NaN."""
     if type(v) in _FLOATS:  # the common case first: a track row is mostly floats
-        return f"{float(v):.3f}"
+        return f"{float(v):.3f}" if math.isfinite(v) else ""
     if isinstance(v, (bool, np.bool_)):
         return str(int(v))
     if isinstance(v, (int, np.integer)):
         return str(int(v))
     if isinstance(v, str):
         return v
-    return f"{float(v):.3f}"
+    return f"{float(v):.3f}" if math.isfinite(float(v)) else ""
 
 
 def excerpt_clip(src, dst, frames):

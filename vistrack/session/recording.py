@@ -111,8 +111,8 @@ def _row(model, index, visible, estimate, redetected, ess, ms, lost_reason, conf
 def target_rows(model, res):
     """The track-CSV rows of a frame of a model of several targets (:class:`~vistrack.scoring.mot.MultiTarget`):
     one per reported target, ``frame, visible = 1, id``, the target's :meth:`describe_target`
-    columns, ``ess, ms, lost_reason``; one row with ``visible = 0, id = -1``, NaN geometry and the
-    frame's ``lost_reason`` when none is reported."""
+    columns, ``ess, ms, lost_reason``; one row with ``visible = 0, id = -1``, NaN geometry (empty cells in
+    the CSV) and the frame's ``lost_reason`` when none is reported."""
     ids, states = res.targets
     tail = {"ess": res.ess, "ms": res.ms}
     if not len(ids):
