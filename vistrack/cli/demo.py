@@ -21,7 +21,7 @@ from vistrack.demo.steps import (
 from vistrack.registry import DEFAULT_MODEL
 
 from .errors import one_line
-from .options import SEED
+from .options import SEED, Output
 from .progress import progress
 from .run import run
 
@@ -58,7 +58,7 @@ def _made(out, paths):
 
 
 @click.command()
-@click.option("--out", "out_dir", default="vistrack-demo", show_default=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", default="vistrack-demo", show_default=True, type=Output(file_okay=False),
               help="Folder for clips, annotated videos, tracks, tables and plots.")
 @click.option("--frames", default=100, show_default=True, type=click.IntRange(min=10),
               help="Number of frames to generate.")

@@ -13,7 +13,7 @@ from vistrack.registry import DEFAULT_MODEL, MODELS, SEARCH_MODEL, algos_for, al
 from vistrack.reports.eval_report import averages
 
 from .errors import one_line
-from .options import SEED, IntList, StrList, check_outputs
+from .options import SEED, IntList, Output, StrList, check_outputs
 from .progress import progress
 
 __all__ = ["eval_cmd"]
@@ -82,7 +82,7 @@ per task) and PNG plots.
 @click.option("--results-format", "results_format", type=click.Choice(FORMATS), default="otb", show_default=True,
               help="Format of the --results-dir files: otb (1-based pixels, as the OTB toolkit and pytracking write "
                    "them), got10k or vot (0-based).")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Results folder.")
+@click.option("--out", "out_dir", required=True, type=Output(file_okay=False), help="Results folder.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, scheduler, workers, timeout, in_process,
              resume, results_dirs, results_format, out_dir, quiet):

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import math
+
 import click
 
+from vistrack.io.numbers import parse_float, parse_int
 from vistrack.io.outputs import check_writable as writable
 from vistrack.io.video_errors import quoted
 
-__all__ = ["Ratio",
+__all__ = ["Ratio", "FloatRange", "Output",
            "IntList", "FloatList", "StrList", "Box", "Size", "Fraction", "SEED", "check_writable", "check_outputs"]
 
 #: ``--seed``: numpy takes any non-negative integer
@@ -24,7 +27,7 @@ class IntList(click.ParamType):
         if isinstance(value, list):
             return value
         try:
-            out = [int(v) for v in str(value).split(",") if v.strip()]
+            out = [parse_int(v) for v in str(value).split(",") if v.strip()]
         except ValueError:
             self.fail(f"expected comma-separated integers, got {quoted(value)}", param, ctx)
         return _no_repeats(out, self, param, ctx)
@@ -40,7 +43,7 @@ class FloatList(click.ParamType):
         if isinstance(value, list):
             return value
         try:
-            out = [float(v) for v in str(value).split(",") if v.strip()]
+            out = [parse_float(v) for v in str(value).split(",") if v.strip()]
         except ValueError:
             out = None
         if out is None or not all(v == v and abs(v) != float("inf") for v in out):
@@ -82,7 +85,7 @@ class Box(click.ParamType):
         if isinstance(value, tuple):
             return value
         try:
-            v = tuple(float(s) for s in str(value).split(","))
+            v = tuple(parse_float(s) for s in str(value).split(","))
         except ValueError:
             self.fail(f"expected four numbers x,y,w,h, got {quoted(value)}", param, ctx)
         if len(v) != 4:
@@ -94,18 +97,31 @@ class Box(click.ParamType):
         return v
 
 
-class Fraction(click.FloatRange):
+class FloatRange(click.FloatRange):
+    """click's ``FloatRange``, read strictly (:func:`~vistrack.io.numbers.parse_float`) and refusing a
+    number that is not finite: ``nan`` passes every comparison of click's range check (``--upscale nan``
+    reached OpenCV, ``--noise nan`` a JSON file as ``NaN``). Every float option takes this type."""
+
+    def convert(self, value, param, ctx):
+        """Parse ``value`` into a finite float in the range; a bad value fails with click's one-line usage error."""
+        if isinstance(value, str):
+            try:
+                value = parse_float(value)
+            except ValueError:
+                self.fail(f"expected a number, got {quoted(value)}", param, ctx)
+        if isinstance(value, float) and not math.isfinite(value):
+            self.fail(f"expected a number{self._describe_range()}, got {value}", param, ctx)
+        return super().convert(value, param, ctx)
+
+    def _describe_range(self):
+        return f" in [{self.min:g}, {self.max:g}]" if self.min is not None and self.max is not None else ""
+
+
+class Fraction(FloatRange):
     """A finite number in ``[0, 1]`` (``nan`` is refused, not read as "never")."""
 
     def __init__(self):
         super().__init__(0.0, 1.0)
-
-    def convert(self, value, param, ctx):
-        """Parse ``value`` into a float in ``[0, 1]``; a bad value fails with click's one-line usage error."""
-        v = super().convert(value, param, ctx)
-        if v != v:
-            self.fail("expected a number in [0, 1], got nan", param, ctx)
-        return v
 
 
 class Size(click.ParamType):
@@ -118,7 +134,7 @@ class Size(click.ParamType):
         if isinstance(value, tuple):
             return value
         try:
-            w, h = (int(v) for v in str(value).lower().split("x"))
+            w, h = (parse_int(v) for v in str(value).lower().split("x"))
         except ValueError:
             self.fail(f"expected WIDTHxHEIGHT such as 320x240, got {quoted(value)}", param, ctx)
         if w < 64 or h < 48:
@@ -153,6 +169,17 @@ def check_outputs(outputs, video=None, inputs=()):
         raise click.ClickException(str(e)) from None
 
 
+class Output(click.Path):
+    """The path of an output file or folder, local: a URL is refused with one usage line (a ``Path`` would
+    have made ``http:/host/...`` folders here)."""
+
+    def convert(self, value, param, ctx):
+        """``value`` checked as ``click.Path`` checks it, unless it is a URL."""
+        if "://" in str(value):
+            self.fail(f"{value} is a URL; vistrack writes its outputs to local files: give a local path", param, ctx)
+        return super().convert(value, param, ctx)
+
+
 class Ratio(click.ParamType):
     """``A:B``, two positive numbers (``--zoom 1:0.6``, ``--gain 0.3:1.6``)."""
 
@@ -163,7 +190,7 @@ class Ratio(click.ParamType):
         if isinstance(value, tuple):
             return value
         try:
-            a, b = (float(v) for v in str(value).split(":"))
+            a, b = (parse_float(v) for v in str(value).split(":"))
         except ValueError:
             self.fail(f"expected two numbers A:B, got {value!r}", param, ctx)
         if not (0 < a < float("inf") and 0 < b < float("inf")):

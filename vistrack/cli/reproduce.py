@@ -16,7 +16,7 @@ from vistrack.reproduce.plate import PlateConfig
 from vistrack.reproduce.reproduction import reproduce as run_reproduction
 
 from .errors import one_line
-from .options import SEED, Fraction, IntList, Size, StrList
+from .options import SEED, Fraction, IntList, Output, Size, StrList
 from .progress import progress
 from .reproduce_common import (
     check_suite_outputs,
@@ -57,8 +57,8 @@ def reproduce():
               help="Resample when ESS < threshold·N (default: every step).")
 @click.option("--lis-proposal", default="xi", show_default=True, type=click.Choice(["xi", "position"]),
               help="LIS's proposal: the noise move across the bearing, or §4.5.5's position move.")
-@click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
-@click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
+@click.option("--json", "json_path", type=Output(dir_okay=False), help="Write results as JSON here.")
+@click.option("--plots", "plots_dir", type=Output(file_okay=False),
               help="Write PNGs of error vs time step and error vs N into this folder.")
 @engine_options("bearings-results")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")

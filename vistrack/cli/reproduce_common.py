@@ -14,7 +14,7 @@ from vistrack.registry.filter_specs import get_filter_spec
 from vistrack.reproduce.clip_suites import SUITES
 from vistrack.reproduce.tables import format_table
 
-from .options import SEED, check_outputs
+from .options import SEED, Output, check_outputs
 
 __all__ = ["Entries", "engine_options", "suite_options", "output_options", "making_clips", "equal_time_line",
            "results_lines", "default_entries", "config_default", "check_suite_outputs"]
@@ -37,7 +37,7 @@ def engine_options(default_out):
                      help="LocalCluster worker processes (0: one per core)."),
         click.option("--scheduler", help="Address of a running Dask scheduler [default: a LocalCluster]."),
         click.option("--in-process", is_flag=True, help="LocalCluster workers as threads of this process."),
-        click.option("--out", "out_dir", default=default_out, show_default=True, type=click.Path(file_okay=False),
+        click.option("--out", "out_dir", default=default_out, show_default=True, type=Output(file_okay=False),
                      help="Folder for the per-task result files (OUT/tasks)."),
         click.option("--resume", is_flag=True, help="Keep finished tasks in --out and run only the rest."),
     ]
@@ -65,8 +65,8 @@ def suite_options(clips_help, size, algos, algos_help, runs, frames=300):
 def output_options(plots_help):
     """``--json``, ``--plots`` (with ``plots_help``) and ``--quiet``, shared by the ``reproduce`` commands."""
     opts = [
-        click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here."),
-        click.option("--plots", "plots_dir", type=click.Path(file_okay=False), help=plots_help),
+        click.option("--json", "json_path", type=Output(dir_okay=False), help="Write results as JSON here."),
+        click.option("--plots", "plots_dir", type=Output(file_okay=False), help=plots_help),
         click.option("--quiet", "-q", is_flag=True, help="No progress bar."),
     ]
     return _stacked(opts)

@@ -14,7 +14,7 @@ from vistrack.data_synth.plate_composite import composite_plate_clip
 from vistrack.data_synth.scene import out_folder
 from vistrack.data_synth.suite import SUITES, check_suite, make_suite
 
-from .options import SEED, Fraction, Ratio, Size, check_outputs
+from .options import SEED, FloatRange, Fraction, Output, Ratio, Size, check_outputs
 
 __all__ = ["synth"]
 
@@ -43,7 +43,7 @@ def _make(make, out, **kw):
 
 def _clip_options(size, frames):
     """``--out``, ``--frames``, ``--size`` and ``--seed`` of every ``synth`` command that renders a clip."""
-    opts = [click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write."),
+    opts = [click.option("--out", required=True, type=Output(file_okay=False), help="Clip folder to write."),
             click.option("--frames", default=frames, show_default=True, type=click.IntRange(min=1),
                          help="Number of frames to generate."),
             click.option("--size", default=size, show_default=True, type=Size(),
@@ -135,11 +135,11 @@ def landmarks(out, k, frames, size, seed, clutter_blobs, occlusion, quiet):
 
 
 @synth.command()
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write.")
+@click.option("--out", required=True, type=Output(file_okay=False), help="Clip folder to write.")
 @click.option("--size", default="640x480", show_default=True, type=Size(), help="Frame size WIDTHxHEIGHT in pixels.")
 @click.option("--seed", default=0, show_default=True, type=SEED,
               help="Random seed: the same seed gives the same output, bit for bit.")
-@click.option("--gap", default=2.0, show_default=True, type=click.FloatRange(0.2, 60),
+@click.option("--gap", default=2.0, show_default=True, type=FloatRange(0.2, 60),
               help="Seconds of each absence (out of the frame, then behind the pillar).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def longterm(out, size, seed, gap, quiet):
@@ -162,14 +162,14 @@ def longterm(out, size, seed, gap, quiet):
 
 @synth.command()
 @click.argument("clip", type=click.Path(exists=True))
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="Folder of the stressed copy.")
+@click.option("--out", required=True, type=Output(file_okay=False), help="Folder of the stressed copy.")
 @click.option("--light", type=click.Choice(LIGHTS), default=None,
               help="ramp: the gain goes linearly from the first --gain factor to the second (dark into light); "
                    "flicker: a random gain per frame between them.")
 @click.option("--gain", default=None, type=Ratio(), help="Gain range of --light [default: 0.3:1.6].")
 @click.option("--blur", default=0, show_default=True, type=click.IntRange(0, 200),
               help="Motion blur: a line kernel K px long along a random direction per frame.")
-@click.option("--shake", default=0.0, show_default=True, type=click.FloatRange(0, 1000),
+@click.option("--shake", default=0.0, show_default=True, type=FloatRange(0, 1000),
               help="Camera shake: each frame moved by up to PX px in x and y (uniform).")
 @click.option("--zoom", default=None, type=Ratio(),
               help="Zoom about the object over the clip: its size goes from A to B times its own (1:0.6 shrinks it).")
@@ -202,16 +202,16 @@ def perturb(clip, out, light, gain, blur, shake, zoom, drop, seed, quiet):
 
 @synth.command("plate-on-car")
 @click.argument("clip", type=click.Path(exists=True))
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="Folder of the new clip.")
+@click.option("--out", required=True, type=Output(file_okay=False), help="Folder of the new clip.")
 @click.option("--layout", type=click.Choice(["single-row", "jp"]), default="single-row", show_default=True,
               help="Layout of the rendered plate.")
-@click.option("--width", default=0.4, show_default=True, type=click.FloatRange(0.05, 1.0),
+@click.option("--width", default=0.4, show_default=True, type=FloatRange(0.05, 1.0),
               help="Plate width as a share of the car box's width.")
-@click.option("--upscale", default=1.0, show_default=True, type=click.FloatRange(1.0, 8.0),
+@click.option("--upscale", default=1.0, show_default=True, type=FloatRange(1.0, 8.0),
               help="Enlarge the frames by this factor first (bicubic): a small car's plate is a few px high.")
-@click.option("--blur", default=0.7, show_default=True, type=click.FloatRange(0, 20),
+@click.option("--blur", default=0.7, show_default=True, type=FloatRange(0, 20),
               help="Gaussian blur (px) of the plate, to match the clip's sharpness.")
-@click.option("--noise", default=2.0, show_default=True, type=click.FloatRange(0, 50),
+@click.option("--noise", default=2.0, show_default=True, type=FloatRange(0, 50),
               help="Sensor noise (grey levels) on the plate.")
 @click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the plate's characters and noise.")
 @click.option("--quiet", "-q", is_flag=True, help="Print only errors.")
@@ -247,7 +247,7 @@ def plate_on_car(clip, out, layout, width, upscale, blur, noise, seed, quiet):
               help="Frames per clip [default: 300; 200 for landmarks].")
 @click.option("--size", default=None, type=Size(),
               help="Frame size [default: 320x240 contour, 640x480 plate/landmarks].")
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="Folder to hold the clip folders.")
+@click.option("--out", required=True, type=Output(file_okay=False), help="Folder to hold the clip folders.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def synth_suite(kind, n_clips, seed, frames, size, out, quiet):
     """A suite of clips for `vistrack eval` (OUT/<kind>-<seed>/ each), with each kind's defaults

@@ -9,7 +9,7 @@ from vistrack.models.contour.nn import NNSearchConfig
 from vistrack.registry import read_support_points
 
 from .errors import one_line
-from .options import SEED, Size, check_outputs, check_writable
+from .options import SEED, Output, Size, check_outputs, check_writable
 
 __all__ = ["train_search"]
 
@@ -22,7 +22,7 @@ __all__ = ["train_search"]
 @click.option("--samples", default=NNSearchConfig.samples, show_default=True, type=click.IntRange(min=100),
               help="Simulated training poses.")
 @click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of the simulation and the network.")
-@click.option("--out", "out_path", type=click.Path(dir_okay=False),
+@click.option("--out", "out_path", type=Output(dir_okay=False),
               help="Write the network here [default: the cache, $VISTRACK_CACHE or ~/.cache/vistrack].")
 def train_search(template_path, size, samples, seed, out_path):
     """Train the neural-network local search of LS-N-IPS (thesis §4.3.1, Fig. 4.5) for a contour

@@ -173,7 +173,9 @@ EXCLUSION_FILES = ("full_occlusion.txt", "out_of_view.txt", "absence.label")
 
 def excluded_frames(folder, n):
     """``(n,)`` bool: frames flagged fully occluded or out of view (LaSOT) or absent (GOT-10k) in
-    ``folder``; a flag file that is not 0/1 values is a :class:`VideoError` naming it."""
+    ``folder`` (``n``: the ground truth's rows); a flag file that is not 0/1 values is a :class:`VideoError`
+    naming it, one of another length a :class:`GroundTruthWarning` with both counts (the frames past its
+    end are not flagged; its extra flags are ignored)."""
     out = np.zeros(n, bool)
     for name in EXCLUSION_FILES:
         f = Path(folder) / name
@@ -182,6 +184,10 @@ def excluded_frames(folder, n):
         text = f.read_text(errors="replace").replace(",", " ").split()
         if any(v not in ("0", "1") for v in text):
             raise VideoError(f"{f}: expected 0/1 flags, one per frame")
+        if len(text) != n:
+            warnings.warn(f"{f} has {len(text)} flags for the {n} rows of the ground truth; "
+                          + ("the frames past its end are taken as not flagged" if len(text) < n
+                             else "its extra flags are ignored"), GroundTruthWarning, stacklevel=3)
         flags = np.array([v == "1" for v in text], bool)[:n]
         out[: len(flags)] |= flags
     return out

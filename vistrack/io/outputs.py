@@ -92,7 +92,12 @@ def replacing(path, what="file", tag="tmp"):
     check_not_input(path, what)
     target, direct = output_target(path)
     if direct:
-        yield target
+        try:
+            yield target
+        except OutputError:
+            raise
+        except OSError as e:  # a device's own error (/dev/full: a full disk), naming the output
+            raise OutputError(what, path, e) from None
         return
     lock = OutputLock(target, what)
     earlier = target.is_file()
@@ -126,6 +131,8 @@ def check_writable(path, what, create=False):
     permission. ``None`` passes."""
     if path is None:
         return
+    if "://" in str(path):
+        raise ValueError(f"{what} {path}: a URL; vistrack writes its outputs to local files: give a local path")
     path = os.path.abspath(path)
     parent = os.path.dirname(path)
     if os.path.isdir(path):

@@ -45,12 +45,13 @@ __all__ = ["is_stream",
     "prefetch",
 ]
 
-IMAGE_EXT = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".ppm", ".pgm"}
+IMAGE_EXT = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".ppm", ".pgm", ".webp"}
 VIDEO_EXT = {".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"}
 #: files FFmpeg's text/data demuxers would "decode", which are never videos here
 TEXT_EXT = {".txt", ".csv", ".json", ".md", ".rst", ".xml", ".yaml", ".yml", ".log", ".py", ".html", ".srt"}
 
 
+from .numbers import parse_float  # noqa: E402
 from .video_errors import FrameOrderWarning, VideoDecodeWarning, VideoError, quoted  # noqa: E402
 from .video_writer import CONTAINERS, VideoWriter  # noqa: E402,F401  (the writer's home; re-exported)
 
@@ -61,6 +62,9 @@ class VideoSource:
     Attributes
     ----------
     path : Path
+    shown : str
+        How messages name it: the path, or a URL or stream as given (a ``Path`` would fold ``http://`` into
+        ``http:/``).
     frame_count : int or None
         Number of frames if the container says (always known for image folders).
     fps : float
@@ -71,6 +75,7 @@ class VideoSource:
 
     def __init__(self, path, *, _images=None, remote=None):
         self.path = Path(path)
+        self.shown = str(path) if is_stream(path) or "://" in str(path) else str(self.path)
         self._images = _images
         #: how a URL was read (:class:`~vistrack.io.remote.Remote`), or ``None``
         self.remote = remote
@@ -262,7 +267,11 @@ def open_video(path):
         return VideoSource(p, _images=images)
     if len(videos) > 1:
         raise VideoError(f"{p} holds several videos ({', '.join(v.name for v in videos)}); name one")
-    raise VideoError(f"{p} holds no video and no images")
+    others = sorted({q.suffix.lower() for sub in (p, p / "img", p / "color") if sub.is_dir() for q in sub.iterdir()
+                     if q.is_file() and q.suffix})
+    raise VideoError(f"{p} holds no video and no images (in the folder, img/ or color/: images "
+                     f"{', '.join(sorted(IMAGE_EXT))}; videos {', '.join(sorted(VIDEO_EXT))})"
+                     + (f"; it holds {', '.join(others[:5])} files" if others else ""))
 
 
 def read_rects(path, origin=0):
@@ -282,7 +291,7 @@ def read_rects(path, origin=0):
             continue
         parts = line.replace(",", " ").replace("\t", " ").split()
         try:
-            v = np.array([float(x) for x in parts])
+            v = np.array([parse_float(x) for x in parts])
         except ValueError:
             raise VideoError(f"{path}, line {k}: expected numbers (x,y,w,h or a 4-corner polygon), "
                              f"got {quoted(line)}") from None
