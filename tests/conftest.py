@@ -41,3 +41,22 @@ def ctrl_c_reaches_python():
         yield
     finally:
         signal.signal(signal.SIGINT, saved)
+
+
+@pytest.fixture
+def serve():
+    """``serve(folder, handler)``: the URL of ``folder`` served on 127.0.0.1 by ``handler``
+    (:mod:`server_helpers`: ``QuietHandler`` without range requests by default, ``RangeHandler`` with them)."""
+    from server_helpers import serve_folder
+
+    servers = []
+
+    def start(folder, handler=None):
+        url, server = serve_folder(folder, handler)
+        servers.append(server)
+        return url
+
+    yield start
+    for s in servers:
+        s.shutdown()
+        s.server_close()

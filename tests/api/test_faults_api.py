@@ -96,3 +96,57 @@ def test_a_frame_size_or_kind_change_after_init_is_an_error_as_in_run():
         vistrack.Tracker().init(frames[0], (1, 2, 3))
     with pytest.raises(ValueError, match="box must be four numbers"):
         vistrack.Tracker().init(frames[0], "30,30,25,25")
+
+
+# ------------------------------------------------------------------ the fourth sweep (issue 55)
+
+
+@pytest.mark.parametrize("kw, words", [
+    (dict(lambda_template="x"), "lambda_template must be a finite number >= 0, got 'x'"),
+    (dict(lambda_template=float("nan")), "lambda_template must be a finite number >= 0, got nan"),
+    (dict(prior_std=-1), "prior_std must be 2 finite numbers > 0, got -1"),
+    (dict(prior_std=(0.1, float("nan"))), "prior_std must be 2 finite numbers > 0, got (0.1, nan)"),
+    (dict(lost_confidence=2), "lost_confidence must be None or a finite number in [0, 1], got 2"),
+    (dict(redetect="yes"), "redetect must be None or a finite number >= 0, got 'yes'"),
+    (dict(map_stride=1.5), "map_stride must be an integer >= 1, got 1.5"),
+    (dict(interpolation="cubic"), "interpolation must be one of 'area', 'linear', got 'cubic'"),
+    (dict(dcf=1), "dcf must be True or False, got 1"),
+], ids=lambda v: str(v)[:28])
+def test_the_tracker_checks_each_model_option_against_its_declared_type_and_range(kw, words):
+    """Tracker(lambda_template='x') was accepted (numpy's UFuncTypeError at init), prior_std=-1 raised
+    'int object is not subscriptable', lambda_template=nan and lost_confidence=2 were accepted,
+    redetect='yes' said 'could not convert string to float'. Each is now one line naming the option."""
+    import vistrack
+
+    with pytest.raises(ValueError) as e:
+        vistrack.Tracker(**kw)
+    assert str(e.value) == words
+
+
+def test_good_model_options_pass_and_are_the_declared_ones():
+    import vistrack
+    from vistrack.registry import get_model_spec
+    from vistrack.registry.option_types import declared_options
+
+    vistrack.Tracker(lambda_template=2, lost_confidence=None, prior_std=[0.1, 0.05], interpolation="linear")
+    d = declared_options(get_model_spec("box"))
+    assert d["lambda_template"].bounds == (0.0, False, float("inf"), False)  # Appearance's, passed on
+    assert d["lost_confidence"].none_ok and d["lost_confidence"].bounds == (0.0, False, 1.0, False)
+    assert d["prior_std"].kind == "tuple" and d["prior_std"].element == "float"
+
+
+def test_the_tracker_attributes_before_init_are_none():
+    """Tracker().box before init raised AttributeError: 'NoneType' object has no attribute 'box'."""
+    import vistrack
+
+    t = vistrack.Tracker()
+    assert (t.box, t.box_estimate, t.visible, t.confidence, t.lost_reason, t.particles, t.result) == (None,) * 7
+    assert "not started" in repr(t)
+
+
+def test_run_checks_its_model_options_with_the_same_check():
+    from vistrack.registry import model_params
+
+    assert model_params("plate", {"--targets": 3}) == {"targets": 3}
+    with pytest.raises(ValueError, match="targets must be an integer, got 2.5"):
+        model_params("plate", {"--targets": 2.5})

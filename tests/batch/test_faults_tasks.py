@@ -211,3 +211,46 @@ def test_local_workers_leave_ctrl_c_to_the_client():
     finally:
         signal.signal(signal.SIGINT, saved)
         logging.getLogger("distributed").setLevel(level)
+
+
+# ------------------------------------------------------------------ the fourth sweep (issue 55)
+
+
+@pytest.mark.parametrize("damage", ["a key lost", "a list cut short", "a value changed"])
+def test_a_task_file_damaged_under_its_fingerprint_is_run_again(tmp_path, damage):
+    """A damaged task file that kept its fingerprint was reused on --resume: without its 'reported' key, the
+    run's reported-lost fraction became 0; with lists cut short, numpy's 'inhomogeneous shape' ended
+    eval. Every task file holds a digest of what its task wrote."""
+    import json
+
+    from vistrack.batch import tasks
+    from vistrack.batch.tasks import TaskFailed
+
+    task = {"name": "t", "algo": "lis", "particles": 10, "run": 0}
+    p = tmp_path / "tasks" / "t.json"
+    tasks.write_task_result(p, {"error": [1.0, 2.0, 3.0], "reported": [1, 1, 0], "frames": 3}, task)
+    assert tasks.task_done(task, tmp_path) and tasks.load_task_results([task], tmp_path)[0]["frames"] == 3
+    data = json.loads(p.read_text())
+    if damage == "a key lost":
+        del data["reported"]
+    elif damage == "a list cut short":
+        data["error"] = data["error"][:2]
+    else:
+        data["frames"] = 4
+    p.write_text(json.dumps(data))
+    assert not tasks.task_done(task, tmp_path) and tasks.stale_tasks([task], tmp_path) == [task]
+    with pytest.raises(TaskFailed, match=f"task file {p} was changed or damaged after its task wrote it"):
+        tasks.load_task_results([task], tmp_path)
+
+
+def test_the_code_signature_covers_the_whole_package():
+    """The signature hashed the modules of vistrack/batch/ alone since the packages moved: a change of a
+    model or a score kept old task files on --resume."""
+    from pathlib import Path
+
+    import vistrack
+    from vistrack.batch import tasks
+
+    root = Path(vistrack.__file__).parent
+    assert Path(tasks.__file__).resolve().parents[1] == root.resolve()
+    assert len(list(root.rglob("*.py"))) > 100  # what the signature reads: every module, not one folder's

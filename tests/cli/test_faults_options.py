@@ -119,3 +119,83 @@ def test_init_gt_given_a_folder_says_so(tmp_path):
     seq = otb_folder(tmp_path / "seq", 3)
     code, _, err = run(["run", seq, "--init-gt", seq, "-q"])
     assert "does not exist" not in one_error(code, err, f"--init-gt: {seq} is a folder; give a ground-truth file")
+
+
+# ------------------------------------------------------------------ the fourth sweep (issue 55)
+
+
+@pytest.mark.parametrize("text", ["4_1,48,25,19", "٣,48,25,19", "0x10,48,25,19", "41 ,48,25,1 9"])
+def test_init_is_parsed_strictly(tmp_path, capsys, text):
+    """--init '4_1,48,25,19' was read as 41 (Python's float takes underscores, and Unicode digits)."""
+    video = tmp_path / "v.avi"
+    write_video(video, 3)
+    code, _, err = run(["run", video, "--init", text, "-q"], capsys)
+    one_error(code, err, "'--init': expected four numbers x,y,w,h")
+
+
+def test_strict_numbers_known_answers():
+    from vistrack.io.numbers import parse_float, parse_int
+
+    assert [parse_float(s) for s in ("41", " -4.5 ", "1e3", ".5", "5.", "+2E-1")] == [41, -4.5, 1000, 0.5, 5, 0.2]
+    assert str(parse_float("nan")) == "nan" and parse_float("-inf") == float("-inf")
+    assert parse_int(" 17 ") == 17
+    for bad in ("4_1", "٣", "0x10", "1e", "", "1 2", "½"):
+        with pytest.raises(ValueError):
+            parse_float(bad)
+    for bad in ("1.0", "1_000", "1e3"):
+        with pytest.raises(ValueError):
+            parse_int(bad)
+
+
+def _float_options():
+    """Every (command path, option) of the command line whose values are floats."""
+    import click
+
+    from vistrack.cli import cli
+
+    def walk(cmd, path):
+        if isinstance(cmd, click.Group):
+            for name, sub in cmd.commands.items():
+                yield from walk(sub, [*path, name])
+            return
+        for p in cmd.params:
+            if isinstance(p, click.Option) and isinstance(p.type, (click.types.FloatParamType, click.FloatRange)):
+                yield path, p.opts[0]
+
+    return list(walk(cli, []))
+
+
+def test_every_float_option_refuses_nan():
+    """click's FloatRange lets NaN through (every comparison with it is false): synth plate-on-car
+    --upscale nan reached OpenCV ('inv_scale_x > 0'), --noise nan wrote "noise": NaN into composite.json,
+    --width nan gave 'cannot convert float NaN to integer'. Every float option is options.FloatRange."""
+    from vistrack.cli.options import FloatRange
+
+    found = _float_options()
+    assert {opt for _, opt in found} >= {"--upscale", "--noise", "--width", "--blur", "--shake", "--gap",
+                                         "--ess-threshold", "--occlusion"}
+    for path, opt in found:
+        from vistrack.cli import cli
+
+        cmd = cli
+        for name in path:
+            cmd = cmd.commands[name]
+        ptype = next(p.type for p in cmd.params if p.opts[0] == opt)
+        assert isinstance(ptype, FloatRange), (path, opt)
+        with pytest.raises(Exception) as e:
+            ptype.convert("nan", None, None)
+        assert "got nan" in str(e.value.format_message()), (path, opt)
+
+
+@pytest.mark.parametrize("opt", ["--upscale", "--noise", "--width", "--blur"])
+def test_plate_on_car_refuses_nan(tmp_path, capsys, opt):
+    image_folder(tmp_path / "car", 3)
+    code, _, err = run(["synth", "plate-on-car", tmp_path / "car", "--out", tmp_path / "o", opt, "nan"], capsys)
+    one_error(code, err, f"Invalid value for '{opt}': expected a number in [", "got nan")
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_url_is_no_output_folder_either(tmp_path, capsys):
+    code, _, err = run(["synth-suite", "--kind", "contour", "--clips", "1", "--out", "http://127.0.0.1:9/s"], capsys)
+    one_error(code, err, "'--out': http://127.0.0.1:9/s is a URL; vistrack writes its outputs to local files")
+    assert not (tmp_path / "http:").exists()

@@ -100,3 +100,70 @@ def test_a_large_suite_is_named_lazily(tmp_path):
         make_contour_clip(out / f"contour-{s:02d}", frames=2, size=(96, 72), seed=s, clutter="low", distractor=False)
     assert prepare_suite(out, SuiteNames("contour", 2, 10**9)) == ["contour-01"]
     assert sorted(p.name for p in out.iterdir()) == ["contour-02", "contour-07"]
+
+
+# ------------------------------------------------------------------ the fourth sweep (issue 55)
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["synth", "contour", "--frames", "1000000000000", "--size", "64x48", "--out", "{d}/c"],
+     ["a clip of 1000000000000 frames at 64x48 needs about", "not even one clip fits: give at most", "--frames"]),
+    (["synth", "plate", "--frames", "1000000000000", "--out", "{d}/c"], ["a clip of 1000000000000 frames"]),
+    (["synth", "landmarks", "--frames", "1000000000000", "--out", "{d}/c"], ["a clip of 1000000000000 frames"]),
+    (["synth", "plate", "--cars", "1000000000", "--frames", "3", "--out", "{d}/c"],
+     ["--cars 1000000000: their sprites need about", "give at most"]),
+    (["synth", "landmarks", "--clutter-blobs", "1000000000", "--frames", "3", "--out", "{d}/c"],
+     ["--clutter-blobs 1000000000: a 640x480 frame shows at most 5925 blobs apart; give at most 5925"]),
+    (["synth", "landmarks", "--k", "100000", "--frames", "3", "--out", "{d}/c"],
+     ["--k 100000: a 640x480 frame shows at most 94 landmarks apart on their ring; give at most 94"]),
+    (["synth-suite", "--kind", "contour", "--clips", "2", "--frames", "1000000000000", "--out", "{d}/s"],
+     ["2 clips of 1000000000000 frames", "not even one clip fits", "--frames"]),
+    (["demo", "--runs", "1000000000", "--out", "{d}/demo"], ["a grid of 3000000000 tasks", "give at most"]),
+    (["reproduce", "bearings", "--ships", "1000000", "--runs", "2", "--sequences", "2", "--steps", "5",
+      "--particles", "50", "--in-process", "--out", "{d}/B"], ["1000000 ship(s)", "--ships"]),
+], ids=["synth-contour-frames", "synth-plate-frames", "synth-landmarks-frames", "synth-plate-cars",
+        "synth-landmarks-blobs", "synth-landmarks-k", "synth-suite-frames", "demo-runs", "bearings-ships"])
+def test_every_size_is_checked_before_anything_is_made(tmp_path, argv, words):
+    """synth --frames 10^12 started with an ETA of 170,000 hours; --cars, --clutter-blobs and --k ran out of
+    memory (numpy's 'Unable to allocate 74.5 GiB' for --k); synth-suite advised 'give at most 0 clips';
+    demo --runs made its clip and ran three trackers before refusing the grid; reproduce bearings --ships
+    10^6 failed after 53 s with every worker killed. Each is one line naming the size, before work."""
+    code, _, err = run([a.format(d=tmp_path) for a in argv])
+    one_error(code, err, *words)
+    assert "give at most 0" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_clip_sizes_known_answers(tmp_path, monkeypatch):
+    from vistrack.data_synth.clip_sizes import CAR_BYTES, check_clip_sizes
+    from vistrack.system import resources
+    from vistrack.system.resources import TooLarge
+
+    check_clip_sizes(tmp_path, 10, (640, 480), cars=3, k=8, clutter_blobs=6)
+    check_clip_sizes(tmp_path, 10, (640, 480), k=94, clutter_blobs=5925)  # the most a 640x480 frame shows apart
+    for kw, words in ((dict(k=95), "--k 95"), (dict(clutter_blobs=5926), "--clutter-blobs 5926")):
+        with pytest.raises(TooLarge, match=words):
+            check_clip_sizes(tmp_path, 10, (640, 480), **kw)
+    monkeypatch.setattr(resources, "available_memory", lambda: 200 * CAR_BYTES)  # half of it holds 100 cars
+    check_clip_sizes(tmp_path, cars=100)
+    with pytest.raises(TooLarge, match="give at most 100 cars"):
+        check_clip_sizes(tmp_path, cars=101)
+
+
+def test_eval_workers_are_capped_at_what_the_machine_and_the_tasks_use(tmp_path):
+    """eval --workers 1000 started hundreds of worker processes and was killed for memory after 26 s."""
+    from vistrack.system.resources import WORKER_BYTES, worker_count
+
+    assert worker_count(1000, 6, available=2**40, cores=2) == (4, "note: --workers 1000 capped at 4 (two per core "
+                                                                  "of the machine's 2 cores)")
+    assert worker_count(1000, 3, available=2**40, cores=8)[0] == 3
+    n, note = worker_count(1000, 600, available=20 * WORKER_BYTES, cores=64)
+    assert n == 10 and "half the" in note
+    assert worker_count(0, 600, available=2**40, cores=2) == (2, None)  # none given: one per core, no note
+    assert worker_count(2, 6, available=2**40, cores=1) == (2, None)
+    from vistrack.data_synth.contour_clip import make_contour_clip
+
+    make_contour_clip(tmp_path / "c1", frames=3, size=(96, 72), seed=1, clutter="low", distractor=False)
+    code, _, err = run(["eval", tmp_path / "c1", "--algos", "bootstrap", "--particles", "10", "--runs", "1",
+                        "--workers", "1000", "--in-process", "--out", tmp_path / "E", "-q"])
+    assert code == 0 and "note: --workers 1000 capped at 1 (1 task(s) to run)" in err, err

@@ -266,3 +266,174 @@ def test_fit_plate_refuses_clips_without_plates(tmp_path, capsys):
     make_contour_clip(tmp_path / "c1", frames=2, size=(96, 72), seed=1, clutter="low", distractor=False)
     code, _, err = run(["fit-plate", str(tmp_path)], capsys)
     assert code != 0 and "c1 is not a plate clip (its groundtruth.csv has no plate vertices x0..y3)" in err
+
+
+# ------------------------------------------------------------------ the fourth sweep (issue 55)
+
+
+@pytest.mark.parametrize("name, flags, words", [
+    ("full_occlusion.txt", "0,0,1,0", "has 4 flags for the 8 rows of the ground truth; the frames past its end"),
+    ("out_of_view.txt", "0,1,0,0,0,0,0,0,0,0", "has 10 flags for the 8 rows of the ground truth; its extra flags"),
+    ("absence.label", "0\n0\n1\n", "has 3 flags for the 8 rows of the ground truth; the frames past its end"),
+], ids=["lasot-occlusion-short", "lasot-out-of-view-long", "got10k-absence-short"])
+def test_flag_files_are_checked_against_the_clip(tmp_path, name, flags, words):
+    """Occlusion or absence flag files shorter than the clip were accepted without a word."""
+    from vistrack.io.clips import GroundTruthWarning, load_clip
+
+    image_folder(tmp_path / "c", 8)
+    (tmp_path / "c" / name).write_text(flags)
+    with pytest.warns(GroundTruthWarning, match=words):
+        clip = load_clip(tmp_path / "c")
+    assert clip.truth["excluded"].tolist()[:4] == [v == "1" for v in flags.replace("\n", ",").split(",")[:4]]
+
+
+def test_webp_frames_are_read(tmp_path, capsys):
+    """An OTB folder of .webp frames gave 'holds no video and no images' (OpenCV reads WebP)."""
+    (tmp_path / "c" / "img").mkdir(parents=True)
+    for i in range(4):
+        cv2.imwrite(str(tmp_path / "c" / "img" / f"{i + 1:04d}.webp"), textured(i))
+    (tmp_path / "c" / "groundtruth_rect.txt").write_text("41,51,25,19\n" * 4)
+    code, _, err = run(["run", tmp_path / "c", "--init-gt", "-n", "20", "-q", "--track", tmp_path / "t.csv"], capsys)
+    assert code == 0, err
+    assert len(read_rows(tmp_path / "t.csv")) == 4
+    (tmp_path / "e").mkdir()
+    (tmp_path / "e" / "notes.xyz").write_text("x")
+    code, _, err = run(["run", tmp_path / "e", "--init", "1,1,5,5", "-q"], capsys)
+    one_error(code, err, f"{tmp_path / 'e'} holds no video and no images (in the folder, img/ or color/: images",
+              ".webp", "it holds .xyz files")
+
+
+def textured(i):
+    from fault_helpers import textured_frame
+
+    return textured_frame(i)
+
+
+def _mp4_clip(path):
+    """A small mp4v video with its index at the end (a server without range requests serves it whole)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    wr = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 25, (W, H))
+    for i in range(12):
+        wr.write(textured(i))
+    wr.release()
+    return path
+
+
+@pytest.mark.parametrize("damage, words", [
+    ("cut", "held 3000 bytes of v.mp4, not the"),
+    ("middle", "held v.mp4 changed since its download (another SHA-256)"),
+    ("folder", "lost v.mp4 (or it is not a file any more)"),
+], ids=["cut-short", "bytes-changed", "replaced-by-a-folder"])
+def test_a_damaged_cached_copy_is_downloaded_again(tmp_path, serve, monkeypatch, damage, words):
+    """A cached download with bytes changed in its middle was used and called 'unchanged on the server'; one
+    cut short was refused as 'not a video' on every later run, never fetched again, although its recorded
+    length showed it short. Copies are checked by length and SHA-256 before use, and fetched again."""
+    import shutil
+
+    monkeypatch.setenv("VISTRACK_CACHE", str(tmp_path / "cache"))
+    _mp4_clip(tmp_path / "www" / "v.mp4")
+    url = serve(tmp_path / "www") + "/v.mp4"
+    args = ["run", url, "--init", "48,51,24,18", "-n", "20", "--track", tmp_path / "t.csv"]
+    code, _, err = run(args)
+    assert code == 0 and "downloaded" in err, err
+    (copy,) = (tmp_path / "cache").rglob("v.mp4")
+    data = copy.read_bytes()
+    if damage == "cut":
+        copy.write_bytes(data[:3000])
+    elif damage == "middle":
+        k = len(data) // 2
+        copy.write_bytes(data[:k] + bytes(255 - b for b in data[k:k + 64]) + data[k + 64:])
+    else:
+        copy.unlink()
+        copy.mkdir()
+    code, _, err = run(args)
+    assert code == 0, err
+    assert f"downloaded {url} again into {copy}: the cached copy {words}" in err, err
+    assert copy.read_bytes() == data
+    code, _, err = run(args)
+    assert code == 0 and "using the cached copy" in err and "as downloaded (its length and SHA-256)" in err, err
+    shutil.rmtree(tmp_path / "cache")
+
+
+@pytest.mark.parametrize("cache", ["read-only", "a-file", "full"])
+def test_a_cache_that_cannot_be_written_names_the_cache_and_how_to_move_it(tmp_path, serve, monkeypatch, cache):
+    """cache_readonly, cache_is_file and cache_full said 'Operation not permitted: rocache/clips', 'Not a
+    directory: ...' and 'No space left on device': none said that the download cache was at fault."""
+    import os
+
+    _mp4_clip(tmp_path / "www" / "v.mp4")
+    url = serve(tmp_path / "www") + "/v.mp4"
+    root = tmp_path / "cache"
+    if cache == "a-file":
+        root.write_text("not a folder")
+    elif cache == "read-only":
+        (root / "clips").mkdir(parents=True)
+        monkeypatch.setattr(os, "replace", _refuse(os.replace, "clips", 1))  # EPERM (tests may run as root)
+    else:
+        (root / "clips").mkdir(parents=True)
+        monkeypatch.setattr(os, "replace", _refuse(os.replace, "clips", 28))
+    monkeypatch.setenv("VISTRACK_CACHE", str(root))
+    code, _, err = run(["run", url, "--init", "48,51,24,18", "-n", "20", "-q"])
+    one_error(code, err, f"cannot write the download cache {root / 'clips'}",
+              "set VISTRACK_CACHE to a writable folder to keep downloads elsewhere")
+
+
+def _refuse(real, where, errno_):
+    """``os.replace`` failing with ``errno_`` for paths under a folder named ``where``."""
+    import os
+
+    def replace(src, dst, *a, **kw):
+        if f"{os.sep}{where}{os.sep}" in str(dst):
+            raise OSError(errno_, os.strerror(errno_), str(dst))
+        return real(src, dst, *a, **kw)
+
+    return replace
+
+
+def test_urls_are_named_as_given_and_never_taken_for_paths(tmp_path, serve):
+    """url_range_flaky_server printed the URL with one slash (http:/127...); --init-gt URL said it did not
+    exist (a local path with one slash); --out and --track URLs said their folder did not exist; a redirect
+    loop gave three lines; an ftp:// URL nobody answers said only 'Connection refused'."""
+    import http.server
+    import socket
+    import threading
+
+    from vistrack.io.video import VideoSource
+
+    _mp4_clip(tmp_path / "www" / "v.mp4")
+    from server_helpers import RangeHandler
+
+    url = serve(tmp_path / "www", RangeHandler) + "/v.mp4"
+    assert VideoSource(url).shown == url
+    v = tmp_path / "v.avi"
+    write_video(v, 3)
+    for opt in ("--out", "--track", "--results"):
+        code, _, err = run(["run", v, "--init", "48,51,24,18", "-q", opt, f"{url}x.mp4"])
+        one_error(code, err, f"'{opt}': {url}x.mp4 is a URL; vistrack writes its outputs to local files")
+    code, _, err = run(["run", v, "--init-gt", f"{url}.txt", "-q"])
+    one_error(code, err, f"--init-gt {url}.txt: a URL; give a local ground-truth file")
+
+    class Loop(http.server.BaseHTTPRequestHandler):
+        def do_GET(self):
+            self.send_response(302)
+            self.send_header("Location", self.path)
+            self.end_headers()
+
+        def log_message(self, *a):
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Loop)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        loop = f"http://127.0.0.1:{server.server_address[1]}/v.mp4"
+        code, _, err = run(["run", loop, "--init", "1,1,5,5", "-q"])
+        one_error(code, err, f"cannot read {loop}: the server redirects it in a loop (HTTP 302")
+        assert err.count("\n") == 1
+    finally:
+        server.shutdown()
+        server.server_close()
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        closed = s.getsockname()[1]
+    code, _, err = run(["run", f"ftp://127.0.0.1:{closed}/v.mp4", "--init", "1,1,5,5", "-q"])
+    one_error(code, err, f"cannot read ftp://127.0.0.1:{closed}/v.mp4: connection refused")

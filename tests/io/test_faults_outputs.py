@@ -341,3 +341,161 @@ def test_every_writer_keeps_the_earlier_file_on_a_failure(tmp_path, monkeypatch)
     t.close()
     assert (tmp_path / "t.csv").read_text() == "frame,cx\n0,1.000\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["p.png", "results.json", "t.csv"]
+
+
+# ------------------------------------------------------------------ the fourth sweep (issue 55)
+
+
+def _drain(path, into):
+    """A thread reading ``path`` (a FIFO) to its end into the list ``into``."""
+    import threading
+
+    def read():
+        with open(path) as f:
+            into.append(f.read())
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    return reader
+
+
+def test_a_link_is_written_through_and_a_pipe_or_descriptor_in_place(tmp_path, capsys):
+    """``--track /dev/stdout`` replaced the system's link with a regular file (the part file renamed over the
+    name). Here: --track through a link to /proc/self/fd/N of a pipe (what /dev/stdout is), --results
+    through a link to a regular file, and --out to a FIFO's link: the rows reach the pipe and the file,
+    and every link and the FIFO stay what they were."""
+    from vistrack.io.outputs import output_target
+
+    write_video(tmp_path / "v.avi", 5)
+    r, w = os.pipe()
+    (tmp_path / "stdout").symlink_to(f"/proc/self/fd/{w}")
+    (tmp_path / "r.txt").symlink_to(tmp_path / "real.txt")
+    assert output_target(tmp_path / "stdout")[1] and output_target("/dev/stdout")[1]
+    assert output_target(tmp_path / "r.txt") == (tmp_path / "real.txt", False)
+    got = []
+    with os.fdopen(r) as f:
+        import threading
+
+        reader = threading.Thread(target=lambda: got.append(f.read()), daemon=True)
+        reader.start()
+        code, _, err = run(["run", tmp_path / "v.avi", "--init", "48,51,24,18", "-n", "20", "-q", "--track",
+                            tmp_path / "stdout", "--results", tmp_path / "r.txt"], capsys)
+        os.close(w)
+        reader.join()
+    assert code == 0, err
+    assert got[0].startswith("frame,visible,") and got[0].count("\n") == 6
+    assert (tmp_path / "stdout").is_symlink() and (tmp_path / "r.txt").is_symlink()
+    assert len((tmp_path / "real.txt").read_text().splitlines()) == 5
+    os.mkfifo(tmp_path / "fifo")
+    (tmp_path / "fifo.csv").symlink_to(tmp_path / "fifo")
+    got = []
+    reader = _drain(tmp_path / "fifo", got)
+    code, _, err = run(["run", tmp_path / "v.avi", "--init", "48,51,24,18", "-n", "20", "-q", "--track",
+                        tmp_path / "fifo.csv"], capsys)
+    reader.join()
+    assert code == 0, err
+    assert got[0].count("\n") == 6 and (tmp_path / "fifo.csv").is_symlink()
+    assert not (tmp_path / "fifo").is_file() and os.path.exists(tmp_path / "fifo")
+
+
+def test_train_search_never_writes_over_its_template_and_says_so_when_it_cannot_write(tmp_path):
+    """train-search --out TEMPLATE overwrote the template with the network; on a full disk it said it had
+    trained to a file that was not there."""
+    tpl = tmp_path / "tpl.txt"
+    tpl.write_text("100 100\n140 100\n140 140\n100 140\n120 90\n")
+    before = tpl.read_bytes()
+    os.link(tpl, tmp_path / "same.txt")
+    train = ["train-search", "--template", tpl, "--samples", "100", "--size", "160x120"]
+    for out in (tpl, tmp_path / "same.txt"):
+        code, out_text, err = run([*train, "--out", out])
+        one_error(code, err, f"--out {out} would overwrite the input it reads")
+        assert "trained" not in out_text + err
+    assert tpl.read_bytes() == before
+    (tmp_path / "full.npz").symlink_to("/dev/full")
+    code, out_text, err = run([*train, "--out", tmp_path / "full.npz"])
+    one_error(code, err, f"cannot write the network cache {tmp_path / 'full.npz'}: No space left on device")
+    assert "trained in" not in out_text
+
+
+def test_reproduce_json_never_writes_over_a_clip_it_reads(tmp_path):
+    """reproduce contour --clips suite --json suite/contour-01/groundtruth.csv overwrote that clip's ground
+    truth with the results: refused before anything runs."""
+    from vistrack.data_synth.contour_clip import make_contour_clip
+
+    make_contour_clip(tmp_path / "suite" / "contour-01", frames=3, size=(96, 72), seed=1, clutter="low",
+                      distractor=False)
+    gt = tmp_path / "suite" / "contour-01" / "groundtruth.csv"
+    before = gt.read_bytes()
+    code, _, err = run(["reproduce", "contour", "--clips", tmp_path / "suite", "--algos", "lis:10", "--runs", "1",
+                        "--in-process", "--out", tmp_path / "C", "--json", gt, "-q"])
+    one_error(code, err, f"--json {gt} would overwrite the input it reads (groundtruth.csv)")
+    assert gt.read_bytes() == before and not (tmp_path / "C").exists()
+
+
+def test_reproduce_never_makes_its_clips_among_other_files(tmp_path):
+    """reproduce contour --clips DIR made ten clips into a folder holding other data."""
+    (tmp_path / "D").mkdir()
+    (tmp_path / "D" / "notes.txt").write_text("mine")
+    code, _, err = run(["reproduce", "contour", "--clips", tmp_path / "D", "--make", "2", "--frames", "3", "--size",
+                        "96x72", "--algos", "lis:10", "--runs", "1", "--in-process", "--out", tmp_path / "C", "-q"])
+    one_error(code, err, f"{tmp_path / 'D'} holds notes.txt", "give an empty or new folder")
+    assert sorted(p.name for p in (tmp_path / "D").iterdir()) == ["notes.txt"]
+
+
+@pytest.mark.parametrize("option, name", [("--out", "a.mp4"), ("--results", "r.txt")])
+def test_every_output_is_locked_while_a_run_writes_it(tmp_path, capsys, option, name):
+    """Two runs given one --out video or --results both wrote it, the later replacing the earlier; only
+    --track was locked. A lock held on the name (or on the file a link names) refuses the second."""
+    from vistrack.io.outputs import OutputLock
+
+    image_folder(tmp_path / "c", 3)
+    (tmp_path / "link").symlink_to(tmp_path / name)
+    held = OutputLock(tmp_path / "link")  # another run writing the file through another name
+    try:
+        code, _, err = run(["run", tmp_path / "c", "--init", "40,50,25,19", option, tmp_path / name, "-q"], capsys)
+        one_error(code, err, "is being written by another vistrack run")
+    finally:
+        held.release()
+    assert not (tmp_path / name).exists()
+
+
+def test_json_outputs_take_the_lock_too(tmp_path):
+    """results.json, task files, plots and the network cache are written through ``replacing``, which now
+    holds the output's lock: another writer of the same file is refused, never interleaved."""
+    from vistrack.batch.tasks import write_atomic
+    from vistrack.io.outputs import OutputBusy, OutputLock
+
+    held = OutputLock(tmp_path / "results.json")
+    try:
+        with pytest.raises(OutputBusy, match="results.json is being written by another vistrack run"):
+            write_atomic(tmp_path / "results.json", "{}")
+    finally:
+        held.release()
+    write_atomic(tmp_path / "results.json", "{}")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.json"]
+
+
+def test_track_files_write_empty_cells_never_nan(tmp_path, capsys):
+    """run --targets 3 wrote literal nan in 14 columns on frames without a plate (the docs: numbers or empty
+    cells): every CSV cell of a number that is not finite is empty, and reads back as NaN."""
+    import numpy as np
+
+    from vistrack.data_synth.plate_clip import make_plate_clip
+    from vistrack.io.clips import read_groundtruth_csv
+    from vistrack.io.track_files import TrackCSV
+
+    t = TrackCSV(tmp_path / "u.csv")
+    t.write({"frame": 0, "cx": float("nan"), "cy": np.float32("inf"), "w": 2.0})
+    t.close()
+    assert (tmp_path / "u.csv").read_text().splitlines() == ["frame,cx,cy,w", "0,,,2.000"]
+    assert np.isnan(read_groundtruth_csv(tmp_path / "u.csv")["cx"][0])
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # no plate comes into view in so few frames
+        make_plate_clip(tmp_path / "p", frames=6, size=(160, 120), seed=1)
+    code, _, err = run(["run", tmp_path / "p", "--targets", "3", "-n", "20", "-q", "--track", tmp_path / "t.csv"],
+                       capsys)
+    assert code == 0, err
+    text = (tmp_path / "t.csv").read_text() + (tmp_path / "p" / "groundtruth.csv").read_text()
+    assert "nan" not in text.lower() and ",," in text

@@ -99,3 +99,21 @@ def test_eval_scores_a_plate_clip_from_its_first_box_frame(tmp_path):
     assert code == 0, err
     (r,) = json.loads((tmp_path / "ev" / "results.json").read_text())["results"]
     assert r["p_lost"] < 0.6 and r["mean_error"] < 2.0, r["p_lost"]
+
+
+# ------------------------------------------------------------------ the fourth sweep (issue 55)
+
+
+def test_iou_is_at_most_one_and_a_perfect_track_scores_20_of_21():
+    """A results file equal to the ground truth scored success AUC 0.9555, above the 20/21 maximum: two equal
+    boxes' IoU came out as 1 + 1e-15, above the last threshold (1)."""
+    import numpy as np
+
+    from vistrack.scoring.metrics import iou, success_auc
+
+    rng = np.random.default_rng(0)
+    boxes = np.column_stack([rng.uniform(0, 500, (200, 2)), rng.uniform(3, 90, (200, 2))])
+    got = iou(boxes, boxes)
+    assert got.max() <= 1.0 and got.min() > 1 - 1e-12  # rounding: never above 1
+    assert success_auc(got) == 20 / 21
+    assert iou([np.nan] * 4, [1, 2, 3, 4]) == 0.0  # no estimate: no overlap, as before

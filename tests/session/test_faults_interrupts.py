@@ -160,3 +160,30 @@ def test_ctrl_c_at_start_up_and_shut_down_is_aborted_and_130(where):
     p = subprocess.run([sys.executable, "-c", INTERRUPT_AT, where, "--version"], capture_output=True, text=True,
                        timeout=120)
     assert (p.returncode, p.stderr) == (130, "Aborted.\n")
+
+
+def test_sighup_keeps_the_track_so_far_as_sigterm_does(tmp_path):
+    """kill -HUP (a closed terminal, a dropped ssh session) ended a run at once and left only .part files;
+    it now stops the run after the frame in hand as SIGTERM does: exit 143, the track, the results and
+    the video holding the same frames."""
+    from fault_helpers import decoded_frames
+
+    write_video(tmp_path / "v.avi", 40)
+    track, res, out = tmp_path / "t.csv", tmp_path / "r.txt", tmp_path / "a.mp4"
+    args = ["run", tmp_path / "v.avi", "--init", "48,51,24,18", "-n", "300", "--algo", "bootstrap", "--track", track,
+            "--results", res, "--out", out, "-q"]
+    proc = gated_cli(args, 8, tmp_path)
+    part = tmp_path / "t.csv.part"
+    wait_until(lambda: part.is_file() and part.read_text().count("\n") >= 4, "4 rows of the track", proc=proc)
+    proc.send_signal(signal.SIGHUP)
+    _, stderr = proc.communicate(timeout=PATIENCE)
+    assert proc.returncode == 143 and "Traceback" not in stderr, stderr
+    k = len(read_rows(track))
+    assert k >= 3 and len(res.read_text().splitlines()) == k and decoded_frames(out) == k
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4", "r.txt", "t.csv", "v.avi"]
+
+
+def test_sighup_counts_as_a_terminating_signal():
+    from vistrack.system.signals import TERMINATING
+
+    assert signal.SIGHUP in TERMINATING and signal.SIGTERM in TERMINATING

@@ -125,10 +125,10 @@ def _keywords(fn):
 
 def declared_options(spec):
     """``{name: Declared}`` of the options of the model of registry entry ``spec``: the keywords of its
-    ``from_box``, of its class and of the classes it passes keywords on to, declared where documented
-    (module docstring)."""
-    cls = spec.model_class
-    owners = [c for c in (cls.__mro__ if cls is not None else ()) if c is not object] + list(spec.passes_on)
+    ``from_box``, of its class, of its several-target form's class and of the classes it passes keywords
+    on to, declared where documented (module docstring)."""
+    owners = [c for cls in (spec.model_class, spec.targets_class) if cls is not None for c in cls.__mro__
+              if c is not object] + list(spec.passes_on)
     docs = _documented(owners)
     defaults = {}
     for fn in [spec.from_box, *(c.__init__ for c in owners)]:
