@@ -13,7 +13,7 @@ import soak_harness as S
 
 def scenarios():
     """The Python-API scenarios."""
-    return _api()
+    return _api() + _options()
 
 
 API = """
@@ -94,4 +94,22 @@ if track([g[:, :, None] for g in grey]) != track(grey):
                "ess_threshold=-1": ("vistrack.Tracker(ess_threshold=-1)", "ess_threshold")}
     out += [S.Scenario(f"Tracker with {k}", ["python-api"], mention=m, driver=_python(body))
             for k, (body, m) in refused.items()]
+    return out
+
+
+def _options():
+    """Issue 55's Python-API cases: every model option against its declared type and range, NaN included;
+    the tracker's attributes before ``init``."""
+    refused = {"lambda_template='x'": "vistrack.Tracker(lambda_template='x')",
+               "prior_std=-1": "vistrack.Tracker(prior_std=-1)",
+               "lambda_template=nan": "vistrack.Tracker(lambda_template=float('nan'))",
+               "lost_confidence=2": "vistrack.Tracker(lost_confidence=2)",
+               "redetect='yes'": "vistrack.Tracker(redetect='yes')"}
+    out = [S.Scenario(f"Tracker with {k}", ["python-api"], mention=k.split("=")[0], driver=_python(body))
+           for k, body in refused.items()]
+    out.append(S.Scenario("Tracker attributes before init", ["python-api"], "ok", check=_not_wrong, driver=_python("""
+t = vistrack.Tracker()
+if (t.box, t.box_estimate, t.visible, t.confidence, t.lost_reason) != (None,) * 5:
+    print("SILENT WRONG: an attribute before init is not None")
+""")))
     return out

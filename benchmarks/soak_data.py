@@ -35,7 +35,7 @@ from soak_harness import (
 
 def scenarios():
     """The data scenarios."""
-    return _videos() + _truth() + _urls() + _summary()
+    return _videos() + _truth() + _urls() + _summary() + _conventions() + _caches()
 
 
 def _videos():
@@ -180,6 +180,7 @@ def _served(steps):
 
     return driver
 
+
 def _shift_truth(w):
     """The server's ground truth changes: every box 30 px to the right."""
     import csv
@@ -194,11 +195,13 @@ def _shift_truth(w):
         wr.writeheader()
         wr.writerows(rows)
 
+
 def _fresh_scores(w, res):
     a, b = (json.loads((w / d / "results.json").read_text())["results"][0]["success_auc"] for d in ("R1", "R2"))
     if a == b and "cache" not in res.err.lower():
         return "silent wrong", f"the changed clip scored as the old one (AUC {a:.3f}), no word of a cache"
     return None
+
 
 def _urls():
     ev = ["eval", "{url}/c1", "--model", "contour", "--algos", "bootstrap", "--particles", "20", "--runs", "1",
@@ -214,6 +217,7 @@ def _urls():
                                                                   "--track", "{w}/t.csv"], "ok",
                    prepare=lambda w: shutil.copy(S.FX / "v.avi", w / "0"), check=S.track_has(S.FRAMES, S.FRAMES)),
     ]
+
 
 def _summary_agrees(w, res):
     import re
@@ -233,11 +237,13 @@ def _summary_agrees(w, res):
     res.note = f"precision {prec}, {lost} lost in both"
     return None
 
+
 def _summary():
     first = ["run", "{fx}/bad12", "--init-gt", "-n", "50", "--results", "{w}/mt/bad12.txt"]
     then = ["eval", "{fx}/bad12", "--algos", "", "--results-dir", "{w}/mt", "--out", "{w}/E", "-q"]
     return [S.Scenario("run's summary and eval score 12 undecodable frames alike", then, "ok",
                        prepare=lambda w: (w / "mt").mkdir(), driver=S.two_steps(first, then), check=_summary_agrees)]
+
 
 def _has_column(name):
     def check(w, res):
@@ -247,3 +253,109 @@ def _has_column(name):
         return None if name in head else ("silent wrong", f"the track has no {name} column: {head}")
 
     return check
+
+
+def _conventions():
+    """Issue 55's data cases: flag files of another length, WebP frames, a perfect results file's score, a
+    --targets track's frames without a plate, URLs never taken for paths."""
+    def short_flags(w):
+        shutil.copytree(S.FX / "otb", w / "lasot")
+        (w / "lasot" / "full_occlusion.txt").write_text("0,0,1,0")
+
+    def webp(w):
+        import cv2
+
+        (w / "wp" / "img").mkdir(parents=True)
+        for k, f in enumerate(S._frames(8)):
+            cv2.imwrite(str(w / "wp" / "img" / f"{k + 1:04d}.webp"), f)
+        (w / "wp" / "groundtruth_rect.txt").write_text("\n".join(S._otb_rows(8)) + "\n")
+
+    def perfect(w):
+        shutil.copytree(S.FX / "otb", w / "otb")
+        (w / "mt").mkdir()
+        shutil.copy(w / "otb" / "groundtruth_rect.txt", w / "mt" / "otb.txt")
+
+    def at_most_20_of_21(w, res):
+        if res.code != 0:
+            return None
+        auc = json.loads((w / "R" / "results.json").read_text())["results"][0]["success_auc"]
+        return None if auc <= 20 / 21 + 1e-12 else ("silent wrong", f"success AUC {auc:.4f} above 20/21")
+
+    return [
+        Scenario("eval an OTB clip whose full_occlusion.txt is short", EV("{w}/lasot", model="box"), "ok",
+                 prepare=short_flags, check=warns("4 flags for the 12 rows")),
+        Scenario("run an OTB folder of .webp frames", R("{w}/wp", "--init-gt", init=False), "ok", prepare=webp,
+                 check=track_has(8, 8)),
+        Scenario("eval a results file equal to the ground truth", EV("{w}/otb", "--results-dir", "{w}/mt",
+                                                                     model="box") + ["--algos", ""], "ok",
+                 prepare=perfect, check=at_most_20_of_21),
+        Scenario("run --targets 3 on a plate clip: empty cells, never nan", R("{fx}/plate", "--targets", "3",
+                                                                            init=False), "ok"),
+        Scenario("run --init-gt a URL", R("{fx}/v.avi", "--init-gt", "http://127.0.0.1:9/gt.txt", init=False),
+                 mention="a URL"),
+        Scenario("run a URL that redirects in a loop", ["run", "{url}/v.mp4", "--init", S.INIT, "-q"],
+                 mention="in a loop", driver=_looping),
+        Scenario("run an ftp:// URL nobody answers", ["run", "ftp://127.0.0.1:9/v.mp4", "--init", S.INIT, "-q"],
+                 mention="ftp://127.0.0.1:9/v.mp4"),
+    ]
+
+
+def _looping(w, argv, timeout):
+    """A driver: ``{url}`` a server that redirects every path to itself."""
+    class Loop(http.server.BaseHTTPRequestHandler):
+        def do_GET(self):
+            self.send_response(302)
+            self.send_header("Location", self.path)
+            self.end_headers()
+
+        def log_message(self, *a):
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Loop)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        return S.vistrack([a.format(url=f"http://127.0.0.1:{server.server_address[1]}") for a in argv], w, timeout)
+    finally:
+        server.shutdown()
+        server.server_close()
+
+
+def _caches():
+    """Issue 55's caches: a cached copy cut short, changed or replaced by a folder is downloaded again; a
+    cache that cannot be written names itself and VISTRACK_CACHE."""
+    run_url = ["run", "{url}/v.mp4", "--init", S.INIT, "-n", "20", "--track", "{w}/t.csv"]
+    shown = [a.replace("{url}", "URL") for a in run_url]
+
+    def serve_video(w):
+        (w / "www").mkdir()
+        shutil.copy(S.FX / "moov_front.mp4", w / "www" / "v.mp4")
+
+    def damage(how):
+        def then(w):
+            (copy,) = (w / "cache").rglob("v.mp4")
+            data = copy.read_bytes()
+            if how == "cut":
+                copy.write_bytes(data[:3000])
+            elif how == "changed":
+                k = len(data) // 2
+                copy.write_bytes(data[:k] + bytes(255 - b for b in data[k:k + 64]) + data[k + 64:])
+            else:
+                copy.unlink()
+                copy.mkdir()
+
+        return then
+
+    def fetched_again(w, res):
+        return None if res.code != 0 or "again into" in res.err else \
+            ("silent wrong", f"the damaged copy was used: {res.err.strip()[-100:]!r}")
+
+    def cache_a_file(w):
+        serve_video(w)
+        (w / "cache").write_text("not a folder")
+
+    return [
+        *[Scenario(f"run a URL whose cached copy was {how}", shown, "ok", prepare=serve_video, check=fetched_again,
+                   driver=_served([run_url, damage(how), run_url])) for how in ("cut", "changed", "a folder")],
+        Scenario("run a URL with the download cache a file", shown, mention="download cache", prepare=cache_a_file,
+                 driver=_served([run_url])),
+    ]

@@ -9,7 +9,7 @@ from soak_harness import BE, EV, INIT, SY, R, Scenario, all_of, fast, says, sub,
 
 def scenarios():
     """The option scenarios."""
-    return _numbers() + _commands()
+    return _numbers() + _commands() + _strict()
 
 
 def _numbers():
@@ -150,3 +150,18 @@ def _absent_truth(w, res):
     if np.any(gt[:, 2] > 0):
         return "silent wrong", f"{int(np.sum(gt[:, 2] > 0))} boxes marked present, all out of the frame"
     return None
+
+
+def _strict():
+    """Issue 55's option cases: numbers read strictly, NaN refused by every float option, URLs as outputs."""
+    base = R("{fx}/v.avi", init=False)
+    poc = ["synth", "plate-on-car", "{fx}/otb", "--out", "{w}/o"]
+    return [
+        *[Scenario(f"run --init {v}", base + ["--init", v], mention="init") for v in ("4_1,48,25,19", "٣,48,25,19")],
+        *[Scenario(f"synth plate-on-car {o} nan", [*poc, o, "nan"], mention=o.lstrip("-"))
+          for o in ("--upscale", "--noise", "--width", "--blur")],
+        Scenario("synth perturb --shake nan", ["synth", "perturb", "{fx}/otb", "--out", "{w}/o", "--shake", "nan"],
+                 mention="shake"),
+        Scenario("run --out a URL", R("{fx}/v.avi", "--out", "http://127.0.0.1:9/a.mp4"), mention="a URL"),
+        Scenario("eval --out a URL", sub(EV("{fx}/suite"), "--out", "http://127.0.0.1:9/R"), mention="a URL"),
+    ]

@@ -41,7 +41,7 @@ from soak_harness import (
 
 def scenarios():
     """The output scenarios."""
-    return _written() + _two_names() + _interrupted() + _full_disk()
+    return _written() + _two_names() + _interrupted() + _full_disk() + _links_and_inputs()
 
 
 def _written():
@@ -208,3 +208,147 @@ def _perturbed_once(w):
     """``w/o``: a stressed copy of the OTB fixture, written once before the scenario writes it again."""
     r = vistrack(["synth", "perturb", str(S.FX / "otb"), "--out", str(w / "o"), "--blur", "3", "-q"], w, 300)
     assert r.code == 0, r.err
+
+
+def _links_and_inputs():
+    """Issue 55's outputs: links written through, descriptors and pipes in place, every output locked, the
+    command's inputs (a template, a clip's files, the source of a copy) never written over, SIGHUP."""
+    v = "{fx}/v.avi"
+    tpl = ["train-search", "--template", "{w}/tpl.txt", "--samples", "100", "--size", "160x120"]
+    rep = ["reproduce", "contour", "--algos", "lis:10", "--runs", "1", "--in-process", "--out", "{w}/C", "-q"]
+    slow = ["run", v, "--init", INIT, "-n", "3000", "--algo", "bootstrap", "--track", "{w}/t.csv", "--results",
+            "{w}/r.txt", "--out", "{w}/a.mp4", "-q"]
+    return [
+        Scenario("run --track through a link to /proc/self/fd/1 with stdout a file (what /dev/stdout is)",
+                 R(v, "--track", "{w}/stdout", init=True), "ok", driver=_stdout_to_file, check=_descriptor_kept),
+        Scenario("run --track through a link to a FIFO", R(v, "--track", "{w}/fifo.csv"), "ok",
+                 prepare=_fifo_link, driver=_reading_fifo, check=_fifo_kept),
+        Scenario("run --results through a link to a file", R(v, "--results", "{w}/r.txt"), "ok",
+                 prepare=lambda w: (w / "r.txt").symlink_to(w / "real.txt"), check=_link_kept("r.txt", "real.txt")),
+        Scenario("train-search --out its own template", [*tpl, "--out", "{w}/tpl.txt"], mention="overwrite",
+                 prepare=_template, check=_unchanged("tpl.txt", TEMPLATE)),
+        Scenario("train-search --out on a full disk", [*tpl, "--out", "{w}/full.npz"], mention="network cache",
+                 prepare=lambda w: (_template(w), link("full.npz")(w)), check=_no_claim("trained in")),
+        Scenario("reproduce contour --json into a clip's ground truth",
+                 [*rep, "--clips", "{w}/suite", "--json", "{w}/suite/c1/groundtruth.csv"], mention="overwrite",
+                 prepare=copy("suite"), check=_clip_gt_unchanged),
+        Scenario("reproduce contour --clips a folder of other files", [*rep, "--clips", "{w}/D", "--make", "2",
+                                                                      "--frames", "3", "--size", "96x72"],
+                 mention="notes.txt", prepare=_other_files, check=_holds_only("D", ["notes.txt"])),
+        Scenario("synth perturb --out its own source clip", ["synth", "perturb", "{w}/c", "--out", "{w}/c", "-q"],
+                 mention="reads", prepare=_synth_clip),
+        Scenario("two runs, one --out video at once", R("{fx}/otb", "--init-gt", "--out", "{w}/a.mp4", init=False),
+                 mention="another vistrack", check=lost_if_flagged,
+                 driver=two_runs(["run", "{fx}/long.avi", "--init", INIT, "-n", "20000", "--algo", "bootstrap",
+                                  "--track", "{w}/t.csv", "--out", "{w}/a.mp4", "-q"])),
+        Scenario("two runs, one --results at once", R("{fx}/otb", "--init-gt", "--results", "{w}/r.txt", init=False),
+                 mention="another vistrack", check=lost_if_flagged,
+                 driver=two_runs(["run", "{fx}/long.avi", "--init", INIT, "-n", "20000", "--algo", "bootstrap",
+                                  "--track", "{w}/t.csv", "--results", "{w}/r.txt", "-q"])),
+        Scenario("run SIGHUP: track, video, results", slow, "ok", codes=(143,), check=same_frames,
+                 driver=signals([signal.SIGHUP], track_part_rows(4))),
+    ]
+
+
+TEMPLATE = "100 100\n140 100\n140 140\n100 140\n120 90\n"
+
+
+def _template(w):
+    (w / "tpl.txt").write_text(TEMPLATE)
+
+
+def _unchanged(name, text):
+    def check(w, res):
+        return None if (w / name).read_text() == text else ("data loss", f"{name} was overwritten")
+
+    return check
+
+
+def _no_claim(words):
+    def check(w, res):
+        return ("silent wrong", f"says {words!r} of a file it could not write") if words in res.out else None
+
+    return check
+
+
+def _clip_gt_unchanged(w, res):
+    gt = "suite/c1/groundtruth.csv"
+    return None if (w / gt).read_bytes() == (S.FX / gt).read_bytes() else ("data loss", f"{gt} was overwritten")
+
+
+def _other_files(w):
+    (w / "D").mkdir()
+    (w / "D" / "notes.txt").write_text("mine")
+
+
+def _holds_only(folder, names):
+    def check(w, res):
+        got = sorted(p.name for p in (w / folder).iterdir())
+        return None if got == sorted(names) else ("silent wrong", f"{folder} now holds {got}")
+
+    return check
+
+
+def _synth_clip(w):
+    r = vistrack(["synth", "contour", "--out", str(w / "c"), "--frames", "3", "--size", "96x72", "-q"], w, 300)
+    assert r.code == 0, r.err
+
+
+def _link_kept(name, target):
+    def check(w, res):
+        if not (w / name).is_symlink():
+            return "data loss", f"the link {name} was replaced by a file"
+        if res.code == 0 and not (w / target).is_file():
+            return "silent wrong", f"nothing was written to {target} through the link"
+        return None
+
+    return check
+
+
+def _stdout_to_file(w, argv, timeout):
+    """A driver: stdout redirected to ``w/out.txt`` (as a shell's ``>``), ``w/stdout`` a link to
+    ``/proc/self/fd/1`` (what the system's ``/dev/stdout`` is)."""
+    import subprocess
+    import sys
+    import time
+
+    (w / "stdout").symlink_to("/proc/self/fd/1")
+    t0 = time.time()
+    with open(w / "out.txt", "w") as out:
+        p = subprocess.run([sys.executable, "-m", "vistrack.cli", *argv], cwd=w, stdout=out, stderr=subprocess.PIPE,
+                           text=True, timeout=timeout)
+    return S.Result(p.returncode, "", p.stderr, time.time() - t0)
+
+
+def _descriptor_kept(w, res):
+    if not (w / "stdout").is_symlink():
+        return "data loss", "the link to /proc/self/fd/1 was replaced by a file"
+    text = (w / "out.txt").read_text()
+    return None if text.startswith("frame,visible,") else ("silent wrong", f"stdout holds {text[:40]!r}")
+
+
+def _fifo_link(w):
+    os.mkfifo(w / "fifo")
+    (w / "fifo.csv").symlink_to(w / "fifo")
+
+
+def _reading_fifo(w, argv, timeout):
+    """A driver: the command runs while a thread reads ``w/fifo`` into ``w/read.txt``."""
+    import threading
+
+    def read():
+        with open(w / "fifo") as f, open(w / "read.txt", "w") as out:
+            out.write(f.read())
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    res = vistrack(argv, w, timeout)
+    reader.join(timeout)
+    return res
+
+
+def _fifo_kept(w, res):
+    if not (w / "fifo.csv").is_symlink() or (w / "fifo").is_file():
+        return "data loss", "the link or the FIFO was replaced by a file"
+    text = (w / "read.txt").read_text() if (w / "read.txt").is_file() else ""
+    return None if text.startswith("frame,visible,") else ("silent wrong", f"the FIFO's reader got {text[:40]!r}")

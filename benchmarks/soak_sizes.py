@@ -9,7 +9,7 @@ import soak_harness as S
 
 def scenarios():
     """The size scenarios."""
-    return _sizes()
+    return _sizes() + _synth_sizes()
 
 
 def _sizes():
@@ -50,4 +50,44 @@ def _sizes():
                    ["reproduce", "contour", "--runs", "100000000", "--clips", "{w}/made", "--make", "2", "--frames",
                     "3", "--size", "96x72", "--in-process", "--out", "{w}/C", "-q"], mention="grid",
                    check=S.all_of(fast, made_nothing("made", "C"))),
+    ]
+
+
+def _synth_sizes():
+    """Issue 55's sizes: synth's frames, cars, clutter blobs and landmarks, synth-suite's frames, demo's runs,
+    reproduce's ships, eval's workers and run's targets, each checked before anything is made."""
+    fast = S.fast(30)
+    out = "{w}/c"
+
+    def made_nothing(w, res):
+        made = sorted(p.name for p in w.iterdir())
+        return ("silent wrong", f"{made} made before the refusal") if made else None
+
+    def capped(w, res):
+        return None if "capped at" in res.err else ("silent wrong", "no line saying the workers were capped")
+
+    big = "1000000000000"
+    return [
+        *[S.Scenario(f"synth {k} --frames 10^12", ["synth", k, "--frames", big, *size, "--out", out], mention="frames",
+                     check=S.all_of(fast, made_nothing))
+          for k, size in (("contour", ["--size", "64x48"]), ("plate", []), ("landmarks", []))],
+        S.Scenario("synth plate --cars 10^9", ["synth", "plate", "--cars", "1000000000", "--frames", "3", "--out", out],
+                   mention="cars", check=S.all_of(fast, made_nothing)),
+        S.Scenario("synth landmarks --clutter-blobs 10^9", ["synth", "landmarks", "--clutter-blobs", "1000000000",
+                                                           "--frames", "3", "--out", out],
+                   mention="clutter-blobs", check=S.all_of(fast, made_nothing)),
+        S.Scenario("synth landmarks --k 100000", ["synth", "landmarks", "--k", "100000", "--frames", "3", "--out", out],
+                   mention="--k", check=S.all_of(fast, made_nothing)),
+        S.Scenario("synth-suite --frames 10^12 (advice is not 'at most 0 clips')",
+                   ["synth-suite", "--kind", "contour", "--clips", "2", "--frames", big, "--out", "{w}/s"],
+                   mention="--frames", check=S.all_of(fast, made_nothing)),
+        S.Scenario("demo --runs 10^9 (checked before the clip is made)", ["demo", "--runs", "1000000000", "--out",
+                                                                         "{w}/d"],
+                   mention="runs", check=S.all_of(fast, made_nothing)),
+        S.Scenario("reproduce bearings --ships 10^6", S.sub(S.BE, "--ships", "1000000"), mention="ships",
+                   check=fast),
+        S.Scenario("eval --workers 1000 (capped, with a line)", S.sub(S.EV("{fx}/suite"), "--workers", "1000"), "ok",
+                   check=capped),
+        S.Scenario("run --targets 100000 (what a frame holds, before memory)",
+                   S.R("{fx}/plate", "--targets", "100000", init=False), mention="holds at most", check=fast),
     ]

@@ -11,7 +11,13 @@ def scenarios():
     """The batch scenarios."""
     suite = "{fx}/suite"
     seed1 = EV("{w}/suite", "--seed", "1")
+    unreported = EV("{w}/suite", "--resume")
     return [
+        Scenario("eval --resume with a task file that lost a key under its fingerprint", unreported, "ok",
+                 prepare=evald(["suite"], then=_drop_key("reported")),
+                 check=equals_fresh(sub(EV("{w}/suite"), "--out", "{w}/F"))),
+        Scenario("eval --resume with a task file whose lists were cut short", unreported, "ok",
+                 prepare=evald(["suite"], then=_cut_lists), check=equals_fresh(sub(EV("{w}/suite"), "--out", "{w}/F"))),
         Scenario("eval suite", EV(suite), "ok"),
         Scenario("eval suite, 2 worker processes", [a for a in EV(suite) if a != "--in-process"] + ["--workers", "2"],
                  "ok"),
@@ -38,3 +44,23 @@ def scenarios():
         Scenario("eval --algos opencv-mil", sub(EV(suite), "--algos", "opencv-mil"), "ok"),
         Scenario("eval --equal-time", EV(suite, "--equal-time") + ["--algos", "bootstrap,lis"], "ok"),
     ]
+
+
+def _edit_task(edit):
+    """``then(w)``: the first task file of ``w/R`` edited by ``edit(dict)``, its fingerprint kept."""
+    import json
+
+    def then(w):
+        p = sorted((w / "R" / "tasks").glob("*.json"))[0]
+        data = json.loads(p.read_text())
+        edit(data)
+        p.write_text(json.dumps(data))
+
+    return then
+
+
+def _drop_key(key):
+    return _edit_task(lambda d: d.pop(key, None))
+
+
+_cut_lists = _edit_task(lambda d: d.update({k: v[: len(v) // 2] for k, v in d.items() if isinstance(v, list)}))

@@ -63,7 +63,7 @@ def trax_session(first, box, second=None, argv=("trax",), timeout=120):
 
 def scenarios():
     """The TraX and start-up scenarios."""
-    return _trax_and_signals()
+    return _trax_and_signals() + _dead_clients()
 
 
 def _trax(case):
@@ -91,6 +91,7 @@ def _trax(case):
 
     return driver
 
+
 def _interrupt_at(where):
     def driver(w, argv, timeout):
         t0 = time.time()
@@ -100,13 +101,16 @@ def _interrupt_at(where):
 
     return driver
 
+
 def _aborted(w, res):
     if res.code != 130 or res.err.strip() != "Aborted.":
         return "misleading error", f"exit {res.code}, stderr {res.err.strip()[-80:]!r} (expected Aborted., 130)"
     return None
 
+
 def _no_hello(w, res):
     return ("misleading error", "the hello went out before the options were checked") if res.out else None
+
 
 def _trax_and_signals():
     return [
@@ -129,6 +133,7 @@ def _trax_and_signals():
                    driver=S.signals([signal.SIGINT], S.after(0.3))),
     ]
 
+
 def _trax_waiting():
     """A driver: Ctrl-C once ``vistrack trax`` said hello and waits for its client."""
 
@@ -145,3 +150,89 @@ def _trax_waiting():
         return res
 
     return driver
+
+
+def _frame(w):
+    import cv2
+
+    cv2.imwrite(str(w / "f.png"), next(S._frames(1)))
+
+
+def _session(w, region, second=None):
+    """A raw TraX v4 session's text: initialise ``region`` on ``w/f.png``, then ``second`` (a frame path)."""
+    text = f'@@TRAX:initialize "{region}"\n@@TRAX:frame "file://{w}/f.png"\n'
+    return text + (f'@@TRAX:frame "{second}"\n' if second else "")
+
+
+def _raw(region, second=None):
+    """A driver: a raw TraX session (:func:`_session`) on standard input."""
+
+    def driver(w, argv, timeout):
+        _frame(w)
+        return S.stdin(_session(w, region, second))(w, argv, timeout)
+
+    return driver
+
+
+def _silent_client(w, argv, timeout):
+    """A driver: a client that initialises, then says nothing (but lives); SIGTERM once it waits."""
+    t0 = time.time()
+    p = subprocess.Popen([sys.executable, "-m", "vistrack.cli", *argv], cwd=w, stdin=subprocess.PIPE,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    p.stdout.readline()
+    p.stdin.write('@@TRAX:initialize "41,48,25,19" \n')
+    p.stdin.flush()
+    p.terminate()
+    return S._finish(p, t0, timeout)
+
+
+def _non_ascii_session(w, argv, timeout):
+    """A driver: vot-trax's own client with the frames under a non-ASCII folder."""
+    try:
+        import trax  # noqa: F401
+    except ImportError:
+        return S.Result(None, "", "", 0.0, skip="vot-trax is not installed")
+    (w / "ünï").mkdir()
+    _frame(w / "ünï")
+    t0 = time.time()
+    code, err, heard = trax_session(w / "ünï" / "f.png", (40.0, 40.0, 25.0, 25.0), w / "ünï" / "f.png",
+                                    timeout=timeout)
+    res = S.Result(code, "", err, time.time() - t0)
+    if code == 0 and not isinstance(heard, list):
+        res.code, res.note = 1, f"the client heard {heard!r}"
+    return res
+
+
+def _terminated(w, res):
+    return None if res.code == 143 and res.err.strip() == "Terminated." else \
+        ("misleading error", f"exit {res.code}, stderr {res.err.strip()[-60:]!r} (expected Terminated., 143)")
+
+
+def _dead_clients():
+    """Issue 55's TraX cases: a client that dies mid-session or cuts a message short, a bad TRAX_SOCKET, a
+    region that is not a box, a silent client and SIGTERM, non-ASCII paths, frames that are not image files."""
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        closed = str(s.getsockname()[1])  # nothing listens there once the socket is closed
+    return [
+        S.Scenario("trax, the client dies after its first message", ["trax"], mention="went away",
+                   driver=S.stdin('@@TRAX:initialize "41,48,25,19" \n')),
+        S.Scenario("trax, a message cut short", ["trax"], mention="TraX client",
+                   driver=S.stdin('@@TRAX:initialize "41,48,25,1')),
+        S.Scenario("trax, TRAX_SOCKET=garbage", ["trax"], mention="TRAX_SOCKET", check=_no_hello,
+                   driver=S.stdin("", env={"TRAX_SOCKET": "garbage"})),
+        S.Scenario("trax, TRAX_SOCKET where nothing listens", ["trax"], mention="no TraX client answers",
+                   check=_no_hello, driver=S.stdin("", env={"TRAX_SOCKET": closed})),
+        *[S.Scenario(f"trax, start region {name}", ["trax"], mention="start region", driver=_raw(region))
+          for name, region in (("abc", "abc"), ("NaN", "nan,nan,nan,nan"), ("1e999", "1e999,3,4,5"),
+                               ("of a million digits", "9" * 1000000 + ",1,2,3"))],
+        S.Scenario("trax, a silent client and SIGTERM", ["trax"], "ok", codes=(143,), check=_terminated,
+                   driver=_silent_client),
+        S.Scenario("trax, frames under a non-ASCII folder", ["trax"], "ok", driver=_non_ascii_session),
+        S.Scenario("trax, a frame that is a folder", ["trax"], mention="a folder",
+                   driver=_raw("30,30,25,25", "file://{w}")),
+        S.Scenario("trax, a frame given as an http:// address", ["trax"], mention="http://",
+                   driver=_raw("30,30,25,25", "http://127.0.0.1:9/f.png")),
+    ]
