@@ -302,22 +302,8 @@ def _conventions():
 
 def _looping(w, argv, timeout):
     """A driver: ``{url}`` a server that redirects every path to itself."""
-    class Loop(http.server.BaseHTTPRequestHandler):
-        def do_GET(self):
-            self.send_response(302)
-            self.send_header("Location", self.path)
-            self.end_headers()
-
-        def log_message(self, *a):
-            pass
-
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Loop)
-    threading.Thread(target=server.serve_forever, daemon=True).start()
-    try:
-        return S.vistrack([a.format(url=f"http://127.0.0.1:{server.server_address[1]}") for a in argv], w, timeout)
-    finally:
-        server.shutdown()
-        server.server_close()
+    with S.looping_server() as url:
+        return S.vistrack([a.format(url=url) for a in argv], w, timeout)
 
 
 def _caches():
@@ -333,15 +319,7 @@ def _caches():
     def damage(how):
         def then(w):
             (copy,) = (w / "cache").rglob("v.mp4")
-            data = copy.read_bytes()
-            if how == "cut":
-                copy.write_bytes(data[:3000])
-            elif how == "changed":
-                k = len(data) // 2
-                copy.write_bytes(data[:k] + bytes(255 - b for b in data[k:k + 64]) + data[k + 64:])
-            else:
-                copy.unlink()
-                copy.mkdir()
+            S.damage_copy(copy, how)
 
         return then
 

@@ -16,6 +16,7 @@ import signal
 import subprocess
 import sys
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -443,7 +444,8 @@ def two_runs(argv_a):
     return driver
 
 
-def _decoded(path):
+def decoded_frames(path):
+    """How many frames OpenCV decodes from ``path`` before its first failure."""
     cap = cv2.VideoCapture(str(path))
     n = 0
     while cap.read()[0]:
@@ -458,7 +460,7 @@ def same_frames(w, res):
         return None
     t = _rows(w / "t.csv") if (w / "t.csv").is_file() else []
     r = _lines(w / "r.txt")
-    v = _decoded(w / "a.mp4") if (w / "a.mp4").is_file() else 0
+    v = decoded_frames(w / "a.mp4") if (w / "a.mp4").is_file() else 0
     if len(t) < 2 or [int(x["frame"]) for x in t] != list(range(len(t))):
         return "data loss", f"track CSV has {len(t)} rows"
     if not len(t) == r == v:
@@ -909,6 +911,44 @@ def two_steps(first, then_argv):
         return b
 
     return driver
+
+def damage_copy(copy, how):
+    """Damage the file ``copy`` as a disk error or another program may: ``cut`` to 3000 bytes, 64 bytes
+    ``changed`` in its middle, or replaced by ``a folder``."""
+    data = copy.read_bytes()
+    if how == "cut":
+        copy.write_bytes(data[:3000])
+    elif how == "changed":
+        k = len(data) // 2
+        copy.write_bytes(data[:k] + bytes(255 - b for b in data[k:k + 64]) + data[k + 64:])
+    else:
+        copy.unlink()
+        copy.mkdir()
+
+
+@contextmanager
+def looping_server():
+    """The URL of an HTTP server on 127.0.0.1 that redirects every path to itself, for the block."""
+    import http.server
+    import threading
+
+    class Loop(http.server.BaseHTTPRequestHandler):
+        def do_GET(self):
+            self.send_response(302)
+            self.send_header("Location", self.path)
+            self.end_headers()
+
+        def log_message(self, *a):
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Loop)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        yield f"http://127.0.0.1:{server.server_address[1]}"
+    finally:
+        server.shutdown()
+        server.server_close()
+
 
 def after(seconds):
     t = []

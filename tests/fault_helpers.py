@@ -17,11 +17,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from full_disk import Unavailable, on_tmpfs  # noqa: E402
+from soak_harness import damage_copy, decoded_frames, looping_server  # noqa: E402
 from soak_trax import INTERRUPT_AT, trax_session  # noqa: E402
 
 __all__ = ["H", "W", "INIT", "write_video", "read_rows", "box_frame", "image_folder", "avi", "one_error", "mp4",
-           "decodable", "decoded_frames", "clip_bytes", "moving_box_frames", "textured_frame", "textured_avi",
-           "otb_folder", "api_frames", "api_track", "Unavailable", "on_tmpfs", "INTERRUPT_AT", "trax_session"]
+           "decodable", "decoded_frames", "damage_copy", "looping_server", "clip_bytes", "moving_box_frames",
+           "textured_frame", "textured_avi", "otb_folder", "api_frames", "api_track", "Unavailable", "on_tmpfs",
+           "INTERRUPT_AT", "trax_session"]
 
 H, W = 120, 160
 #: a start box on the clips of :func:`write_video` and :func:`textured_avi`
@@ -107,15 +109,6 @@ def decodable(video):
     cap = cv2.VideoCapture(str(video))
     n = sum(cap.read()[0] for _ in range(100))
     cap.release()
-    return n
-
-
-def decoded_frames(path):
-    """How many frames OpenCV decodes from ``path`` before its first failure."""
-    cap = cv2.VideoCapture(str(path))
-    n = 0
-    while cap.read()[0]:
-        n += 1
     return n
 
 

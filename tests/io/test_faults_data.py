@@ -16,6 +16,7 @@ from fault_helpers import (
     H,
     W,
     avi,
+    damage_copy,
     decodable,
     image_folder,
     mp4,
@@ -321,7 +322,7 @@ def _mp4_clip(path):
 
 @pytest.mark.parametrize("damage, words", [
     ("cut", "held 3000 bytes of v.mp4, not the"),
-    ("middle", "held v.mp4 changed since its download (another SHA-256)"),
+    ("changed", "held v.mp4 changed since its download (another SHA-256)"),
     ("folder", "lost v.mp4 (or it is not a file any more)"),
 ], ids=["cut-short", "bytes-changed", "replaced-by-a-folder"])
 def test_a_damaged_cached_copy_is_downloaded_again(tmp_path, serve, monkeypatch, damage, words):
@@ -338,14 +339,7 @@ def test_a_damaged_cached_copy_is_downloaded_again(tmp_path, serve, monkeypatch,
     assert code == 0 and "downloaded" in err, err
     (copy,) = (tmp_path / "cache").rglob("v.mp4")
     data = copy.read_bytes()
-    if damage == "cut":
-        copy.write_bytes(data[:3000])
-    elif damage == "middle":
-        k = len(data) // 2
-        copy.write_bytes(data[:k] + bytes(255 - b for b in data[k:k + 64]) + data[k + 64:])
-    else:
-        copy.unlink()
-        copy.mkdir()
+    damage_copy(copy, damage)
     code, _, err = run(args)
     assert code == 0, err
     assert f"downloaded {url} again into {copy}: the cached copy {words}" in err, err
@@ -394,10 +388,9 @@ def test_urls_are_named_as_given_and_never_taken_for_paths(tmp_path, serve):
     """url_range_flaky_server printed the URL with one slash (http:/127...); --init-gt URL said it did not
     exist (a local path with one slash); --out and --track URLs said their folder did not exist; a redirect
     loop gave three lines; an ftp:// URL nobody answers said only 'Connection refused'."""
-    import http.server
     import socket
-    import threading
 
+    from fault_helpers import looping_server
     from vistrack.io.video import VideoSource
 
     _mp4_clip(tmp_path / "www" / "v.mp4")
@@ -413,25 +406,11 @@ def test_urls_are_named_as_given_and_never_taken_for_paths(tmp_path, serve):
     code, _, err = run(["run", v, "--init-gt", f"{url}.txt", "-q"])
     one_error(code, err, f"--init-gt {url}.txt: a URL; give a local ground-truth file")
 
-    class Loop(http.server.BaseHTTPRequestHandler):
-        def do_GET(self):
-            self.send_response(302)
-            self.send_header("Location", self.path)
-            self.end_headers()
-
-        def log_message(self, *a):
-            pass
-
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Loop)
-    threading.Thread(target=server.serve_forever, daemon=True).start()
-    try:
-        loop = f"http://127.0.0.1:{server.server_address[1]}/v.mp4"
+    with looping_server() as base:
+        loop = f"{base}/v.mp4"
         code, _, err = run(["run", loop, "--init", "1,1,5,5", "-q"])
         one_error(code, err, f"cannot read {loop}: the server redirects it in a loop (HTTP 302")
         assert err.count("\n") == 1
-    finally:
-        server.shutdown()
-        server.server_close()
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         closed = s.getsockname()[1]
