@@ -6,7 +6,8 @@ tracks each ``--runs`` times with every entry as ``vistrack eval`` does (its run
 ground-truth box, the plate lost rule; run r of every entry draws from the same seed stream), in
 ``--workers`` processes, and prints per entry: ``vistrack eval``'s "mean error, not lost" (per clip, then
 averaged over clips) and its ratio to the reference entry's; the same over the frames that both the entry
-and the reference track in the same run (paired frames); P(lost). Each ``--variant NAME=VALUE,...`` runs
+and the reference track in the same run (paired frames); the ratio's 95 % interval (:func:`ratio_interval`: the
+runs of each clip resampled, the entries kept paired); P(lost). Each ``--variant NAME=VALUE,...`` runs
 the first entry again with those defaults of the plate model's LIS proposal (``PlateLISProposal``) set in
 its workers (the reference once), to try them side by side.
 
@@ -79,6 +80,34 @@ def track(clips, entries, runs, seed, out, workers, variant=None):
     return [json.loads(Path(p).read_text()) for p in paths]
 
 
+def _not_lost_mean(by, keys, entry):
+    """eval's "mean error, not lost" of ``entry`` over the runs ``keys`` ((clip, run) pairs): per clip, then
+    averaged over clips."""
+    clips = sorted({c for c, _ in keys})
+    return float(np.mean([np.mean([x for k in keys if k[0] == c for x, q in zip(by[k][entry]["error"],
+                                                                              by[k][entry]["lost"])
+                                    if x is not None and not q]) for c in clips]))
+
+
+def ratio_interval(results, entry, ref, draws=2000, seed=0):
+    """The 95 % interval of the ratio of ``entry``'s to ``ref``'s "mean error, not lost", the runs of each
+    clip resampled with replacement, the two entries' runs kept paired (run r of both, the same seed stream)."""
+    by = defaultdict(dict)
+    for r in results:
+        by[(r["clip"], r["run"])][(r["algo"], r["particles"])] = r
+    keys = sorted(by)
+    clips = sorted({c for c, _ in keys})
+    rng = np.random.default_rng(seed)
+    reps = []
+    for _ in range(draws):
+        sample = []
+        for c in clips:
+            runs = [k for k in keys if k[0] == c]
+            sample += [runs[i] for i in rng.integers(0, len(runs), len(runs))]
+        reps.append(_not_lost_mean(by, sample, entry) / _not_lost_mean(by, sample, ref))
+    return tuple(float(v) for v in np.percentile(reps, [2.5, 97.5]))
+
+
 def summary(results, entries):
     """``{entry: {mean_not_lost, paired, p_lost}}``: eval's mean error of frames not lost (per clip,
     averaged over clips), the mean over the frames the entry and the reference (the last entry) both
@@ -121,8 +150,8 @@ def main():
     variants = [{k: json.loads(v) for k, v in (kv.split("=", 1) for kv in x.split(","))} for x in args.variant]
     clips = make_clips(args.cache, _seeds(args.seeds), args.frames)
     print(f"{len(clips)} clips ({args.seeds}), {args.runs} runs")
-    print("| entry | variant | mean error, not lost (px) | ratio | paired frames: entry / reference (px) | ratio | "
-          "P(lost) | ms/frame |\n|---|---|---|---|---|---|---|---|")
+    print("| entry | variant | mean error, not lost (px) | ratio | 95 % interval | paired frames: entry / reference "
+          "(px) | ratio | P(lost) | ms/frame |\n|---|---|---|---|---|---|---|---|---|")
     rows = {}
     with tempfile.TemporaryDirectory() as out:
         base = track(clips, entries, args.runs, args.seed, out, args.workers)
@@ -134,10 +163,12 @@ def main():
             for e in (entries if not name else entries[:1]):
                 v = s[e]
                 ms = np.mean([np.mean(r["ms"]) for r in results if (r["algo"], r["particles"]) == e])
-                rows[f"{e[0]}:{e[1]} {name or ''}".strip()] = v
+                lo, hi = ratio_interval(results, e, entries[-1]) if e != entries[-1] else (1.0, 1.0)
+                rows[f"{e[0]}:{e[1]} {name or ''}".strip()] = {**v, "interval": [lo, hi]}
                 print(f"| {e[0]}-{e[1]} | {name or '-'} | {v['mean_not_lost']:.4f} | "
-                      f"{v['mean_not_lost'] / ref['mean_not_lost']:.3f} | {v['paired']:.4f} / {v['paired_ref']:.4f} | "
-                      f"{v['paired'] / v['paired_ref']:.3f} | {v['p_lost']:.3f} | {ms:.1f} |", flush=True)
+                      f"{v['mean_not_lost'] / ref['mean_not_lost']:.3f} | {lo:.3f}-{hi:.3f} | {v['paired']:.4f} / "
+                      f"{v['paired_ref']:.4f} | {v['paired'] / v['paired_ref']:.3f} | {v['p_lost']:.3f} | {ms:.1f} |",
+                      flush=True)
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1, default=str))
 
