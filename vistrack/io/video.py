@@ -30,20 +30,9 @@ import numpy as np
 # frame is counted and reported once (VideoDecodeWarning). Read when the first capture opens.
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 
-__all__ = ["is_stream",
-    "VideoError",
-    "VideoDecodeWarning",
-    "FrameOrderWarning",
-    "natural_key",
-    "read_text_lines",
-    "VideoSource",
-    "open_video",
-    "VideoWriter",
-    "read_rects",
-    "find_groundtruth",
-    "groundtruth_origin",
-    "prefetch",
-]
+__all__ = ["is_stream", "VideoError", "VideoDecodeWarning", "FrameOrderWarning", "natural_key", "read_text_lines",
+           "VideoSource", "open_video", "VideoWriter", "read_rects", "find_groundtruth", "groundtruth_origin",
+           "prefetch"]
 
 IMAGE_EXT = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".ppm", ".pgm", ".webp"}
 VIDEO_EXT = {".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"}
@@ -63,8 +52,7 @@ class VideoSource:
     ----------
     path : Path
     shown : str
-        How messages name it: the path, or a URL or stream as given (a ``Path`` would fold ``http://`` into
-        ``http:/``).
+        How messages name it: the path, or a URL or stream as given (never ``http:/``).
     frame_count : int or None
         Number of frames if the container says (always known for image folders).
     fps : float
@@ -267,8 +255,8 @@ def open_video(path):
         return VideoSource(p, _images=images)
     if len(videos) > 1:
         raise VideoError(f"{p} holds several videos ({', '.join(v.name for v in videos)}); name one")
-    others = sorted({q.suffix.lower() for sub in (p, p / "img", p / "color") if sub.is_dir() for q in sub.iterdir()
-                     if q.is_file() and q.suffix})
+    others = sorted({q.suffix.lower() for d in (p, p / "img", p / "color") if d.is_dir() for q in d.iterdir()
+                     if q.suffix})
     raise VideoError(f"{p} holds no video and no images (in the folder, img/ or color/: images "
                      f"{', '.join(sorted(IMAGE_EXT))}; videos {', '.join(sorted(VIDEO_EXT))})"
                      + (f"; it holds {', '.join(others[:5])} files" if others else ""))
