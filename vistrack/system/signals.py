@@ -19,7 +19,7 @@ class Terminated(KeyboardInterrupt):
 
 
 #: the signals that end a run as SIGTERM does: SIGTERM, and SIGHUP where the platform has it
-TERMINATING = tuple(getattr(signal, n) for n in ("SIGTERM", "SIGHUP") if hasattr(signal, n))
+TERMINATING = tuple(s for s in (signal.SIGTERM, signal.Signals.__members__.get("SIGHUP")) if s is not None)
 
 
 @contextmanager
