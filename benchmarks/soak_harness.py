@@ -490,6 +490,28 @@ def results_lines(n, zero=None, first_zero=0):
     return check
 
 
+def results_follow_track(n):
+    """``w/r.txt`` has ``n`` lines, one per input frame of the track ``w/t.csv``, and a line is ``0,0,0,0``
+    exactly where the track does not report the object (``visible=0``: a frame that failed to decode, or
+    one reported lost)."""
+
+    def check(w, res):
+        if res.code != 0:
+            return None
+        lines = (w / "r.txt").read_text().splitlines() if (w / "r.txt").is_file() else []
+        rows = _rows(w / "t.csv") if (w / "t.csv").is_file() else []
+        zeros = [set(ln.replace(",", "").replace(".", "")) <= {"0"} for ln in lines]
+        if len(lines) != n or len(rows) != n:
+            return "silent wrong", f"results have {len(lines)} lines, the track {len(rows)} rows, for {n} frames"
+        wrong = [k for k, (z, r) in enumerate(zip(zeros, rows)) if z != (r["visible"] == "0")]
+        if wrong:
+            return "silent wrong", f"results lines {wrong[:5]} disagree with the track's visible column"
+        res.note = f"{n} lines, {sum(zeros)} 0,0,0,0 (the frames not reported)"
+        return None
+
+    return check
+
+
 def all_of(*checks):
     def check(w, res):
         for c in checks:
