@@ -191,8 +191,9 @@ def _full_disk():
     track = ["--track", "{T}/t.csv", "--results", "{T}/r.txt"]
     steps = [[*run[:1], short, *run[1:], *track], [*run[:1], long, *run[1:], *track, "--out", "/dev/null"]]
     alone = [[*run[:1], long, *run[1:], "--track", "{T}/t.csv"]]
+    # the second clip passes the size check (the least a clip takes) and fills the disk while it is written
     clip = [["synth", "contour", "--out", "{T}/c", "--frames", "2", "--size", "96x72", "-q"],
-            ["synth", "contour", "--out", "{T}/c", "--frames", "400", "--size", "320x240", "-q"]]
+            ["synth", "contour", "--out", "{T}/c", "--frames", "60", "--size", "320x240", "-q"]]
     out += [
         Scenario("run --track over an earlier track on a full tmpfs", S.shown(steps), mention="is kept",
                    driver=S.tmpfs(steps, "24k"), check=S.earlier_kept("t.csv")),
