@@ -9,7 +9,7 @@ import click
 
 from vistrack.demo.steps import DemoConfig, run_demo
 
-from .options import SEED, option
+from .options import SEED, Output, option
 from .progress import Bars, progress
 from .run import lost_notice
 
@@ -24,7 +24,7 @@ def _made(out, paths):
 
 
 @click.command()
-@option("--out", "out_dir", source=DemoConfig, key="out", type=click.Path(file_okay=False),
+@option("--out", "out_dir", source=DemoConfig, key="out", type=Output(file_okay=False),
         help="Folder for clips, annotated videos, tracks, tables and plots.")
 @option("--frames", source=DemoConfig, type=click.IntRange(min=10), help="Number of frames to generate.")
 @option("--runs", source=DemoConfig, type=click.IntRange(min=1),

@@ -12,7 +12,7 @@ from vistrack.registry import BASELINES, DEFAULT_MODEL, MODELS, algos_for, all_a
 from vistrack.reports.eval_report import averages
 
 from .errors import one_line
-from .options import SEED, IntList, StrList, joined, option
+from .options import SEED, IntList, Output, StrList, check_outputs, joined, option
 from .progress import Bars, progress
 
 __all__ = ["eval_cmd"]
@@ -81,11 +81,12 @@ per task) and PNG plots.
 @option("--results-format", "results_format", source=evaluate, type=click.Choice(FORMATS),
         help="Format of the --results-dir files: otb (1-based pixels, as the OTB toolkit and pytracking write "
              "them), got10k or vot (0-based).")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Results folder.")
+@click.option("--out", "out_dir", required=True, type=Output(file_okay=False), help="Results folder.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, scheduler, workers, timeout, in_process,
              resume, results_dirs, results_format, out_dir, quiet):
     """``vistrack eval``: :data:`EVAL_HELP`."""
+    check_outputs({"--out": out_dir}, None, [*clips, *results_dirs])
     with one_line():
         cfg = eval_config(clips, algos=algos, particles=particles, runs=runs, seed=seed, model=model, targets=targets,
                           results_dirs=results_dirs)

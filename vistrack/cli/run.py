@@ -31,7 +31,7 @@ from vistrack.session.plan import track_video
 from vistrack.session.recording import record_video
 
 from .errors import one_line
-from .options import SEED, Box, Fraction, check_outputs, check_writable, option
+from .options import SEED, Box, Fraction, Output, check_outputs, check_writable, option
 from .progress import Bars
 
 __all__ = ["run"]
@@ -161,11 +161,11 @@ Landmarks (seed 000): vistrack synth landmarks --out lm && vistrack run lm --alg
               help="Contour support points (x y per line, or JSON): used where they lie in the first "
                    "frame, or fitted to --init / --init-gt boxes. Default: an ellipse, or the clip's template. "
                    "Landmarks: the first frame's landmark positions.")
-@click.option("--track", "track_path", type=click.Path(dir_okay=False), help="Write the track CSV here.")
-@click.option("--out", "out_path", type=click.Path(dir_okay=False),
+@click.option("--track", "track_path", type=Output(dir_okay=False), help="Write the track CSV here.")
+@click.option("--out", "out_path", type=Output(dir_okay=False),
               help="Write the annotated video here: .mp4 (H.264, index first: plays in browsers while loading), .mkv, "
                    ".mov, or .avi (Motion JPEG).")
-@click.option("--results", "results_path", type=click.Path(),
+@click.option("--results", "results_path", type=Output(),
               help="Write the track as the tracking toolkits' result file: x,y,w,h per frame (0,0,0,0 where the "
                    "object is not reported). otb: this file, 1-based pixels as the OTB toolkit and pytracking "
                    "write them; got10k: the submission layout in this folder (SEQ/SEQ_001.txt, 0-based, and "
@@ -213,14 +213,14 @@ def run(video, model_name, layout, algo, search, particles, seed, init, init_gt,
 
 def _check_output_paths(video, track_path, out_path, results_path, results_format, inputs):
     """One error line for an output ``run`` cannot write, or one that is an input or another output."""
-    check_writable(track_path, "track file")
-    check_writable(out_path, "annotated video")
+    check_writable(track_path, "--track")
+    check_writable(out_path, "--out")
     if results_format == "otb":  # its folder is made as the GOT-10k and VOT layouts' are
-        check_writable(results_path, "results file", create=True)
+        check_writable(results_path, "--results", create=True)
     elif results_path is not None and os.path.exists(results_path) and not os.path.isdir(results_path):
         raise click.ClickException(f"--results {results_path}: the {results_format} layout is a folder "
                                    "(SEQ/SEQ_001.txt inside it), not a file")
-    check_outputs({"--track": track_path, "--out": out_path, "--results": results_path}, video, inputs=inputs)
+    check_outputs({"--track": track_path, "--out": out_path, "--results": results_path}, video, inputs)
 
 
 @contextmanager

@@ -115,9 +115,9 @@ def _pillar_image(rng, h, width):
 
 
 @atomic_clip
-def make_longterm_clip(out, *, size=(640, 480), seed=0, gap=2.0, fps=30.0, progress=None, frames=None):
+def make_longterm_clip(out, *, size=(640, 480), seed=0, gap=2.0, fps=30.0, progress=None, on_length=None):
     """Render a long-term clip into folder ``out`` (video.mp4, groundtruth.csv, meta.json; module
-    docstring). ``gap``: the seconds of each absence. Returns the meta dictionary; ``frames(n)`` is told the
+    docstring). ``gap``: the seconds of each absence. Returns the meta dictionary; ``on_length(n)`` is told the
     clip's length once its script is drawn and ``progress(k)`` is called after every frame, when given."""
     w, h = int(size[0]), int(size[1])
     if w < 160 or h < 120:
@@ -134,8 +134,8 @@ def make_longterm_clip(out, *, size=(640, 480), seed=0, gap=2.0, fps=30.0, progr
     x0, x1 = int(round(0.52 * w)), int(round(0.52 * w)) + int(round(1.9 * ow))
     pillar = _pillar_image(rng, h, x1 - x0)
     centres = script(rng, (w, h), (ow, oh), (x0, x1), gap, fps)
-    if frames is not None:
-        frames(len(centres))
+    if on_length is not None:
+        on_length(len(centres))
     phase = rng.uniform(0, 2 * np.pi)
     rows, absent, first = [], [], None
     with VideoWriter(out / "video.mp4", fps, (w, h)) as vw:

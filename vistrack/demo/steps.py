@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .. import kernels
 from ..data_synth.contour_clip import make_contour_clip
-from ..evaluation.experiment import EvalConfig
+from ..evaluation.experiment import EvalConfig, check_grid_size
 from ..evaluation.pipeline import evaluate
 from ..io.clips import excerpt_clip
 from ..registry import DEFAULT_MODEL, DEFAULT_PARTICLES, algos_for, get_model_spec
@@ -21,7 +21,7 @@ from ..session.plan import track_video
 from ..system.compiling import compiling
 
 __all__ = ["DemoConfig", "DEMO_ENTRIES", "CLIP", "CLIP_FOLDER", "REAL_ENTRIES", "REAL_CLIP", "Excerpt",
-           "find_real_clip", "make_demo_clip", "real_excerpt", "compare", "run_demo", "runs_phrase"]
+           "find_real_clip", "check_demo", "make_demo_clip", "real_excerpt", "compare", "run_demo", "runs_phrase"]
 
 #: the comparison on the generated clip (:data:`~vistrack.registry.comparisons.DEMO`)
 DEMO_ENTRIES = DEMO
@@ -71,6 +71,14 @@ def find_real_clip():
         if (base / REAL_CLIP).exists():
             return base / REAL_CLIP
     return None
+
+
+def check_demo(frames, runs, real_frames):
+    """Before anything is made: the demo's two comparisons (``runs`` runs of :data:`DEMO_ENTRIES` on a clip
+    of ``frames`` frames, of :data:`REAL_ENTRIES` on ``real_frames``) checked against memory
+    (:func:`~vistrack.evaluation.experiment.check_grid_size`: a one-line ``TooLarge``)."""
+    check_grid_size(1, DEMO_ENTRIES, runs, frames)
+    check_grid_size(1, REAL_ENTRIES, runs, real_frames)
 
 
 def make_demo_clip(out, frames, seed):
@@ -144,6 +152,7 @@ def run_demo(out=DemoConfig.out, *, frames=DemoConfig.frames, runs=DemoConfig.ru
     of :func:`~vistrack.session.plan.track_video` (``note``, ``lost``, ``compiling_progress``, ``frames``) and
     ``grid`` those of the engine (``progress``, ``on_ready``, ``notify``)."""
     out, made, (w, h), tracking, grid = Path(out), [], CLIP["size"], dict(tracking or {}), grid or {}
+    check_demo(frames, runs, real_frames)
     say(f"1/4 generating a {frames}-frame {w}x{h} clip in {out / CLIP_FOLDER}: a textured object in heavy clutter "
         "that jumps 38-51 px every 25 frames or so")
     clip = make_demo_clip(out, frames, seed)

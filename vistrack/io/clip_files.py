@@ -18,14 +18,13 @@ same boxes (:func:`groundtruth_origin`):
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 __all__ = ["IMAGE_EXT", "VIDEO_EXT", "TEXT_EXT", "FRAME_FOLDERS", "GROUNDTRUTH_FILES", "ONE_BASED", "LASOT_FLAGS",
-           "SYNTH_RECORDS", "CLIP_FILES", "groundtruth_origin", "find_groundtruth", "overwrites_input"]
+           "SYNTH_RECORDS", "CLIP_FILES", "groundtruth_origin", "find_groundtruth"]
 
 #: the image files an image folder's frames are read from
-IMAGE_EXT = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".ppm", ".pgm"}
+IMAGE_EXT = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".ppm", ".pgm", ".webp"}
 #: the video files a clip folder's video is found by
 VIDEO_EXT = {".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"}
 #: files FFmpeg's text/data demuxers would "decode", which are never videos here
@@ -41,7 +40,8 @@ LASOT_FLAGS = ("full_occlusion.txt", "out_of_view.txt")
 #: the record each ``vistrack synth`` command writes beside its clip, and the keys that name what it is
 #: (a clip vistrack wrote: its box ground truth is 0-based whatever its name)
 SYNTH_RECORDS = {"meta.json": ("kind", "model"), "perturb.json": ("source",), "composite.json": ("source",)}
-#: the files of a clip folder that a run reads besides the frames
+#: the files of a clip folder that a run reads besides the frames (an output must not be one of them:
+#: :func:`vistrack.io.outputs.check_not_input`)
 CLIP_FILES = ("video.mp4", "groundtruth.csv", *GROUNDTRUTH_FILES, "meta.json", "objects.csv")
 
 
@@ -67,17 +67,3 @@ def find_groundtruth(path):
             return folder / name
     return None
 
-
-def overwrites_input(path, video):
-    """Whether writing the file ``path`` (its real path) would overwrite what a run of ``video`` reads: the
-    video file itself, or a clip folder's files (:data:`CLIP_FILES`), images (:data:`IMAGE_EXT`) or the
-    frames of its :data:`FRAME_FOLDERS`."""
-    real, video = os.path.realpath(path), os.path.realpath(video)
-    if real == video:
-        return True
-    if not os.path.isdir(video):
-        return False
-    parent, name = os.path.split(real)
-    if parent == video:
-        return name in CLIP_FILES or os.path.splitext(name)[1].lower() in IMAGE_EXT
-    return os.path.dirname(parent) == video and os.path.basename(parent) in FRAME_FOLDERS

@@ -28,6 +28,9 @@ def initial_truth(clip, init_gt):
             raise VideoError(f"--init-gt: {clip.folder} has no groundtruth.csv or groundtruth_rect.txt; "
                              "give a file (--init-gt FILE) or a box (--init x,y,w,h)")
     else:
+        if "://" in str(init_gt):
+            raise VideoError(f"--init-gt {init_gt}: a URL; give a local ground-truth file, or --init-gt alone for "
+                             "the clip's own (a clip given as a URL brings its ground truth)")
         p = Path(init_gt)
         if p.is_dir():
             raise VideoError(f"--init-gt: {p} is a folder; give a ground-truth file (groundtruth.csv, or x,y,w,h "
@@ -115,7 +118,7 @@ def first_frame(clip, index=0):
     for i, frame in clip.source:
         if i >= index:
             return frame
-    raise VideoError(f"{clip.source.path}: no frame could be decoded" + (f" from frame {index} on" if index else ""))
+    raise VideoError(f"{clip.source.shown}: no frame could be decoded" + (f" from frame {index} on" if index else ""))
 
 
 def start_box(clip, init, init_gt):

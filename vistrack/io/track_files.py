@@ -13,7 +13,7 @@ import os
 from pathlib import Path
 
 from .clips import format_value
-from .outputs import OutputError, OutputLock, is_device, left_note, temporary_name
+from .outputs import OutputError, OutputLock, check_not_input, left_note, output_target, temporary_name
 from .results_format import format_line
 
 __all__ = ["TrackCSV", "TRACK_COLUMNS", "LOST_REASONS", "column_name", "check_lost_reason", "columns_help"]
@@ -82,26 +82,29 @@ def columns_help():
 class TrackCSV:
     """Track rows (dicts) written as they come: header from the first row, one flushed row per
     :meth:`write` to ``path.part``; :meth:`close` renames it to ``path`` (module docstring); a
-    device or pipe (``/dev/stdout``) is written directly.
+    symbolic link is written through to its file, a device or pipe (``/dev/stdout``) in place
+    (:func:`~vistrack.io.outputs.output_target`), and an input of the command is refused.
     ``boxes``: a result file of the tracking toolkits instead (:mod:`vistrack.io.results_format`):
     ``"otb"`` (or ``True``), ``"got10k"``, ``"vot"`` — ``x,y,w,h`` per frame, no header — or
     ``"time"``, GOT-10k's seconds per frame."""
 
     def __init__(self, path, boxes=False):
         self.path = Path(path)
-        # a device or pipe (/dev/stdout) is written directly: a part file renamed over it would replace it
-        self.direct = is_device(self.path)
+        self.what = "track file" if not boxes else "results file"
+        check_not_input(self.path, self.what)
+        # a device or pipe (/dev/stdout) is written in place: a part file renamed over it would replace it;
+        # a link is written through to its file, the link kept
+        self.target, self.direct = output_target(self.path)
         # one live writer per output (a second run refuses it: OutputBusy), and a temporary name of its own
-        self._lock = OutputLock(self.path, "results file" if boxes else "track file")
+        self._lock = OutputLock(self.target, self.what)
         try:
-            self.part = self.path if self.direct else temporary_name(self.path)
+            self.part = self.target if self.direct else temporary_name(self.target)
             self._f = open(self.part, "w", newline="")
         except BaseException:
             self._lock.release()
             raise
         self._w = csv.writer(self._f)
         self.boxes = "otb" if boxes is True else (boxes or None)
-        self.what = "track file" if not boxes else "results file"
         self.columns = None
         self.rows = 0
         self._done = False
@@ -127,7 +130,7 @@ class TrackCSV:
 
     def _left(self):
         """What a failure leaves at :attr:`path`: the earlier file, or the rows written whole."""
-        if self.path.is_file():
+        if self.target.is_file():
             return left_note(self.path, True)
         return f"the {self.rows} rows written before are kept" if self.rows else left_note(self.path, False)
 
@@ -170,7 +173,7 @@ class TrackCSV:
                 if self._error is not None and not raised:
                     raise OutputError(self.what, self.path, self._error, left)
             elif self.rows:
-                os.replace(self.part, self.path)
+                os.replace(self.part, self.target)
         finally:
             if not self.direct:
                 self.part.unlink(missing_ok=True)
@@ -179,10 +182,10 @@ class TrackCSV:
     def _keep_whole_rows(self):
         """After a failure: the part file cut to its whole rows and renamed to :attr:`path` when no
         earlier file is there and it holds rows; else removed."""
-        if not self.path.is_file() and self.rows:
+        if not self.target.is_file() and self.rows:
             try:
                 os.truncate(self.part, self._whole)
-                os.replace(self.part, self.path)
+                os.replace(self.part, self.target)
             except OSError:
                 pass
         self.part.unlink(missing_ok=True)

@@ -35,6 +35,7 @@ from .clip_files import (  # the names' home; find_groundtruth, groundtruth_orig
     find_groundtruth,
     groundtruth_origin,
 )
+from .numbers import parse_float
 from .video_errors import FrameOrderWarning, VideoDecodeWarning, VideoError, quoted
 from .video_writer import VideoWriter  # the writer's home; re-exported (__all__)
 
@@ -42,20 +43,9 @@ from .video_writer import VideoWriter  # the writer's home; re-exported (__all__
 # frame is counted and reported once (VideoDecodeWarning). Read when the first capture opens.
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 
-__all__ = ["is_stream",
-    "VideoError",
-    "VideoDecodeWarning",
-    "FrameOrderWarning",
-    "natural_key",
-    "read_text_lines",
-    "VideoSource",
-    "open_video",
-    "VideoWriter",
-    "read_rects",
-    "find_groundtruth",
-    "groundtruth_origin",
-    "prefetch",
-]
+__all__ = ["is_stream", "VideoError", "VideoDecodeWarning", "FrameOrderWarning", "natural_key", "read_text_lines",
+           "VideoSource", "open_video", "VideoWriter", "read_rects", "find_groundtruth", "groundtruth_origin",
+           "prefetch"]
 
 
 @contextmanager
@@ -78,6 +68,8 @@ class VideoSource:
     Attributes
     ----------
     path : Path
+    shown : str
+        How messages name it: the path, or a URL or stream as given (never ``http:/``).
     frame_count : int or None
         Number of frames if the container says (always known for image folders).
     fps : float
@@ -88,6 +80,7 @@ class VideoSource:
 
     def __init__(self, path, *, _images=None, remote=None):
         self.path = Path(path)
+        self.shown = str(path) if is_stream(path) or "://" in str(path) else str(self.path)
         self._images = _images
         #: how a URL was read (:class:`~vistrack.io.remote.Remote`), or ``None``
         self.remote = remote
@@ -280,7 +273,11 @@ def open_video(path):
         return VideoSource(p, _images=images)
     if len(videos) > 1:
         raise VideoError(f"{p} holds several videos ({', '.join(v.name for v in videos)}); name one")
-    raise VideoError(f"{p} holds no video and no images")
+    others = sorted({q.suffix.lower() for d in (p, *(p / f for f in FRAME_FOLDERS)) if d.is_dir() for q in d.iterdir()
+                     if q.suffix})
+    raise VideoError(f"{p} holds no video and no images (in the folder, img/ or color/: images "
+                     f"{', '.join(sorted(IMAGE_EXT))}; videos {', '.join(sorted(VIDEO_EXT))})"
+                     + (f"; it holds {', '.join(others[:5])} files" if others else ""))
 
 
 def read_rects(path, origin=0):
@@ -300,7 +297,7 @@ def read_rects(path, origin=0):
             continue
         parts = line.replace(",", " ").replace("\t", " ").split()
         try:
-            v = np.array([float(x) for x in parts])
+            v = np.array([parse_float(x) for x in parts])
         except ValueError:
             raise VideoError(f"{path}, line {k}: expected numbers (x,y,w,h or a 4-corner polygon), "
                              f"got {quoted(line)}") from None

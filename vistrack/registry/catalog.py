@@ -24,6 +24,7 @@ from ..models.plate.layout import LAYOUTS  # the plate layouts by name: --layout
 from ..models.spec import ModelSpec
 from ..system.resources import check_memory
 from .filter_specs import FILTERS, get_filter_spec, runs_on
+from .option_types import check_model_options
 
 __all__ = ["ModelSpec", "MODELS", "LAYOUTS", "DEFAULT_MODEL", "SEARCH_MODEL", "DEFAULT_PARTICLES", "REFERENCE_ALGO",
            "OptionError", "default_comparison", "check_particle_memory", "register", "get_model_spec", "algos_for",
@@ -170,4 +171,5 @@ def model_params(name, flags, algo=None):
             where = " and ".join(s.name for s in takes) + (" models" if len(takes) > 1 else " model")
             raise OptionError(f"{flag} is for " + (f"--algo {', '.join(algos)} on the " if algos else "the ") + where)
         params[opt.name] = value if opt.value is None else opt.value
+    check_model_options(spec, params)  # the check vistrack.Tracker makes of the same options
     return params

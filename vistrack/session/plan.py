@@ -106,10 +106,11 @@ def prepare(video, *, model=None, algo=None, particles=DEFAULT_PARTICLES, init=N
              "--layout": layout, "--no-colour": no_colour or None, "--search": search}
     params = model_params(name, flags, algo)
     check_algo(name, algo, targets is not None, who=f"--algo {algo}")
-    check_particle_memory(particles, spec.bytes_per_particle, algo, targets=targets or 1)
-    if compiler is not None:  # the options are good: compile before anything calls the kernels
+    if compiler is not None:  # the options go together: compile before anything calls the kernels (building does)
         compiler.compile(name, [algo], targets is not None)
+    # built first: what the model refuses by sense (more plates than a frame holds) before what memory allows
     built = build_model(name, clip, init=init, init_gt=init_gt, **params)
+    check_particle_memory(particles, spec.bytes_per_particle, algo, targets=targets or 1)
     if search == "nn":  # train (once per template) or load before the first frame
         network_for(built, notify=notify)
     plan = Plan(clip, name, algo, built, frames=_frames(clip.source, max_frames))

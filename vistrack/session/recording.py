@@ -34,10 +34,9 @@ from ..io.track_files import TrackCSV, check_lost_reason
 from ..io.video_writer import VideoWriter
 from ..loop.profiling import STAGES, Timer, instrument
 from ..loop.stepper import Stepper, top_particles, warm_up
-from ..system.signals import deferred_signals, stop_on_signals, stop_reason
+from ..system.signals import deferred_signals, stop_reason
 
-# stop_on_signals (vistrack.system.signals) re-exported for tests/test_faults_sweep2.py, which imports it from here
-__all__ = ["SessionLog", "record_video", "track_row", "target_rows", "stop_on_signals"]
+__all__ = ["SessionLog", "record_video", "track_row", "target_rows"]
 
 
 @dataclass
@@ -111,8 +110,8 @@ def _row(model, index, visible, estimate, redetected, ess, ms, lost_reason, conf
 def target_rows(model, res):
     """The track-CSV rows of a frame of a model of several targets (:class:`~vistrack.scoring.mot.MultiTarget`):
     one per reported target, ``frame, visible = 1, id``, the target's :meth:`describe_target`
-    columns, ``ess, ms, lost_reason``; one row with ``visible = 0, id = -1``, NaN geometry and the
-    frame's ``lost_reason`` when none is reported."""
+    columns, ``ess, ms, lost_reason``; one row with ``visible = 0, id = -1``, NaN geometry (empty cells in
+    the CSV) and the frame's ``lost_reason`` when none is reported."""
     ids, states = res.targets
     tail = {"ess": res.ess, "ms": res.ms}
     if not len(ids):
