@@ -96,8 +96,11 @@ def iou(a, b):
 
 def success_curve(ious):
     """The success plot (OTB): for each of :data:`IOU_THRESHOLDS`, the share of the IoUs ``(...)`` (one
-    run's frames, or runs × frames) above it; NaN counts as 0."""
+    run's frames, or runs × frames) above it; NaN counts as 0. Without frames (a ground truth in which
+    the object is never in view) each share is NaN: there is nothing to score."""
     ious = np.nan_to_num(np.asarray(ious, float))
+    if not ious.size:
+        return [float("nan")] * len(IOU_THRESHOLDS)
     return [float((ious > t).mean()) for t in IOU_THRESHOLDS]
 
 

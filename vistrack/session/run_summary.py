@@ -159,14 +159,19 @@ def _box_summary(rows, t, frame_width):
     s = summarize([{**scored, "clip": "", "algo": "", "particles": 0, "run": 0, "ms": [], "ess": []}])[0]
     vis = np.array(scored["visible"], bool)
     reported = np.array(scored["reported"], bool)
-    missed = int(np.sum(vis & np.array([e is None for e in scored["error"]])))
+    absent = int((~vis).sum())
+    if not vis.size:
+        return "vs ground truth: it has no row for the frames tracked, so there is nothing to score"
+    if not vis.any():  # no frame to score: a ground truth without rows for these frames, or the object never in view
+        return (f"vs ground truth: the object is in none of the {vis.size} frames it covers, so there is no "
+                f"success or precision score; reported absent (visible=0) in {int((~reported).sum())} of them")
+    missed = int(np.sum(vis & np.array([e is None for e in scored["error"]], bool)))
     lost = vis & np.array(scored["lost"], bool)
     mean_all = "n/a" if s["mean_error_all"] is None else f"{s['mean_error_all']:.2f} px"
     err = np.array([np.inf if e is None else e for e in scored["error"]])
     on = vis & reported & np.isfinite(err)  # tracked: the frames the tracker reported (issue 44), not the truth's rule
     tracked = f"{err[on].mean():.2f} px" if on.any() else "none"
     but = f" but the {missed} without an estimate (undecodable, or searched before it was found)" if missed else ""
-    absent = int((~vis).sum())
     return (f"vs ground truth ({int(vis.sum())} frames with the object): success AUC {s['success_auc']:.3f} "
             f"({s['success_auc_lost_empty']:.3f} with the frames reported lost as empty), precision@20px "
             f"{s['precision_20px']:.3f}, long-term F-score {s['lt_f']:.3f} (precision {s['lt_precision']:.3f}, "
