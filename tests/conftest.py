@@ -3,8 +3,8 @@
 ``slow`` (registered in pyproject.toml) marks a test that runs a command end to end (a subprocess, a grid on
 Dask, the demo, the docs build), tracks a clip over many frames or checks a proposal against a brute-force
 posterior: each took over 2 s on the busy 2-core development machine. ``pytest -m "not slow"`` is the quick
-check (under a minute there); the fault sweeps (``test_faults*.py``, every test a command under a fault) are
-slow as a whole until issue 55 files them by what they break.
+check (under a minute there); the fault tests (``tests/<package>/test_faults_*.py``, filed by what a fault
+breaks, every test a command under a fault) are slow as a whole.
 """
 
 import numpy as np
@@ -24,7 +24,7 @@ def pytest_sessionstart(session):
 
 
 def pytest_collection_modifyitems(items):
-    """The fault sweeps' tests are slow (module docstring)."""
+    """The fault tests are slow (module docstring)."""
     for item in items:
         if item.path.name.startswith("test_faults"):
             item.add_marker(pytest.mark.slow)
@@ -69,3 +69,22 @@ def ctrl_c_reaches_python():
         yield
     finally:
         signal.signal(signal.SIGINT, saved)
+
+
+@pytest.fixture
+def serve():
+    """``serve(folder, handler)``: the URL of ``folder`` served on 127.0.0.1 by ``handler``
+    (:mod:`server_helpers`: ``QuietHandler`` without range requests by default, ``RangeHandler`` with them)."""
+    from server_helpers import serve_folder
+
+    servers = []
+
+    def start(folder, handler=None):
+        url, server = serve_folder(folder, handler)
+        servers.append(server)
+        return url
+
+    yield start
+    for s in servers:
+        s.shutdown()
+        s.server_close()

@@ -177,3 +177,21 @@ def test_run_with_template_file(clip, tmp_path, capsys):
     tmpl.write_text("1 2\n3 4\n")
     code, _, err = run(["run", str(clip), "--template", str(tmpl)], capsys)
     assert code != 0 and "at least 4 support points" in err
+
+
+@pytest.mark.parametrize("text, says", [
+    ("", "it has no row for the frames tracked, so there is nothing to score"),
+    ("0,0,0,0\n0,0,0,0\n", "the object is in none of the 2 frames it covers, so there is no success or "
+                          "precision score"),
+])
+def test_run_summary_against_a_truth_without_the_object(tmp_path, text, says):
+    """A ground truth that scores no frame (no rows, or the object never in view) is said, not a traceback
+    (CI's hypothesis run found the empty file; the scores of zero frames were indexed)."""
+    (tmp_path / "img").mkdir()
+    for i in range(2):
+        cv2.imwrite(str(tmp_path / "img" / f"{i + 1:04d}.jpg"), np.full((120, 160, 3), 90 + 40 * i, np.uint8))
+    (tmp_path / "groundtruth_rect.txt").write_text(text)
+    code, out, err = run(["run", tmp_path, "--init", "10,10,20,20", "-n", "10", "--model", "box"])
+    assert code == 0, err
+    assert "Traceback" not in err and "RuntimeWarning" not in err
+    assert f"vs ground truth: {says}" in out

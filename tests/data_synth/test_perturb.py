@@ -112,7 +112,7 @@ def test_cli_writes_a_clip_that_run_and_eval_read(tmp_path):
     with VideoWriter(src / "sq.mp4", 30, (W, H), codec="h264") as w:
         for f in frames:
             w.write(f)
-    np.savetxt(src / "groundtruth_rect.txt", gt, fmt="%d", delimiter=",")
+    np.savetxt(src / "groundtruth_rect.txt", gt + (1, 1, 0, 0), fmt="%d", delimiter=",")  # OTB's file: 1-based
     out = tmp_path / "sq-shake"
     r = CliRunner().invoke(main, ["synth", "perturb", str(src), "--out", str(out), "--shake", "5", "--zoom",
                                   "1:0.7", "--drop", "5", "--seed", "1", "-q"])

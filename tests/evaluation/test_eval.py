@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
+from clip_helpers import tiny_otb_clip
 from eval_helpers import strip_timing
 from vistrack.data_synth.contour_clip import make_contour_clip
 
@@ -112,29 +113,12 @@ def test_synth_suite(tmp_path, capsys):
     assert json.loads((tmp_path / "s" / "contour-06" / "meta.json").read_text())["seed"] == 6
 
 
-def _tiny_otb_clip(folder, frames=12):
-    """An OTB-layout clip (img/ + 1-based groundtruth_rect.txt): a red square moving right on grey noise."""
-    import cv2
-
-    rng = np.random.default_rng(3)
-    bg = cv2.GaussianBlur(rng.integers(40, 200, (72, 96, 3)).astype(np.uint8), (0, 0), 1.5)
-    (folder / "img").mkdir(parents=True)
-    lines = []
-    for t in range(frames):
-        f = bg.copy()
-        f[26:46, 20 + t:40 + t] = (20, 30, 220)
-        cv2.imwrite(str(folder / "img" / f"{t + 1:04d}.png"), f)
-        lines.append(f"{21 + t},27,20,20")
-    (folder / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n")
-    return folder
-
-
 @pytest.mark.slow
 def test_demo_writes_videos_tracks_and_reports(tmp_path, capsys):
     import cv2
 
     out = tmp_path / "demo"
-    real = _tiny_otb_clip(tmp_path / "Tiny")
+    real = tiny_otb_clip(tmp_path / "Tiny")
     code, stdout, err = run(["demo", "--out", str(out), "--frames", "12", "--runs", "2", "--real-clip", str(real),
                              "--real-frames", "10"], capsys)
     assert code == 0, err
@@ -165,7 +149,7 @@ def test_demo_writes_videos_tracks_and_reports(tmp_path, capsys):
 def test_demo_skips_a_missing_real_clip(tmp_path, capsys, monkeypatch):
     import importlib
 
-    demo_module = importlib.import_module("vistrack.cli.demo")  # the package's `demo` is the command
+    demo_module = importlib.import_module("vistrack.demo.steps")
     monkeypatch.setattr(demo_module, "DEMO_ENTRIES", (("bootstrap", 20),))  # the skip is what is tested
     out = tmp_path / "demo"
     code, stdout, err = run(["demo", "--out", str(out), "--frames", "10", "--runs", "1", "--real-clip",

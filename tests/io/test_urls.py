@@ -4,67 +4,17 @@ kept by the URL and the server's validators, which are checked again on every us
 downloaded again; run and eval's report say when a cached copy was used); the track is the local
 file's; a local path wins over a camera index; errors name the URL and what failed."""
 
-import io
 import os
 import re
 import socket
-import threading
-from functools import partial
-from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
 
 import cv2
 import numpy as np
 import pytest
 
 from cli_helpers import run
+from server_helpers import RangeHandler
 from vistrack.io.clips import read_groundtruth_csv
-
-
-class QuietHandler(SimpleHTTPRequestHandler):
-    """``python -m http.server``'s handler (no range requests), without its log lines."""
-
-    def log_message(self, *args):
-        pass
-
-
-class RangeHandler(QuietHandler):
-    """The same, answering ``Range: bytes=a-b`` with 206 and the part (the starts asked are kept)."""
-
-    starts = []
-
-    def send_head(self):
-        path = self.translate_path(self.path)
-        m = re.fullmatch(r"bytes=(\d+)-(\d*)", self.headers.get("Range", ""))
-        if os.path.isdir(path) or not os.path.isfile(path) or not m:
-            return super().send_head()
-        data = open(path, "rb").read()
-        start, end = int(m[1]), min(int(m[2]) if m[2] else len(data) - 1, len(data) - 1)
-        type(self).starts.append(start)
-        self.send_response(206)
-        self.send_header("Content-Type", self.guess_type(path))
-        self.send_header("Content-Range", f"bytes {start}-{end}/{len(data)}")
-        self.send_header("Content-Length", str(end - start + 1))
-        self.send_header("Accept-Ranges", "bytes")
-        self.send_header("ETag", f'"{len(data)}-{int(os.path.getmtime(path))}"')
-        self.end_headers()
-        return io.BytesIO(data[start:end + 1])
-
-
-@pytest.fixture
-def serve():
-    """``serve(folder, handler)``: the URL of ``folder`` served on 127.0.0.1 by ``handler``."""
-    servers = []
-
-    def start(folder, handler=QuietHandler):
-        server = ThreadingHTTPServer(("127.0.0.1", 0), partial(handler, directory=str(folder)))
-        threading.Thread(target=server.serve_forever, daemon=True).start()
-        servers.append(server)
-        return f"http://127.0.0.1:{server.server_address[1]}"
-
-    yield start
-    for s in servers:
-        s.shutdown()
-        s.server_close()
 
 
 @pytest.fixture(autouse=True)

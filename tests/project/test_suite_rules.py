@@ -22,17 +22,17 @@ def test_no_test_reads_the_clock_or_sleeps():
 def test_tests_are_filed_by_package():
     """A test file lies in ``tests/<package>/`` (a folder per vistrack package, ``models/<family>/`` for a
     family, ``project/`` for the repository's own rules), under a name no other test file has, with no
-    ``__init__.py``; tests/ itself holds the shared helpers (``conftest.py``, ``*_helpers.py``) and, until
-    issue 55 files them by what they break, the fault sweeps (``test_faults*.py``)."""
+    ``__init__.py``; tests/ itself holds the shared helpers (``conftest.py``, ``*_helpers.py``) only (issue 55
+    filed the fault sweeps by what they break: ``tests/<package>/test_faults_*.py``)."""
     code = ROOT / "vistrack"
     folders = {p.parent.relative_to(code).as_posix() for p in code.rglob("__init__.py")} - {"."} | {"project"}
     files = sorted(TESTS.rglob("test_*.py"))
     misplaced = [p.relative_to(TESTS).as_posix() for p in files
-                 if (p.parent == TESTS and not p.name.startswith("test_faults"))
+                 if p.parent == TESTS
                  or (p.parent != TESTS and p.parent.relative_to(TESTS).as_posix() not in folders)]
     names = [p.name for p in files]
     assert misplaced == []
     assert sorted({n for n in names if names.count(n) > 1}) == []
     assert list(TESTS.rglob("__init__.py")) == []
-    loose = sorted(p.name for p in TESTS.glob("*.py") if not p.name.startswith("test_faults"))
+    loose = sorted(p.name for p in TESTS.glob("*.py"))
     assert all(n == "conftest.py" or n.endswith("_helpers.py") for n in loose), loose

@@ -55,6 +55,6 @@ def test_a_model_the_version_lacks_is_one_line(tmp_path):
 
 
 def test_demo_says_runs_in_english():
-    from vistrack.cli.demo import _runs
+    from vistrack.demo.steps import runs_phrase
 
-    assert (_runs(1), _runs(4)) == ("1 run", "4 runs")
+    assert (runs_phrase(1), runs_phrase(4)) == ("1 run", "4 runs")

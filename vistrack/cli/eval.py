@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import click
 
 from vistrack.batch.cluster import run_grid
@@ -14,17 +12,18 @@ from vistrack.registry import BASELINES, DEFAULT_MODEL, MODELS, algos_for, all_a
 from vistrack.reports.eval_report import averages
 
 from .errors import one_line
-from .options import SEED, IntList, StrList, joined, option
-from .progress import progress
+from .options import SEED, IntList, Output, StrList, check_outputs, joined, option
+from .progress import Bars, progress
 
 __all__ = ["eval_cmd"]
 
 
-def _chosen(quiet):
-    """``on_equal_time``: the particle counts of equal time on one line (nothing with ``quiet``)."""
-    if quiet:
+def _chosen(bars):
+    """``on_equal_time``: the particle counts of equal time on one line (nothing with ``quiet``), after the bar
+    shown is closed."""
+    if bars.quiet:
         return None
-    return lambda chosen: click.echo("equal time per frame: " + ", ".join(f"{a} N={n}" for a, n in chosen.items()))
+    return lambda chosen: bars.echo("equal time per frame: " + ", ".join(f"{a} N={n}" for a, n in chosen.items()))
 
 
 #: ``eval --help``
@@ -82,20 +81,20 @@ per task) and PNG plots.
 @option("--results-format", "results_format", source=evaluate, type=click.Choice(FORMATS),
         help="Format of the --results-dir files: otb (1-based pixels, as the OTB toolkit and pytracking write "
              "them), got10k or vot (0-based).")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Results folder.")
+@click.option("--out", "out_dir", required=True, type=Output(file_okay=False), help="Results folder.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def eval_cmd(clips, algos, particles, runs, seed, model, equal_time, targets, scheduler, workers, timeout, in_process,
              resume, results_dirs, results_format, out_dir, quiet):
     """``vistrack eval``: :data:`EVAL_HELP`."""
+    check_outputs({"--out": out_dir}, None, [*clips, *results_dirs])
     with one_line():
         cfg = eval_config(clips, algos=algos, particles=particles, runs=runs, seed=seed, model=model, targets=targets,
                           results_dirs=results_dirs)
     engine = dict(scheduler=scheduler, workers=workers, timeout=timeout, in_process=in_process, resume=resume)
-    with progress("eval", quiet) as hooks:
+    bars = Bars(quiet)
+    with progress("eval", quiet, bars) as hooks:
         done = evaluate(cfg, out_dir, results_dirs=results_dirs, results_format=results_format, equal_time=equal_time,
-                        on_equal_time=_chosen(quiet), **engine, **hooks)
+                        on_equal_time=_chosen(bars), compiling_progress=bars.compiling, **engine, **hooks)
     if not quiet:
         click.echo(averages(out_dir))
-        wrote = "results.csv and report.md" if targets is not None else \
-            f"results.csv, report.md and {len(done.plots)} plots"
-        click.echo(f"wrote {Path(out_dir) / 'results.json'}, {wrote}")
+        click.echo(done.wrote())

@@ -12,14 +12,15 @@ from vistrack.reproduce.bearings import BearingsConfig, format_ship_table
 from vistrack.reproduce.clip_suites import experiment_clips
 from vistrack.reproduce.contour import ContourConfig
 from vistrack.reproduce.landmarks import PAPER, STREAMS, LandmarksConfig
-from vistrack.reproduce.multi_plate import PlatesConfig
+from vistrack.reproduce.multi_plate import PlatesConfig, plate_experiment
 from vistrack.reproduce.plate import PlateConfig
 from vistrack.reproduce.reproduction import reproduce as run_reproduction
 
 from .errors import one_line
-from .options import SEED, Fraction, IntList, StrList, joined, option
+from .options import SEED, Fraction, IntList, Output, StrList, joined, option
 from .progress import progress
 from .reproduce_common import (
+    check_suite_outputs,
     default_entries,
     engine_options,
     equal_time_line,
@@ -55,8 +56,8 @@ def reproduce():
               help="Resample when ESS < threshold·N (default: every step).")
 @option("--lis-proposal", source=BearingsConfig, key="proposal", type=click.Choice(list(LIS_PROPOSALS)),
         help="LIS's proposal: the noise move across the bearing, or §4.5.5's position move.")
-@click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
-@click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
+@click.option("--json", "json_path", type=Output(dir_okay=False), help="Write results as JSON here.")
+@click.option("--plots", "plots_dir", type=Output(file_okay=False),
               help="Write PNGs of error vs time step and error vs N into this folder.")
 @engine_options(BearingsConfig)
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
@@ -101,6 +102,7 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
     scaled) at the last frame and averaged over frames, the mean error of
     runs not lost, and the filter's time per frame.
     """
+    check_suite_outputs("contour", clips_dir, json_path)
     with making_clips(make, frames, quiet) as made, one_line():
         clips = experiment_clips("contour", clips_dir, make, frames, size, made, grid=(entries, runs))
     cfg = ContourConfig(clips=clips, entries=entries, runs=runs, seed=seed)
@@ -187,12 +189,12 @@ def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targ
     if not overlap and (equal_time or "targets" in given):
         raise click.UsageError("--targets and --equal-time are for --overlap")
     experiment = "plates" if overlap else "plate"
+    check_suite_outputs(experiment, clips_dir, json_path)
     with making_clips(make, frames, quiet) as made, one_line():
         clips = experiment_clips(experiment, clips_dir, make, frames, size, made, grid=(entries, runs))
-    chosen = {"entries": entries} if "entries" in given or not overlap else {}  # else the experiment's own
-    cfg = PlatesConfig(clips, runs=runs, seed=seed, targets=targets, **chosen) if overlap else \
-        PlateConfig(clips, runs=runs, seed=seed, **chosen)
-    out = out_dir if "out_dir" in given or not overlap else PlatesConfig.results_dir
+    cfg, out = plate_experiment(clips, runs=runs, seed=seed, overlap=overlap, targets=targets,
+                                entries=entries if "entries" in given or not overlap else None,
+                                out=out_dir if "out_dir" in given else None)
     with progress(experiment, quiet) as hooks:
         done = run_reproduction(cfg, out, json_path=json_path, plots_dir=plots_dir, equal_time=equal_time,
                                 on_equal_time=equal_time_line("frame"), scheduler=scheduler, workers=workers,

@@ -14,10 +14,10 @@ from vistrack.registry.filter_specs import get_filter_spec
 from vistrack.reproduce.clip_suites import SUITES
 from vistrack.reproduce.tables import format_table
 
-from .options import SEED, Size, default_of, option, size_text
+from .options import SEED, Output, Size, check_outputs, default_of, option, size_text
 
 __all__ = ["Entries", "engine_options", "suite_options", "output_options", "making_clips", "equal_time_line",
-           "results_lines", "default_entries", "entries_text"]
+           "results_lines", "default_entries", "entries_text", "check_suite_outputs"]
 
 
 def _stacked(opts):
@@ -38,7 +38,7 @@ def engine_options(config):
                help="LocalCluster worker processes (0: one per core)."),
         click.option("--scheduler", help="Address of a running Dask scheduler [default: a LocalCluster]."),
         click.option("--in-process", is_flag=True, help="LocalCluster workers as threads of this process."),
-        option("--out", "out_dir", source=config, key="results_dir", type=click.Path(file_okay=False),
+        option("--out", "out_dir", source=config, key="results_dir", type=Output(file_okay=False),
                help="Folder for the per-task result files (OUT/tasks)."),
         click.option("--resume", is_flag=True, help="Keep finished tasks in --out and run only the rest."),
     ]
@@ -68,8 +68,8 @@ def suite_options(config, clips_help, algos_help):
 def output_options(plots_help):
     """``--json``, ``--plots`` (with ``plots_help``) and ``--quiet``, shared by the ``reproduce`` commands."""
     opts = [
-        click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here."),
-        click.option("--plots", "plots_dir", type=click.Path(file_okay=False), help=plots_help),
+        click.option("--json", "json_path", type=Output(dir_okay=False), help="Write results as JSON here."),
+        click.option("--plots", "plots_dir", type=Output(file_okay=False), help=plots_help),
         click.option("--quiet", "-q", is_flag=True, help="No progress bar."),
     ]
     return _stacked(opts)
@@ -136,3 +136,9 @@ def results_lines(experiment, done):
     if done.plots:
         lines.append(f"plot{'s' if len(done.plots) > 1 else ''} written to {' and '.join(done.plots)}")
     return "\n".join(lines)
+
+
+def check_suite_outputs(experiment, clips_dir, json_path):
+    """Before any clip is made or tracked: ``--json`` must not be a file of the clips it reads (the
+    experiment's ``--clips``, or its default folder; :func:`~vistrack.cli.options.check_outputs`)."""
+    check_outputs({"--json": json_path}, clips_dir or SUITES[experiment].folder)

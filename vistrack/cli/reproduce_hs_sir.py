@@ -14,6 +14,7 @@ from .errors import one_line
 from .options import option
 from .progress import progress
 from .reproduce_common import (
+    check_suite_outputs,
     engine_options,
     equal_time_line,
     making_clips,
@@ -78,6 +79,7 @@ def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, likel
     prints P(lost) (centre error > 50 px at 240-px width) at the last frame and
     averaged, the mean error of runs not lost and the time per frame.
     """
+    check_suite_outputs("hs-sir", clips_dir, json_path)
     with making_clips(make, frames, quiet) as made, one_line():
         clips = experiment_clips("hs-sir", clips_dir, make, frames, size, made, grid=(entries, runs))
     cfg = HSConfig(clips=clips, entries=entries, runs=runs, seed=seed, likelihood=likelihood)

@@ -15,7 +15,7 @@ from vistrack.data_synth.scene import out_folder
 from vistrack.data_synth.suite import SUITES, check_suite, make_suite
 from vistrack.registry import LAYOUTS
 
-from .options import SEED, Fraction, Ratio, Size, option, size_text
+from .options import SEED, FloatRange, Fraction, Output, Ratio, Size, check_outputs, option, size_text
 
 __all__ = ["synth"]
 
@@ -45,7 +45,7 @@ def _make(make, out, **kw):
 def _clip_options(make):
     """``--out``, ``--frames``, ``--size`` and ``--seed`` of every ``synth`` command that renders a clip, their
     defaults those of the clip's maker ``make``."""
-    opts = [click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write."),
+    opts = [click.option("--out", required=True, type=Output(file_okay=False), help="Clip folder to write."),
             option("--frames", source=make, type=click.IntRange(min=1), help="Number of frames to generate."),
             option("--size", source=make, shown=size_text, type=Size(), help="Frame size WIDTHxHEIGHT in pixels."),
             option("--seed", source=make, type=SEED,
@@ -135,11 +135,11 @@ def landmarks(out, k, frames, size, seed, clutter_blobs, occlusion, quiet):
 
 
 @synth.command()
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="Clip folder to write.")
+@click.option("--out", required=True, type=Output(file_okay=False), help="Clip folder to write.")
 @option("--size", source=make_longterm_clip, shown=size_text, type=Size(), help="Frame size WIDTHxHEIGHT in pixels.")
 @option("--seed", source=make_longterm_clip, type=SEED,
         help="Random seed: the same seed gives the same output, bit for bit.")
-@option("--gap", source=make_longterm_clip, type=click.FloatRange(0.2, 60),
+@option("--gap", source=make_longterm_clip, type=FloatRange(0.2, 60),
         help="Seconds of each absence (out of the frame, then behind the pillar).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def longterm(out, size, seed, gap, quiet):
@@ -154,7 +154,8 @@ def longterm(out, size, seed, gap, quiet):
     """
     out = _out_dir(out)
     with tqdm(unit="frame", disable=quiet, desc="synth longterm") as bar:
-        meta = _make(make_longterm_clip, out, size=size, seed=seed, gap=gap, progress=bar.update)
+        meta = _make(make_longterm_clip, out, size=size, seed=seed, gap=gap, progress=bar.update,
+                     on_length=lambda n: bar.reset(total=n))
     if not quiet:
         click.echo(f"wrote {out}/video.mp4, groundtruth.csv, meta.json ({meta['frames']} frames, {size[0]}x{size[1]}, "
                    f"absent in frames " + ", ".join(f"{a}-{b}" for a, b in meta["absent"]) + ")")
@@ -162,14 +163,14 @@ def longterm(out, size, seed, gap, quiet):
 
 @synth.command()
 @click.argument("clip", type=click.Path(exists=True))
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="Folder of the stressed copy.")
+@click.option("--out", required=True, type=Output(file_okay=False), help="Folder of the stressed copy.")
 @click.option("--light", type=click.Choice(LIGHTS), default=None,
               help="ramp: the gain goes linearly from the first --gain factor to the second (dark into light); "
                    "flicker: a random gain per frame between them.")
 @click.option("--gain", default=None, type=Ratio(), help="Gain range of --light [default: 0.3:1.6].")
 @option("--blur", source=Perturbation, type=click.IntRange(0, 200),
         help="Motion blur: a line kernel K px long along a random direction per frame.")
-@option("--shake", source=Perturbation, type=click.FloatRange(0, 1000),
+@option("--shake", source=Perturbation, type=FloatRange(0, 1000),
         help="Camera shake: each frame moved by up to PX px in x and y (uniform).")
 @click.option("--zoom", default=None, type=Ratio(),
               help="Zoom about the object over the clip: its size goes from A to B times its own (1:0.6 shrinks it).")
@@ -187,13 +188,14 @@ def perturb(clip, out, light, gain, blur, shake, zoom, drop, seed, quiet):
       vistrack synth perturb ../shared/data/real/girl_otb --out girl-ramp --light ramp
       vistrack synth perturb CLIP --out C2 --blur 9 --shake 6 --zoom 1:0.6 --drop 2 --seed 1
     """
+    check_outputs({"--out": out}, clip)
     try:
         p = Perturbation(light=light, gain=gain, blur=blur, shake=shake, zoom=zoom, drop=drop, seed=seed)
         video, gt = read_clip(clip)
     except ValueError as e:
         raise click.ClickException(str(e)) from None
     out = _out_dir(out)
-    with tqdm(total=len(gt), unit="frame", disable=quiet, desc=f"synth perturb {p.name}") as bar:
+    with tqdm(total=p.kept(len(gt)), unit="frame", disable=quiet, desc=f"synth perturb {p.name}") as bar:
         n = _make(perturb_clip, out, clip=clip, p=p, progress=bar.update)
     if not quiet:
         click.echo(f"wrote {out} ({p.name}: {n} of {len(gt)} frames, ground truth transformed)")
@@ -201,16 +203,16 @@ def perturb(clip, out, light, gain, blur, shake, zoom, drop, seed, quiet):
 
 @synth.command("plate-on-car")
 @click.argument("clip", type=click.Path(exists=True))
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="Folder of the new clip.")
+@click.option("--out", required=True, type=Output(file_okay=False), help="Folder of the new clip.")
 @option("--layout", source=composite_plate_clip, type=click.Choice(list(LAYOUTS)),
         help="Layout of the rendered plate.")
-@option("--width", source=composite_plate_clip, type=click.FloatRange(0.05, 1.0),
+@option("--width", source=composite_plate_clip, type=FloatRange(0.05, 1.0),
         help="Plate width as a share of the car box's width.")
-@option("--upscale", source=composite_plate_clip, type=click.FloatRange(1.0, 8.0),
+@option("--upscale", source=composite_plate_clip, type=FloatRange(1.0, 8.0),
         help="Enlarge the frames by this factor first (bicubic): a small car's plate is a few px high.")
-@option("--blur", source=composite_plate_clip, type=click.FloatRange(0, 20),
+@option("--blur", source=composite_plate_clip, type=FloatRange(0, 20),
         help="Gaussian blur (px) of the plate, to match the clip's sharpness.")
-@option("--noise", source=composite_plate_clip, type=click.FloatRange(0, 50),
+@option("--noise", source=composite_plate_clip, type=FloatRange(0, 50),
         help="Sensor noise (grey levels) on the plate.")
 @option("--seed", source=composite_plate_clip, type=SEED, help="Seed of the plate's characters and noise.")
 @click.option("--quiet", "-q", is_flag=True, help="Print only errors.")
@@ -224,6 +226,7 @@ def plate_on_car(clip, out, layout, width, upscale, blur, noise, seed, quiet):
       vistrack synth plate-on-car ../shared/data/real/car4_otb_first100 --out car4-jp --layout jp
       vistrack synth plate-on-car ../shared/data/real/car4_otb_first100 --out car4-eu --upscale 2
     """
+    check_outputs({"--out": out}, clip)
     try:
         read_clip(clip)
     except ValueError as e:
@@ -245,7 +248,7 @@ def plate_on_car(clip, out, layout, width, upscale, blur, noise, seed, quiet):
               help="Frames per clip [default: 300; 200 for landmarks].")
 @click.option("--size", default=None, type=Size(),
               help="Frame size [default: 320x240 contour, 640x480 plate/landmarks].")
-@click.option("--out", required=True, type=click.Path(file_okay=False), help="Folder to hold the clip folders.")
+@click.option("--out", required=True, type=Output(file_okay=False), help="Folder to hold the clip folders.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar; print only errors.")
 def synth_suite(kind, n_clips, seed, frames, size, out, quiet):
     """A suite of clips for `vistrack eval` (OUT/<kind>-<seed>/ each), with each kind's defaults

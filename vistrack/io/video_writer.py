@@ -60,9 +60,13 @@ class VideoWriter:
     """
 
     def __init__(self, path, fps, size, codec="mp4v", atomic=False, what=None):
-        from .outputs import OutputLock, is_device, temporary_name
+        from .outputs import OutputLock, check_not_input, output_target, temporary_name
 
         self.path = Path(path)
+        self.what = what or ("annotated video" if atomic else "video")
+        check_not_input(self.path, self.what)
+        # a link is written through to its file; a device or pipe (/dev/null, /dev/stdout) in place
+        self._target, direct = output_target(self.path)
         if not self.path.parent.is_dir():
             raise VideoError(f"cannot write {self.path}: folder {self.path.parent} does not exist")
         if codec not in ("mp4v", "h264", "auto"):
@@ -73,22 +77,22 @@ class VideoWriter:
         self._av = None
         # the container by the name's last known suffix (``a.mp4``, or a temporary ``a.mp4.part-7``)
         suffix = next((x for x in reversed([x.lower() for x in self.path.suffixes]) if x in CONTAINERS), "")
-        self.container = suffix = suffix or (".mp4" if is_device(self.path) else "")  # /dev/null: anything goes
+        self.container = suffix = suffix or (".mp4" if direct else "")  # /dev/null: anything goes
         if suffix not in CONTAINERS:
             raise VideoError(f"cannot write a video to {self.path}: give a file name ending in "
                              f"{', '.join(CONTAINERS)}")
         self._w = _Closed()
-        self.what = what or ("annotated video" if atomic else "video")
         self._error = None  # the first write that failed: close() then discards the file
         self._complete = True  # False: the run failed (abandon)
         # atomic: written under a temporary name of its own, renamed over ``path`` by close(); one live writer
-        self._lock = OutputLock(self.path, self.what) if atomic else _NoLock()
+        self._lock = OutputLock(self._target, self.what) if atomic else _NoLock()
         self._final = self.path
-        self._earlier = self.path.is_file()
-        self._atomic = atomic and not is_device(self.path)
+        self._earlier = self._target.is_file()
+        self._atomic = atomic and not direct
+        self._device = direct
         try:
             if self._atomic:
-                self.path = temporary_name(self.path)
+                self.path = temporary_name(self._target)
             self._open(fps, codec)
         except OSError as e:  # the temporary file or the container could not be created (a full disk)
             self._discard()
@@ -187,7 +191,7 @@ class VideoWriter:
             try:
                 self._finish()
                 if error is None and self.frames and self.path != self._final and not keep_earlier:
-                    os.replace(self.path, self._final)
+                    os.replace(self.path, self._target)
             except Exception as e:  # noqa: BLE001 - any failure to flush, close or rename: the file is not whole
                 error = error or e
         finally:
@@ -215,12 +219,6 @@ class VideoWriter:
                 container.mux(packet)
         finally:
             container.close()
-
-    @property
-    def _device(self):
-        from .outputs import is_device
-
-        return is_device(self._final)
 
     def _failure(self, cause):
         """The error of a failed write: :class:`~vistrack.io.outputs.OutputError` naming the

@@ -83,10 +83,10 @@ class ModelSpec:
         own kind (the plate's vertices, the landmarks), from the track rows and the ground truth's
         columns; ``None`` (or ``None`` returned, where the truth has no such columns): the box scores of
         :mod:`vistrack.session.run_summary`, as ``eval`` scores a task.
-    compile_seconds : float or None
-        CPU seconds its compiled kernels take to compile on a first run with its default filter (the
-        2-core development machine: ``python benchmarks/first_run.py``), for the notice a first run
-        prints; ``None``: not measured (the notice gives the largest of the registered models').
+    passes_on : tuple of type
+        Classes its model passes keyword options on to (the box model's ``**appearance`` to
+        :class:`~vistrack.appearance.cues.Appearance`): their documented parameters are options of the model
+        too, each checked against its declared type and range (:mod:`vistrack.registry.option_types`).
     """
 
     name: str
@@ -103,7 +103,7 @@ class ModelSpec:
     seed: str = "001"
     options: tuple = ()
     summary: Callable | None = None
-    compile_seconds: float | None = None
+    passes_on: tuple = ()
 
     @property
     def default_algo(self):

@@ -38,7 +38,6 @@ from .catalog import (
     check_algo,
     check_particle_memory,
     clip_model,
-    compile_seconds,
     default_comparison,
     derived_algos,
     get_model_spec,
@@ -53,6 +52,6 @@ __all__ = ["FILTERS", "ALGORITHMS", "FilterSpec", "Option", "get_filter_spec", "
            "ModelSpec", "ModelOption", "MODELS", "LAYOUTS", "DEFAULT_MODEL", "SEARCH_MODEL", "DEFAULT_PARTICLES",
            "REFERENCE_ALGO", "OptionError", "default_comparison", "check_particle_memory", "register",
            "get_model_spec", "algos_for", "all_algos", "check_algo", "clip_model", "derived_algos", "model_params",
-           "targets_model", "compile_seconds", "run_option", "build_model", "model_from_box", "read_support_points",
+           "targets_model", "run_option", "build_model", "model_from_box", "read_support_points",
            "BASELINES", "BaselineSpec", "register_baseline", "get_baseline_spec", "is_baseline", "check_baseline",
            "runs_once"]

@@ -25,11 +25,12 @@ from ..models.siam.builder import SPEC as SIAM
 from ..models.spec import ModelSpec
 from ..system.resources import check_memory
 from .filter_specs import FILTERS, get_filter_spec, runs_on
+from .option_types import check_model_options
 
-__all__ = ["ModelSpec", "MODELS", "LAYOUTS", "DEFAULT_MODEL", "DEFAULT_MODEL_WHY", "SEARCH_MODEL",
-           "DEFAULT_PARTICLES", "REFERENCE_ALGO", "OptionError", "default_comparison", "check_particle_memory",
-           "register", "get_model_spec", "algos_for", "all_algos", "check_algo", "clip_model", "model_params",
-           "derived_algos", "targets_model", "compile_seconds", "run_option"]
+__all__ = ["ModelSpec", "MODELS", "LAYOUTS", "DEFAULT_MODEL", "DEFAULT_MODEL_WHY", "SEARCH_MODEL", "DEFAULT_PARTICLES",
+           "REFERENCE_ALGO", "OptionError", "default_comparison", "check_particle_memory", "register", "get_model_spec",
+           "algos_for", "all_algos", "check_algo", "clip_model", "model_params", "derived_algos", "targets_model",
+           "run_option"]
 
 #: the model ``run``, ``eval``, ``demo``, ``trax`` and ``vistrack.Tracker`` use when neither the user
 #: nor the clip (its ``meta.json``) names one: any object, from a box; of the two models that track any object
@@ -136,16 +137,6 @@ def targets_model(name=None):
     return name or next(n for n, s in MODELS.items() if s.targets_class is not None)
 
 
-def compile_seconds(name):
-    """About how many seconds the kernels of model ``name`` take to compile on a first run
-    (:attr:`~vistrack.models.spec.ModelSpec.compile_seconds`; not measured, or not registered: the most of
-    any registered model)."""
-    spec = MODELS.get(name)
-    if spec is not None and spec.compile_seconds is not None:
-        return spec.compile_seconds
-    return max(s.compile_seconds for s in MODELS.values() if s.compile_seconds is not None)
-
-
 def check_particle_memory(n, bytes_per_particle, algo="", share=0.5, available=None, targets=1):
     """Raise :class:`~vistrack.system.resources.TooLarge` (one line) when ``n`` particles (of ``targets`` plate
     slots each) would need more than ``share`` of the available memory per frame: the model's
@@ -187,4 +178,5 @@ def model_params(name, flags, algo=None):
             where = " and ".join(s.name for s in takes) + (" models" if len(takes) > 1 else " model")
             raise OptionError(f"{flag} is for " + (f"--algo {', '.join(algos)} on the " if algos else "the ") + where)
         params[opt.name] = value if opt.value is None else opt.value
+    check_model_options(spec, params)  # the check vistrack.Tracker makes of the same options
     return params

@@ -105,8 +105,8 @@ def _runs_line(labels):
 
 def write_eval_outputs(out, cfg, summaries, results, chosen=None):
     """Write ``results.json``, ``results.csv``, the plots, ``report.md`` and ``report.html`` (with an
-    annotated video of one run per tracker) of an evaluation into ``out`` (each file whole); returns
-    the plot paths."""
+    annotated video of one run per tracker in ``videos/``) of an evaluation into ``out`` (each file whole);
+    returns the plot paths and the videos' paths."""
     rows = [task_row(r) for r in results]
     write_atomic(out / "results.json", json.dumps(
         {"config": {"clips": [str(c) for c in cfg.clips], "algos": cfg.algos, "particles": cfg.particles,
@@ -146,7 +146,7 @@ def write_eval_outputs(out, cfg, summaries, results, chosen=None):
     write_atomic(out / "report.md", "\n".join(lines) + "\n")
     write_atomic(out / "report.html", _html(head, labels, by_clip, plots, videos,
                                             " ".join(t for t in (_lost_note(cfg), sources) if t)))
-    return plots
+    return plots, [path for _, path, _ in videos]
 
 
 def _sources_note(results):
@@ -176,6 +176,7 @@ def _annotated_videos(out, results, max_trackers=8, width=480, least=320):
     import cv2
 
     from ..io.clips import load_clip
+    from ..io.render import TRUTH, draw_box, draw_label, tracker_colour
     from ..io.video import VideoWriter
 
     clips = list(dict.fromkeys(r["clip"] for r in results))
@@ -203,12 +204,11 @@ def _annotated_videos(out, results, max_trackers=8, width=480, least=320):
                                                      interpolation=cv2.INTER_LINEAR if scale < 1 else cv2.INTER_NEAREST)
             for label, r, path, k in writers:
                 img = small.copy()
-                _draw(img, truth[i] * scale, (0, 200, 0))
+                draw_box(img, truth[i] * scale, TRUTH)
                 b = r["boxes"][i] if i < len(r["boxes"]) else None
                 if b is not None:
-                    _draw(img, np.asarray(b) * scale, _COLOURS[k % len(_COLOURS)])
-                cv2.putText(img, f"{label}  #{i}", (4, 14), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 255), 1,
-                            cv2.LINE_AA)
+                    draw_box(img, np.asarray(b, float) * scale, tracker_colour(k))
+                draw_label(img, f"{label}  #{i}", org=(4, 14))
                 if path not in opened:
                     opened[path] = VideoWriter(path, clip.source.fps or 25.0, (img.shape[1], img.shape[0]),
                                                codec="auto", atomic=True, what="report video")
@@ -228,18 +228,6 @@ def _close_videos(writers):
             error = error or e
     if error is not None:
         raise error
-
-
-_COLOURS = [(0, 0, 255), (255, 128, 0), (255, 0, 255), (0, 200, 255), (255, 255, 0), (128, 0, 255), (0, 128, 255),
-            (200, 200, 200)]
-
-
-def _draw(img, box, colour):
-    import cv2
-
-    if np.all(np.isfinite(box)) and box[2] > 0 and box[3] > 0:
-        x, y, w, h = (int(round(v)) for v in box)
-        cv2.rectangle(img, (x, y), (x + w, y + h), colour, 1)
 
 
 def _html(head, labels, by_clip, plots, videos, lost_note):

@@ -6,9 +6,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+from ..data_synth.clip_sizes import check_suite_disk
 from ..data_synth.contour_clip import make_contour_clip
 from ..data_synth.plate_clip import make_plate_clip
-from ..data_synth.scene import check_suite_disk
+from ..data_synth.scene import SuiteNames, prepare_suite
 from ..evaluation.experiment import check_grid_size
 
 __all__ = ["Suite", "SUITES", "clip_suite", "experiment_clips"]
@@ -56,9 +57,11 @@ def clip_suite(base, make, frames, size, maker, prefix, progress=None, **kw):
     """The clip folders in ``base`` (those with a ``groundtruth.csv``; hidden ones, such as a clip
     being written, are skipped), sorted.
 
-    When ``base`` holds none, ``make`` clips of seeds ``1..make`` are generated there first,
-    each by ``maker(base / f"{prefix}-{seed:02d}", frames=frames, size=size, seed=seed,
-    progress=progress, **kw)`` (e.g. :func:`vistrack.data_synth.contour_clip.make_contour_clip`).
+    When ``base`` holds none, ``make`` clips of seeds ``1..make`` are generated there first (a
+    ``base`` that holds other files or folders is refused with a one-line ``ValueError``: the clips
+    would be mixed with them, :func:`~vistrack.data_synth.scene.prepare_suite`), each by
+    ``maker(base / f"{prefix}-{seed:02d}", frames=frames, size=size, seed=seed, progress=progress, **kw)``
+    (e.g. :func:`vistrack.data_synth.contour_clip.make_contour_clip`).
 
     Parameters
     ----------
@@ -79,6 +82,7 @@ def clip_suite(base, make, frames, size, maker, prefix, progress=None, **kw):
 
     if not found():
         check_suite_disk(base, make, frames, size)
+        prepare_suite(base, SuiteNames(prefix, 1, make))
         base.mkdir(parents=True, exist_ok=True)
         for s in range(1, make + 1):
             maker(base / f"{prefix}-{s:02d}", frames=frames, size=size, seed=s, progress=progress, **kw)

@@ -24,15 +24,15 @@ def road(synth_clip):
 @pytest.mark.slow
 def test_overlap_objects_csv_format(road):
     """objects.csv: the exact header; every frame has a row; a frame without a plate has exactly one row
-    ``t,0,-1,nan,...``; plates in view have integer ids >= 0, at most three per frame, in order of id,
-    and groundtruth.csv's row is the largest of them."""
+    ``t,0,-1,,...`` (empty geometry cells); plates in view have integer ids >= 0, at most three per frame, in
+    order of id, and groundtruth.csv's row is the largest of them."""
     lines = (road / "objects.csv").read_text().splitlines()
     assert lines[0] == OBJECT_HEADER
     rows = [r.split(",") for r in lines[1:]]
     frames = [int(r[0]) for r in rows]
     assert sorted(set(frames)) == list(range(60)) and frames == sorted(frames)
     empty = [r for r in rows if r[1] == "0"]
-    assert empty and all(r[2] == "-1" and set(r[3:]) == {"nan"} and frames.count(int(r[0])) == 1 for r in empty)
+    assert empty and all(r[2] == "-1" and set(r[3:]) == {""} and frames.count(int(r[0])) == 1 for r in empty)
     cols = read_groundtruth_csv(road / "objects.csv")
     gt = load_clip(road).truth
     counts = np.bincount(cols["frame"][cols["visible"] > 0].astype(int), minlength=60)
@@ -168,7 +168,7 @@ def test_run_targets_track_csv_format_and_same_seed(road, tmp_path, capsys):
     assert sorted({int(r[0]) for r in body}) == list(range(12))
     for r in body:
         if r[1] == "0":
-            assert r[2] == "-1" and set(r[3:17]) == {"nan"} and r[-1] == "not found"
+            assert r[2] == "-1" and set(r[3:17]) == {""} and r[-1] == "not found"
         else:
             assert int(r[2]) >= 0 and r[-1] == ""
 

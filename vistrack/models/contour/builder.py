@@ -93,7 +93,7 @@ def train_search(points, size=(320, 240), *, samples=NNSearchConfig.samples, see
 
 SPEC = ModelSpec("contour", description="B-spline contour on edges (thesis 001 §1.3.1), + colour on colour video",
                  from_box=_contour_from_box, from_clip=_contour_from_clip, bytes_per_particle=48_000,
-                 model_class=Contour, compile_seconds=5, options=(
+                 model_class=Contour, options=(
                      ModelOption("template", None, "support points (n, 2) in pixels instead of the ellipse",
                                  flag="--template"),
                      ModelOption("colour", "auto", "the colour term: on for colour video (auto), True or False",

@@ -115,8 +115,7 @@ def _summary(rows, truth, model):
 
 SPEC = ModelSpec("plate", description="license-plate template (thesis 001 §1.3.2); acquires plates without a box",
                  from_box=_plate_from_frame_box, from_clip=_plate_from_clip, lost_rule="plate",
-                 bytes_per_particle=48_000, model_class=Plate, targets_class=Plates, summary=_summary,
-                 compile_seconds=14, options=(
+                 bytes_per_particle=48_000, model_class=Plate, targets_class=Plates, summary=_summary, options=(
                      ModelOption("targets", None, "track up to K plates at once, one slot each", flag="--targets"),
                      ModelOption("layout", "auto", "a layout's name (LAYOUTS); auto: from the clip, the box or the "
                                  "plate found", flag="--layout"),
