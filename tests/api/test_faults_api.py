@@ -31,7 +31,7 @@ def test_4_the_python_api_checks_the_start_box_too():
     (dict(ess_threshold=-1), "ess_threshold must be a number in [0, 1]"),
     (dict(ess_threshold=5), "ess_threshold must be a number in [0, 1]"),
     (dict(resample="best"), "unknown resampling scheme 'best'; choose from"),
-    (dict(frobnicate=3), "unknown option 'frobnicate' for the box model; its options include"),
+    (dict(model="box", frobnicate=3), "unknown option 'frobnicate' for the box model; its options include"),
     (dict(model="plate", frobnicate=3), "unknown option 'frobnicate' for the plate model; its options include"),
 ], ids=lambda v: str(v)[:30])
 def test_the_tracker_checks_every_argument_when_it_is_made(kw, words):
@@ -45,8 +45,8 @@ def test_the_tracker_names_the_options_it_takes():
     import vistrack
 
     with pytest.raises(ValueError, match="lambda_dcf, lambda_scale, lost_confidence, map_stride"):
-        vistrack.Tracker(frobnicate=3)
-    vistrack.Tracker(lambda_dcf=30.0, lambda_template=2.0)  # the model's own and its appearance's
+        vistrack.Tracker(model="box", frobnicate=3)
+    vistrack.Tracker(model="box", lambda_dcf=30.0, lambda_template=2.0)  # the model's own and its appearance's
 
 @pytest.mark.parametrize("convert", [
     lambda f: f.astype(np.float64) / 255, lambda f: f.astype(np.float32), lambda f: f.astype(np.uint16) * 257,
@@ -119,7 +119,7 @@ def test_the_tracker_checks_each_model_option_against_its_declared_type_and_rang
     import vistrack
 
     with pytest.raises(ValueError) as e:
-        vistrack.Tracker(**kw)
+        vistrack.Tracker(model="box", **kw)
     assert str(e.value) == words
 
 
@@ -128,7 +128,8 @@ def test_good_model_options_pass_and_are_the_declared_ones():
     from vistrack.registry import get_model_spec
     from vistrack.registry.option_types import declared_options
 
-    vistrack.Tracker(lambda_template=2, lost_confidence=None, prior_std=[0.1, 0.05], interpolation="linear")
+    vistrack.Tracker(model="box", lambda_template=2, lost_confidence=None, prior_std=[0.1, 0.05],
+                     interpolation="linear")
     d = declared_options(get_model_spec("box"))
     assert d["lambda_template"].bounds == (0.0, False, float("inf"), False)  # Appearance's, passed on
     assert d["lost_confidence"].none_ok and d["lost_confidence"].bounds == (0.0, False, 1.0, False)
@@ -150,3 +151,22 @@ def test_run_checks_its_model_options_with_the_same_check():
     assert model_params("plate", {"--targets": 3}) == {"targets": 3}
     with pytest.raises(ValueError, match="targets must be an integer, got 2.5"):
         model_params("plate", {"--targets": 2.5})
+
+
+@pytest.mark.parametrize("kw, words", [
+    (dict(share=2), "share must be a finite number in [0, 1], got 2"),
+    (dict(cells=0), "cells must be an integer >= 1, got 0"),
+    (dict(widen=0.5), "widen must be a finite number >= 1, got 0.5"),
+    (dict(hold_when_lost=1), "hold_when_lost must be True or False, got 1"),
+    (dict(confidence="/nonexistent/siam.npz"),
+     "confidence: cannot read a calibration from /nonexistent/siam.npz (No such file or directory)"),
+], ids=lambda v: str(v)[:28])
+def test_the_siam_model_declares_its_options_and_reads_a_calibration_path(kw, words):
+    """The siam model's options are checked from its docstring as the box model's are; ``confidence`` takes a
+    path as documented (a type line of several types was checked as its default's bool)."""
+    import vistrack
+
+    frame = np.zeros((120, 160, 3), np.uint8)
+    with pytest.raises(ValueError) as e:
+        vistrack.Tracker(model="siam", **kw).init(frame, (40, 40, 30, 30))
+    assert str(e.value) == words

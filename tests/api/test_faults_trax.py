@@ -23,7 +23,7 @@ def _vistrack(argv, stdin=subprocess.DEVNULL, **kw):
 def test_trax_checks_its_options_before_the_hello():
     p = _vistrack(["trax", "--model", "nonsense"])
     assert p.stdout == "" and p.stderr.startswith("Error: unknown model 'nonsense'") and p.stderr.count("\n") == 1
-    p = _vistrack(["trax", "--algo", "pf-eis"])
+    p = _vistrack(["trax", "--model", "box", "--algo", "pf-eis"])
     assert p.stdout == "" and "does not run on the box model" in p.stderr and p.stderr.count("\n") == 1
 
 @pytest.mark.parametrize("stdin", ["", "garbage\n", "@@TRAX:frame\n"], ids=["nothing", "garbage", "out of order"])

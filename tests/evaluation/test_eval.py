@@ -133,16 +133,17 @@ def test_demo_writes_videos_tracks_and_reports(tmp_path, capsys):
     assert json.loads((out / "clips" / "jumps" / "meta.json").read_text())["model"] == "box"
     assert f"  {out / 'eval' / 'report.html'} (the same in a browser" in stdout
     assert f"  {out / 'eval-real' / 'report.html'} (the same in a browser" in stdout
-    assert "comparing them over 2 runs" in stdout and "beside OpenCV MIL, 2 runs each" in stdout
+    assert "comparing them over 2 runs" in stdout and "beside nanotrack-v3 and opencv-mil, 2 runs each" in stdout
     res = json.loads((out / "eval" / "results.json").read_text())
     assert res["config"]["model"] == "box"
     assert [(r["algo"], r["particles"], r["runs"]) for r in res["results"]] == [
         ("ls-n-ips", 30, 2), ("lis", 30, 2), ("bootstrap", 150, 2)]
     real_res = json.loads((out / "eval-real" / "results.json").read_text())["results"]
-    assert [(r["algo"], r["particles"], r["runs"]) for r in real_res] == [("lis", 100, 2), ("opencv-mil", 1, 2)]
+    assert [(r["algo"], r["particles"], r["runs"]) for r in real_res] == [("lis", 100, 2), ("nanotrack-v3", 1, 1),
+                                                                        ("opencv-mil", 1, 2)]
     assert len(real_res[0]["p_lost_per_frame"]) == 10  # the excerpt: the first 10 frames
     # no N for a tracker without particles; its true run count (issue 37)
-    assert "| opencv-mil | – | 2 |" in stdout and "| lis | 100 | 2 |" in stdout
+    assert "| opencv-mil | – | 2 |" in stdout and "| nanotrack-v3 | – | 1 |" in stdout and "| lis | 100 | 2 |" in stdout
 
 
 @pytest.mark.slow

@@ -136,7 +136,8 @@ def _step4(real, real_clip, real_frames, runs):
     took = f"the first {real_frames} frames" if real.frames >= real_frames else \
         f"all {real.frames} frames (fewer than --real-frames {real_frames})"
     return (f"4/4 {took} of {real.real} ({real.folder}): vistrack's default tracker (the {DEFAULT_MODEL} model, "
-            f"{REAL_ENTRIES[0][0].upper()} N={REAL_ENTRIES[0][1]}) beside " + _entries(REAL_ENTRIES[1:])
+            f"{REAL_ENTRIES[0][0].upper()} N={REAL_ENTRIES[0][1]}) beside "
+            + " and ".join(a for a, _ in REAL_ENTRIES[1:])
             + f", {runs_phrase(runs)} each")
 
 

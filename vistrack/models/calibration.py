@@ -53,9 +53,13 @@ class Calibration:
     def load(cls, path, part="frame", features=()):
         """The calibration ``part`` (``"frame"``, ``"candidate"``) in ``path`` (an ``.npz`` of :meth:`save_all`),
         applied to cue vectors ordered as ``features``."""
-        with np.load(path, allow_pickle=False) as d:
-            v = [d[f"{part}_{k}"] for k in cls.KEYS]
-            hold = float(d[f"{part}_hold"]) if f"{part}_hold" in d else 0.0
+        try:
+            with np.load(path, allow_pickle=False) as d:
+                v = [d[f"{part}_{k}"] for k in cls.KEYS]
+                hold = float(d[f"{part}_hold"]) if f"{part}_hold" in d else 0.0
+        except (OSError, ValueError, KeyError) as e:
+            why = e.strerror if isinstance(e, OSError) and e.strerror else str(e).strip("'\"")
+            raise ValueError(f"confidence: cannot read a calibration from {path} ({why})") from None
         return cls(tuple(str(n) for n in v[0]), *(a.astype(float) for a in v[1:4]), float(v[4]), float(v[5]),
                    tuple(features), hold)
 

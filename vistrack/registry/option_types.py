@@ -14,7 +14,8 @@ choices ``{"a", "b"}``, with a range after it (``>= 0``, ``> 0``, ``in [0, 1]``,
 
 :func:`check_option` refuses, in one line naming the option, a value of another type, a number that is
 not finite (NaN included, which every comparison lets through) and one outside the range. An option whose
-type line is not of that form is checked by its default's type alone (a number: finite).
+type line names several types (``bool, tuple or path``) is left to the model (only NaN is refused); one whose
+type line is of no form above is checked by its default's type alone (a number: finite).
 """
 
 from __future__ import annotations
@@ -76,12 +77,11 @@ def _declare(text, default):
     if text.endswith(" or None"):
         text, none_ok = text[:-len(" or None")].strip(), True
     m = _BASE.match(text)
-    if m is None:
-        return Declared(None, None, None, none_ok, default)
-    base, rest = m["base"], m["rest"].strip().lstrip(",").strip()
+    base, rest = (m["base"], m["rest"].strip().lstrip(",").strip()) if m else (None, None)
     r = _RANGE.match(rest) if rest else None
-    if rest and r is None:
-        return Declared(None, None, None, none_ok, default)
+    if m is None or (rest and r is None):  # several types (the model checks which), or no form this reads
+        several = bool(re.search(r",| or ", text))
+        return Declared("any" if several else None, None, None, none_ok, default)
     bounds = None
     if r is not None and r["op"]:
         a = float(r["a"])
@@ -157,6 +157,8 @@ def _fits(value, d):
         return not (isinstance(value, float) and not math.isfinite(value))
     if isinstance(kind, tuple):
         return value in kind
+    if kind == "any":
+        return not (isinstance(value, float) and not math.isfinite(value))
     if kind in ("float", "int"):
         return _is_number(value, kind == "int") and _in_range(value, d.bounds)
     if kind == "tuple":

@@ -55,44 +55,63 @@ class Siam(SiamLost, VideoModelBase):
         The first frame.
     box : tuple of float
         ``(x, y, w, h)`` of the object in ``frame``.
-    sigma_xy : float
+    sigma_xy : float, > 0
         ``σ_c``: the centre's innovation std per frame as a share of the box's side ``sqrt(w h)``.
-    sigma_jump, jump_share : float
-        The centre's innovation is a mixture: a share ``jump_share`` with std ``sigma_jump`` (a jump: a fast move,
-        a shaking camera), the rest ``σ_c`` (``jump_share`` 0: Gaussian).
+    sigma_jump : float, > 0
+        The std of a jump (a fast move, a shaking camera), as a share of the side.
+    jump_share : float in [0, 1]
+        The centre's innovation is a mixture: a share ``jump_share`` with std ``sigma_jump``, the rest ``σ_c``
+        (0: Gaussian).
     jump_when_lost : bool
         The jump share only on frames after one reported lost (a tracked object moves as ``σ_c`` says).
-    sigma_scale, sigma_aspect : float
-        ``σ_s``, ``σ_a``: the innovation stds of the log-scale and of the log-aspect per frame.
-    damping : float
+    sigma_scale : float, >= 0
+        ``σ_s``: the innovation std of the log-scale per frame.
+    sigma_aspect : float, >= 0
+        ``σ_a``: the innovation std of the log-aspect per frame.
+    damping : float in [0, 1]
         ``d``: the share of the last frame's velocity carried over.
-    prior_std : tuple of float
+    prior_std : tuple of float, > 0
         ``p_0``'s std on the centre (share of the side) and on the log-sizes.
-    lambda_logit : float
+    lambda_logit : float, >= 0
         ``λ``: the weight of the logit in ``log r``.
-    box_std : tuple of float
+    box_std : tuple of float, > 0
         ``(σ_b, σ_bl)``: the agreement's std of the centre (share of the head's box size) and of the log-sizes.
     box_gate : bool
         Weigh the agreement by the cell's object probability ``σ(ℓ)``.
-    share : float
+    share : float in [0, 1]
         ``β``: the share of particles LIS draws from the response (the rest from ``K``).
-    cells : int
+    cells : int, >= 1
         ``C``: the strongest cells in the response mixture.
-    tempering : float
+    tempering : float, >= 0
         ``τ``: the mixture's weights ``∝ exp(τ ℓ)``.
-    spread : tuple of float
+    spread : tuple of float, > 0
         ``(s_c, s_l)``: each mixture component's std of the centre (share of its box's size) and the log-sizes.
-    mode_radius : float
+    mode_radius : float, > 0
         The estimate's mode: the particles within this share of the box's side of the heaviest one.
-    widen : float
+    widen : float, >= 1
         The search crop's side grows with the cloud's centre spread: ``s_x · max(1, min(widen, 1 + 2 spread / s_x))``
         (``1``: never).
-    confidence, lost_confidence, redetect_after, search_every, search_peaks, search_cap
-        What is reported lost and how it is found again (:meth:`~vistrack.models.siam.lost.SiamLost.init_lost`).
-    exemplar_rate, exemplar_every, exemplar_confidence : float, int, float
-        The exemplar's update (:meth:`adapt`): every ``exemplar_every``-th frame whose confidence is at least
-        ``exemplar_confidence``, ``z ← (1 - η) z + η z_t`` with the exemplar features ``z_t`` of the estimate's box,
-        ``η`` = ``exemplar_rate`` (0: the first frame's exemplar throughout).
+    confidence : bool, str or tuple
+        ``True``: the package's calibrations; ``False``: none; the path of an ``.npz`` holding them, or a pair of
+        :class:`~vistrack.models.calibration.Calibration` (:meth:`~vistrack.models.siam.lost.SiamLost.init_lost`).
+    lost_confidence : float in [0, 1] or None
+        The threshold below which the object is reported lost (``None``: the calibration's).
+    redetect_after : int, >= 1 or None
+        The lost frames before the first wide search (``None``: never search).
+    search_every : int, >= 1
+        The lost frames between searches at first; the gap doubles up to ``search_cap``.
+    search_peaks : int, >= 1
+        The wide search's candidates, each confirmed with a normal crop.
+    search_cap : int, >= 1
+        The longest gap between searches.
+    exemplar_rate : float in [0, 1]
+        ``η`` of the exemplar's update (:meth:`adapt`): every ``exemplar_every``-th frame whose confidence is at
+        least ``exemplar_confidence``, ``z ← (1 - η) z + η z_t`` with the exemplar features ``z_t`` of the
+        estimate's box (0: the first frame's exemplar throughout).
+    exemplar_every : int, >= 1
+        The frames between the exemplar's updates.
+    exemplar_confidence : float in [0, 1]
+        The confidence a frame needs for the exemplar to learn from it.
     hold_when_lost : bool
         While the object is reported lost, the search crop stays about the last place it was reported (where a
         hidden object comes back), not about the cloud's prediction.
