@@ -35,8 +35,8 @@ def strip(results):
 
 def eval_args(clip, out, *extra):
     return [sys.executable, "-c", "from vistrack.cli import main; main()", "eval", str(clip),
-            "--algos", "bootstrap,lis", "--particles", "1500", "--runs", "6", "--seed", "7", "--out", str(out), "-q",
-            *extra]
+            "--model", "box", "--algos", "bootstrap,lis", "--particles", "1500", "--runs", "6", "--seed", "7",
+            "--out", str(out), "-q", *extra]
 
 
 def test_eval_on_a_cluster_without_a_shared_filesystem_equals_the_local_run(tmp_path):
