@@ -169,9 +169,9 @@ def test_lis_weights_match_a_brute_force_posterior():
     z, lw, _, _ = filt.propose(prev, obs, np.random.default_rng(0), filt.kernel)
     assert np.all(np.isfinite(lw))
     sc, ss, sa = model.sigma_xy * model.side0, model.sigma_scale, model.sigma_aspect
-    cs = np.arange(-4 * sc, 4 * sc + 1e-9, 0.25)
-    ls = np.arange(-4 * ss, 4 * ss + 1e-9, ss / 4)
-    la = np.arange(-4 * sa, 4 * sa + 1e-9, sa / 4)
+    cs = np.arange(-4 * sc, 4 * sc + 1e-9, 0.5)
+    ls = np.arange(-4 * ss, 4 * ss + 1e-9, ss / 3)
+    la = np.arange(-4 * sa, 4 * sa + 1e-9, sa / 3)
     du, dv, dl, da = (a.ravel() for a in np.meshgrid(cs, cs, ls, la, indexing="ij"))
     grid = np.tile(np.concatenate([pose, pose]), (du.size, 1))
     grid[:, 0] += du
@@ -179,7 +179,7 @@ def test_lis_weights_match_a_brute_force_posterior():
     grid[:, 2] += dl + da / 2
     grid[:, 3] += dl - da / 2
     lp = model.loglik(obs, grid) + model.transition_logpdf(grid, prev[:1].repeat(len(grid), 0))
-    vol = 0.25 * 0.25 * (ss / 4) * (sa / 4)  # (lw, lh) = (l + a/2, l - a/2): Jacobian 1
+    vol = 0.5 * 0.5 * (ss / 3) * (sa / 3)  # (lw, lh) = (l + a/2, l - a/2): Jacobian 1
     assert logsumexp(lw) - np.log(n) == pytest.approx(logsumexp(lp) + np.log(vol), abs=0.1)
     w, g = np.exp(lw - lw.max()), np.exp(lp - lp.max())
     mean_is, mean_grid = (w @ z[:, :4]) / w.sum(), (g @ grid[:, :4]) / g.sum()
