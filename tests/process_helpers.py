@@ -62,12 +62,19 @@ main(sys.argv[1:])
 
 def gated_cli(args, gate, cwd, **kw):
     """``Popen`` of ``vistrack *args`` (text mode, stdout and stderr piped) whose video decoding waits
-    before yielding frame ``gate`` until the test closes ``proc.stdin``; SIGINT at its default (a
-    shell's background job would start with it ignored). Run it from ``cwd`` outside the repository
-    (``-c`` from the root would import the source tree's ``vistrack/``)."""
+    before yielding frame ``gate`` until the test closes ``proc.stdin``; SIGINT and SIGHUP at their defaults (a
+    shell's background job would start with SIGINT ignored, a suite run under ``nohup`` with SIGHUP ignored,
+    which the run rightly keeps ignoring). Run it from ``cwd`` outside the repository (``-c`` from the root
+    would import the source tree's ``vistrack/``)."""
     return subprocess.Popen([sys.executable, "-c", _GATED, str(gate), *map(str, args)], stdin=subprocess.PIPE,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=cwd,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL), **kw)
+                            preexec_fn=_default_signals, **kw)
+
+
+def _default_signals():
+    """In the child before it runs: SIGINT and SIGHUP at their defaults (:func:`gated_cli`)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
 
 
 _SITECUSTOMIZE = """
