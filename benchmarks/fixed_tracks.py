@@ -8,8 +8,8 @@ per case; ``--save FILE`` keeps them, ``--check FILE`` compares and exits 1 on a
     git stash; python benchmarks/fixed_tracks.py --save /tmp/before.json; git stash pop
     python benchmarks/fixed_tracks.py --check /tmp/before.json
 
-Cases: the box model on a rendered contour clip and (when ``../shared/data/real/girl_otb`` is there)
-on a real clip; the contour model with LIS, LS-N-IPS and SIR with history sampling (colour clip);
+Cases: the box and the siam model on a rendered contour clip and (when ``../shared/data/real/girl_otb`` is
+there) on a real clip; the contour model with LIS, LS-N-IPS and SIR with history sampling (colour clip);
 the plate model with LIS (one plate) and partitioned LIS (``--targets 2``); the landmark model with
 PF-EIS-MT; ``vistrack reproduce bearings`` (a small grid). The rendered clips are made once by
 ``vistrack synth`` under ``--cache``. About a minute on two cores.
@@ -40,7 +40,9 @@ CLIPS = {
 #: case -> (clip, run arguments)
 CASES = {
     "box-lis": ("contour", ["--model", "box", "--init-gt"]),
-    "box-real": (str(REAL / "girl_otb"), ["--init-gt", "--max-frames", "60"]),
+    "box-real": (str(REAL / "girl_otb"), ["--model", "box", "--init-gt", "--max-frames", "60"]),
+    "siam-lis": ("contour", ["--model", "siam", "--init-gt"]),
+    "siam-real": (str(REAL / "girl_otb"), ["--model", "siam", "--init-gt", "--max-frames", "60"]),
     "contour-lis": ("contour", ["--model", "contour", "--init-gt", "--algo", "lis"]),
     "contour-ls-n-ips": ("contour", ["--model", "contour", "--init-gt", "--algo", "ls-n-ips"]),
     "contour-hs-sir": ("contour-colour", ["--model", "contour", "--init-gt", "--algo", "hs-sir"]),
