@@ -4,7 +4,10 @@ timed call is counted once, in its own part)."""
 import time
 import warnings
 
-from vistrack.loop.profiling import Timer  # noqa: F401  (the benchmarks import it from here)
+from vistrack.loop import Timer
+
+#: the benchmarks import ``Timer`` from here
+__all__ = ["Timer", "PARTS", "run_timed", "stepper", "split_table"]
 
 PARTS = ["decode", "features", "likelihood", "proposal", "resampling"]
 

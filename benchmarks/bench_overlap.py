@@ -21,7 +21,7 @@ import numpy as np
 from vistrack.data_synth.contour_clip import make_contour_clip
 from vistrack.io.clips import load_clip
 from vistrack.io.video import open_video, prefetch
-from vistrack.loop.stepper import FrameStepper, warm_up
+from vistrack.loop import Stepper, warm_up
 from vistrack.registry import make_filter
 from vistrack.registry.builders import build_model
 
@@ -51,7 +51,7 @@ def tracker(clip, frames):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             while not stop.is_set():
-                stepper = FrameStepper(filt, 30, np.random.default_rng(0))
+                stepper = Stepper(filt, 30, np.random.default_rng(0))
                 for i, f in enumerate(frames):
                     if stop.is_set():
                         return

@@ -34,14 +34,14 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-from real_corpus import opencv_tracker  # noqa: E402 (run from benchmarks/)
+from real_corpus import opencv_tracker  # run from benchmarks/
 
 import vistrack
 from vistrack.data_synth.contour_clip import make_contour_clip
 from vistrack.data_synth.plate_clip import make_plate_clip
 from vistrack.io.clips import load_clip
 from vistrack.io.video import groundtruth_origin, open_video, prefetch, read_rects
-from vistrack.loop.stepper import FrameStepper, warm_up
+from vistrack.loop import Stepper, warm_up
 from vistrack.registry import make_filter
 from vistrack.registry.builders import build_model
 from vistrack.session.recording import record_video
@@ -97,7 +97,7 @@ def tracking_rate(folder, frames, model_name, algo, n, seed, **build):
     model = build_model(model_name, load_clip(folder), **build)
     filt = make_filter(algo, model)
     warm_up(filt, n, frames[0])  # the compiled kernels loaded: start-up, not tracking
-    stepper = FrameStepper(filt, n, np.random.default_rng(seed))
+    stepper = Stepper(filt, n, np.random.default_rng(seed))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         t0 = CLOCK()

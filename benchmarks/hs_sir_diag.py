@@ -20,7 +20,7 @@ import numpy as np
 from vistrack.appearance.features import FeatureMaps
 from vistrack.core.particles import ParticleSet
 from vistrack.io.clips import load_clip
-from vistrack.loop.stepper import step_frames
+from vistrack.loop import Stepper
 from vistrack.models.contour.spline import edge_peaks, pose_from
 from vistrack.registry import make_filter
 from vistrack.registry.builders import build_model
@@ -116,7 +116,7 @@ def frames(args):
         for seed in range(args.seeds):
             model = build_model("contour", clip, init_gt="", **params)
             rows = []
-            for r in step_frames(fr, make_filter(algo, model), int(n), np.random.default_rng(seed)):
+            for r in Stepper(make_filter(algo, model), int(n), np.random.default_rng(seed)).steps(fr):
                 z, p = true_pose(t, r.index), r.particles
                 d = np.hypot(p.states[:, 0] - z[0], p.states[:, 1] - z[1])
                 grid = np.tile(np.concatenate([z, z]), (gx.size, 1))

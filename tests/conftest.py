@@ -1,5 +1,33 @@
+"""Shared fixtures, the ``slow`` marker's rule, and the kernels compiled once before the suite.
+
+``slow`` (registered in pyproject.toml) marks a test that runs a command end to end (a subprocess, a grid on
+Dask, the demo, the docs build), tracks a clip over many frames or checks a proposal against a brute-force
+posterior: each took over 2 s on the busy 2-core development machine. ``pytest -m "not slow"`` is the quick
+check (under a minute there); the fault tests (``tests/<package>/test_faults_*.py``, filed by what a fault
+breaks, every test a command under a fault) are slow as a whole.
+"""
+
 import numpy as np
 import pytest
+
+from kernel_helpers import compile_kernels
+
+
+def pytest_sessionstart(session):
+    """Compile the kernels once before the tests, in the process that starts pytest-xdist's workers (before
+    it starts them: this hook runs before xdist's own): numba's disk cache then holds them, and every worker
+    loads them instead of compiling them inside whichever test touches one first. Nothing without workers
+    (``-n 0``, a test or two): a test that needs a kernel compiles it as before."""
+    config = session.config
+    if not hasattr(config, "workerinput") and config.getoption("numprocesses", None):
+        compile_kernels()
+
+
+def pytest_collection_modifyitems(items):
+    """The fault tests are slow (module docstring)."""
+    for item in items:
+        if item.path.name.startswith("test_faults"):
+            item.add_marker(pytest.mark.slow)
 
 
 @pytest.fixture
@@ -41,3 +69,22 @@ def ctrl_c_reaches_python():
         yield
     finally:
         signal.signal(signal.SIGINT, saved)
+
+
+@pytest.fixture
+def serve():
+    """``serve(folder, handler)``: the URL of ``folder`` served on 127.0.0.1 by ``handler``
+    (:mod:`server_helpers`: ``QuietHandler`` without range requests by default, ``RangeHandler`` with them)."""
+    from server_helpers import serve_folder
+
+    servers = []
+
+    def start(folder, handler=None):
+        url, server = serve_folder(folder, handler)
+        servers.append(server)
+        return url
+
+    yield start
+    for s in servers:
+        s.shutdown()
+        s.server_close()

@@ -1,6 +1,6 @@
 """Write the API reference pages (``docs/api/*.md``): one page per package of vistrack, a section per
 public module (mkdocstrings ``::: module``), so that the reference covers every public module;
-``tests/test_docs.py`` checks that it does. Run from the repository root after adding a module::
+``tests/project/test_docs.py`` checks that it does. Run from the repository root after adding a module::
 
     python tools/api_pages.py
 """
@@ -37,8 +37,8 @@ PAGES = {
     "baselines": ("Baselines", ["vistrack.baselines"], "The trackers vistrack is compared with."),
     "loop": ("The frame loop", ["vistrack.loop"], "One filter step per frame, and the timing of its stages."),
     "registry": ("Registry", ["vistrack.registry"],
-                 "Models and filters by name: which algorithms run on which model, the defaults, building a model "
-                 "by name."),
+                 "Everything by name: models, filters, comparison trackers and plate layouts, which algorithms run "
+                 "on which model, the defaults, building a model by name."),
     "data_synth": ("Synthetic data", ["vistrack.data_synth"],
                    "Synthetic clips and sequences with exact ground truth, stressed copies of real clips."),
     "filters": ("Filters", ["vistrack.filters"],

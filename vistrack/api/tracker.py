@@ -9,7 +9,7 @@ code written for ``cv2.TrackerMIL``; other frames a user may pass (``uint16``, f
 0..255, ``(H, W, 1)``, BGRA, nested lists) are converted once (:func:`vistrack.io.frames.as_frame`),
 and a frame of another size or kind than the first is an error, as in ``vistrack run``. It runs the
 same code as ``vistrack run`` (:func:`~vistrack.registry.builders.model_from_box`,
-:class:`~vistrack.loop.stepper.FrameStepper`): the same options and seed give the same track. Every
+:class:`~vistrack.loop.stepper.Stepper`): the same options and seed give the same track. Every
 argument is checked when the tracker is made: a bad one is one ``ValueError`` naming it.
 """
 
@@ -23,7 +23,7 @@ import numpy as np
 
 from ..core.resampling import SCHEMES
 from ..io.frames import as_frame
-from ..loop.stepper import FrameStepper
+from ..loop.stepper import Stepper
 from ..registry import (
     DEFAULT_MODEL,
     DEFAULT_PARTICLES,
@@ -33,6 +33,7 @@ from ..registry import (
     make_filter,
     model_from_box,
 )
+from ..registry.option_types import check_model_options
 
 __all__ = ["Tracker"]
 
@@ -78,6 +79,10 @@ class Tracker:
         The particle set after the last frame.
     result : FrameResult or None
         The last frame's result (estimate, ESS, milliseconds).
+
+    Every attribute of the last frame (:attr:`particles`, :attr:`result`, :attr:`box`,
+    :attr:`box_estimate`, :attr:`visible`, :attr:`confidence`, :attr:`lost_reason`) is ``None`` before
+    :meth:`init`.
     """
 
     def __init__(self, model=DEFAULT_MODEL, algo=None, particles=DEFAULT_PARTICLES, seed=0, *, resample="systematic",
@@ -99,6 +104,7 @@ class Tracker:
         self.filter_options = {"resample": resample, "ess_threshold": ess_threshold}
         self.model_options = model_options
         if model_options:
+            check_model_options(spec, model_options)  # the declared types and ranges, NaN refused
             _check_options(model, spec, model_options)
         self.model = None
         self.result = None
@@ -118,7 +124,7 @@ class Tracker:
         self.model = model_from_box(self.model_name, frame, box, **self.model_options)
         self._format = fmt
         filt = make_filter(self.algo, self.model, **self.filter_options)
-        self._stepper = FrameStepper(filt, self.n, np.random.default_rng(self.seed))
+        self._stepper = Stepper(filt, self.n, np.random.default_rng(self.seed))
         self._index = 0
         self.result = self._stepper.step(0, frame)
         return True
@@ -136,12 +142,17 @@ class Tracker:
     @property
     def box(self):
         """The last estimate's box as ``(x, y, w, h)`` integers, as OpenCV's trackers give it (it
-        draws with ``cv2.rectangle(frame, tracker.box, colour)``); :attr:`box_estimate` has the floats."""
-        return tuple(int(round(v)) for v in self.box_estimate)
+        draws with ``cv2.rectangle(frame, tracker.box, colour)``); :attr:`box_estimate` has the floats.
+        ``None`` before :meth:`init`."""
+        box = self.box_estimate
+        return None if box is None else tuple(int(round(v)) for v in box)
 
     @property
     def box_estimate(self):
-        """The last estimate as ``(x, y, w, h)`` floats (sub-pixel; what ``vistrack run`` writes)."""
+        """The last estimate as ``(x, y, w, h)`` floats (sub-pixel; what ``vistrack run`` writes); ``None``
+        before :meth:`init`."""
+        if self.result is None:
+            return None
         return tuple(float(v) for v in self.model.box(self.result.estimate)[0])
 
     def __repr__(self):
@@ -152,21 +163,21 @@ class Tracker:
 
     @property
     def visible(self):
-        """Whether the last frame reports the object (``update``'s ``ok``)."""
-        return self.result.visible
+        """Whether the last frame reports the object (``update``'s ``ok``); ``None`` before :meth:`init`."""
+        return None if self.result is None else self.result.visible
 
     @property
     def confidence(self):
         """The last frame's calibrated confidence in ``[0, 1]`` that the box lies on the object (the box
         model's, :mod:`vistrack.models.box.confidence`; the track CSV's ``confidence``), ``None`` for a
-        model without one."""
-        return self.result.confidence
+        model without one, and before :meth:`init`."""
+        return None if self.result is None else self.result.confidence
 
     @property
     def lost_reason(self):
         """``""``, or why the last frame does not report the object
-        (:data:`~vistrack.models.collapse.REASONS`)."""
-        return self.result.lost_reason
+        (:data:`~vistrack.models.collapse.REASONS`); ``None`` before :meth:`init`."""
+        return None if self.result is None else self.result.lost_reason
 
 
 def _checked_seed(seed):

@@ -65,18 +65,20 @@ class Appearance:
     frame : ndarray of shape (H, W, 3) uint8 BGR, or (H, W)
     box : tuple of float
         ``(x, y, w, h)`` of the object in ``frame``.
-    work_size : float
+    work_size : float, > 0
         The object's size ``sqrt(w h)`` at the working resolution (px); the frame is
         never enlarged.
-    lambda_colour, kappa, ring : float
+    lambda_colour, kappa, ring : float, >= 0
         ``λ_c``, ``κ`` and the ring's width as a share of the mean side (module docstring).
-    lambda_template : float
+    lambda_template : float, >= 0
         ``λ_t``.
-    template_points : int
+    template_points : int, >= 1
         About this many grid points for the template.
-    adapt_rate, adapt_min_ncc : float
-        Adaptation rate ``α`` (0: never adapt) and the confidence bar.
-    anchor_min_ncc : float or None
+    adapt_rate : float in [0, 1]
+        Adaptation rate ``α`` (0: never adapt).
+    adapt_min_ncc : float in [-1, 1]
+        The confidence bar: the estimate's patch correlates at least this much with the template.
+    anchor_min_ncc : float in [-1, 1] or None
         The first view as anchor: a frame adapts only if the estimate's patch also correlates
         at least this much with the first frame's template (``None``: no such test), so that a
         template that has drifted cannot keep adapting to what it drifted onto.

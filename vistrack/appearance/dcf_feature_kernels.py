@@ -10,7 +10,7 @@
   products per channel, into the channels side by side ``(H, W, n)``: one ``cv2.boxFilter`` call then
   sums the cells of all of them (as it sums each alone), and :func:`normalised_cells` divides them by
   the block energy back into ``(n + 1, H, W)`` (the same float32 arithmetic: equal,
-  ``tests/test_box_dcf.py``).
+  ``tests/models/box/test_box_dcf.py``).
 """
 
 from __future__ import annotations

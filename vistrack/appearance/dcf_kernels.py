@@ -5,16 +5,16 @@
 - :func:`response_read` is :meth:`DCFResponse.read <vistrack.appearance.correlation.DCFResponse.read>`:
   ``np.interp`` of the log-scale, then the two nearest scale maps read bilinearly, per state in one
   pass where numpy makes some forty small calls (the same float64 arithmetic in the same order:
-  equal, ``tests/test_box_dcf.py``).
+  equal, ``tests/models/box/test_box_dcf.py``).
 - :func:`correlate` and :func:`adapt_filter` are ``CorrelationFilter.detect``'s ``Σ_k conj(A_k) Z_k / (B + λ)``
   per scale and ``CorrelationFilter.adapt``'s learning, blending and applied filter, one pass each where
   numpy makes a temporary per operation: numpy's complex products are fused multiply-adds on FMA CPUs
   (``re = fma(a_r, b_r, -(a_i b_i))``, ``im = fma(a_r, b_i, a_i b_r)``) and plain elsewhere; which, is
   probed at import (:data:`EXACT`, :data:`NUMPY_FMA`) and these do the same (equal,
-  ``tests/test_box_dcf.py``); a complex divided by a real is the product with its inverse.
+  ``tests/models/box/test_box_dcf.py``); a complex divided by a real is the product with its inverse.
 - :func:`correlation_draws` is the correlation proposal's draws from the response and its density
   there (``CorrelationProposal.draw`` and ``log_density``, :mod:`~vistrack.models.box.correlation_proposal`), per
-  particle in one pass (the same arithmetic: equal, ``tests/test_box_dcf.py``).
+  particle in one pass (the same arithmetic: equal, ``tests/models/box/test_box_dcf.py``).
 """
 
 from __future__ import annotations

@@ -13,11 +13,11 @@ where numpy makes a dozen small ones.
   of the estimate sampled as ``cv2.remap`` samples it (:func:`~vistrack.appearance.cue_kernels.ncc`'s
   sampling), its correlation with the template, the new template and the box's bin counts
   (sums in sample order where numpy's BLAS sums in another: 1e-12 relative,
-  ``tests/test_kernels_box.py``).
+  ``tests/models/box/test_kernels_box.py``).
 - :func:`shrink_area` is ``cv2.resize(image, None, fx=f, fy=f, interpolation=cv2.INTER_AREA)`` of a BGR
   image for a non-integer ``1 / f`` (``Appearance``'s regions): OpenCV's ``resizeArea_`` (its tap tables,
   float sums in its order, rounding to nearest even), with each source row's horizontal pass made once
-  where OpenCV makes it once per output row it touches (equal, ``tests/test_kernels_box.py``), over a
+  where OpenCV makes it once per output row it touches (equal, ``tests/models/box/test_kernels_box.py``), over a
   window of the output if asked (each pixel's sum in the same order: equal to that part of the whole).
 """
 

@@ -1,5 +1,6 @@
-"""OpenCV's trackers as ``eval`` compares them beside the particle filters: which there are, which of
-them vary from run to run, whether this OpenCV build has one, and one run of one over a clip's frames."""
+"""OpenCV's trackers as ``eval`` compares them beside the particle filters: whether this OpenCV build
+has one, and one run of one over a clip's frames. Which there are, and which of them vary from run to
+run, is the registry's (:data:`vistrack.registry.baseline_specs.BASELINES`)."""
 
 from __future__ import annotations
 
@@ -7,33 +8,33 @@ import time
 
 import numpy as np
 
-__all__ = ["OPENCV_TRACKERS", "OPENCV_RANDOMISED", "check_opencv", "track_opencv"]
-
-#: OpenCV trackers by name -> constructor attribute (contrib ones may be missing)
-OPENCV_TRACKERS = {"opencv-mil": "TrackerMIL_create", "opencv-kcf": "TrackerKCF_create",
-                   "opencv-csrt": "TrackerCSRT_create"}
-#: the OpenCV trackers whose result varies from run to run (randomised inside OpenCV, which no seed
-#: reaches: MIL's samples); they run ``runs`` times like the particle filters, the others once
-OPENCV_RANDOMISED = {"opencv-mil"}
+__all__ = ["check_opencv", "track_opencv"]
 
 
-def check_opencv(name):
-    """Raise ``ValueError`` (one line) when this OpenCV build lacks the tracker ``name``."""
+def _constructor(ctor):
+    """``cv2.<ctor>`` or ``cv2.legacy.<ctor>`` (contrib trackers may live in either, or be missing); ``None``
+    when this build has neither."""
     import cv2
 
-    if not hasattr(cv2, OPENCV_TRACKERS[name]) and not hasattr(getattr(cv2, "legacy", None), OPENCV_TRACKERS[name]):
-        raise ValueError(f"{name} is not in this OpenCV build ({cv2.__version__}); "
-                         "KCF and CSRT need opencv-contrib-python")
+    return getattr(cv2, ctor, None) or getattr(getattr(cv2, "legacy", None), ctor, None)
 
 
-def track_opencv(name, box, frames):
-    """One run of OpenCV's tracker ``name`` from ``box`` ``(x, y, w, h)`` on the first of ``frames``
-    (``(index, frame)`` pairs). Returns ``(boxes (frames, 4), ms (frames,), index (frames,))``: ``x, y, w,
-    h`` per frame (NaN where it lost the object), the milliseconds of each call, the frames' indices."""
+def check_opencv(name, ctor, needs=""):
+    """Raise ``ValueError`` (one line) when this OpenCV build lacks the tracker ``name`` (made by
+    ``cv2.<ctor>``); ``needs``: the package that has it."""
     import cv2
 
-    ctor = getattr(cv2, OPENCV_TRACKERS[name], None) or getattr(cv2.legacy, OPENCV_TRACKERS[name])
-    tracker = ctor()
+    if _constructor(ctor) is None:
+        raise ValueError(f"{name} is not in this OpenCV build ({cv2.__version__})"
+                         + (f"; it needs {needs}" if needs else ""))
+
+
+def track_opencv(ctor, box, frames):
+    """One run of the OpenCV tracker made by ``cv2.<ctor>`` from ``box`` ``(x, y, w, h)`` on the first of
+    ``frames`` (``(index, frame)`` pairs). Returns ``(boxes (frames, 4), ms (frames,), index (frames,))``:
+    ``x, y, w, h`` per frame (NaN where it lost the object), the milliseconds of each call, the frames'
+    indices."""
+    tracker = _constructor(ctor)()
     x, y, w, h = box
     boxes, ms, index = [], [], []
     for k, (i, frame) in enumerate(frames):

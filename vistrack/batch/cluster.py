@@ -25,6 +25,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Protocol
 
+from ..system.resources import worker_count
 from .tasks import OutLocked, TaskFailed, check_shared, lock_out, stale_tasks, task_done, task_path, write_atomic
 
 __all__ = ["Experiment", "run_experiment", "EngineError", "open_client", "dask_quiet", "run_grid", "run_on_worker",
@@ -178,6 +179,10 @@ def run_grid(tasks, out, *, scheduler=None, workers=0, timeout=10, in_process=Fa
                        "content or vistrack version or code (or are damaged): running them again")
             if all(task_done(t, out) for t in tasks):
                 return
+        if not scheduler:  # no more workers than the machine and the tasks can use
+            workers, capped = worker_count(workers, len(tasks))
+            if capped:
+                notify(capped)
         with dask_quiet() as deaths:
             client, cluster = open_client(scheduler, workers, timeout, in_process)
             try:

@@ -13,8 +13,8 @@ import numpy as np
 
 from ..io.outputs import replacing
 
-__all__ = ["task_path", "task_fingerprint", "write_task_result", "save_result", "write_atomic", "task_done",
-           "stale_tasks", "load_task_results", "TaskFailed", "check_shared", "OutLocked", "lock_out"]
+__all__ = ["task_path", "result_digest", "task_fingerprint", "write_task_result", "save_result", "write_atomic",
+           "task_done", "stale_tasks", "load_task_results", "TaskFailed", "check_shared", "OutLocked", "lock_out"]
 
 
 def task_path(out_dir, task=None):
@@ -65,7 +65,7 @@ def code_signature():
     if _CODE is None:
         import hashlib
 
-        root = Path(__file__).resolve().parent
+        root = Path(__file__).resolve().parents[1]  # the package, not this module's folder alone
         h = hashlib.sha256()
         for p in sorted(root.rglob("*.py")):
             h.update(p.relative_to(root).as_posix().encode() + b"\0" + p.read_bytes() + b"\0")
@@ -92,12 +92,23 @@ def task_fingerprint(task):
     return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()[:20]
 
 
+def result_digest(result):
+    """A hash of a task's result as its file holds it (its keys and every value, without ``fingerprint``
+    and ``digest``): a file cut short, edited or damaged whose fingerprint survived is told apart."""
+    import hashlib
+
+    body = {k: v for k, v in result.items() if k not in ("fingerprint", "digest")}
+    return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()[:20]
+
+
 def write_task_result(path, result, task=None):
     """Write a task's result JSON atomically (temporary file, then rename); return the path.
-    With ``task``, the result records its :func:`task_fingerprint` (what ``--resume`` checks)."""
+    With ``task``, the result records its :func:`task_fingerprint` and its :func:`result_digest` (what
+    ``--resume`` checks)."""
     path = Path(path)
     if task is not None:
         result = {**result, "fingerprint": task_fingerprint(task)}
+        result["digest"] = result_digest(result)
     path.parent.mkdir(parents=True, exist_ok=True)
     write_atomic(path, json.dumps(result))
     return str(path)
@@ -119,17 +130,19 @@ def write_atomic(path, text, what="file"):
 
 
 def task_done(task, out_dir):
-    """Whether ``task``'s result file exists, parses, and was computed by this very task (its
-    :func:`task_fingerprint`: same clip content, options, seed stream, version and code) — what
+    """Whether ``task``'s result file exists, parses, was computed by this very task (its
+    :func:`task_fingerprint`: same clip content, options, seed stream, version and code) and holds what
+    that task wrote (its :func:`result_digest`: no key lost, no list cut short, no value changed) — what
     ``--resume`` may reuse."""
     p = task_path(out_dir, task)
     if not p.is_file():
         return False
     try:
         data = json.loads(p.read_text())
-    except (json.JSONDecodeError, OSError, UnicodeDecodeError):
+    except (json.JSONDecodeError, OSError, UnicodeDecodeError, RecursionError):
         return False
-    return isinstance(data, dict) and data.get("fingerprint") == task_fingerprint(task)
+    return (isinstance(data, dict) and data.get("fingerprint") == task_fingerprint(task)
+            and data.get("digest") == result_digest(data))
 
 
 def stale_tasks(tasks, out_dir):
@@ -139,8 +152,20 @@ def stale_tasks(tasks, out_dir):
 
 def load_task_results(tasks, out_dir):
     """The result dicts of ``tasks`` (list of task dicts), read from their files (:func:`task_path`), in the
-    tasks' order: what every experiment's results are computed from."""
-    return [json.loads(task_path(out_dir, t).read_text()) for t in tasks]
+    tasks' order: what every experiment's results are computed from. A file that does not parse or does
+    not hold what its task wrote (:func:`result_digest`) is :class:`TaskFailed` naming it."""
+    out = []
+    for t in tasks:
+        p = task_path(out_dir, t)
+        try:
+            data = json.loads(p.read_text())
+        except (OSError, ValueError, RecursionError) as e:
+            raise TaskFailed(f"task file {p} cannot be read ({e}); run again with --resume to redo it") from None
+        if not isinstance(data, dict) or ("digest" in data and data["digest"] != result_digest(data)):
+            raise TaskFailed(f"task file {p} was changed or damaged after its task wrote it; run again with "
+                             "--resume to redo it")
+        out.append(data)
+    return out
 
 
 class TaskFailed(RuntimeError):

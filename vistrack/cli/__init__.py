@@ -16,9 +16,9 @@ with interrupt_aborts():  # Ctrl-C in the seconds the modules load: "Aborted.", 
     import click
 
     from vistrack import __version__
-    from vistrack.io.outputs import OutputError
-    from vistrack.session.recording import Terminated, stop_on_signals
+    from vistrack.io.outputs import OutputError, OutputIsInput, command_inputs
     from vistrack.system.resources import TooLarge, keep_freed_memory
+    from vistrack.system.signals import Terminated, stop_on_signals
 
     from .demo import demo
     from .eval import eval_cmd
@@ -41,7 +41,7 @@ class VistrackGroup(click.Group):
         (files in progress are finished or removed, never left half-written); an operating-system
         error (disk full, permission denied) is one line too. Exits (``SystemExit``) with the code."""
         try:
-            with stop_on_signals(), _one_line_warnings():
+            with stop_on_signals(), _one_line_warnings(), command_inputs():
                 code = super().main(args=args, prog_name=prog_name or "vistrack", complete_var=complete_var,
                                     standalone_mode=False, **extra)
         except click.exceptions.NoArgsIsHelpError as e:
@@ -53,7 +53,7 @@ class VistrackGroup(click.Group):
             sys.exit(e.exit_code)
         except (click.exceptions.Abort, KeyboardInterrupt) as e:
             _stopped(e)
-        except (OutputError, TooLarge) as e:  # one line: the output, the cause, what is left; the size, what fits
+        except (OutputError, OutputIsInput, TooLarge) as e:  # one line: the output and the cause; the size, what fits
             click.echo(f"Error: {e}", err=True)
             sys.exit(1)
         except OSError as e:
@@ -109,7 +109,7 @@ def _one_line_warnings():
 
 
 def _stopped(e):
-    """Exit on Ctrl-C (130) or SIGTERM (143; :class:`~vistrack.session.recording.Terminated`), which click
+    """Exit on Ctrl-C (130) or SIGTERM (143; :class:`~vistrack.system.signals.Terminated`), which click
     may have wrapped in ``Abort``."""
     term = any(isinstance(x, Terminated) for x in (e, e.__cause__, e.__context__))
     click.echo("Terminated." if term else "Aborted.", err=True)

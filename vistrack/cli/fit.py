@@ -5,16 +5,17 @@ from __future__ import annotations
 import click
 
 from vistrack.models.plate.fitting import fit_plate_coefficients
+from vistrack.registry import LAYOUTS
 
-from .options import FloatList
+from .options import FloatList, option
 
 
 @click.command("fit-plate")
 @click.argument("clips", type=click.Path(exists=True, file_okay=False))
-@click.option("--layout", default="jp", show_default=True, type=click.Choice(["jp", "single-row"]),
-              help="Plate layout the template is fitted to: Japanese two-row (jp) or single-row.")
-@click.option("--rounds", default=2, show_default=True, type=click.IntRange(min=0),
-              help="Refits with hard negatives mined by the current coefficients.")
+@option("--layout", source=fit_plate_coefficients, type=click.Choice(list(LAYOUTS)),
+        help="Plate layout the template is fitted to: Japanese two-row (jp) or single-row.")
+@option("--rounds", source=fit_plate_coefficients, type=click.IntRange(min=0),
+        help="Refits with hard negatives mined by the current coefficients.")
 @click.option("--scales", type=FloatList(), metavar="S0,S1",
               help="Scale-banded coefficients: fit them at these two plate widths (px), interpolated in log s.")
 def fit_plate(clips, layout, rounds, scales):

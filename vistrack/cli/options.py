@@ -1,16 +1,20 @@
-"""Shared click parameter types."""
+"""Shared click parameter types, and options whose defaults are read from the library (:func:`option`)."""
 
 from __future__ import annotations
 
-import os
+import dataclasses
+import inspect
+import math
+from collections.abc import Mapping
 
 import click
 
+from vistrack.io.numbers import parse_float, parse_int
 from vistrack.io.outputs import check_writable as writable
 from vistrack.io.video_errors import quoted
 
-__all__ = ["Ratio",
-           "IntList", "FloatList", "StrList", "Box", "Size", "Fraction", "SEED", "check_writable", "check_outputs"]
+__all__ = ["Ratio", "FloatRange", "Output", "IntList", "FloatList", "StrList", "Box", "Size", "Fraction", "SEED",
+           "check_writable", "check_outputs", "Sourced", "option", "default_of", "joined", "size_text"]
 
 #: ``--seed``: numpy takes any non-negative integer
 SEED = click.IntRange(min=0)
@@ -26,7 +30,7 @@ class IntList(click.ParamType):
         if isinstance(value, list):
             return value
         try:
-            out = [int(v) for v in str(value).split(",") if v.strip()]
+            out = [parse_int(v) for v in str(value).split(",") if v.strip()]
         except ValueError:
             self.fail(f"expected comma-separated integers, got {quoted(value)}", param, ctx)
         return _no_repeats(out, self, param, ctx)
@@ -42,7 +46,7 @@ class FloatList(click.ParamType):
         if isinstance(value, list):
             return value
         try:
-            out = [float(v) for v in str(value).split(",") if v.strip()]
+            out = [parse_float(v) for v in str(value).split(",") if v.strip()]
         except ValueError:
             out = None
         if out is None or not all(v == v and abs(v) != float("inf") for v in out):
@@ -84,7 +88,7 @@ class Box(click.ParamType):
         if isinstance(value, tuple):
             return value
         try:
-            v = tuple(float(s) for s in str(value).split(","))
+            v = tuple(parse_float(s) for s in str(value).split(","))
         except ValueError:
             self.fail(f"expected four numbers x,y,w,h, got {quoted(value)}", param, ctx)
         if len(v) != 4:
@@ -96,18 +100,31 @@ class Box(click.ParamType):
         return v
 
 
-class Fraction(click.FloatRange):
+class FloatRange(click.FloatRange):
+    """click's ``FloatRange``, read strictly (:func:`~vistrack.io.numbers.parse_float`) and refusing a
+    number that is not finite: ``nan`` passes every comparison of click's range check (``--upscale nan``
+    reached OpenCV, ``--noise nan`` a JSON file as ``NaN``). Every float option takes this type."""
+
+    def convert(self, value, param, ctx):
+        """Parse ``value`` into a finite float in the range; a bad value fails with click's one-line usage error."""
+        if isinstance(value, str):
+            try:
+                value = parse_float(value)
+            except ValueError:
+                self.fail(f"expected a number, got {quoted(value)}", param, ctx)
+        if isinstance(value, float) and not math.isfinite(value):
+            self.fail(f"expected a number{self._describe_range()}, got {value}", param, ctx)
+        return super().convert(value, param, ctx)
+
+    def _describe_range(self):
+        return f" in [{self.min:g}, {self.max:g}]" if self.min is not None and self.max is not None else ""
+
+
+class Fraction(FloatRange):
     """A finite number in ``[0, 1]`` (``nan`` is refused, not read as "never")."""
 
     def __init__(self):
         super().__init__(0.0, 1.0)
-
-    def convert(self, value, param, ctx):
-        """Parse ``value`` into a float in ``[0, 1]``; a bad value fails with click's one-line usage error."""
-        v = super().convert(value, param, ctx)
-        if v != v:
-            self.fail("expected a number in [0, 1], got nan", param, ctx)
-        return v
 
 
 class Size(click.ParamType):
@@ -120,7 +137,7 @@ class Size(click.ParamType):
         if isinstance(value, tuple):
             return value
         try:
-            w, h = (int(v) for v in str(value).lower().split("x"))
+            w, h = (parse_int(v) for v in str(value).lower().split("x"))
         except ValueError:
             self.fail(f"expected WIDTHxHEIGHT such as 320x240, got {quoted(value)}", param, ctx)
         if w < 64 or h < 48:
@@ -139,42 +156,31 @@ def check_writable(path, what, create=False):
         raise click.ClickException(str(e)) from None
 
 
-#: files of a clip folder that ``run`` reads (besides the frames of ``img/``, ``color/`` or the folder itself)
-CLIP_INPUTS = {"video.mp4", "groundtruth.csv", "groundtruth_rect.txt", "groundtruth.txt", "meta.json"}
-IMAGE_SUFFIXES = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp"}
-
-
-def check_outputs(outputs, video, inputs=()):
+def check_outputs(outputs, video=None, inputs=()):
     """Raise ``click.ClickException`` when two of ``outputs`` (``{option: path or None}``) are one
-    file, or one would overwrite what ``video`` reads: the video file itself, or a clip folder's
-    video, ground truth, meta.json or frames, or one of ``inputs`` (a template, an ``--init-gt``
-    file). Files are compared by identity (:func:`vistrack.io.outputs.file_id`: a hard or symbolic
-    link of an input is that input), names that do not exist yet by their real path. Devices such
-    as ``/dev/null`` may be shared."""
-    from vistrack.io.outputs import file_id, input_files
+    file, or one would overwrite what the command reads: ``video`` (a video file, or a clip, image or
+    clips folder: its video, ground truth, meta.json or frames) or one of ``inputs`` (a template, an
+    ``--init-gt`` file, the source of a stressed copy). Files are compared by identity (a hard or
+    symbolic link of an input is that input), names that do not exist yet by their real path; devices
+    such as ``/dev/null`` may be shared (:func:`vistrack.io.outputs.check_outputs`). The inputs stay
+    declared for the command: every writer refuses them too."""
+    from vistrack.io.outputs import check_outputs as check
 
-    read = {file_id(p): p for p in input_files(video, inputs)}
-    video = os.path.realpath(video)
-    seen = {}
-    for opt, path in outputs.items():
-        if path is None:
-            continue
-        real = os.path.realpath(path)
-        if os.path.exists(real) and not os.path.isfile(real):
-            continue
-        key = file_id(real) or real
-        if key in seen:
-            raise click.ClickException(f"{seen[key]} and {opt} name the same file {path}")
-        seen[key] = opt
-        parent, name = os.path.split(real)
-        reads = real == video or (os.path.isdir(video) and (
-            (parent == video and (name in CLIP_INPUTS or os.path.splitext(name)[1].lower() in IMAGE_SUFFIXES))
-            or (os.path.dirname(parent) == video and os.path.basename(parent) in ("img", "color"))))
-        if reads:
-            raise click.ClickException(f"{opt} {path} would overwrite the input it reads ({name}); write elsewhere")
-        if key in read:  # a hard or symbolic link, another spelling
-            raise click.ClickException(f"{opt} {path} would overwrite the input it reads ({read[key]}, the same file "
-                                       "under another name); write elsewhere")
+    try:
+        check(outputs, [video, *inputs])
+    except ValueError as e:
+        raise click.ClickException(str(e)) from None
+
+
+class Output(click.Path):
+    """The path of an output file or folder, local: a URL is refused with one usage line (a ``Path`` would
+    have made ``http:/host/...`` folders here)."""
+
+    def convert(self, value, param, ctx):
+        """``value`` checked as ``click.Path`` checks it, unless it is a URL."""
+        if "://" in str(value):
+            self.fail(f"{value} is a URL; vistrack writes its outputs to local files: give a local path", param, ctx)
+        return super().convert(value, param, ctx)
 
 
 class Ratio(click.ParamType):
@@ -187,9 +193,55 @@ class Ratio(click.ParamType):
         if isinstance(value, tuple):
             return value
         try:
-            a, b = (float(v) for v in str(value).split(":"))
+            a, b = (parse_float(v) for v in str(value).split(":"))
         except ValueError:
             self.fail(f"expected two numbers A:B, got {value!r}", param, ctx)
         if not (0 < a < float("inf") and 0 < b < float("inf")):
             self.fail(f"expected two positive numbers A:B, got {value!r}", param, ctx)
         return a, b
+
+
+def default_of(source, key):
+    """The default of ``key`` where the library keeps it, ``source``: a config dataclass (its field's default,
+    or its factory's value; or a class attribute), a function or class (its keyword's default), a mapping (its
+    item) or any other object (its attribute: a registry constant, an entry's field)."""
+    if isinstance(source, type) and dataclasses.is_dataclass(source):
+        field = {f.name: f for f in dataclasses.fields(source)}.get(key)
+        if field is not None:
+            return field.default if field.default is not dataclasses.MISSING else field.default_factory()
+        return getattr(source, key)
+    if isinstance(source, Mapping):
+        return source[key]
+    if callable(source):
+        p = inspect.signature(source).parameters.get(key)
+        if p is not None and p.default is not p.empty:
+            return p.default
+    return getattr(source, key)
+
+
+class Sourced(click.Option):
+    """A click option whose default is read from the library (:func:`default_of` of ``source`` and ``key``,
+    by default the option's own name), never typed out beside it: ``shown`` turns it into what the command
+    line takes (``[100, 750]`` into ``100,750``)."""
+
+    def __init__(self, param_decls, *, source, key=None, shown=None, **attrs):
+        self.source, self.key = source, key or click.Option(param_decls).name
+        self.shown = shown
+        value = default_of(source, self.key)
+        super().__init__(param_decls, default=value if shown is None else shown(value), **attrs)
+
+
+def option(*param_decls, source, key=None, shown=None, **attrs):
+    """``click.option`` with its default read from ``source`` (:class:`Sourced`) and shown in ``--help``."""
+    attrs.setdefault("show_default", True)
+    return click.option(*param_decls, cls=Sourced, source=source, key=key, shown=shown, **attrs)
+
+
+def joined(values):
+    """``[100, 750]`` as ``--particles`` takes it: ``100,750``."""
+    return ",".join(str(v) for v in values)
+
+
+def size_text(size):
+    """``(320, 240)`` as ``--size`` takes it: ``320x240``."""
+    return f"{size[0]}x{size[1]}"

@@ -5,21 +5,22 @@ from __future__ import annotations
 import click
 from click.core import ParameterSource
 
-from vistrack.models.bearings.model import Bearings
+from vistrack.core.resampling import SCHEMES
+from vistrack.models.bearings.model import LIS_PROPOSALS, Bearings
 from vistrack.registry import algos_for, derived_algos
 from vistrack.reproduce.bearings import BearingsConfig, format_ship_table
 from vistrack.reproduce.clip_suites import experiment_clips
 from vistrack.reproduce.contour import ContourConfig
-from vistrack.reproduce.landmarks import STREAMS, LandmarksConfig
-from vistrack.reproduce.multi_plate import PlatesConfig
+from vistrack.reproduce.landmarks import PAPER, STREAMS, LandmarksConfig
+from vistrack.reproduce.multi_plate import PlatesConfig, plate_experiment
 from vistrack.reproduce.plate import PlateConfig
 from vistrack.reproduce.reproduction import reproduce as run_reproduction
 
 from .errors import one_line
-from .options import SEED, Fraction, IntList, Size, StrList
+from .options import SEED, Fraction, IntList, Output, StrList, joined, option
 from .progress import progress
 from .reproduce_common import (
-    config_default,
+    check_suite_outputs,
     default_entries,
     engine_options,
     equal_time_line,
@@ -28,6 +29,7 @@ from .reproduce_common import (
     results_lines,
     suite_options,
 )
+from .reproduce_hs_sir import hs_sir
 
 __all__ = ["reproduce"]
 
@@ -38,28 +40,26 @@ def reproduce():
 
 
 @reproduce.command()
-@click.option("--ships", default=1, show_default=True, type=int, help="Number of ships M (state dimension 4M).")
-@click.option("--sequences", default=10, show_default=True, type=int, help="Fixed state/observation sequences.")
-@click.option("--runs", default=100, show_default=True, type=int, help="Filter runs per sequence.")
-@click.option("--steps", default=10, show_default=True, type=int, help="Time steps per sequence.")
-@click.option("--algos", default=",".join(config_default(BearingsConfig, "algos")), show_default=True, type=StrList(),
-              help="Algorithms, comma-separated (" + ", ".join(derived_algos(Bearings)) + ").")
-@click.option("--particles", default="100,500,3000", show_default=True, type=IntList(),
-              help="Particle counts N, comma-separated.")
+@option("--ships", source=BearingsConfig, type=int, help="Number of ships M (state dimension 4M).")
+@option("--sequences", source=BearingsConfig, type=int, help="Fixed state/observation sequences.")
+@option("--runs", source=BearingsConfig, type=int, help="Filter runs per sequence.")
+@option("--steps", source=BearingsConfig, type=int, help="Time steps per sequence.")
+@option("--algos", source=BearingsConfig, shown=joined, type=StrList(),
+        help="Algorithms, comma-separated (" + ", ".join(derived_algos(Bearings)) + ").")
+@option("--particles", source=BearingsConfig, shown=joined, type=IntList(), help="Particle counts N, comma-separated.")
 @click.option("--equal-time", is_flag=True, help="Run the first algorithm at each N and every other at the N that "
               "takes as long per run (timed here on the first sequence).")
-@click.option("--seed", default=0, show_default=True, type=SEED, help="Seed of sequences and runs.")
-@click.option("--resample", default="systematic", show_default=True,
-              type=click.Choice(["multinomial", "residual", "stratified", "systematic"]),
-              help="Resampling scheme of the particle filter.")
+@option("--seed", source=BearingsConfig, type=SEED, help="Seed of sequences and runs.")
+@option("--resample", source=BearingsConfig, type=click.Choice(list(SCHEMES)),
+        help="Resampling scheme of the particle filter.")
 @click.option("--ess-threshold", default=None, type=Fraction(),
               help="Resample when ESS < threshold·N (default: every step).")
-@click.option("--lis-proposal", default="xi", show_default=True, type=click.Choice(["xi", "position"]),
-              help="LIS's proposal: the noise move across the bearing, or §4.5.5's position move.")
-@click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here.")
-@click.option("--plots", "plots_dir", type=click.Path(file_okay=False),
+@option("--lis-proposal", source=BearingsConfig, key="proposal", type=click.Choice(list(LIS_PROPOSALS)),
+        help="LIS's proposal: the noise move across the bearing, or §4.5.5's position move.")
+@click.option("--json", "json_path", type=Output(dir_okay=False), help="Write results as JSON here.")
+@click.option("--plots", "plots_dir", type=Output(file_okay=False),
               help="Write PNGs of error vs time step and error vs N into this folder.")
-@engine_options("bearings-results")
+@engine_options(BearingsConfig)
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def bearings(ships, sequences, runs, steps, algos, particles, equal_time, seed, resample, ess_threshold, lis_proposal,
              json_path, plots_dir, workers, scheduler, in_process, out_dir, resume, quiet):
@@ -87,11 +87,10 @@ def bearings(ships, sequences, runs, steps, algos, particles, equal_time, seed, 
 
 
 @reproduce.command()
-@suite_options("Folder of contour clip folders (each with video.mp4, groundtruth.csv, meta.json); "
-               "made there with --make if missing.", "320x240", default_entries(ContourConfig),
-               "ALGO:N pairs (" + ", ".join(algos_for(ContourConfig.model)) + ").",
-               config_default(ContourConfig, "runs"))
-@engine_options("contour-results")
+@suite_options(ContourConfig, "Folder of contour clip folders (each with video.mp4, groundtruth.csv, meta.json); "
+               "made there with --make if missing.",
+               "ALGO:N pairs (" + ", ".join(algos_for(ContourConfig.model)) + ").")
+@engine_options(ContourConfig)
 @output_options("Write P(lost) vs frame and error vs frame PNGs here.")
 def contour(clips_dir, make, frames, size, entries, runs, seed, workers, scheduler, in_process, out_dir, resume,
             json_path, plots_dir, quiet):
@@ -103,9 +102,9 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
     scaled) at the last frame and averaged over frames, the mean error of
     runs not lost, and the filter's time per frame.
     """
+    check_suite_outputs("contour", clips_dir, json_path)
     with making_clips(make, frames, quiet) as made, one_line():
-        clips = experiment_clips("contour", clips_dir, make, frames, Size().convert(size, None, None), made,
-                                 grid=(entries, runs))
+        clips = experiment_clips("contour", clips_dir, make, frames, size, made, grid=(entries, runs))
     cfg = ContourConfig(clips=clips, entries=entries, runs=runs, seed=seed)
     with progress("contour", quiet) as hooks:
         done = run_reproduction(cfg, out_dir, json_path=json_path, plots_dir=plots_dir, scheduler=scheduler,
@@ -115,20 +114,20 @@ def contour(clips_dir, make, frames, size, entries, runs, seed, workers, schedul
 
 
 @reproduce.command()
-@click.option("--k", "k", type=click.Choice(["5", "8"]), default="5", show_default=True,
-              help="5: deforming pentagon, N=50, PF-EIS vs PF-Doucet vs PF-Gordon (Fig. 2a); "
-                   "8: N=20, PF-EIS-MT vs PF-EIS vs PF-Gordon (Fig. 2b).")
-@click.option("--runs", default=80, show_default=True, type=click.IntRange(min=1), help="Monte-Carlo runs.")
-@click.option("--steps", default=50, show_default=True, type=click.IntRange(min=1), help="Time steps T per run.")
-@click.option("--seed", default=0, show_default=True, type=SEED,
-              help="Random seed: the same seed gives the same output, bit for bit.")
+@option("--k", "k", source=LandmarksConfig, shown=str, type=click.Choice([str(k) for k in PAPER]),
+        help="5: deforming pentagon, N=50, PF-EIS vs PF-Doucet vs PF-Gordon (Fig. 2a); "
+             "8: N=20, PF-EIS-MT vs PF-EIS vs PF-Gordon (Fig. 2b).")
+@option("--runs", source=LandmarksConfig, type=click.IntRange(min=1), help="Monte-Carlo runs.")
+@option("--steps", source=LandmarksConfig, type=click.IntRange(min=1), help="Time steps T per run.")
+@option("--seed", source=LandmarksConfig, type=SEED,
+        help="Random seed: the same seed gives the same output, bit for bit.")
 @click.option("--algos", default=None, type=StrList(),
               help=f"Algorithms, comma-separated ({', '.join(STREAMS)}) [default: the paper's for K].")
 @click.option("-n", "--particles", default=None, type=click.IntRange(min=1),
               help="Particles N [default: the paper's, 50 for K=5 and 20 for K=8].")
 @click.option("--mt-dims", default=None, type=click.IntRange(min=0),
               help="PF-EIS-MT: trailing entries of c that are mode-tracked [default: 10 for K=8, 4 for K=5].")
-@engine_options("landmarks-results")
+@engine_options(LandmarksConfig)
 @output_options("Write mse_vs_time.png here.")
 def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, scheduler, in_process, out_dir, resume,
               json_path, plots_dir, quiet):
@@ -154,20 +153,18 @@ def landmarks(k, runs, steps, seed, algos, particles, mt_dims, workers, schedule
 
 
 @reproduce.command()
-@suite_options("Folder of plate clip folders; made there with --make if missing [default: plate-clips; "
-               "plate-overlap-clips with --overlap].", "640x480", default_entries(PlateConfig),
-               "ALGO:N pairs (" + ", ".join(algos_for(PlateConfig.model)) + "; with --overlap: "
-               + ", ".join(algos_for(PlatesConfig.model, targets=True)) + ") [default with --overlap: "
-               + default_entries(PlatesConfig) + "].", config_default(PlateConfig, "runs"))
+@suite_options(PlateConfig, "Folder of plate clip folders; made there with --make if missing [default: plate-clips; "
+               "plate-overlap-clips with --overlap].", "ALGO:N pairs (" + ", ".join(algos_for(PlateConfig.model))
+               + "; with --overlap: " + ", ".join(algos_for(PlatesConfig.model, targets=True))
+               + ") [default with --overlap: " + default_entries(PlatesConfig) + "].")
 @click.option("--overlap", is_flag=True,
               help="Several plates at once: clips with up to three plates in view (6 cars, synth plate --overlap), "
                    "tracked with --targets slots and scored by MOTA and IDF1 against objects.csv.")
-@click.option("--targets", default=3, show_default=True, type=click.IntRange(min=1),
-              help="With --overlap: plate slots K.")
+@option("--targets", source=PlatesConfig, type=click.IntRange(min=1), help="With --overlap: plate slots K.")
 @click.option("--equal-time", is_flag=True,
               help="With --overlap: set every N after the first so that its time per frame matches the first "
                    "entry's (timed on 60 frames of the first clip, from a quarter of the way in).")
-@engine_options("plate-results")
+@engine_options(PlateConfig)
 @output_options("Write P(lost) vs frame PNG here.")
 @click.pass_context
 def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targets, equal_time, workers, scheduler,
@@ -192,13 +189,12 @@ def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targ
     if not overlap and (equal_time or "targets" in given):
         raise click.UsageError("--targets and --equal-time are for --overlap")
     experiment = "plates" if overlap else "plate"
+    check_suite_outputs(experiment, clips_dir, json_path)
     with making_clips(make, frames, quiet) as made, one_line():
-        clips = experiment_clips(experiment, clips_dir, make, frames, Size().convert(size, None, None), made,
-                                 grid=(entries, runs))
-    chosen = {"entries": entries} if "entries" in given or not overlap else {}  # else the experiment's own
-    cfg = PlatesConfig(clips, runs=runs, seed=seed, targets=targets, **chosen) if overlap else \
-        PlateConfig(clips, runs=runs, seed=seed, **chosen)
-    out = out_dir if "out_dir" in given or not overlap else "plate-overlap-results"
+        clips = experiment_clips(experiment, clips_dir, make, frames, size, made, grid=(entries, runs))
+    cfg, out = plate_experiment(clips, runs=runs, seed=seed, overlap=overlap, targets=targets,
+                                entries=entries if "entries" in given or not overlap else None,
+                                out=out_dir if "out_dir" in given else None)
     with progress(experiment, quiet) as hooks:
         done = run_reproduction(cfg, out, json_path=json_path, plots_dir=plots_dir, equal_time=equal_time,
                                 on_equal_time=equal_time_line("frame"), scheduler=scheduler, workers=workers,
@@ -206,7 +202,5 @@ def plate(ctx, clips_dir, make, frames, size, entries, runs, seed, overlap, targ
     click.echo(f"{len(clips)} clips x {runs} runs" + (f", K = {targets} plate slots" if overlap else ""))
     click.echo(results_lines(experiment, done))
 
-
-from .reproduce_hs_sir import hs_sir  # noqa: E402
 
 reproduce.add_command(hs_sir)

@@ -4,19 +4,20 @@ importing the group: no import circle)."""
 
 from __future__ import annotations
 
-import dataclasses
 from contextlib import contextmanager
 
 import click
 from tqdm import tqdm
 
+from vistrack.batch.cluster import run_grid
 from vistrack.registry.filter_specs import get_filter_spec
+from vistrack.reproduce.clip_suites import SUITES
 from vistrack.reproduce.tables import format_table
 
-from .options import SEED
+from .options import SEED, Output, Size, check_outputs, default_of, option, size_text
 
 __all__ = ["Entries", "engine_options", "suite_options", "output_options", "making_clips", "equal_time_line",
-           "results_lines", "default_entries", "config_default"]
+           "results_lines", "default_entries", "entries_text", "check_suite_outputs"]
 
 
 def _stacked(opts):
@@ -29,34 +30,37 @@ def _stacked(opts):
     return deco
 
 
-def engine_options(default_out):
-    """The evaluation engine's options, shared by every ``reproduce`` command."""
+def engine_options(config):
+    """The evaluation engine's options, shared by every ``reproduce`` command (``--out``: the ``config``
+    class's ``results_dir``)."""
     opts = [
-        click.option("--workers", default=0, show_default=True, type=click.IntRange(min=0),
-                     help="LocalCluster worker processes (0: one per core)."),
+        option("--workers", source=run_grid, type=click.IntRange(min=0),
+               help="LocalCluster worker processes (0: one per core)."),
         click.option("--scheduler", help="Address of a running Dask scheduler [default: a LocalCluster]."),
         click.option("--in-process", is_flag=True, help="LocalCluster workers as threads of this process."),
-        click.option("--out", "out_dir", default=default_out, show_default=True, type=click.Path(file_okay=False),
-                     help="Folder for the per-task result files (OUT/tasks)."),
+        option("--out", "out_dir", source=config, key="results_dir", type=Output(file_okay=False),
+               help="Folder for the per-task result files (OUT/tasks)."),
         click.option("--resume", is_flag=True, help="Keep finished tasks in --out and run only the rest."),
     ]
     return _stacked(opts)
 
 
-def suite_options(clips_help, size, algos, algos_help, runs, frames=300):
+def suite_options(config, clips_help, algos_help):
     """A clip suite's options (``--clips --make --frames --size --algos --runs --seed``), shared by
-    the ``reproduce`` commands that track synthetic clips."""
+    the ``reproduce`` commands that track synthetic clips: their defaults those of the experiment's ``config``
+    class and of its clip suite (:data:`~vistrack.reproduce.clip_suites.SUITES`)."""
+    suite = SUITES[config.table]
     opts = [
         click.option("--clips", "clips_dir", type=click.Path(file_okay=False), help=clips_help),
-        click.option("--make", "make", default=10, show_default=True, type=click.IntRange(min=1),
-                     help="Clips to generate (seeds 1..MAKE) when --clips has none."),
-        click.option("--frames", default=frames, show_default=True, type=click.IntRange(min=2),
-                     help="Frames per made clip."),
-        click.option("--size", default=size, show_default=True, help="Frame size of made clips."),
-        click.option("--algos", "entries", default=algos, show_default=True, type=Entries(), help=algos_help),
-        click.option("--runs", default=runs, show_default=True, type=click.IntRange(min=1), help="Runs per clip."),
-        click.option("--seed", default=0, show_default=True, type=SEED,
-                      help="Random seed: the same seed gives the same output, bit for bit."),
+        option("--make", "make", source=suite, type=click.IntRange(min=1),
+               help="Clips to generate (seeds 1..MAKE) when --clips has none."),
+        option("--frames", source=suite, type=click.IntRange(min=2), help="Frames per made clip."),
+        option("--size", source=suite, shown=size_text, type=Size(), help="Frame size of made clips."),
+        option("--algos", "entries", source=config, key="entries", shown=entries_text, type=Entries(),
+               help=algos_help),
+        option("--runs", source=config, type=click.IntRange(min=1), help="Runs per clip."),
+        option("--seed", source=config, type=SEED,
+               help="Random seed: the same seed gives the same output, bit for bit."),
     ]
     return _stacked(opts)
 
@@ -64,8 +68,8 @@ def suite_options(clips_help, size, algos, algos_help, runs, frames=300):
 def output_options(plots_help):
     """``--json``, ``--plots`` (with ``plots_help``) and ``--quiet``, shared by the ``reproduce`` commands."""
     opts = [
-        click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write results as JSON here."),
-        click.option("--plots", "plots_dir", type=click.Path(file_okay=False), help=plots_help),
+        click.option("--json", "json_path", type=Output(dir_okay=False), help="Write results as JSON here."),
+        click.option("--plots", "plots_dir", type=Output(file_okay=False), help=plots_help),
         click.option("--quiet", "-q", is_flag=True, help="No progress bar."),
     ]
     return _stacked(opts)
@@ -98,16 +102,14 @@ class Entries(click.ParamType):
         return out
 
 
-def default_entries(config):
-    """A config's default ``(algo, N)`` entries as ``--algos`` takes them: ``ls-n-ips:30,bootstrap:2000``."""
-    entries = {f.name: f for f in dataclasses.fields(config)}["entries"].default_factory()
+def entries_text(entries):
+    """``(algo, N)`` entries as ``--algos`` takes them: ``ls-n-ips:30,bootstrap:2000``."""
     return ",".join(f"{a}:{n}" for a, n in entries)
 
 
-def config_default(config, name):
-    """A config's default value of field ``name``."""
-    f = {f.name: f for f in dataclasses.fields(config)}[name]
-    return f.default if f.default is not dataclasses.MISSING else f.default_factory()
+def default_entries(config):
+    """A config's default ``(algo, N)`` entries as ``--algos`` takes them (:func:`entries_text`)."""
+    return entries_text(default_of(config, "entries"))
 
 
 @contextmanager
@@ -134,3 +136,9 @@ def results_lines(experiment, done):
     if done.plots:
         lines.append(f"plot{'s' if len(done.plots) > 1 else ''} written to {' and '.join(done.plots)}")
     return "\n".join(lines)
+
+
+def check_suite_outputs(experiment, clips_dir, json_path):
+    """Before any clip is made or tracked: ``--json`` must not be a file of the clips it reads (the
+    experiment's ``--clips``, or its default folder; :func:`~vistrack.cli.options.check_outputs`)."""
+    check_outputs({"--json": json_path}, clips_dir or SUITES[experiment].folder)

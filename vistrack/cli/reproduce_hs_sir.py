@@ -11,10 +11,10 @@ from vistrack.reproduce.history_sampling import HSConfig, likelihood_params
 from vistrack.reproduce.reproduction import reproduce
 
 from .errors import one_line
-from .options import Size
+from .options import option
 from .progress import progress
 from .reproduce_common import (
-    default_entries,
+    check_suite_outputs,
     engine_options,
     equal_time_line,
     making_clips,
@@ -23,7 +23,7 @@ from .reproduce_common import (
     suite_options,
 )
 
-__all__ = ["Likelihood", "hs_sir"]
+__all__ = ["Likelihood", "likelihood_text", "hs_sir"]
 
 
 class Likelihood(click.ParamType):
@@ -41,19 +41,23 @@ class Likelihood(click.ParamType):
             self.fail(str(e), param, ctx)
 
 
+def likelihood_text(params):
+    """``{key: value}`` as ``--likelihood`` takes it: ``sigma_edge=4,q_miss=0.5`` (``""``: none)."""
+    return ",".join(f"{k}={v}" for k, v in params.items())
+
+
 @click.command("hs-sir")
-@suite_options("Folder of colour contour clip folders; made there with --make if missing "
-               "[default: hs-sir-clips].", "240x180", default_entries(HSConfig),
-               "ALGO:N pairs, any that runs on the contour model (" + ", ".join(algos_for(HSConfig.model)) + ").",
-               10, frames=150)
+@suite_options(HSConfig, "Folder of colour contour clip folders; made there with --make if missing "
+               "[default: hs-sir-clips].",
+               "ALGO:N pairs, any that runs on the contour model (" + ", ".join(algos_for(HSConfig.model)) + ").")
 @click.option("--equal-time", is_flag=True,
               help="Set every N after the first so that its time per frame matches the first entry's (timed on "
                    "the first clip), as Table 3.1's counts were chosen.")
-@click.option("--likelihood", default="", type=Likelihood(),
+@option("--likelihood", source=HSConfig, shown=likelihood_text, show_default=False, type=Likelihood(),
               help="The edge likelihood's parameters for every algorithm, e.g. sigma_edge=4,q_miss=0.5,"
                    "clutter_density=0.5 (sigma_edge, q_miss, clutter_density, measure_per_segment, "
                    "edge_threshold) [default: the contour model's].")
-@engine_options("hs-sir-results")
+@engine_options(HSConfig)
 @output_options("Write P(lost) vs frame (Fig. 3.10) and error vs frame (Fig. 3.9) PNGs here.")
 def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, likelihood, workers, scheduler, in_process,
            out_dir, resume, json_path, plots_dir, quiet):
@@ -75,9 +79,9 @@ def hs_sir(clips_dir, make, frames, size, entries, runs, seed, equal_time, likel
     prints P(lost) (centre error > 50 px at 240-px width) at the last frame and
     averaged, the mean error of runs not lost and the time per frame.
     """
+    check_suite_outputs("hs-sir", clips_dir, json_path)
     with making_clips(make, frames, quiet) as made, one_line():
-        clips = experiment_clips("hs-sir", clips_dir, make, frames, Size().convert(size, None, None), made,
-                                 grid=(entries, runs))
+        clips = experiment_clips("hs-sir", clips_dir, make, frames, size, made, grid=(entries, runs))
     cfg = HSConfig(clips=clips, entries=entries, runs=runs, seed=seed, likelihood=likelihood)
     with progress("hs-sir", quiet) as hooks:
         done = reproduce(cfg, out_dir, json_path=json_path, plots_dir=plots_dir, equal_time=equal_time,

@@ -4,19 +4,18 @@ from __future__ import annotations
 
 import click
 
-from vistrack.registry import DEFAULT_MODEL, DEFAULT_PARTICLES
+from vistrack.api.trax_server import ClientError, SessionError, serve
 
-from .options import SEED
+from .options import SEED, option
 
 __all__ = ["trax"]
 
 
 @click.command()
-@click.option("--model", default=DEFAULT_MODEL, show_default=True, help="Tracking model (any that starts from a box).")
+@option("--model", source=serve, help="Tracking model (any that starts from a box).")
 @click.option("--algo", default=None, help="Particle filter [default: the model's].")
-@click.option("-n", "--particles", default=DEFAULT_PARTICLES, show_default=True, type=click.IntRange(min=1),
-              help="Number of particles N.")
-@click.option("--seed", default=0, show_default=True, type=SEED, help="Random seed (same seed, same boxes).")
+@option("-n", "--particles", source=serve, type=click.IntRange(min=1), help="Number of particles N.")
+@option("--seed", source=serve, type=SEED, help="Random seed (same seed, same boxes).")
 def trax(model, algo, particles, seed):
     """Serve one TraX session on standard input and output (the VOT toolkit starts this command;
     the boxes equal `vistrack run FRAMES --init x,y,w,h` with the same options and seed).
@@ -29,8 +28,6 @@ def trax(model, algo, particles, seed):
       protocol = trax
       command = vistrack trax --seed 0
     """
-    from vistrack.api.trax_server import ClientError, SessionError, serve
-
     try:
         serve(model, algo, particles, seed)
     except ImportError as e:

@@ -33,10 +33,12 @@ from vistrack.models.contour.model import BSpline
 
 from .scene import add_noise, atomic_clip, clutter_background, lighting, motion_blur, smooth_noise, write_clip_files
 
-__all__ = ["contour_template", "make_contour_clip", "CLUTTER"]
+__all__ = ["contour_template", "make_contour_clip", "CLUTTER", "SHAPES"]
 
 #: background shapes and sensor noise per clutter level
 CLUTTER = {"low": (30, 3.0), "high": (140, 6.0)}
+#: the outlines :func:`contour_template` draws
+SHAPES = ("hand", "head")
 
 
 def contour_template(kind, radius, n=24):
@@ -51,7 +53,7 @@ def contour_template(kind, radius, n=24):
         # head-and-shoulders: round top, wider bottom
         r = 1.0 + 0.18 * np.cos(2 * phi) * (np.sin(phi) > 0) + 0.1 * np.sin(phi)
     else:
-        raise ValueError(f"unknown contour shape {kind!r}; choose hand or head")
+        raise ValueError(f"unknown contour shape {kind!r}; choose {' or '.join(SHAPES)}")
     q = np.stack([radius * r * np.cos(phi), radius * r * np.sin(phi)], axis=1)
     return q - q.mean(axis=0)
 

@@ -115,10 +115,10 @@ def _pillar_image(rng, h, width):
 
 
 @atomic_clip
-def make_longterm_clip(out, *, size=(640, 480), seed=0, gap=2.0, fps=30.0, progress=None):
+def make_longterm_clip(out, *, size=(640, 480), seed=0, gap=2.0, fps=30.0, progress=None, on_length=None):
     """Render a long-term clip into folder ``out`` (video.mp4, groundtruth.csv, meta.json; module
-    docstring). ``gap``: the seconds of each absence. Returns the meta dictionary; ``progress(k)`` is
-    called after every frame when given."""
+    docstring). ``gap``: the seconds of each absence. Returns the meta dictionary; ``on_length(n)`` is told the
+    clip's length once its script is drawn and ``progress(k)`` is called after every frame, when given."""
     w, h = int(size[0]), int(size[1])
     if w < 160 or h < 120:
         raise ValueError(f"frame size {w}x{h} is too small for a long-term clip (at least 160x120)")
@@ -131,17 +131,17 @@ def make_longterm_clip(out, *, size=(640, 480), seed=0, gap=2.0, fps=30.0, progr
     side = 0.15 * min(w, h)
     ow, oh = 2 * int(round(0.45 * side)), 2 * int(round(0.55 * side))  # even sides: the centre on a pixel corner
     sprite, alpha = _sprite(rng, ow, oh)
-    x0 = int(round(0.52 * w))
-    x1 = x0 + int(round(1.9 * ow))
+    x0, x1 = int(round(0.52 * w)), int(round(0.52 * w)) + int(round(1.9 * ow))
     pillar = _pillar_image(rng, h, x1 - x0)
     centres = script(rng, (w, h), (ow, oh), (x0, x1), gap, fps)
+    if on_length is not None:
+        on_length(len(centres))
     phase = rng.uniform(0, 2 * np.pi)
     rows, absent, first = [], [], None
     with VideoWriter(out / "video.mp4", fps, (w, h)) as vw:
         for t, (cx, cy) in enumerate(centres):
             frame = bg * lighting((w, h), t, phase)
-            layer = np.zeros((h, w), np.float32)
-            obj = np.zeros((h, w, 3), np.float32)
+            layer, obj = np.zeros((h, w), np.float32), np.zeros((h, w, 3), np.float32)
             ox, oy = int(round(cx)) - ow // 2, int(round(cy)) - oh // 2
             a0, a1, b0, b1 = max(0, oy), min(h, oy + oh), max(0, ox), min(w, ox + ow)
             if a0 < a1 and b0 < b1:

@@ -95,6 +95,10 @@ class Perturbation:
         parts += [f"drop{self.drop}"] if self.drop else []
         return "+".join(parts) or "none"
 
+    def kept(self, n):
+        """How many of ``n`` frames the stressed copy keeps (``drop`` removes every ``drop``-th)."""
+        return n - (n // self.drop if self.drop else 0)
+
 
 #: the stresses the real-clip benchmark reports beside each original clip
 STRESS_PRESETS = {

@@ -19,7 +19,7 @@ its plate not in view); a nearer car passing in front hides a plate.
 Ground truth per frame (``groundtruth.csv``): ``frame, visible, id, cx, cy, w, h,
 angle_deg, scale`` and the vertices ``x0, y0, ..., x3, y3`` (top-left,
 top-right, bottom-right, bottom-left) of the plate in view — the largest when
-there are several (``visible = 1``; NaN geometry and ``id = -1`` when none is).
+there are several (``visible = 1``; empty geometry cells and ``id = -1`` when none is).
 A plate is in view when the whole of it is inside the frame and at most
 :data:`MAX_HIDDEN` (10 %) of it is hidden by a car in front.
 
@@ -27,8 +27,8 @@ Ground truth per plate (``objects.csv``, the multi-target truth): the same
 columns plus ``hidden`` (the share of the plate hidden by cars in front), one
 row per frame and plate in view, in order of frame and then of ``id`` (the
 car's number, 0, 1, ... in order of entry, the same in every frame); a frame
-with no plate in view has one row with ``visible = 0``, ``id = -1`` and NaN
-geometry, so every frame has at least one row.
+with no plate in view has one row with ``visible = 0``, ``id = -1`` and empty
+geometry cells, so every frame has at least one row.
 """
 
 from __future__ import annotations
@@ -318,7 +318,7 @@ def make_plate_clip(out, *, frames=300, size=(640, 480), seed=0, cars=3, layout=
         import warnings
 
         warnings.warn(f"no plate comes wholly into view in the {frames} frame(s): every row of groundtruth.csv and "
-                      "objects.csv has visible=0 (NaN geometry); give more frames",
+                      "objects.csv has visible=0 (empty geometry cells); give more frames",
                       NoPlateWarning, stacklevel=3)
     return meta
 

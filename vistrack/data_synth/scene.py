@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import inspect
 import json
 import os
 import shutil
@@ -11,16 +12,16 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from vistrack.io.clip_files import CLIP_FILES, FRAME_FOLDERS, IMAGE_EXT, SYNTH_RECORDS, VIDEO_EXT
 from vistrack.io.clips import write_track_csv
-from vistrack.system.resources import check_disk
+
+from .clip_sizes import check_clip_sizes
 
 __all__ = ["smooth_noise", "clutter_background", "motion_blur", "lighting", "add_noise", "write_clip_files",
-           "atomic_clip", "is_synth_clip", "out_folder", "prepare_suite", "check_video_size", "check_suite_disk",
-           "SuiteNames"]
+           "atomic_clip", "is_synth_clip", "out_folder", "prepare_suite", "check_video_size", "SuiteNames"]
 
 #: names in a clip folder that a run reads as part of the clip: never carried from an old folder into a new clip
-CLIP_NAMES = {"video.mp4", "groundtruth.csv", "groundtruth_rect.txt", "groundtruth.txt", "meta.json", "objects.csv",
-              "img", "color"}
+CLIP_NAMES = {*CLIP_FILES, *FRAME_FOLDERS}
 #: the largest side MPEG-4 Part 2 (mp4v) encodes
 MAX_SIDE = 8190
 
@@ -154,8 +155,6 @@ def check_video_size(size):
         raise ValueError(f"frame size {w}x{h}: the clip's MPEG-4 video has at most {MAX_SIDE} pixels a side")
 
 
-#: the record each ``vistrack synth`` command writes beside its clip, and what it names
-SYNTH_RECORDS = {"meta.json": ("kind", "model"), "perturb.json": ("source",), "composite.json": ("source",)}
 
 
 def is_synth_clip(folder):
@@ -182,24 +181,10 @@ def _check_clip_out(out):
     if not out.is_dir() or is_synth_clip(out):
         return
     theirs = sorted(e.name for e in out.iterdir() if not e.name.startswith("."))
-    clip = [n for n in theirs if n in CLIP_NAMES or Path(n).suffix.lower() in (".mp4", ".avi", ".jpg", ".png")]
+    clip = [n for n in theirs if n in CLIP_NAMES or Path(n).suffix.lower() in VIDEO_EXT | IMAGE_EXT]
     if clip:
         raise ValueError(f"{out} holds {', '.join(clip[:3])}{', ...' if len(clip) > 3 else ''}, not a clip vistrack "
                          "synth wrote: the new clip would be mixed with them; give an empty or new folder")
-
-
-#: the least a synthetic clip takes on disk: its small files, and per frame its ground-truth rows and
-#: bytes per pixel of video (a 640x480 plate clip takes 0.04, a 320x240 contour clip 0.03)
-CLIP_BYTES, CLIP_FRAME_BYTES, CLIP_PIXEL_BYTES = 1024, 100, 0.01
-
-
-def check_suite_disk(out, clips, frames, size):
-    """Raise :class:`~vistrack.system.resources.TooLarge` (one line, before any clip is made) when
-    ``clips`` clips of ``frames`` frames of ``size`` would not fit on the disk holding ``out``
-    (:data:`CLIP_BYTES`, :data:`CLIP_FRAME_BYTES`, :data:`CLIP_PIXEL_BYTES`: the least they take)."""
-    each = CLIP_BYTES + int(frames) * (CLIP_FRAME_BYTES + CLIP_PIXEL_BYTES * size[0] * size[1])
-    check_disk(int(clips) * each, out, f"{clips} clips of {frames} frames at {size[0]}x{size[1]} need",
-               lambda free: f"give at most {int(free // each)} clips")
 
 
 class SuiteNames:
@@ -252,7 +237,8 @@ def prepare_suite(out, names):
     other = [e.name for e in out.iterdir() if not e.name.startswith(".") and not (e.is_dir() and is_synth_clip(e))]
     if other:
         raise ValueError(f"{out} holds {', '.join(sorted(other)[:3])}{', ...' if len(other) > 3 else ''}, which are "
-                         "not clips of an earlier synth-suite: give an empty or new folder")
+                         "not clips vistrack synth wrote: the clips would be mixed with them; give an empty or new "
+                         "folder")
     stale = sorted(e.name for e in out.iterdir() if e.is_dir() and not e.name.startswith(".") and e.name not in names)
     for n in stale:
         shutil.rmtree(out / n)
@@ -264,11 +250,16 @@ def atomic_clip(make):
     ``out`` (``.NAME.partial-PID``, which ``eval`` does not take for a clip) and renamed over ``out``
     when it is complete, so an interrupted or failed render leaves the old clip as it was and no
     partial one. Partial folders of dead processes are removed. ``out`` may not hold the current
-    folder (``ValueError``)."""
+    folder (``ValueError``). The clip's sizes (frames, frame size, cars, landmarks, clutter blobs) are
+    checked first (:func:`~vistrack.data_synth.clip_sizes.check_clip_sizes`: a one-line ``TooLarge``)."""
+    sizes = [n for n in ("frames", "size", "cars", "k", "clutter_blobs") if n in inspect.signature(make).parameters]
 
     @functools.wraps(make)
     def wrapper(out, *args, **kw):
         out = Path(out)
+        given = inspect.signature(make).bind(out, *args, **kw)
+        given.apply_defaults()
+        check_clip_sizes(out.parent, **{n: given.arguments[n] for n in sizes})
         if Path.cwd().resolve().is_relative_to(out.resolve()):
             raise ValueError(f"{out} holds the current folder: give the clip a folder of its own (such as clip/)")
         if out.exists() and not out.is_dir():

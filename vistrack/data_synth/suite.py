@@ -5,10 +5,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .clip_sizes import check_suite_disk
 from .contour_clip import make_contour_clip
 from .landmark_clip import make_landmark_clip
 from .plate_clip import make_plate_clip
-from .scene import SuiteNames, check_suite_disk, prepare_suite
+from .scene import SuiteNames, prepare_suite
 
 __all__ = ["SUITES", "suite_names", "check_suite", "make_suite"]
 
@@ -26,12 +27,12 @@ def suite_names(kind, clips, seed):
 def check_suite(out, kind, clips, frames=None, size=None):
     """Raise :class:`~vistrack.system.resources.TooLarge` (one line, before anything is made) when ``clips``
     clips of ``kind`` (``frames`` and ``size`` default to the kind's) would not fit on the disk holding
-    ``out`` (:func:`~vistrack.data_synth.scene.check_suite_disk`)."""
+    ``out`` (:func:`~vistrack.data_synth.clip_sizes.check_suite_disk`)."""
     _, frames_default, size_default = SUITES[kind]
     check_suite_disk(out, clips, frames or frames_default, size or size_default)
 
 
-def make_suite(out, kind, clips, seed, frames=None, size=None, progress=None):
+def make_suite(out, kind, clips=10, seed=1, frames=None, size=None, progress=None):
     """``clips`` clips of ``kind`` (:data:`SUITES`) into the folder ``out``, from seeds ``seed``, ``seed +
     1``, ...; ``frames`` and ``size`` default to the kind's. Their size on disk is checked first
     (:func:`check_suite`); ``out`` then holds this suite alone

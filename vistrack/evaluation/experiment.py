@@ -26,27 +26,30 @@ recall and F-score, precision at 20 px, frames/s, mean ESS).
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ..baselines.opencv import OPENCV_RANDOMISED, OPENCV_TRACKERS, check_opencv, track_opencv
 from ..batch.tasks import load_task_results, save_result
 from ..core.seeds import run_seed
 from ..io.clips import GroundTruthWarning, load_clip, sequence_name
 from ..io.remote import is_url, url_version
 from ..io.results_format import find_result_file, read_result_file
 from ..io.video import VideoError
-from ..loop.stepper import step_frames
+from ..loop.stepper import Stepper
 from ..registry import (
     ALGORITHMS,
+    BASELINES,
     DEFAULT_MODEL,
     build_model,
     check_algo,
+    check_baseline,
     default_comparison,
     get_model_spec,
+    is_baseline,
     make_filter,
+    runs_once,
 )
 from ..registry.builders import start_frame
 from ..scoring.aggregate import summarize as metrics_summarize
@@ -55,7 +58,7 @@ from ..system.resources import check_memory, prepare_worker
 from .multi_target import run_plates_task, score_plates_tasks
 
 __all__ = ["EvalConfig", "task_list", "check_task_grid", "check_grid_size", "entry_tasks", "entries_config",
-           "run_task", "summarize", "OPENCV_TRACKERS", "OPENCV_RANDOMISED", "check_algos", "score_boxes",
+           "run_task", "summarize", "check_algos", "score_boxes",
            "score_result_file", "result_files", "ResultsLengthWarning", "dask_setup"]
 
 
@@ -68,7 +71,7 @@ class EvalConfig:
     clips : list
         Clip folders, videos or image folders with ground truth.
     algos : list of str
-        Particle filters or OpenCV trackers (``opencv-mil``, ...).
+        Particle filters or comparison trackers (:data:`~vistrack.registry.baseline_specs.BASELINES`).
     particles : list of int
         Numbers of particles ``N``; every algorithm runs at every ``N``.
     runs : int
@@ -98,9 +101,9 @@ class EvalConfig:
     targets: int | None = None
 
     def pairs(self):
-        """The ``(algo, N)`` pairs: :attr:`entries`, else every algorithm at every N (an OpenCV
+        """The ``(algo, N)`` pairs: :attr:`entries`, else every algorithm at every N (a comparison
         tracker at N 1)."""
-        return self.entries or [(a, n) for a in self.algos for n in ([1] if a in OPENCV_TRACKERS else self.particles)]
+        return self.entries or [(a, n) for a in self.algos for n in ([1] if is_baseline(a) else self.particles)]
 
     def tasks(self):
         """:func:`task_list` of the clips, each with ``targets`` when tracking several."""
@@ -122,14 +125,15 @@ class EvalConfig:
 
 
 def check_algos(algos, model=None, targets=False):
-    """Raise ``ValueError`` (one line) for an unknown algorithm, an OpenCV tracker this OpenCV lacks, or
-    (given ``model``) an algorithm that does not run on that model (with ``targets``: on its several-target
-    form; the line names those that do, :func:`vistrack.registry.check_algo`)."""
+    """Raise ``ValueError`` (one line) for an unknown algorithm, a comparison tracker this installation
+    cannot run (its :attr:`~vistrack.registry.baseline_specs.BaselineSpec.check`), or (given ``model``) an
+    algorithm that does not run on that model (with ``targets``: on its several-target form; the line names
+    those that do, :func:`vistrack.registry.check_algo`)."""
     for a in algos:
-        if a in OPENCV_TRACKERS:
-            check_opencv(a)
+        if is_baseline(a):
+            check_baseline(a)
         elif a not in ALGORITHMS:
-            known = sorted(set(ALGORITHMS) | set(OPENCV_TRACKERS))
+            known = sorted(set(ALGORITHMS) | set(BASELINES))
             raise ValueError(f"unknown algorithm {a!r}; choose from {', '.join(known)}")
         elif model is not None:
             check_algo(model, a, targets, who=f"--algos {a}")
@@ -155,10 +159,10 @@ def check_task_grid(clips, pairs, runs, available=None):
 def check_grid_size(clips, pairs, runs, frames=300, available=None):
     """Raise :class:`~vistrack.system.resources.TooLarge` when a grid of ``clips`` clips (of ``frames``
     frames) x ``pairs`` (algorithm, N) x ``runs`` would not fit in memory: its tasks and their
-    results (:data:`TASK_BYTES`, :data:`TASK_FRAME_BYTES`). A deterministic OpenCV tracker runs once
-    (:data:`OPENCV_RANDOMISED`). Returns the number of tasks."""
+    results (:data:`TASK_BYTES`, :data:`TASK_FRAME_BYTES`). A deterministic comparison tracker runs once
+    (:func:`~vistrack.registry.baseline_specs.runs_once`). Returns the number of tasks."""
     pairs = list(pairs)
-    fixed = sum(a in OPENCV_TRACKERS and a not in OPENCV_RANDOMISED for a, _ in pairs)  # one run
+    fixed = sum(runs_once(a) for a, _ in pairs)
     n = clips * ((len(pairs) - fixed) * int(runs) + fixed)
     each = TASK_BYTES + TASK_FRAME_BYTES * int(frames)
 
@@ -186,8 +190,8 @@ def _longest(clips, default=300):
 def task_list(cfg, clips):
     """All tasks as dicts ``{clip, clip_index, algo, particles, run, seed_seq, model, name}``, the grid
     checked against memory first (:func:`check_task_grid`): run ``r`` draws from
-    :func:`~vistrack.core.seeds.run_seed` ``(cfg.seed, r)``; a deterministic OpenCV tracker runs once
-    (:data:`OPENCV_RANDOMISED`: as many runs as the filters)."""
+    :func:`~vistrack.core.seeds.run_seed` ``(cfg.seed, r)``; a deterministic comparison tracker runs once
+    (:func:`~vistrack.registry.baseline_specs.runs_once`; a randomised one as many times as the filters)."""
     pairs = cfg.pairs()
     check_task_grid(clips, pairs, cfg.runs)
     tasks = []
@@ -197,7 +201,7 @@ def task_list(cfg, clips):
         version = {"clip_version": url_version(clip)} if is_url(clip) else {}
         for algo, n in pairs:
             for r in range(cfg.runs):
-                if algo in OPENCV_TRACKERS and algo not in OPENCV_RANDOMISED and r > 0:
+                if runs_once(algo) and r > 0:
                     continue  # deterministic: one run
                 tasks.append({"clip": str(clip), "clip_index": ci, "algo": algo, "particles": int(n), "run": r,
                               "seed_seq": run_seed(cfg.seed, r), "model": cfg.model,
@@ -221,8 +225,6 @@ def entry_tasks(cfg, model):
 
 def entries_config(cfg):
     """Such a config as a JSON-ready dict."""
-    from dataclasses import asdict
-
     d = asdict(cfg)
     d["clips"] = [str(c) for c in cfg.clips]
     d["entries"] = [list(e) for e in cfg.entries]
@@ -274,8 +276,8 @@ def run_task(task, out_dir):
     rule = "centre" if task.get("lost_rule") == "thesis" else "size"
     reported, vertices, aspect = [], [], None
     shown, conf = None, None  # what the tracker reported per frame, its confidence
-    if algo in OPENCV_TRACKERS:
-        boxes, ms, index = track_opencv(algo, clip.first_box(), frames)
+    if is_baseline(algo):
+        boxes, ms, index = BASELINES[algo].track(clip.first_box(), frames)
         boxes, ess = _by_index(boxes, index), np.full(index.max() + 1, np.nan)
     else:
         spec = get_model_spec(task["model"])
@@ -283,7 +285,7 @@ def run_task(task, out_dir):
         filt = make_filter(algo, model)
         rng = np.random.default_rng(task["seed_seq"])
         est, ms, ess, index, shown, conf = [], [], [], [], [], []
-        for res in step_frames(frames, filt, n, rng):
+        for res in Stepper(filt, n, rng).steps(frames):
             index.append(res.index)
             est.append(res.estimate)
             ms.append(res.ms)
@@ -349,7 +351,7 @@ def result_files(dirs, clips, fmt="otb"):
             raise ValueError(f"--results-dir {names[d.name]} and {d} have the same name {d.name!r}: each tracker is "
                              "named after its folder; rename one")
         names[d.name] = d
-        if d.name.lower() in ALGORITHMS or d.name.lower() in OPENCV_TRACKERS:
+        if d.name.lower() in ALGORITHMS or is_baseline(d.name.lower()):
             raise ValueError(f"--results-dir {d} is named like vistrack's algorithm {d.name.lower()!r}: its results "
                              "would be listed as that algorithm's; rename the folder (e.g. after the tracker)")
         for c in clips:
@@ -387,9 +389,9 @@ def score_result_file(clip_path, path, name, fmt="otb"):
 
 
 def summarize(results):
-    """Per clip × algo × N summaries of task results (:func:`vistrack.scoring.aggregate.summarize`; OpenCV's
-    trackers marked as no particle filter)."""
-    return metrics_summarize(results, not_filters=OPENCV_TRACKERS)
+    """Per clip × algo × N summaries of task results (:func:`vistrack.scoring.aggregate.summarize`; the
+    comparison trackers marked as no particle filter)."""
+    return metrics_summarize(results, not_filters=BASELINES)
 
 
 class ResultsLengthWarning(UserWarning):

@@ -17,8 +17,8 @@ import numpy as np
 from ..batch.tasks import load_task_results, save_result
 from ..core.particles import DegenerateWeightsWarning
 from ..io.clips import load_clip
-from ..loop.stepper import step_frames
-from ..registry import build_model, make_filter
+from ..loop.stepper import Stepper
+from ..registry import build_model, make_filter, targets_model
 from ..scoring.metrics import best_ms, equal_time
 from ..scoring.mot import FrameObjects, clear_mot, objects_by_frame
 from ..system.resources import prepare_worker
@@ -29,12 +29,12 @@ __all__ = ["track_plates", "run_plates_task", "record_objects", "score_plates_ta
 def track_plates(clip, algo, n, targets, rng, frames=None):
     """Track ``clip`` with ``targets`` plate slots by ``algo`` with ``n`` particles; yields per frame
     ``(FrameResult, ids (M,), vertices (M, 4, 2), scale (M,))`` of the reported plates."""
-    model = build_model("plate", clip, targets=targets)
+    model = build_model(targets_model(), clip, targets=targets)
     filt = make_filter(algo, model)
     source = clip.source if frames is None else frames
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DegenerateWeightsWarning)
-        for res in step_frames(source, filt, n, rng):
+        for res in Stepper(filt, n, rng).steps(source):
             ids, states = res.targets
             yield res, ids, model.target_outline(states), states[:, 3]
 

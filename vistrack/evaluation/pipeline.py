@@ -11,18 +11,28 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+from .. import kernels
 from ..batch.cluster import run_experiment
 from ..batch.tasks import lock_out, task_path
 from ..io.clips import find_clips, load_clip
-from ..loop.stepper import ms_per_frame
-from ..registry import MODELS, OptionError, build_model, check_particle_memory, clip_model, get_model_spec
+from ..loop.stepper import filter_ms
+from ..registry import (
+    MODELS,
+    OptionError,
+    build_model,
+    check_particle_memory,
+    clip_model,
+    get_model_spec,
+    is_baseline,
+    targets_model,
+)
 from ..registry.builders import start_frame
 from ..reports.eval_report import write_eval_outputs
 from ..reports.mot_report import write_mot_outputs
 from ..scoring.metrics import equal_time
 from ..scoring.mot import require_motmetrics
+from ..system.compiling import compiling
 from .experiment import (
-    OPENCV_TRACKERS,
     EvalConfig,
     check_algos,
     check_task_grid,
@@ -48,6 +58,21 @@ class Evaluation:
     plots: list
     report: Path
     chosen: dict | None = None
+    #: the annotated videos written (``OUT/videos/<tracker>.mp4``)
+    videos: list = dataclasses.field(default_factory=list)
+    #: the other files written into ``OUT``, by name
+    files: tuple = ("results.json", "results.csv", "report.md", "report.html")
+
+    def wrote(self):
+        """The line that names every file written: ``wrote OUT/results.json, results.csv, report.md,
+        report.html, 6 plots and 3 annotated videos (videos/)``."""
+        out = self.report.parent
+        names = list(self.files[1:])
+        counted = [f"{len(self.plots)} plot{'s' * (len(self.plots) != 1)}"] if self.plots else []
+        if self.videos:
+            counted.append(f"{len(self.videos)} annotated video{'s' * (len(self.videos) != 1)} (videos/)")
+        *first, last = names + counted
+        return f"wrote {out / self.files[0]}, {', '.join(first)} and {last}"
 
 
 def clips_model(clips):
@@ -75,12 +100,12 @@ def eval_config(clips, *, algos, particles, runs, seed, model=None, targets=None
     clip_paths = find_clips(clips)
     if model is None and targets is None:
         model = clips_model(clip_paths)
-    spec = get_model_spec(model or "plate")
+    spec = get_model_spec(model if targets is None else targets_model(model))
     if targets is not None:
         _check_targets(model, clip_paths, results_dirs)
     check_algos(algos, spec.name, targets is not None)
     for a in algos:  # one task's working memory (tasks run side by side: one per worker)
-        for n in ([] if a in OPENCV_TRACKERS else particles):
+        for n in ([] if is_baseline(a) else particles):
             check_particle_memory(n, spec.bytes_per_particle, a)
     # without algorithms (--algos "" with --results-dir) no particle count was used: none is recorded
     cfg = EvalConfig(clips=clip_paths, algos=list(algos), particles=list(particles) if algos else [], runs=runs,
@@ -146,7 +171,7 @@ def eval_equal_time(cfg, frames=30):
         raise ValueError(f"--equal-time times the algorithms on the first clip, {cfg.clips[0]}, which has "
                          f"{len(fr)} frame(s) to track: it needs at least 3")
     model = build_model(cfg.model, clip, init_gt="")
-    entries, _ = equal_time(lambda a, n: ms_per_frame(fr, model, a, n), [(a, n_ref) for a in cfg.algos],
+    entries, _ = equal_time(lambda a, n: filter_ms(fr, model, a, n), [(a, n_ref) for a in cfg.algos],
                             min_slope=0.1, checks=3)
     for algo, n in entries[1:]:
         try:
@@ -157,7 +182,8 @@ def eval_equal_time(cfg, frames=30):
     return dict(entries)
 
 
-def evaluate(cfg, out, *, results_dirs=(), results_format="otb", equal_time=False, on_equal_time=None, **engine):
+def evaluate(cfg, out, *, results_dirs=(), results_format="otb", equal_time=False, on_equal_time=None,
+             compiling_progress=None, **engine):
     """Evaluate ``cfg`` (an :class:`~vistrack.evaluation.experiment.EvalConfig`, :func:`eval_config`) into the
     folder ``out``: with ``equal_time`` the particle counts of equal time first (:func:`eval_equal_time`;
     ``on_equal_time(chosen)`` hears them before the grid runs), then the tasks on the grid
@@ -168,8 +194,15 @@ def evaluate(cfg, out, *, results_dirs=(), results_format="otb", equal_time=Fals
 
     Raises ``ValueError`` (one line) for an ``out`` that cannot take the results or result files that do
     not fit the clips, and what the grid raises; the task files finished are kept (``resume``).
+
+    On local workers the kernels of the model and algorithms are compiled here first, once, telling
+    ``compiling_progress(done, total)`` (:func:`~vistrack.system.compiling.compiling`: the first run after an
+    install), rather than by every worker at once.
     """
     out = results_folder(out)
+    if not engine.get("scheduler"):
+        with compiling(compiling_progress, kernels.use()) as compiler:
+            compiler.compile(cfg.model, cfg.algos, cfg.targets is not None)  # OpenCV's trackers: none
     chosen, run = None, cfg
     if equal_time:
         chosen = eval_equal_time(cfg)
@@ -179,13 +212,14 @@ def evaluate(cfg, out, *, results_dirs=(), results_format="otb", equal_time=Fals
     with lock_out(out):
         results = run_experiment(run, out, **engine)
         if cfg.targets is not None:
-            return Evaluation(write_mot_outputs(out, cfg, results, cfg.targets, chosen), [], out / "report.md", chosen)
+            return Evaluation(write_mot_outputs(out, cfg, results, cfg.targets, chosen), [], out / "report.md", chosen,
+                              files=("results.json", "results.csv", "report.md"))
         results += [score_result_file(c, f, name, results_format)
                     for name, c, f in result_files(results_dirs, cfg.clips, results_format)]
         summaries = summarize(results)
         try:
-            plots = write_eval_outputs(out, cfg, summaries, results, chosen)
+            plots, videos = write_eval_outputs(out, cfg, summaries, results, chosen)
         except OSError as e:
             raise ValueError(f"cannot write the results into {out}: {e.strerror or e} (the task files are kept: "
                              "--resume writes them without running the tasks again)") from None
-    return Evaluation(summaries, plots, out / "report.md", chosen)
+    return Evaluation(summaries, plots, out / "report.md", chosen, videos)

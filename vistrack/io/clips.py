@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .clip_files import FRAME_FOLDERS, GROUNDTRUTH_FILES
 from .outputs import replacing
 from .remote import is_url
 from .video import VideoError, find_groundtruth, groundtruth_origin, open_video, read_rects
@@ -172,7 +174,9 @@ EXCLUSION_FILES = ("full_occlusion.txt", "out_of_view.txt", "absence.label")
 
 def excluded_frames(folder, n):
     """``(n,)`` bool: frames flagged fully occluded or out of view (LaSOT) or absent (GOT-10k) in
-    ``folder``; a flag file that is not 0/1 values is a :class:`VideoError` naming it."""
+    ``folder`` (``n``: the ground truth's rows); a flag file that is not 0/1 values is a :class:`VideoError`
+    naming it, one of another length a :class:`GroundTruthWarning` with both counts (the frames past its
+    end are not flagged; its extra flags are ignored)."""
     out = np.zeros(n, bool)
     for name in EXCLUSION_FILES:
         f = Path(folder) / name
@@ -181,6 +185,10 @@ def excluded_frames(folder, n):
         text = f.read_text(errors="replace").replace(",", " ").split()
         if any(v not in ("0", "1") for v in text):
             raise VideoError(f"{f}: expected 0/1 flags, one per frame")
+        if len(text) != n:
+            warnings.warn(f"{f} has {len(text)} flags for the {n} rows of the ground truth; "
+                          + ("the frames past its end are taken as not flagged" if len(text) < n
+                             else "its extra flags are ignored"), GroundTruthWarning, stacklevel=3)
         flags = np.array([v == "1" for v in text], bool)[:n]
         out[: len(flags)] |= flags
     return out
@@ -224,16 +232,18 @@ _FLOATS = (float, np.float64, np.float32)
 
 
 def format_value(v):
-    """A track-CSV cell: integers and flags as integers, numbers with 3 decimals, text as is."""
+    """A track-CSV cell: integers and flags as integers, numbers with 3 decimals, text as is; a number
+    that is not finite (a plate frame's geometry where no plate is in view) an empty cell, which
+    :func:`read_groundtruth_csv` reads back as NaN."""
     if type(v) in _FLOATS:  # the common case first: a track row is mostly floats
-        return f"{float(v):.3f}"
+        return f"{float(v):.3f}" if math.isfinite(v) else ""
     if isinstance(v, (bool, np.bool_)):
         return str(int(v))
     if isinstance(v, (int, np.integer)):
         return str(int(v))
     if isinstance(v, str):
         return v
-    return f"{float(v):.3f}"
+    return f"{float(v):.3f}" if math.isfinite(float(v)) else ""
 
 
 def excerpt_clip(src, dst, frames):
@@ -271,9 +281,8 @@ def excerpt_clip(src, dst, frames):
 def _is_clip(p):
     """A clip folder: a synthetic clip, or images (``img/``, VOT's ``color/``, or in the folder) or a
     video with box ground truth of a known layout (OTB, VOT, GOT-10k, LaSOT)."""
-    return ((p / "video.mp4").is_file() or (p / "img").is_dir() or (p / "color").is_dir()
-            or (p / "groundtruth_rect.txt").is_file() or (p / "groundtruth.txt").is_file()
-            or (p / "groundtruth.csv").is_file())
+    return ((p / "video.mp4").is_file() or any((p / f).is_dir() for f in FRAME_FOLDERS)
+            or any((p / g).is_file() for g in (*GROUNDTRUTH_FILES, "groundtruth.csv")))
 
 
 def _dataset_clips(p):

@@ -2,9 +2,15 @@
 
 * :func:`same_file`: two names of one file, by identity (``st_dev``, ``st_ino``), not by
   spelling: a hard link, a symbolic link or ``./x`` against ``x``.
+* :func:`output_target`: where an output is written and how. A symbolic link is written through
+  to the file it names (the link stays a link); a name that leads to a process's descriptor
+  (``/dev/stdout``: ``/proc/self/fd/1``), a character device or a FIFO is written in place, never
+  replaced by a rename.
 * :func:`check_writable`: whether a file can be written at a path, before any work.
 * :func:`input_files`: the files a run reads from a video, clip or image folder (what an output
-  must never be).
+  must never be); :func:`check_outputs`: a command's outputs checked against its inputs and each
+  other before any work, the inputs then kept for the command (:func:`command_inputs`) so that
+  every writer refuses them too (:func:`check_not_input`).
 * :class:`OutputLock`: one live writer per output. A lock file ``.NAME.lock`` beside the output,
   held with ``flock`` (released by the kernel when the process ends, however it ends): a second
   run given the same output refuses it with one line (:class:`OutputBusy`).
@@ -19,17 +25,25 @@
 
 from __future__ import annotations
 
+import contextvars
 import errno
 import os
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["OutputBusy", "OutputError", "same_file", "file_id", "check_writable", "input_files", "OutputLock",
-           "temporary_name", "is_device", "replacing", "left_note"]
+from .clip_files import CLIP_FILES, FRAME_FOLDERS, IMAGE_EXT
+
+__all__ = ["OutputBusy", "OutputError", "OutputIsInput", "same_file", "file_id", "check_writable", "input_files",
+           "OutputLock", "temporary_name", "output_target", "in_place", "replacing", "left_note", "command_inputs",
+           "declare_inputs", "check_outputs", "check_not_input"]
 
 
 class OutputBusy(RuntimeError):
     """Another live process writes this output."""
+
+
+class OutputIsInput(ValueError):
+    """An output names a file the command reads (one line: the output, the input, what to do)."""
 
 
 class OutputError(OSError):
@@ -72,22 +86,36 @@ def replacing(path, what="file", tag="tmp"):
     (:func:`temporary_name`) for the block to write and close; when the block succeeds it is
     renamed over ``path``; when anything fails it is removed, ``path`` is left as it was and
     :class:`OutputError` names ``path`` and the cause (an ``OSError``; other errors pass as
-    they are). A device (``/dev/stdout``) is yielded itself and written directly."""
+    they are). The output's lock is held meanwhile (:class:`OutputBusy` when another process holds
+    it); a symbolic link is written through to its file; a device or pipe (``/dev/stdout``) is
+    yielded itself and written in place (:func:`output_target`); an input of the command is
+    refused (:func:`check_not_input`)."""
     path = Path(path)
-    if is_device(path):
-        yield path
+    check_not_input(path, what)
+    target, direct = output_target(path)
+    if direct:
+        try:
+            yield target
+        except OutputError:
+            raise
+        except OSError as e:  # a device's own error (/dev/full: a full disk), naming the output
+            raise OutputError(what, path, e) from None
         return
-    earlier = path.is_file()
-    tmp = temporary_name(path, tag)
+    lock = OutputLock(target, what)
+    earlier = target.is_file()
+    tmp = None
     try:
+        tmp = temporary_name(target, tag)
         yield tmp
-        os.replace(tmp, path)
+        os.replace(tmp, target)
     except OutputError:
         raise
     except OSError as e:
         raise OutputError(what, path, e, left_note(path, earlier)) from None
     finally:
-        tmp.unlink(missing_ok=True)
+        if tmp is not None:
+            tmp.unlink(missing_ok=True)
+        lock.release()
 
 
 def file_id(path):
@@ -105,6 +133,8 @@ def check_writable(path, what, create=False):
     permission. ``None`` passes."""
     if path is None:
         return
+    if "://" in str(path):
+        raise ValueError(f"{what} {path}: a URL; vistrack writes its outputs to local files: give a local path")
     path = os.path.abspath(path)
     parent = os.path.dirname(path)
     if os.path.isdir(path):
@@ -128,15 +158,36 @@ def same_file(a, b):
         return False
 
 
-def is_device(path):
-    """Whether ``path`` exists and is not a regular file or folder (``/dev/null``, a pipe): such
-    outputs are written directly and may be shared."""
-    p = Path(path)
-    return p.exists() and not p.is_file() and not p.is_dir()
+#: folders whose names stand for a process's open descriptors (``/dev/stdout`` leads there)
+_DESCRIPTORS = ("/proc/", "/dev/fd/")
 
 
-#: files of a clip folder that a run reads besides the frames
-CLIP_FILES = ("video.mp4", "groundtruth.csv", "groundtruth_rect.txt", "groundtruth.txt", "meta.json", "objects.csv")
+def output_target(path):
+    """``(target, in_place)``: the file an output named ``path`` is written to, and whether it is
+    written in place (opened and written) rather than replaced (a temporary file renamed over it).
+
+    A symbolic link is followed to the file it names: the output is written there and the link stays
+    a link (a rename over the link would replace it). A name that leads into ``/proc`` or
+    ``/dev/fd`` (``/dev/stdout`` is a link to ``/proc/self/fd/1``: the process's standard output,
+    a terminal, a pipe or the file a shell opened), a character device or a FIFO is written in place:
+    a rename would replace the device node, and a shell's file would keep the old, unlinked copy."""
+    p = os.path.abspath(path)
+    for _ in range(40):
+        if p.startswith(_DESCRIPTORS):
+            return Path(p), True
+        if not os.path.islink(p):
+            break
+        folder = os.path.realpath(os.path.dirname(p))
+        p = os.path.normpath(os.path.join(folder, os.readlink(p)))
+    else:
+        raise OSError(errno.ELOOP, os.strerror(errno.ELOOP), str(path))
+    return Path(p), os.path.exists(p) and not os.path.isfile(p) and not os.path.isdir(p)
+
+
+def in_place(path):
+    """Whether an output named ``path`` is written in place (a device, a pipe, ``/dev/stdout``:
+    :func:`output_target`); such outputs may also be shared by several writers."""
+    return output_target(path)[1]
 
 
 def input_files(video, extra=()):
@@ -149,13 +200,115 @@ def input_files(video, extra=()):
     out = [p] if p.is_file() else []
     out += [folder / n for n in CLIP_FILES]
     if p.is_dir():
-        for sub in (folder, folder / "img", folder / "color"):
+        for sub in (folder, *(folder / f for f in FRAME_FOLDERS)):
             try:
                 out += [e for e in sub.iterdir() if e.is_file()]
             except OSError:
                 pass
     out += [Path(e) for e in extra if e]
     return [q for q in out if q.is_file()]
+
+
+#: what the command running in this context reads: ``{"files": {key: shown}, "folders": {real path: shown}}``
+#: (keys: a file's identity and its real path); ``None`` outside :func:`command_inputs`
+_READS = contextvars.ContextVar("vistrack_reads", default=None)
+
+
+@contextmanager
+def command_inputs():
+    """The scope of one command (the command line opens one per command): the inputs declared in it
+    (:func:`check_outputs`, :func:`declare_inputs`) are refused as outputs by every writer in it
+    (:func:`check_not_input`)."""
+    token = _READS.set({"files": {}, "folders": {}})
+    try:
+        yield
+    finally:
+        _READS.reset(token)
+
+
+def declare_inputs(paths):
+    """Declare ``paths`` read by the command (files, or folders: a clip, an image folder, a folder of
+    clips); nothing outside :func:`command_inputs`. A URL or a path that is not there is skipped."""
+    reads = _READS.get()
+    if reads is None:
+        return
+    for p in paths:
+        if p is None or "://" in str(p) or not os.path.exists(p):
+            continue
+        if os.path.isdir(p):
+            reads["folders"][os.path.realpath(p)] = str(p)
+            files = input_files(p)
+        else:
+            files = [Path(p)]
+        for f in files:
+            reads["files"][os.path.realpath(f)] = str(f)
+            reads["files"][file_id(f)] = str(f)
+
+
+def _read_by(real):
+    """The input a file at real path ``real`` would overwrite (a declared file by identity or path,
+    or a clip's own file inside a declared folder: its ground truth, meta.json, video or frames,
+    also one level down in a folder of clips), or ``None``."""
+    reads = _READS.get()
+    if not reads:
+        return None
+    hit = reads["files"].get(file_id(real)) or reads["files"].get(real)
+    if hit:
+        return hit
+    for folder, shown in reads["folders"].items():
+        rel = os.path.relpath(real, folder)
+        parts = rel.split(os.sep)
+        if rel.startswith(os.pardir) or len(parts) > 3:
+            continue
+        name = parts[-1]
+        if name in CLIP_FILES or os.path.splitext(name)[1].lower() in IMAGE_EXT or \
+                (len(parts) > 1 and parts[-2] in FRAME_FOLDERS):
+            return os.path.join(shown, rel)
+    return None
+
+
+def check_not_input(path, what="output"):
+    """Raise :class:`OutputIsInput` (one line) when ``path`` names a file the command reads (declared in
+    its :func:`command_inputs` scope): the same file by identity or real path, through any link."""
+    target, direct = output_target(path)
+    if direct:
+        return
+    hit = _read_by(os.path.realpath(target))
+    if hit:
+        same = os.path.realpath(target) == os.path.realpath(hit) and Path(path).name == Path(hit).name
+        which = Path(hit).name if same else f"{hit}, the same file under another name"
+        raise OutputIsInput(f"{what} {path} would overwrite the input it reads ({which}); write elsewhere")
+
+
+def check_outputs(outputs, inputs=()):
+    """Before any work: raise ``ValueError`` (one line) when two of ``outputs`` (``{name: path or
+    None}``, ``name`` the option; a file, or a folder the command writes into) are one file, one would
+    overwrite one of ``inputs`` (files and folders the command reads: :func:`check_not_input`) or a
+    folder output is a folder of ``inputs``; then ``inputs`` stay declared for the command
+    (:func:`declare_inputs`), so that every writer refuses them. Devices and pipes may be shared."""
+    scoped = _READS.get() is not None
+    token = None if scoped else _READS.set({"files": {}, "folders": {}})
+    try:
+        declare_inputs(inputs)
+        seen = {}
+        for name, path in outputs.items():
+            if path is None or "://" in str(path):
+                continue
+            target, direct = output_target(path)
+            if direct:
+                continue
+            folder = _READS.get()["folders"].get(os.path.realpath(target))
+            if folder is not None:
+                raise ValueError(f"{name} {path} is the folder {folder} that the command reads: its files would be "
+                                 "mixed with the outputs; write elsewhere")
+            key = file_id(target) or os.path.realpath(target)
+            if key in seen:
+                raise ValueError(f"{seen[key]} and {name} name the same file {path}")
+            seen[key] = name
+            check_not_input(path, name)
+    finally:
+        if token is not None:
+            _READS.reset(token)
 
 
 def temporary_name(path, tag="part"):
@@ -187,11 +340,12 @@ class OutputLock:
         self.path = Path(path)
         self.lock = None
         self._fd = None
-        if is_device(self.path):
+        target, direct = output_target(self.path)
+        if direct:
             return
         import fcntl
 
-        lock = self.path.with_name(f".{self.path.name}.lock")
+        lock = target.with_name(f".{target.name}.lock")  # every name of one file takes the same lock
         for _ in range(20):
             fd = os.open(lock, os.O_CREAT | os.O_RDWR, 0o666)
             try:

@@ -9,7 +9,11 @@ kept under the URL and the server's validators of each file (ETag, Last-Modified
 other filesystems what their ``info`` gives: ETag, modification time, size). The validators are
 asked for again on every use: an unchanged copy is used as it is (:attr:`Remote.cached`), a changed
 file is downloaded again, and a server that gives none is read anew every time. A partial download
-is never used (it goes to a temporary name and is renamed).
+is never used (it goes to a temporary name and is renamed), and a copy is checked before each use
+against the length and SHA-256 recorded when it was downloaded: one cut short, changed or replaced
+(a disk error, another program) is downloaded again, with a note (:attr:`Remote.repaired`). A cache
+that cannot be written (read-only, a file where its folder should be, a full disk) is one error line
+naming it and ``$VISTRACK_CACHE``, which moves it.
 
 The batch engine's workers (:mod:`vistrack.batch.cluster`) need no filesystem in common with the
 client: each fetches a clip given as a URL into its own cache. Errors are :class:`FetchError`, one
@@ -26,60 +30,16 @@ import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .url_files import FetchError, download, is_http, list_files, probe, size_words, url_version
+
 __all__ = ["is_url", "open_url", "open_remote", "fetch", "url_version", "probe", "Remote", "FetchError", "cache_dir",
            "describe_version"]
-
-#: seconds to wait for a server to answer
-TIMEOUT = 60
-#: how vistrack names itself to servers
-AGENT = "vistrack"
-#: the validators of a file, by the names servers and fsspec filesystems give them
-VALIDATORS = {"etag": ("ETag", "etag", "md5Hash"),
-              "last_modified": ("Last-Modified", "LastModified", "last_modified", "updated", "mtime", "created"),
-              "length": ("size", "Content-Length")}
 
 
 def cache_dir():
     """Where fetched videos and clips are kept: ``$VISTRACK_CACHE/clips`` (default
     ``~/.cache/vistrack/clips``)."""
     return Path(os.environ.get("VISTRACK_CACHE", Path.home() / ".cache" / "vistrack")) / "clips"
-
-
-class FetchError(OSError):
-    """A URL could not be read: one sentence naming it and what failed."""
-
-    def __str__(self):
-        return self.args[0] if self.args else ""
-
-
-@dataclass
-class Probe:
-    """What the server says of an HTTP(S) URL: ``status``, ``ranges`` (it answered a range request with
-    206), ``length`` (bytes, or ``None``), ``content_type`` and the validators (:attr:`version`)."""
-
-    url: str
-    status: int
-    ranges: bool
-    length: int | None
-    content_type: str
-    etag: str | None
-    last_modified: str | None
-
-    @property
-    def version(self):
-        """The validators as a dict (``etag``, ``last_modified``, ``length``; those the server gave)."""
-        v = {"etag": self.etag, "last_modified": self.last_modified, "length": self.length}
-        return {k: x for k, x in v.items() if x is not None}
-
-    @property
-    def live(self):
-        """A stream without an end (no length, no ranges: a camera's MJPEG, a live feed)."""
-        return self.length is None and not self.ranges
-
-    @property
-    def listing(self):
-        """An HTML page (a server's folder listing: a clip folder)."""
-        return self.content_type == "text/html"
 
 
 @dataclass
@@ -99,6 +59,9 @@ class Remote:
         The server gave validators to check a copy against (else it is read anew on every use).
     live : bool
         Read as a live stream (the server gives no length and takes no range requests).
+    repaired : str or None
+        Why the cached copy was not used and the file downloaded again (it was cut short or changed
+        since its download), or ``None``.
     """
 
     url: str
@@ -107,6 +70,7 @@ class Remote:
     cached: bool = False
     validated: bool = True
     live: bool = False
+    repaired: str | None = None
 
     def describe(self):
         """One line: how the URL was read (from the server, a fresh download or the cached copy)."""
@@ -117,7 +81,10 @@ class Remote:
                     "nothing is downloaded)")
         what = describe_version(self.version)
         if self.cached:
-            return f"{self.url}: using the cached copy {self.path}, unchanged on the server ({what})"
+            return (f"{self.url}: using the cached copy {self.path}, unchanged on the server ({what}) and as "
+                    "downloaded (its length and SHA-256)")
+        if self.repaired:
+            return f"downloaded {self.url} again into {self.path}: the cached copy {self.repaired}"
         if not self.validated:
             return (f"downloaded {self.url} into {self.path} (the server gives no ETag, Last-Modified or length "
                     "to check a copy against: it is downloaded on every use)")
@@ -142,16 +109,11 @@ def describe_version(version):
             except (KeyError, TypeError, ValueError):
                 pass
         newest = f", the newest Last-Modified {max(dated)[1]}" if dated else ""
-        return f"{len(files)} files, {_size(total)}{newest}"
+        return f"{len(files)} files, {size_words(total)}{newest}"
     parts = [f"ETag {version['etag']}" if "etag" in version else None,
              f"Last-Modified {version['last_modified']}" if "last_modified" in version else None,
-             _size(version["length"]) if "length" in version else None]
+             size_words(version["length"]) if "length" in version else None]
     return ", ".join(p for p in parts if p)
-
-
-def _size(n):
-    n = int(n)
-    return f"{n} bytes" if n < 10_000 else f"{n / 1e3:.0f} kB" if n < 10_000_000 else f"{n / 1e6:.1f} MB"
 
 
 def is_url(path):
@@ -159,160 +121,42 @@ def is_url(path):
     return "://" in str(path)
 
 
-def _is_http(url):
-    return str(url).lower().startswith(("http://", "https://"))
-
-
-def _reason(e):
-    """What failed, in words, for an error of ``urllib``, the socket or a filesystem."""
-    import socket
-    from urllib.error import HTTPError, URLError
-
-    if isinstance(e, HTTPError):
-        return f"the server answered HTTP {e.code} {e.reason}"
-    r = e.reason if isinstance(e, URLError) else e
-    if isinstance(r, ConnectionRefusedError):
-        return "connection refused (no server listening there)"
-    if isinstance(r, socket.gaierror):
-        return "unknown host"
-    if isinstance(r, (TimeoutError, socket.timeout)):
-        return f"no answer within {TIMEOUT} s"
-    if isinstance(r, FileNotFoundError):
-        return "no such file there"
-    if isinstance(r, ConnectionError) or isinstance(e, URLError):
-        return f"the connection failed ({r.strerror if isinstance(r, OSError) and r.strerror else r})"
-    return f"{type(e).__name__}: {e}"
-
-
-def probe(url):
-    """Ask an HTTP(S) server about ``url`` (a ``GET`` of its first byte; nothing more is read): a
-    :class:`Probe`; a :class:`FetchError` naming the URL for a connection that fails or an HTTP error."""
-    from urllib.request import Request, urlopen
-
-    req = Request(url, headers={"Range": "bytes=0-0", "User-Agent": AGENT})
-    try:
-        with urlopen(req, timeout=TIMEOUT) as r:
-            h, status = r.headers, r.status
-    except Exception as e:  # noqa: BLE001 - urllib's and the socket's errors, said in one line
-        raise FetchError(f"cannot read {url}: {_reason(e)}") from None
-    length = None
-    if status == 206 and "/" in h.get("Content-Range", ""):
-        total = h["Content-Range"].rsplit("/", 1)[1]
-        length = int(total) if total.isdigit() else None
-    elif h.get("Content-Length", "").isdigit() and h.get("Content-Encoding", "identity") == "identity":
-        length = int(h["Content-Length"])
-    return Probe(url, status, status == 206, length, h.get("Content-Type", "").partition(";")[0].strip(),
-                 h.get("ETag"), h.get("Last-Modified"))
-
-
-def _fs(url):
-    """``(filesystem, path)`` of an fsspec URL; a :class:`FetchError` for a scheme fsspec lacks."""
-    import fsspec
-
-    try:
-        return fsspec.core.url_to_fs(url)
-    except (ImportError, ValueError) as e:
-        raise FetchError(f"cannot read {url}: {e}") from None
-
-
-def _info_version(info):
-    """The validators in an fsspec ``info`` dict."""
-    out = {}
-    for key, names in VALIDATORS.items():
-        v = next((info[n] for n in names if info.get(n) not in (None, "")), None)
-        if v is not None:
-            out[key] = int(v) if key == "length" else str(v)
-    return out
-
-
-def _files(url):
-    """``{relative name: (file URL, validators)}`` of the file or clip folder at ``url`` (a file: the
-    name ``""``), asking the server for each file's validators."""
-    if _is_http(url):
-        p = probe(url)
-        if not p.listing:
-            return {"": (url, p.version)}
-        fs, root = _fs(url)
-        try:
-            found = fs.find(root)
-        except Exception as e:  # noqa: BLE001 - fsspec's and aiohttp's errors, said in one line
-            raise FetchError(f"cannot list the folder {url}: {type(e).__name__}: {e}") from None
-        base = root.rstrip("/") + "/"
-        names = {f[len(base):] if f.startswith(base) else f.rsplit("/", 1)[-1]: f for f in found}
-        return {n: (f, probe(f).version) for n, f in sorted(names.items()) if n and not n.endswith("/")}
-    fs, root = _fs(url)
-    try:
-        if fs.isdir(root):
-            found = fs.find(root, detail=True)
-            base = root.rstrip("/") + "/"
-            return {f[len(base):]: (f, _info_version(i)) for f, i in sorted(found.items()) if f.startswith(base)}
-        return {"": (root, _info_version(fs.info(root)))}
-    except FileNotFoundError:
-        raise FetchError(f"cannot read {url}: no such file or folder there") from None
-    except FetchError:
-        raise
-    except Exception as e:  # noqa: BLE001 - the filesystem's own errors, said in one line
-        raise FetchError(f"cannot read {url}: {type(e).__name__}: {e}") from None
-
-
-def url_version(url):
-    """The server's validators of the file or clip folder at ``url`` now (what :func:`fetch` checks
-    a cached copy against): a file's ``{etag, last_modified, length}``, a folder's ``{"files":
-    {name: validators}}``."""
-    files = _files(str(url).rstrip("/") if not _is_http(url) else str(url))
-    return files[""][1] if list(files) == [""] else {"files": {n: v for n, (_, v) in files.items()}}
-
-
-def _download(url, source, dest, length, bar):
-    """Copy one file, ``source`` (an HTTP URL, or a path on ``url``'s fsspec filesystem), to ``dest``,
-    advancing the progress bar ``bar``: a :class:`FetchError` naming it where the server or the
-    connection fails or the copy falls short of ``length``; an error writing ``dest`` as it is."""
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        if _is_http(source):
-            from urllib.request import Request, urlopen
-
-            src = urlopen(Request(source, headers={"User-Agent": AGENT}), timeout=TIMEOUT)
-        else:
-            src = _fs(url)[0].open(source, "rb")
-    except FetchError:
-        raise
-    except Exception as e:  # noqa: BLE001 - the server's, the socket's or the filesystem's, in one line
-        raise FetchError(f"cannot download {source}: {_reason(e)}") from None
-    got = 0
-    with src, open(dest, "wb") as f:
-        while True:
-            try:
-                chunk = src.read(1 << 20)
-            except Exception as e:  # noqa: BLE001 - a connection cut mid-way
-                raise FetchError(f"cannot download {source}: {_reason(e)} after {_size(got)}") from None
-            if not chunk:
-                break
-            f.write(chunk)
-            got += len(chunk)
-            bar.update(len(chunk))
-    if length is not None and got != length:
-        raise FetchError(f"cannot download {source}: the connection ended after {got} of its {length} bytes")
-
-
 def fetch(url, cache=None, progress=False):
     """A local copy of the file or clip folder at ``url`` (:class:`Remote`), from the cache when the
-    server's validators are those of the cached copy, else downloaded (``progress``: a progress bar
-    on stderr) into a temporary folder and renamed into the cache, the URL's older copies removed."""
+    server's validators are those of the cached copy and the copy is as it was downloaded
+    (:func:`_damaged`), else downloaded (``progress``: a progress bar on stderr) into a temporary folder
+    and renamed into the cache, the URL's older copies removed. A cache that cannot be written is a
+    :class:`FetchError` naming it (:func:`_cache_error`)."""
     s = str(url)
     name = s.rstrip("/").rsplit("/", 1)[-1].split("?", 1)[0] or "clip"
-    files = _files(s if _is_http(s) else s.rstrip("/"))
+    files = list_files(s if is_http(s) else s.rstrip("/"))
     if not files:
         raise FetchError(f"cannot read {s}: a folder that lists no files")
     single = list(files) == [""]
     version = files[""][1] if single else {"files": {n: v for n, (_, v) in files.items()}}
     validated = all(v for _, v in files.values())
-    home = Path(cache or cache_dir()) / hashlib.sha256(s.encode()).hexdigest()[:16]
+    root = Path(cache or cache_dir())
+    home = root / hashlib.sha256(s.encode()).hexdigest()[:16]
     key = hashlib.sha256(json.dumps(version, sort_keys=True).encode()).hexdigest()[:12] if validated else \
         f"unvalidated-{uuid.uuid4().hex[:12]}"
     dest = home / key / name
-    if validated and dest.exists():
+    repaired = _damaged(home / key, name, files) if validated and (home / key).exists() else None
+    if validated and dest.exists() and repaired is None:
         return Remote(s, dest, version, cached=True)
+    try:
+        if repaired is not None:
+            shutil.rmtree(home / key)
+        _download_all(s, name, files, version, home, key, progress)
+    except FetchError:
+        raise
+    except OSError as e:
+        raise _cache_error(root, e) from None
+    return Remote(s, dest, version, cached=False, validated=validated, repaired=repaired)
+
+
+def _download_all(url, name, files, version, home, key, progress):
+    """Download ``files`` (:func:`_files`) into ``home/key/name`` through a temporary folder, with their
+    lengths and SHA-256 in ``home/key/version.json``; the URL's older copies removed."""
     tmp = home / f".{key}.partial-{os.getpid()}-{uuid.uuid4().hex[:6]}"
     from tqdm import tqdm
 
@@ -321,27 +165,65 @@ def fetch(url, cache=None, progress=False):
         with tqdm(total=total, unit="B", unit_scale=True, desc=f"downloading {name}", disable=not progress,
                   leave=False) as bar:
             for rel, (src, v) in files.items():
-                _download(s, src, tmp / name / rel if rel else tmp / name, v.get("length"), bar)
+                download(url, src, tmp / name / rel if rel else tmp / name, v.get("length"), bar)
         tmp.mkdir(parents=True, exist_ok=True)
-        (tmp / "version.json").write_text(json.dumps({"url": s, "version": version}, indent=1))
+        content = {rel: _content(tmp / name / rel if rel else tmp / name) for rel in files}
+        (tmp / "version.json").write_text(json.dumps({"url": url, "version": version, "content": content}, indent=1))
         try:
             os.replace(tmp, home / key)
         except OSError:
-            if not dest.exists():  # else another process fetched the same version first: theirs is as good
+            if not (home / key / name).exists():  # else another process fetched the same version first
                 raise
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     for old in home.iterdir():  # the URL's older copies (a version the server no longer has)
         if old.name != key and not old.name.startswith("."):
             shutil.rmtree(old, ignore_errors=True)
-    return Remote(s, dest, version, cached=False, validated=validated)
+
+
+def _content(path):
+    """``{"bytes", "sha256"}`` of a downloaded file."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return {"bytes": os.path.getsize(path), "sha256": h.hexdigest()}
+
+
+def _damaged(copy, name, files):
+    """Why the cached copy in folder ``copy`` is not as it was downloaded (a file missing, not a file,
+    cut short or grown, its content changed; a record without the content: an older vistrack's copy),
+    or ``None`` when every file's length and SHA-256 are those recorded."""
+    try:
+        recorded = json.loads((copy / "version.json").read_text()).get("content")
+    except (OSError, ValueError, AttributeError):
+        recorded = None
+    if not isinstance(recorded, dict) or set(recorded) != set(files):
+        return "had no record of its content to check it against"
+    for rel, want in recorded.items():
+        f = copy / name / rel if rel else copy / name
+        shown = f"{name}/{rel}" if rel else name
+        if not f.is_file():
+            return f"lost {shown} (or it is not a file any more)"
+        if os.path.getsize(f) != want.get("bytes"):
+            return f"held {os.path.getsize(f)} bytes of {shown}, not the {want.get('bytes')} downloaded"
+        if _content(f)["sha256"] != want.get("sha256"):
+            return f"held {shown} changed since its download (another SHA-256)"
+    return None
+
+
+def _cache_error(root, e):
+    """The :class:`FetchError` of a cache that cannot be written: what, where and how to move it."""
+    where = e.filename or root
+    return FetchError(f"cannot write the download cache {root} ({e.strerror or e}: {where}); free space there, "
+                      "or set VISTRACK_CACHE to a writable folder to keep downloads elsewhere")
 
 
 def open_url(url, cache=None, progress=False):
     """How to read the video file or clip folder at ``url``: a :class:`Remote` whose ``path`` is
     ``None`` where FFmpeg reads the server itself (an HTTP(S) file whose server takes range requests,
     or a live stream: no length), else a local copy (:func:`fetch`)."""
-    if _is_http(url):
+    if is_http(url):
         p = probe(url)
         if not p.listing and (p.ranges or p.live):
             return Remote(url, None, p.version, live=p.live)

@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .numbers import parse_float
+
 __all__ = ["FORMATS", "ORIGIN", "result_paths", "format_line", "find_result_file", "read_result_file"]
 
 FORMATS = ("otb", "got10k", "vot")
@@ -73,7 +75,7 @@ def read_result_file(path, fmt):
             if not parts:
                 continue
             try:
-                v = np.array([float(p) for p in parts])
+                v = np.array([parse_float(p) for p in parts])
             except ValueError:
                 raise ValueError(f"{path}, line {k}: expected numbers, got {line.strip()[:60]!r}") from None
             if len(v) == 1 and fmt == "vot":

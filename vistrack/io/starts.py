@@ -12,8 +12,8 @@ import numpy as np
 from .clips import read_groundtruth_csv
 from .video import VideoError, find_groundtruth, groundtruth_origin, read_rects
 
-__all__ = ["MAX_BOX_FACTOR", "initial_truth", "start_frame", "check_start_box", "first_frame", "start_box",
-           "one_based_init_note"]
+__all__ = ["MAX_BOX_FACTOR", "initial_truth", "start_frame", "check_start_box", "start_box_problem", "first_frame",
+           "start_box", "one_based_init_note"]
 
 
 def initial_truth(clip, init_gt):
@@ -28,6 +28,9 @@ def initial_truth(clip, init_gt):
             raise VideoError(f"--init-gt: {clip.folder} has no groundtruth.csv or groundtruth_rect.txt; "
                              "give a file (--init-gt FILE) or a box (--init x,y,w,h)")
     else:
+        if "://" in str(init_gt):
+            raise VideoError(f"--init-gt {init_gt}: a URL; give a local ground-truth file, or --init-gt alone for "
+                             "the clip's own (a clip given as a URL brings its ground truth)")
         p = Path(init_gt)
         if p.is_dir():
             raise VideoError(f"--init-gt: {p} is a folder; give a ground-truth file (groundtruth.csv, or x,y,w,h "
@@ -77,23 +80,37 @@ MAX_BOX_FACTOR = 2
 
 
 def check_start_box(box, size, what="--init box"):
-    """Raise :class:`VideoError` unless ``box`` ``(x, y, w, h)`` is one to start tracking from in
-    a frame of ``size`` ``(width, height)``: finite, at least 2 px wide and high, at least 2 px of it
-    inside the frame each way, and at most :data:`MAX_BOX_FACTOR` times the frame's width and height."""
+    """Raise :class:`VideoError` unless ``box`` ``(x, y, w, h)`` is one to start tracking from in a frame of
+    ``size`` ``(width, height)`` (:func:`start_box_problem`)."""
+    problem = start_box_problem(box, size, what)
+    if problem:
+        raise VideoError(problem[1])
+
+
+def start_box_problem(box, size, what="--init box"):
+    """``None`` where ``box`` ``(x, y, w, h)`` is one to start tracking from in a frame of ``size``
+    ``(width, height)``: finite numbers and a positive size, at most :data:`MAX_BOX_FACTOR` times the frame's
+    width and height, at least 2 px wide and high, its centre in the frame (else the tracker would report
+    the object out of frame from the start) and 2 px of it inside each way; else ``(kind, line)``, the first
+    check it fails (``"numbers"``, ``"size"`` or ``"outside"``) and the one line that refuses it."""
     fw, fh = size
     x, y, w, h = (float(v) for v in box)
-    text = f"{x:.6g},{y:.6g},{w:.6g},{h:.6g}"
+    text, cx, cy = f"{x:.6g},{y:.6g},{w:.6g},{h:.6g}", x + w / 2, y + h / 2
     if not all(np.isfinite([x, y, w, h])) or w <= 0 or h <= 0:
-        raise VideoError(f"{what} {text} needs finite numbers and a positive size (width and height)")
+        return "numbers", f"{what} {text} needs finite numbers and a positive size (width and height)"
     if w > MAX_BOX_FACTOR * fw or h > MAX_BOX_FACTOR * fh:
-        raise VideoError(f"{what} {text} is far larger than the {fw}x{fh} frame (at most {MAX_BOX_FACTOR} times "
-                         "its width and height): give the object's box")
+        return "size", (f"{what} {text} is far larger than the {fw}x{fh} frame (at most {MAX_BOX_FACTOR} times its "
+                        "width and height): give the object's box")
     if w < 2 or h < 2:
-        raise VideoError(f"{what} {text} is smaller than 2 px ({w:.6g}x{h:.6g}): give a box of at least 2x2 px "
-                         "on the object")
+        return "size", (f"{what} {text} is smaller than 2 px ({w:.6g}x{h:.6g}): give a box of at least 2x2 px on "
+                        "the object")
+    if not (0 <= cx < fw and 0 <= cy < fh):
+        return "outside", (f"{what} {text} lies outside the {fw}x{fh} frame (its centre {cx:.6g},{cy:.6g} is not in "
+                           "it): give a box on the object")
     if min(x + w, fw) - max(x, 0) < 2 or min(y + h, fh) - max(y, 0) < 2:
-        raise VideoError(f"{what} {text} lies outside the {fw}x{fh} frame (less than 2 px of it inside): "
-                         "give a box on the object")
+        return "outside", (f"{what} {text} lies outside the {fw}x{fh} frame (less than 2 px of it inside): give a "
+                           "box on the object")
+    return None
 
 
 def first_frame(clip, index=0):
@@ -101,7 +118,7 @@ def first_frame(clip, index=0):
     for i, frame in clip.source:
         if i >= index:
             return frame
-    raise VideoError(f"{clip.source.path}: no frame could be decoded" + (f" from frame {index} on" if index else ""))
+    raise VideoError(f"{clip.source.shown}: no frame could be decoded" + (f" from frame {index} on" if index else ""))
 
 
 def start_box(clip, init, init_gt):

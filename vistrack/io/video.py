@@ -21,38 +21,45 @@ from __future__ import annotations
 
 import os
 import warnings
+from contextlib import contextmanager
 from pathlib import Path
 
 import cv2
 import numpy as np
 
+from .clip_files import (  # the names' home; find_groundtruth, groundtruth_origin re-exported (__all__)
+    FRAME_FOLDERS,
+    IMAGE_EXT,
+    TEXT_EXT,
+    VIDEO_EXT,
+    find_groundtruth,
+    groundtruth_origin,
+)
+from .numbers import parse_float
+from .video_errors import FrameOrderWarning, VideoDecodeWarning, VideoError, quoted
+from .video_writer import VideoWriter  # the writer's home; re-exported (__all__)
+
 # FFmpeg's own lines for a damaged stream ("header damaged", one per packet) are noise: a skipped
 # frame is counted and reported once (VideoDecodeWarning). Read when the first capture opens.
 os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
 
-__all__ = ["is_stream",
-    "VideoError",
-    "VideoDecodeWarning",
-    "FrameOrderWarning",
-    "natural_key",
-    "read_text_lines",
-    "VideoSource",
-    "open_video",
-    "VideoWriter",
-    "read_rects",
-    "find_groundtruth",
-    "groundtruth_origin",
-    "prefetch",
-]
-
-IMAGE_EXT = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".ppm", ".pgm"}
-VIDEO_EXT = {".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"}
-#: files FFmpeg's text/data demuxers would "decode", which are never videos here
-TEXT_EXT = {".txt", ".csv", ".json", ".md", ".rst", ".xml", ".yaml", ".yml", ".log", ".py", ".html", ".srt"}
+__all__ = ["is_stream", "VideoError", "VideoDecodeWarning", "FrameOrderWarning", "natural_key", "read_text_lines",
+           "VideoSource", "open_video", "VideoWriter", "read_rects", "find_groundtruth", "groundtruth_origin",
+           "prefetch"]
 
 
-from .video_errors import FrameOrderWarning, VideoDecodeWarning, VideoError, quoted  # noqa: E402
-from .video_writer import CONTAINERS, VideoWriter  # noqa: E402,F401  (the writer's home; re-exported)
+@contextmanager
+def _opencv_quiet(on=True):
+    """OpenCV's own log lines (``[ WARN:0] ... can't open camera by index``) left out within the block
+    (``on``); the level is restored after."""
+    level = cv2.utils.logging.getLogLevel() if on else None
+    if on:
+        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+    try:
+        yield
+    finally:
+        if on:
+            cv2.utils.logging.setLogLevel(level)
 
 
 class VideoSource:
@@ -61,6 +68,8 @@ class VideoSource:
     Attributes
     ----------
     path : Path
+    shown : str
+        How messages name it: the path, or a URL or stream as given (never ``http:/``).
     frame_count : int or None
         Number of frames if the container says (always known for image folders).
     fps : float
@@ -71,6 +80,7 @@ class VideoSource:
 
     def __init__(self, path, *, _images=None, remote=None):
         self.path = Path(path)
+        self.shown = str(path) if is_stream(path) or "://" in str(path) else str(self.path)
         self._images = _images
         #: how a URL was read (:class:`~vistrack.io.remote.Remote`), or ``None``
         self.remote = remote
@@ -90,7 +100,8 @@ class VideoSource:
             self.fps = 30.0
             self.size = (first.shape[1], first.shape[0])
             return
-        cap = cv2.VideoCapture(self._open_arg)
+        with _opencv_quiet(isinstance(self._open_arg, int)):  # no camera: the one error line below, not OpenCV's
+            cap = cv2.VideoCapture(self._open_arg)
         try:
             ok, frame = cap.read() if cap.isOpened() else (False, None)
             if not ok or frame is None:
@@ -249,7 +260,7 @@ def open_video(path):
         if p.suffix.lower() in TEXT_EXT:
             raise VideoError(f"{p} is a {p.suffix} file, not a video (FFmpeg would render its text as frames)")
         return VideoSource(p)
-    for sub in ("img", "color"):
+    for sub in FRAME_FOLDERS:
         if (p / sub).is_dir() and _image_files(p / sub):
             return VideoSource(p, _images=_image_files(p / sub))
     if (p / "video.mp4").is_file():
@@ -262,7 +273,11 @@ def open_video(path):
         return VideoSource(p, _images=images)
     if len(videos) > 1:
         raise VideoError(f"{p} holds several videos ({', '.join(v.name for v in videos)}); name one")
-    raise VideoError(f"{p} holds no video and no images")
+    others = sorted({q.suffix.lower() for d in (p, *(p / f for f in FRAME_FOLDERS)) if d.is_dir() for q in d.iterdir()
+                     if q.suffix})
+    raise VideoError(f"{p} holds no video and no images (in the folder, img/ or color/: images "
+                     f"{', '.join(sorted(IMAGE_EXT))}; videos {', '.join(sorted(VIDEO_EXT))})"
+                     + (f"; it holds {', '.join(others[:5])} files" if others else ""))
 
 
 def read_rects(path, origin=0):
@@ -282,7 +297,7 @@ def read_rects(path, origin=0):
             continue
         parts = line.replace(",", " ").replace("\t", " ").split()
         try:
-            v = np.array([float(x) for x in parts])
+            v = np.array([parse_float(x) for x in parts])
         except ValueError:
             raise VideoError(f"{path}, line {k}: expected numbers (x,y,w,h or a 4-corner polygon), "
                              f"got {quoted(line)}") from None
@@ -318,34 +333,6 @@ def read_text_lines(path):
         raise VideoError(f"{path} is a folder, not a text file") from None
 
 
-#: ground-truth files by dataset layout: (file name, coordinate origin)
-GROUNDTRUTH_FILES = (("groundtruth_rect.txt", None), ("groundtruth.txt", None))
-
-
-def groundtruth_origin(gt_path):
-    """Pixel origin of a ground-truth file by its dataset's layout: 1 for OTB (``img/`` and
-    ``groundtruth_rect.txt``) and LaSOT (``img/`` and ``groundtruth.txt`` beside ``full_occlusion.txt``),
-    else 0 (VOT, GOT-10k, vistrack's own and other clips)."""
-    p = Path(gt_path)
-    img = (p.parent / "img").is_dir()
-    if p.name == "groundtruth_rect.txt" and img:
-        return 1
-    if p.name == "groundtruth.txt" and img and (p.parent / "full_occlusion.txt").is_file():
-        return 1
-    return 0
-
-
-def find_groundtruth(path):
-    """The box ground truth beside a video or in a clip folder — ``groundtruth_rect.txt`` (OTB)
-    or ``groundtruth.txt`` (VOT, GOT-10k, LaSOT) — or ``None``."""
-    p = Path(path)
-    folder = p if p.is_dir() else p.parent
-    for name, _ in GROUNDTRUTH_FILES:
-        if (folder / name).is_file():
-            return folder / name
-    return None
-
-
 def prefetch(frames, size=8):
     """The items of ``frames`` (e.g. a :class:`VideoSource`), decoded ahead in a background thread
     into a queue of at most ``size``: decoding overlaps tracking (OpenCV releases the GIL while it
@@ -370,7 +357,7 @@ def prefetch(frames, size=8):
                 if stop.is_set():
                     return
             q.put(("end", done))
-        except BaseException as e:  # handed to the consumer
+        except BaseException as e:  # noqa: BLE001 - handed to the consumer, which raises it
             q.put(("error", e))
 
     t = threading.Thread(target=work, name="vistrack-decode", daemon=True)

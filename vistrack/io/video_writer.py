@@ -60,9 +60,13 @@ class VideoWriter:
     """
 
     def __init__(self, path, fps, size, codec="mp4v", atomic=False, what=None):
-        from .outputs import OutputLock, is_device, temporary_name
+        from .outputs import OutputLock, check_not_input, output_target, temporary_name
 
         self.path = Path(path)
+        self.what = what or ("annotated video" if atomic else "video")
+        check_not_input(self.path, self.what)
+        # a link is written through to its file; a device or pipe (/dev/null, /dev/stdout) in place
+        self._target, direct = output_target(self.path)
         if not self.path.parent.is_dir():
             raise VideoError(f"cannot write {self.path}: folder {self.path.parent} does not exist")
         if codec not in ("mp4v", "h264", "auto"):
@@ -73,22 +77,22 @@ class VideoWriter:
         self._av = None
         # the container by the name's last known suffix (``a.mp4``, or a temporary ``a.mp4.part-7``)
         suffix = next((x for x in reversed([x.lower() for x in self.path.suffixes]) if x in CONTAINERS), "")
-        self.container = suffix = suffix or (".mp4" if is_device(self.path) else "")  # /dev/null: anything goes
+        self.container = suffix = suffix or (".mp4" if direct else "")  # /dev/null: anything goes
         if suffix not in CONTAINERS:
             raise VideoError(f"cannot write a video to {self.path}: give a file name ending in "
                              f"{', '.join(CONTAINERS)}")
         self._w = _Closed()
-        self.what = what or ("annotated video" if atomic else "video")
         self._error = None  # the first write that failed: close() then discards the file
         self._complete = True  # False: the run failed (abandon)
         # atomic: written under a temporary name of its own, renamed over ``path`` by close(); one live writer
-        self._lock = OutputLock(self.path, self.what) if atomic else _NoLock()
+        self._lock = OutputLock(self._target, self.what) if atomic else _NoLock()
         self._final = self.path
-        self._earlier = self.path.is_file()
-        self._atomic = atomic and not is_device(self.path)
+        self._earlier = self._target.is_file()
+        self._atomic = atomic and not direct
+        self._device = direct
         try:
             if self._atomic:
-                self.path = temporary_name(self.path)
+                self.path = temporary_name(self._target)
             self._open(fps, codec)
         except OSError as e:  # the temporary file or the container could not be created (a full disk)
             self._discard()
@@ -115,7 +119,7 @@ class VideoWriter:
                 self._open_h264(fps)
                 self.codec = "h264"
                 return
-            except Exception as e:  # PyAV missing, or FFmpeg without an H.264 encoder
+            except Exception as e:  # noqa: BLE001 - PyAV missing, or FFmpeg without an H.264 encoder
                 if codec == "h264":
                     raise VideoError(f"cannot write H.264 to {self._final}: {e}") from None
                 self.note = (f"H.264 not available ({type(e).__name__}: {e}); wrote MPEG-4 Part 2 (mp4v), which "
@@ -129,7 +133,7 @@ class VideoWriter:
     def _open_h264(self, fps):
         from fractions import Fraction
 
-        import av  # noqa: PLC0415  (optional: PyAV)
+        import av  # optional: PyAV
 
         # the index (moov) first, so that a browser plays the file while it loads
         fmt = {".mp4": "mp4", ".m4v": "mp4", ".mov": "mov", ".mkv": "matroska"}[self.container]
@@ -187,7 +191,7 @@ class VideoWriter:
             try:
                 self._finish()
                 if error is None and self.frames and self.path != self._final and not keep_earlier:
-                    os.replace(self.path, self._final)
+                    os.replace(self.path, self._target)
             except Exception as e:  # noqa: BLE001 - any failure to flush, close or rename: the file is not whole
                 error = error or e
         finally:
@@ -216,12 +220,6 @@ class VideoWriter:
         finally:
             container.close()
 
-    @property
-    def _device(self):
-        from .outputs import is_device
-
-        return is_device(self._final)
-
     def _failure(self, cause):
         """The error of a failed write: :class:`~vistrack.io.outputs.OutputError` naming the
         output and the cause (a device: its own error)."""
@@ -243,7 +241,7 @@ class VideoWriter:
         self.abandon()
         try:
             self.close()
-        except Exception:  # noqa: BLE001
+        except Exception:  # noqa: BLE001 - the error that ended the run is the one to raise
             pass
 
 

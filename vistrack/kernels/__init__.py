@@ -2,7 +2,7 @@
 
 Each kernel computes what a numpy path of a model computes — the same samples, the same
 arithmetic in the same order where that can be had, so that tracks stay identical — and is
-tested against it (``tests/test_kernels.py``, which states each tolerance). The numpy paths stay
+tested against it (``tests/kernels/test_kernels.py``, which states each tolerance). The numpy paths stay
 as the reference and as the fallback where numba is missing:
 
 - :mod:`~vistrack.kernels.sampling`: bilinear samples exactly as ``cv2.remap`` (``INTER_LINEAR``,
@@ -36,11 +36,12 @@ from contextlib import contextmanager
 __all__ = ["AVAILABLE", "use", "numpy_paths"]
 
 try:
-    import numba  # noqa: F401
-
-    AVAILABLE = True
+    import numba
 except ImportError:  # pragma: no cover - numba is a dependency; the numpy paths still work
-    AVAILABLE = False
+    numba = None
+
+#: whether numba can be imported (the kernels can be compiled)
+AVAILABLE = numba is not None
 
 _state = {"on": AVAILABLE and os.environ.get("VISTRACK_NUMBA", "1") != "0"}
 

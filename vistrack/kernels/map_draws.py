@@ -6,7 +6,7 @@
   map (``exp`` of the tempered scores) read as ``cv2.remap`` reads it, over each row's maximum and
   floored, the cell drawn by inversion of the cumulative ``q g`` in the linear domain (no
   ``log``/``exp`` per cell), the point in its cell, ``log alpha`` and ``log q``
-  (``tests/test_kernels_box.py`` compares them with the numpy path).
+  (``tests/models/box/test_kernels_box.py`` compares them with the numpy path).
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ the 1-D weights ``(1 - a, a)``, ``a`` a multiple of 1/32 (so the weights are exa
 ``((p00 w00 + p01 w01) + p10 w10) + p11 w11`` in float32. With ``BORDER_CONSTANT`` a point whose
 four pixels all lie outside the image is the border value, and a pixel outside the image counts
 as the border value. :func:`corner` and :func:`lerp4` do exactly that, so a kernel's samples are
-``cv2.remap``'s bit for bit (``tests/test_kernels.py``). A point with a NaN or infinite coordinate
+``cv2.remap``'s bit for bit (``tests/kernels/test_kernels.py``). A point with a NaN or infinite coordinate
 is NaN in a 1-, 3- or 4-channel image and the border value in a 2-channel one (OpenCV 5's
 paths differ there); ``lerp4`` returns its ``nonfinite`` argument for it.
 

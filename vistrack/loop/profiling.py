@@ -25,7 +25,7 @@ from ..models.protocol import (
     offers,
 )
 
-__all__ = ["Timer", "STAGES", "profile_stages"]
+__all__ = ["Timer", "STAGES", "instrument"]
 
 STAGES = ("decode", "features", "likelihood", "proposal", "resampling", "adapt")
 
@@ -91,7 +91,7 @@ _MAP_PARTS = ("gradient", "colour_labels", "integral")
 
 
 @contextmanager
-def profile_stages(model, filt, timer):
+def instrument(model, filt, timer):
     """Within the block, time ``model``'s and ``filt``'s stages (module docstring) into ``timer``.
 
     The methods are wrapped on their classes (the model's, its proposal's and

@@ -19,7 +19,7 @@ from ..models.protocol import Redetects, VideoModel, offers, require
 from ..registry import make_filter
 from ..scoring.metrics import best_ms
 
-__all__ = ["FrameResult", "FrameStepper", "step_frames", "top_particles", "warm_up", "ms_per_frame"]
+__all__ = ["FrameResult", "Stepper", "top_particles", "warm_up", "filter_ms"]
 
 
 @dataclass
@@ -76,11 +76,11 @@ def top_particles(particles, k):
     return particles.states[idx]
 
 
-class FrameStepper:
+class Stepper:
     """One filter step per frame: frame -> feature maps -> observation -> step -> estimate.
 
-    The one loop body behind :func:`step_frames`, ``vistrack run``, ``eval`` and
-    :class:`vistrack.Tracker`. The first frame observes ``X_1 ~ p_0``
+    The one loop body behind ``vistrack run``, ``eval``, the reproductions and :class:`vistrack.Tracker`:
+    :meth:`step` one frame, :meth:`steps` over frames. The first frame observes ``X_1 ~ p_0``
     (``filt.first_step``). The model is a
     :class:`~vistrack.models.protocol.VideoModel`: ``observe(maps, previous_particles)``
     turns each frame's maps into its observation ``Y_t`` (the maps themselves by default;
@@ -131,6 +131,12 @@ class FrameStepper:
         return FrameResult(index, frame, self.particles, est, ms, maps, obs, reason, detail, targets, redetected,
                            conf)
 
+    def steps(self, frames):
+        """:meth:`step` over ``frames`` (an iterable of ``(index, BGR frame)``): yields a :class:`FrameResult`
+        per frame."""
+        for i, frame in frames:
+            yield self.step(i, frame)
+
 
 def warm_up(filt, n, frame):
     """Run ``filt``'s first step and one more step with ``n`` particles on a blank frame shaped like
@@ -166,22 +172,12 @@ def warm_up(filt, n, frame):
             pass
 
 
-def step_frames(frames, filt, n, rng, *, estimator=None):
-    """Run ``filt`` with ``n`` particles over ``frames`` (an iterable of ``(index, BGR frame)``).
-
-    Yields a :class:`FrameResult` per frame (:class:`FrameStepper`).
-    """
-    stepper = FrameStepper(filt, n, rng, estimator=estimator)
-    for i, frame in frames:
-        yield stepper.step(i, frame)
-
-
-def ms_per_frame(frames, model, algo, n, repeats=2):
+def filter_ms(frames, model, algo, n, repeats=2):
     """The time per frame (ms) of filter ``algo`` with ``n`` particles tracking ``frames`` (a list of
     ``(index, frame)``) on ``model``: a new filter each run from seed 0, the best of ``repeats``
     (:func:`~vistrack.scoring.metrics.best_ms`); what equal-time comparisons measure."""
     def run():
-        for _ in step_frames(frames, make_filter(algo, model), n, np.random.default_rng(0)):
+        for _ in Stepper(make_filter(algo, model), n, np.random.default_rng(0)).steps(frames):
             pass
 
     return best_ms(run, repeats) / len(frames)

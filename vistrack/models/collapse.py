@@ -1,6 +1,6 @@
 """When a track has lost its object: the collapse test behind ``visible=0`` and ``lost_reason``.
 
-The frame loop (:class:`~vistrack.loop.stepper.FrameStepper`) asks the model once per frame,
+The frame loop (:class:`~vistrack.loop.stepper.Stepper`) asks the model once per frame,
 in order, :meth:`check_lost(obs, estimate) <CollapseCheck.check_lost>`; the answer is the
 track CSV's ``visible`` and ``lost_reason`` columns and what ``vistrack run`` says when it
 loses the object. A model whose estimate collapses is reported lost with one of
@@ -33,15 +33,13 @@ from collections import deque
 
 import numpy as np
 
+from ..io.track_files import LOST_REASONS
+
 __all__ = ["REASONS", "CollapseWatch", "CollapseCheck"]
 
-#: ``lost_reason`` codes (the track CSV's column) and what they mean
-REASONS = {
-    "low-confidence": "the estimate's confidence fell below the model's threshold",
-    "collapse": "the estimate's scale fell below the floor, or log r there far below its running level",
-    "out-of-frame": "the estimate's centre left the frame",
-    "not found": "the model's own test found no object at the estimate",
-}
+#: the ``lost_reason`` codes a model's verdict gives (the track CSV's column) and what they mean: those of
+#: :data:`vistrack.io.track_files.LOST_REASONS`, the one list, that are not about frames left untracked
+REASONS = {k: LOST_REASONS[k] for k in ("low-confidence", "collapse", "out-of-frame", "not found")}
 
 
 class CollapseWatch:

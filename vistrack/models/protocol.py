@@ -35,7 +35,7 @@ from typing import Protocol, runtime_checkable
 
 # the checks and the optional hooks live in the core (proposals and filters use them without
 # importing the models); re-exported here, with every protocol of the models
-from ..core.hooks import FusedLISStep, FusedPropose, LookAhead, ProposalMap, Redetects, missing_parts, offers, require  # noqa: F401
+from ..core.hooks import FusedLISStep, FusedPropose, LookAhead, ProposalMap, Redetects, missing_parts, offers, require
 
 __all__ = ["StateSpaceModel", "PredictMean", "LocalSearch", "LearnedSearch", "LocalMoves", "LLSModel", "GridLikelihood",
            "LISModel", "Births", "ReservedLineages", "LaplaceModel", "EISModel", "SIRModel", "InnovationSplit",

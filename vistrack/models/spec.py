@@ -78,6 +78,15 @@ class ModelSpec:
         algorithms are listed under (``condensation`` on the thesis's models, ``pf-gordon`` on the paper's).
     options : tuple of ModelOption
         Its builder's options that ``run`` sets (with their flags).
+    summary : callable or None
+        ``summary(rows, truth, model) -> str or None``: ``run``'s line against ground truth of the model's
+        own kind (the plate's vertices, the landmarks), from the track rows and the ground truth's
+        columns; ``None`` (or ``None`` returned, where the truth has no such columns): the box scores of
+        :mod:`vistrack.session.run_summary`, as ``eval`` scores a task.
+    passes_on : tuple of type
+        Classes its model passes keyword options on to (the box model's ``**appearance`` to
+        :class:`~vistrack.appearance.cues.Appearance`): their documented parameters are options of the model
+        too, each checked against its declared type and range (:mod:`vistrack.registry.option_types`).
     """
 
     name: str
@@ -93,6 +102,8 @@ class ModelSpec:
     targets_class: type | None = None
     seed: str = "001"
     options: tuple = ()
+    summary: Callable | None = None
+    passes_on: tuple = ()
 
     @property
     def default_algo(self):

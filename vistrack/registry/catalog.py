@@ -8,7 +8,8 @@ filter registry (:data:`~vistrack.registry.filter_specs.FILTERS`) whose protocol
 (:func:`~vistrack.registry.filter_specs.runs_on`), in that registry's order, so the first is the model's
 default. Adding a model is its module plus one :func:`register` call; each built-in model's entry is
 its package's ``builder.SPEC`` (:mod:`vistrack.models.box.builder`, :mod:`~vistrack.models.contour.builder`,
-:mod:`~vistrack.models.plate.builder`, :mod:`~vistrack.models.landmarks.builder`).
+:mod:`~vistrack.models.plate.builder`, :mod:`~vistrack.models.landmarks.builder`). The plate family's layouts
+(:data:`LAYOUTS`) are listed here too: the choices of every ``--layout``.
 """
 
 from __future__ import annotations
@@ -19,13 +20,16 @@ from ..models.box.builder import SPEC as BOX
 from ..models.contour.builder import SPEC as CONTOUR
 from ..models.landmarks.builder import SPEC as LANDMARKS
 from ..models.plate.builder import SPEC as PLATE
+from ..models.plate.layout import LAYOUTS  # the plate layouts by name: --layout's choices, listed here
 from ..models.spec import ModelSpec
 from ..system.resources import check_memory
 from .filter_specs import FILTERS, get_filter_spec, runs_on
+from .option_types import check_model_options
 
-__all__ = ["ModelSpec", "MODELS", "DEFAULT_MODEL", "SEARCH_MODEL", "DEFAULT_PARTICLES", "BASELINE", "OptionError",
-           "default_comparison", "check_particle_memory", "register", "get_model_spec", "algos_for",
-           "all_algos", "check_algo", "clip_model", "model_params", "derived_algos"]
+__all__ = ["ModelSpec", "MODELS", "LAYOUTS", "DEFAULT_MODEL", "SEARCH_MODEL", "DEFAULT_PARTICLES", "REFERENCE_ALGO",
+           "OptionError", "default_comparison", "check_particle_memory", "register", "get_model_spec", "algos_for",
+           "all_algos", "check_algo", "clip_model", "model_params", "derived_algos", "targets_model",
+           "run_option"]
 
 #: the model ``run``, ``eval``, ``demo``, ``trax`` and ``vistrack.Tracker`` use when neither the user
 #: nor the clip (its ``meta.json``) names one: any object, from a box
@@ -37,7 +41,7 @@ SEARCH_MODEL = "plate"
 DEFAULT_PARTICLES = 100
 #: the filter a comparison measures the others against by default (``eval --algos``): the bootstrap
 #: filter (thesis 001 §2.6)
-BASELINE = "bootstrap"
+REFERENCE_ALGO = "bootstrap"
 
 
 class OptionError(ValueError):
@@ -116,8 +120,14 @@ def check_algo(name, algo, targets=False, who=None):
 
 
 def default_comparison():
-    """The algorithms ``eval`` compares by default: the default model's default, then :data:`BASELINE`."""
-    return (get_model_spec(DEFAULT_MODEL).default_algo, BASELINE)
+    """The algorithms ``eval`` compares by default: the default model's default, then :data:`REFERENCE_ALGO`."""
+    return (get_model_spec(DEFAULT_MODEL).default_algo, REFERENCE_ALGO)
+
+
+def targets_model(name=None):
+    """The model that tracks several targets at once (``run``/``eval --targets``): ``name``, else the first
+    registered model with a several-target form (:attr:`~vistrack.models.spec.ModelSpec.targets_class`)."""
+    return name or next(n for n, s in MODELS.items() if s.targets_class is not None)
 
 
 def check_particle_memory(n, bytes_per_particle, algo="", share=0.5, available=None, targets=1):
@@ -139,6 +149,12 @@ def clip_model(named=None):
     return named or DEFAULT_MODEL
 
 
+def run_option(flag):
+    """The model option that ``run``'s ``flag`` sets (:class:`~vistrack.models.spec.ModelOption`: its default
+    and help), of the first model that takes it; ``None`` where none does."""
+    return next((s.option(flag) for s in MODELS.values() if s.option(flag) is not None), None)
+
+
 def model_params(name, flags, algo=None):
     """The builder parameters of model ``name`` that ``run``'s ``flags`` (``{flag: value}``; ``None``:
     not given) set (:attr:`~vistrack.models.spec.ModelSpec.options`); a one-line :class:`OptionError` for a
@@ -155,4 +171,5 @@ def model_params(name, flags, algo=None):
             where = " and ".join(s.name for s in takes) + (" models" if len(takes) > 1 else " model")
             raise OptionError(f"{flag} is for " + (f"--algo {', '.join(algos)} on the " if algos else "the ") + where)
         params[opt.name] = value if opt.value is None else opt.value
+    check_model_options(spec, params)  # the check vistrack.Tracker makes of the same options
     return params

@@ -1,11 +1,13 @@
 """What the seeds compare, and the demo: the algorithms of their tables and figures, with the particle
 counts where they fix them (``(algorithm, N)`` entries). The reproductions and ``vistrack demo`` take
-their default algorithms from here, so that no list of algorithm names sits outside the registry.
+their default algorithms (and the demo its comparison tracker) from here, so that no list of algorithm or
+tracker names sits outside the registry.
 """
 
 from __future__ import annotations
 
-__all__ = ["CONTOUR", "HISTORY_SAMPLING", "PLATE", "PLATES", "BEARINGS", "LANDMARKS", "SEED_000_ORDER", "DEMO"]
+__all__ = ["CONTOUR", "HISTORY_SAMPLING", "PLATE", "PLATES", "BEARINGS", "LANDMARKS", "SEED_000_ORDER", "DEMO",
+           "DEMO_REAL"]
 
 #: thesis 001 Table 4.1 (a contour in clutter with a distractor): LS-N-IPS with 30 particles against the
 #: bootstrap filter with 2000
@@ -25,3 +27,6 @@ SEED_000_ORDER = ("pf-gordon", "pf-doucet", "pf-eis", "pf-eis-mt")
 #: ``vistrack demo``: the box model's LS-N-IPS, LIS and bootstrap at about equal time per frame on a clip of
 #: sudden jumps in heavy clutter (docs/experiments.md)
 DEMO = (("ls-n-ips", 30), ("lis", 30), ("bootstrap", 150))
+#: ``vistrack demo``'s real clip: the comparison trackers beside vistrack's default tracker (the default model's
+#: default algorithm at the default N): OpenCV's MIL, which every OpenCV build has
+DEMO_REAL = (("opencv-mil", 1),)

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..baselines.opencv import OPENCV_RANDOMISED, OPENCV_TRACKERS
 from ..batch.tasks import write_atomic
+from ..registry import BASELINES, get_model_spec, is_baseline
 from ..scoring.aggregate import summarize
 
 __all__ = ["CSV_COLUMNS", "task_row", "write_eval_outputs", "averages"]
@@ -36,7 +36,7 @@ def task_row(r):
     truth has no object (OTB/VOT absent frames) count in neither. ``mean_error`` is over the
     frames not lost, ``mean_error_all`` over every frame with the object in view and an estimate;
     empty where there is none."""
-    s = summarize([r], not_filters=OPENCV_TRACKERS)[0]
+    s = summarize([r], not_filters=BASELINES)[0]
     row = {"clip": r["clip"], "algo": r["algo"], "particles": r["particles"], "run": r["run"], "frames": r["frames"]}
     row.update({k: "" if s[k] is None else s[k] for k in CSV_COLUMNS[5:]})
     return row
@@ -97,16 +97,16 @@ def _runs_line(labels):
         n = sorted({s["runs"] for s in ss})
         runs = "/".join(str(v) for v in n)
         algo = ss[0]["algo"]
-        note = (" (randomised inside OpenCV, not seeded)" if algo in OPENCV_RANDOMISED else " (deterministic)"
-                if algo in OPENCV_TRACKERS else " (a result file)" if not ss[0].get("particle_filter", True) else "")
+        note = (f" ({BASELINES[algo].runs_note})" if is_baseline(algo)
+                else " (a result file)" if not ss[0].get("particle_filter", True) else "")
         parts.append(f"{k}: {runs} run{'s' if n != [1] else ''}{note}")
     return "; ".join(parts)
 
 
 def write_eval_outputs(out, cfg, summaries, results, chosen=None):
     """Write ``results.json``, ``results.csv``, the plots, ``report.md`` and ``report.html`` (with an
-    annotated video of one run per tracker) of an evaluation into ``out`` (each file whole); returns
-    the plot paths."""
+    annotated video of one run per tracker in ``videos/``) of an evaluation into ``out`` (each file whole);
+    returns the plot paths and the videos' paths."""
     rows = [task_row(r) for r in results]
     write_atomic(out / "results.json", json.dumps(
         {"config": {"clips": [str(c) for c in cfg.clips], "algos": cfg.algos, "particles": cfg.particles,
@@ -146,7 +146,7 @@ def write_eval_outputs(out, cfg, summaries, results, chosen=None):
     write_atomic(out / "report.md", "\n".join(lines) + "\n")
     write_atomic(out / "report.html", _html(head, labels, by_clip, plots, videos,
                                             " ".join(t for t in (_lost_note(cfg), sources) if t)))
-    return plots
+    return plots, [path for _, path, _ in videos]
 
 
 def _sources_note(results):
@@ -176,13 +176,14 @@ def _annotated_videos(out, results, max_trackers=8, width=480, least=320):
     import cv2
 
     from ..io.clips import load_clip
+    from ..io.render import TRUTH, draw_box, draw_label, tracker_colour
     from ..io.video import VideoWriter
 
     clips = list(dict.fromkeys(r["clip"] for r in results))
     if not clips:
         return []
     first = [r for r in results if r["clip"] == clips[0] and r["run"] == 0 and r.get("boxes")]
-    first = list({_label({**r, "particle_filter": r["algo"] not in OPENCV_TRACKERS and not r.get("external")}): r
+    first = list({_label({**r, "particle_filter": not is_baseline(r["algo"]) and not r.get("external")}): r
                   for r in first}.items())[:max_trackers]
     if not first:
         return []
@@ -203,12 +204,11 @@ def _annotated_videos(out, results, max_trackers=8, width=480, least=320):
                                                      interpolation=cv2.INTER_LINEAR if scale < 1 else cv2.INTER_NEAREST)
             for label, r, path, k in writers:
                 img = small.copy()
-                _draw(img, truth[i] * scale, (0, 200, 0))
+                draw_box(img, truth[i] * scale, TRUTH)
                 b = r["boxes"][i] if i < len(r["boxes"]) else None
                 if b is not None:
-                    _draw(img, np.asarray(b) * scale, _COLOURS[k % len(_COLOURS)])
-                cv2.putText(img, f"{label}  #{i}", (4, 14), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 255), 1,
-                            cv2.LINE_AA)
+                    draw_box(img, np.asarray(b, float) * scale, tracker_colour(k))
+                draw_label(img, f"{label}  #{i}", org=(4, 14))
                 if path not in opened:
                     opened[path] = VideoWriter(path, clip.source.fps or 25.0, (img.shape[1], img.shape[0]),
                                                codec="auto", atomic=True, what="report video")
@@ -228,18 +228,6 @@ def _close_videos(writers):
             error = error or e
     if error is not None:
         raise error
-
-
-_COLOURS = [(0, 0, 255), (255, 128, 0), (255, 0, 255), (0, 200, 255), (255, 255, 0), (128, 0, 255), (0, 128, 255),
-            (200, 200, 200)]
-
-
-def _draw(img, box, colour):
-    import cv2
-
-    if np.all(np.isfinite(box)) and box[2] > 0 and box[3] > 0:
-        x, y, w, h = (int(round(v)) for v in box)
-        cv2.rectangle(img, (x, y), (x + w, y + h), colour, 1)
 
 
 def _html(head, labels, by_clip, plots, videos, lost_note):
@@ -333,9 +321,13 @@ def _table(labels, first):
     return "\n".join(out)
 
 
+#: what eval counts as lost, by the model's lost rule (:attr:`~vistrack.models.spec.ModelSpec.lost_rule`)
+LOST_RULES = {"centre": "centre error above half the larger side of the true box",
+              "plate": "plate: no plate reported, or the vertex error above a third of the plate height"}
+
+
 def _lost_note(cfg):
-    rule = ("plate: no plate reported, or the vertex error above a third of the plate height" if cfg.model == "plate"
-            else "centre error above half the larger side of the true box")
+    rule = LOST_RULES[get_model_spec(cfg.model).lost_rule]
     return (f"Lost: {rule} (thesis reproductions use the thesis's rules: `vistrack reproduce`). Reported lost: the "
             "share of the frames with the object that the tracker reported lost (vistrack's `visible=0`, an OpenCV "
             "tracker's failed `update`). Long-term F: VOT-LT's tracking F-score (precision over the frames the tracker "

@@ -28,7 +28,10 @@ def _groups(rows, key):
 
 def _table(groups):
     """A markdown table: one row per ``(algo, N) -> pooled scores``."""
-    fmt = lambda v, f: "–" if v is None else format(v, f)  # noqa: E731
+
+    def fmt(v, f):
+        return "–" if v is None else format(v, f)
+
     lines = ["| algo | N | runs | MOTA | IDF1 | MOTP (px) | switches / run | false positives / run | misses / run | "
              "plates reported in frames without one | ms/frame |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for (algo, n), s in groups.items():

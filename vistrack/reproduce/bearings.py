@@ -52,6 +52,8 @@ class BearingsConfig:
     entries: list | None = None
 
     table = "bearings"
+    #: the folder of its task files when ``--out`` is not given
+    results_dir = "bearings-results"
 
     def pairs(self):
         """The ``(algo, N)`` pairs to run: :attr:`entries`, else every algorithm at every N."""
@@ -131,17 +133,23 @@ class BearingsConfig:
     def check_size(self, available=None):
         """Raise :class:`~vistrack.system.resources.TooLarge` (one line) when the errors gathered
         (:data:`VALUE_BYTES` per ship, step, run, sequence and pair), the runs' seed streams that
-        every task makes and one step's particles would not fit in memory."""
+        every task makes and one step's particles in every worker at once (a worker per core, at most
+        one per sequence) would not fit in memory."""
+        import os
+
         pairs = self.pairs()
         per_step = VALUE_BYTES * self.sequences * len(pairs) * self.runs * self.ships
-        rest = 600 * self.sequences * self.runs + max(n for _, n in pairs) * 4 * self.ships * 8 * 32
+        at_once = min(self.sequences, os.cpu_count() or 1)
+        rest = 600 * self.sequences * self.runs + at_once * max(n for _, n in pairs) * 4 * self.ships * 8 * 32
 
         def most(room):
             steps = int((room - rest) // per_step)
-            return f"give at most {steps} --steps" if steps >= 1 else "give fewer --runs, --sequences or --particles"
+            return f"give at most {steps} --steps" if steps >= 1 else \
+                "give fewer --ships, --particles, --runs or --sequences"
 
-        check_memory(per_step * self.steps + rest, f"{self.sequences} sequences x {self.runs} runs x {self.steps} "
-                     f"steps x {len(pairs)} algorithm and N pair(s) need", most, available=available)
+        check_memory(per_step * self.steps + rest, f"{self.ships} ship(s), {self.sequences} sequences x {self.runs} "
+                     f"runs x {self.steps} steps x {len(pairs)} algorithm and N pair(s) need", most,
+                     available=available)
 
 
 #: bytes of one number gathered from the tasks: its JSON text, the parsed float, the array's copy

@@ -2,22 +2,41 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
+from ..data_synth.clip_sizes import check_suite_disk
 from ..data_synth.contour_clip import make_contour_clip
 from ..data_synth.plate_clip import make_plate_clip
-from ..data_synth.scene import check_suite_disk
+from ..data_synth.scene import SuiteNames, prepare_suite
 from ..evaluation.experiment import check_grid_size
 
-__all__ = ["SUITES", "clip_suite", "experiment_clips"]
+__all__ = ["Suite", "SUITES", "clip_suite", "experiment_clips"]
 
-#: per experiment: the folder of its clips by default, their names' prefix, the clip maker and its options
+
+@dataclass(frozen=True)
+class Suite:
+    """An experiment's clip suite: the folder of its clips by default, their names' prefix, the clip maker and
+    its options, and what ``--make``, ``--frames`` and ``--size`` make by default."""
+
+    folder: str
+    prefix: str
+    maker: Callable
+    options: dict = field(default_factory=dict)
+    make: int = 10
+    frames: int = 300
+    size: tuple = (320, 240)
+
+
+#: per experiment: its clip suite
 SUITES = {
-    "contour": ("contour-clips", "contour", make_contour_clip, {"clutter": "high", "distractor": True}),
-    "hs-sir": ("hs-sir-clips", "contour-color", make_contour_clip, {"clutter": "high", "distractor": True,
-                                                                     "color": True}),
-    "plate": ("plate-clips", "plate", make_plate_clip, {}),
-    "plates": ("plate-overlap-clips", "plate-overlap", make_plate_clip, {"overlap": True, "cars": 6}),
+    "contour": Suite("contour-clips", "contour", make_contour_clip, {"clutter": "high", "distractor": True}),
+    "hs-sir": Suite("hs-sir-clips", "contour-color", make_contour_clip,
+                    {"clutter": "high", "distractor": True, "color": True}, frames=150, size=(240, 180)),
+    "plate": Suite("plate-clips", "plate", make_plate_clip, size=(640, 480)),
+    "plates": Suite("plate-overlap-clips", "plate-overlap", make_plate_clip, {"overlap": True, "cars": 6},
+                    size=(640, 480)),
 }
 
 
@@ -29,17 +48,20 @@ def experiment_clips(experiment, clips_dir, make, frames, size, progress=None, g
     :class:`~vistrack.system.resources.TooLarge`)."""
     if grid is not None:
         check_grid_size(make, *grid, frames)
-    folder, prefix, maker, kw = SUITES[experiment]
-    return clip_suite(clips_dir or folder, make, frames, size, maker, prefix, progress=progress, **kw)
+    suite = SUITES[experiment]
+    return clip_suite(clips_dir or suite.folder, make, frames, size, suite.maker, suite.prefix, progress=progress,
+                      **suite.options)
 
 
 def clip_suite(base, make, frames, size, maker, prefix, progress=None, **kw):
     """The clip folders in ``base`` (those with a ``groundtruth.csv``; hidden ones, such as a clip
     being written, are skipped), sorted.
 
-    When ``base`` holds none, ``make`` clips of seeds ``1..make`` are generated there first,
-    each by ``maker(base / f"{prefix}-{seed:02d}", frames=frames, size=size, seed=seed,
-    progress=progress, **kw)`` (e.g. :func:`vistrack.data_synth.contour_clip.make_contour_clip`).
+    When ``base`` holds none, ``make`` clips of seeds ``1..make`` are generated there first (a
+    ``base`` that holds other files or folders is refused with a one-line ``ValueError``: the clips
+    would be mixed with them, :func:`~vistrack.data_synth.scene.prepare_suite`), each by
+    ``maker(base / f"{prefix}-{seed:02d}", frames=frames, size=size, seed=seed, progress=progress, **kw)``
+    (e.g. :func:`vistrack.data_synth.contour_clip.make_contour_clip`).
 
     Parameters
     ----------
@@ -60,6 +82,7 @@ def clip_suite(base, make, frames, size, maker, prefix, progress=None, **kw):
 
     if not found():
         check_suite_disk(base, make, frames, size)
+        prepare_suite(base, SuiteNames(prefix, 1, make))
         base.mkdir(parents=True, exist_ok=True)
         for s in range(1, make + 1):
             maker(base / f"{prefix}-{s:02d}", frames=frames, size=size, seed=s, progress=progress, **kw)

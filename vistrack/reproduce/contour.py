@@ -42,6 +42,8 @@ class ContourConfig:
 
     #: the experiment's table and figures (:mod:`vistrack.reproduce.tables`)
     table = "contour"
+    #: the folder of its task files when ``--out`` is not given
+    results_dir = "contour-results"
     #: the registered model its tasks build (:mod:`vistrack.registry`)
     model = "contour"
     #: whether it tracks several targets (the model's several-target form)

@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..io.clips import load_clip
-from ..loop.stepper import ms_per_frame
+from ..loop.stepper import filter_ms
 from ..registry import build_model
 from ..registry.comparisons import HISTORY_SAMPLING
 from ..scoring.metrics import equal_time
@@ -40,6 +40,8 @@ class HSConfig(ContourConfig):
     likelihood: dict = field(default_factory=dict)
 
     table = "hs-sir"
+    #: the folder of its task files when ``--out`` is not given
+    results_dir = "hs-sir-results"
 
     def tasks(self):
         """:func:`hs_tasks`."""
@@ -95,5 +97,5 @@ def equal_time_entries(clip_path, entries, frames=20, likelihood=None):
         if i >= frames:
             break
         fr.append((i, f))
-    model = build_model("contour", clip, init_gt="", **(likelihood or {}))
-    return equal_time(lambda algo, n: ms_per_frame(fr, model, algo, n), entries)
+    model = build_model(HSConfig.model, clip, init_gt="", **(likelihood or {}))
+    return equal_time(lambda algo, n: filter_ms(fr, model, algo, n), entries)

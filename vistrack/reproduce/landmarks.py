@@ -62,6 +62,8 @@ class LandmarksConfig:
     resample: str = "systematic"
 
     table = "landmarks"
+    #: the folder of its task files when ``--out`` is not given
+    results_dir = "landmarks-results"
 
     def __post_init__(self):
         paper = PAPER.get(self.k)

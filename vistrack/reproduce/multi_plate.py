@@ -17,8 +17,9 @@ from ..evaluation.multi_target import plates_equal_time, run_plates_task, score_
 from ..registry.comparisons import PLATES
 from ..scoring.mot import pool_scores, require_motmetrics
 from .contour import ContourConfig
+from .plate import PlateConfig
 
-__all__ = ["PlatesConfig", "plates_results"]
+__all__ = ["PlatesConfig", "plates_results", "plate_experiment"]
 
 
 @dataclass
@@ -31,6 +32,8 @@ class PlatesConfig(ContourConfig):
     targets: int = 3
 
     table = "plates"
+    #: the folder of its task files when ``--out`` is not given
+    results_dir = "plate-overlap-results"
     model = "plate"
     several = True
 
@@ -78,3 +81,13 @@ def plates_results(cfg, tasks, out_dir):
         out.append({"algo": algo, "particles": n, "clips": len(per_clip), **pool_scores(rows),
                     "per_clip": {c: [pool_scores(v)["mota"], pool_scores(v)["idf1"]] for c, v in per_clip.items()}})
     return out
+
+
+def plate_experiment(clips, *, runs, seed, overlap=False, targets=PlatesConfig.targets, entries=None, out=None):
+    """``(config, out)`` of ``vistrack reproduce plate``: a :class:`~vistrack.reproduce.plate.PlateConfig` of one
+    plate, or with ``overlap`` a :class:`PlatesConfig` of ``targets`` slots; ``entries`` ``None``: the
+    experiment's own; ``out`` ``None``: its folder (the config's ``results_dir``)."""
+    chosen = {} if entries is None else {"entries": entries}
+    cfg = PlatesConfig(clips, runs=runs, seed=seed, targets=targets, **chosen) if overlap else \
+        PlateConfig(clips, runs=runs, seed=seed, **chosen)
+    return cfg, cfg.results_dir if out is None else out

@@ -27,7 +27,7 @@ from ..batch.tasks import load_task_results, save_result
 from ..core.particles import DegenerateWeightsWarning
 from ..evaluation.experiment import entries_config
 from ..io.clips import load_clip
-from ..loop.stepper import step_frames
+from ..loop.stepper import Stepper
 from ..registry import build_model, make_filter
 from ..registry.comparisons import PLATE
 from ..scoring.metrics import plate_frame_measures
@@ -48,6 +48,8 @@ class PlateConfig(ContourConfig):
     acquire_within: int = 10
 
     table = "plate"
+    #: the folder of its task files when ``--out`` is not given
+    results_dir = "plate-results"
     model = "plate"
 
     @property
@@ -64,13 +66,13 @@ def run_plate_task(task, out_dir):
     """Engine runner: track one plate clip once (no initial box); write the per-frame record."""
     prepare_worker()
     clip = load_clip(task["clip"])
-    model = build_model("plate", clip)
+    model = build_model(task["model"], clip)
     filt = make_filter(task["algo"], model)
     rng = np.random.default_rng(task["seed_seq"])
     reported, verts, ms, ess, ll = [], [], [], [], []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DegenerateWeightsWarning)
-        for res in step_frames(clip.source, filt, task["particles"], rng):
+        for res in Stepper(filt, task["particles"], rng).steps(clip.source):
             reported.append(int(res.visible))
             ll.append(round(float(model.loglik(res.obs, res.estimate[None])[0]), 3))
             verts.append(np.round(model.vertices(res.estimate)[0].ravel(), 3).tolist())

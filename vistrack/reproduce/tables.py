@@ -71,7 +71,10 @@ def write_plots(experiment, out, plots_dir, title=""):
     from ..reports import plots
 
     os.makedirs(plots_dir, exist_ok=True)
-    path = lambda name: os.path.join(plots_dir, name)  # noqa: E731
+
+    def path(name):
+        return os.path.join(plots_dir, name)
+
     results = out["results"]
     if experiment == "bearings":
         return [plots.plot_error_vs_time(out["curves"], path("error_vs_time.png"),

@@ -56,7 +56,7 @@ def summarize(results, not_filters=()):
             "mean_error": float(err[ok].mean()) if ok.any() else None,
             "mean_error_all": float(every.mean()) if every.size else None,
             "p_lost": float(p_lost[vis].mean()) if vis.any() else 0.0,
-            "p_lost_final": float(p_lost[-1]),
+            "p_lost_final": float(p_lost[-1]) if p_lost.size else 0.0,
             "p_lost_per_frame": p_lost.tolist(),
             "error_per_frame": [None if not np.isfinite(v) else float(v) for v in err_frame],
             "success_auc": float(np.mean(success)),

@@ -81,7 +81,8 @@ def landmark_error(rows, truth, k):
 
 
 def iou(a, b):
-    """Intersection over union of boxes ``(..., 4)`` as ``(x, y, w, h)``."""
+    """Intersection over union of boxes ``(..., 4)`` as ``(x, y, w, h)``, in ``[0, 1]`` (two equal boxes'
+    rounding can give 1 + 1e-15, which the success plot's last threshold, 1, would count as above it)."""
     a, b = np.asarray(a, float), np.asarray(b, float)
     x0 = np.maximum(a[..., 0], b[..., 0])
     y0 = np.maximum(a[..., 1], b[..., 1])
@@ -90,13 +91,16 @@ def iou(a, b):
     inter = np.clip(x1 - x0, 0, None) * np.clip(y1 - y0, 0, None)
     union = a[..., 2] * a[..., 3] + b[..., 2] * b[..., 3] - inter
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(union > 0, inter / union, 0.0)
+        return np.clip(np.where(union > 0, inter / union, 0.0), 0.0, 1.0)
 
 
 def success_curve(ious):
     """The success plot (OTB): for each of :data:`IOU_THRESHOLDS`, the share of the IoUs ``(...)`` (one
-    run's frames, or runs × frames) above it; NaN counts as 0."""
+    run's frames, or runs × frames) above it; NaN counts as 0. Without frames (a ground truth in which
+    the object is never in view) each share is NaN: there is nothing to score."""
     ious = np.nan_to_num(np.asarray(ious, float))
+    if not ious.size:
+        return [float("nan")] * len(IOU_THRESHOLDS)
     return [float((ious > t).mean()) for t in IOU_THRESHOLDS]
 
 

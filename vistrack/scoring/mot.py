@@ -20,6 +20,7 @@ height — the single-plate experiment's rule for "on the plate" (:mod:`vistrack
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
@@ -144,7 +145,7 @@ def require_motmetrics():
     which :func:`clear_mot` scores with) cannot be imported: batch commands check it before they
     track, so that a stale environment does not lose its score after hours of runs."""
     try:
-        import motmetrics  # noqa: F401
+        importlib.import_module("motmetrics")
     except ImportError:
         raise ImportError("the motmetrics library (vistrack's scorer of MOTA and IDF1) is not installed: "
                           "pip install motmetrics, or reinstall vistrack") from None

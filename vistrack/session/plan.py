@@ -14,8 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import kernels
+from ..core.seeds import run_seed
 from ..io.clips import load_clip
-from ..io.starts import one_based_init_note, start_frame
+from ..io.starts import one_based_init_note, start_box_problem, start_frame
 from ..io.video import VideoDecodeWarning, prefetch
 from ..models.contour.nn import network_for
 from ..models.plate.detect import PlateSearch
@@ -31,11 +33,12 @@ from ..registry import (
     read_support_points,
 )
 from ..registry.choice import choose
-from ..system.compiling import compile_message
+from ..system.compiling import compiling
 from ..system.signals import stop_on_signals
 from .recording import record_video
+from .run_summary import run_report
 
-__all__ = ["Plan", "prepare", "execute"]
+__all__ = ["Plan", "prepare", "execute", "track_video"]
 
 
 @dataclass
@@ -76,7 +79,7 @@ class Plan:
 
 def prepare(video, *, model=None, algo=None, particles=DEFAULT_PARTICLES, init=None, init_gt=None, template=None,
              layout=None, no_colour=False, targets=None, search=None, resample="systematic", ess_threshold=None,
-             max_frames=None, notify=None, watch=None):
+             max_frames=None, notify=None, compiler=None):
     """Set up ``vistrack run VIDEO`` (module docstring): returns a :class:`Plan`.
 
     ``template`` is a file of support points (:func:`~vistrack.registry.builders.read_support_points`);
@@ -84,8 +87,8 @@ def prepare(video, *, model=None, algo=None, particles=DEFAULT_PARTICLES, init=N
     not given; :func:`~vistrack.registry.catalog.model_params`). ``notify(line)`` hears what the user should
     know on the way (how a URL was read, the model and algorithm and why: :mod:`vistrack.registry.choice`, a
     1-based box given as ``--init``, the plate search and what it found, training the network search; a
-    download's progress bar when given). ``watch`` (:class:`~vistrack.system.compiling.CompileWatch`) is told
-    the model chosen (the compile time it says). Raises
+    download's progress bar when given). ``compiler`` (:class:`~vistrack.system.compiling.Compiler`) compiles the
+    kernels of the model and algorithm chosen before anything calls them. Raises
     :class:`~vistrack.registry.OptionError` for options that do not go together or do not apply to the
     model, ``ValueError`` (``VideoError``) for bad input; each one line.
     """
@@ -99,14 +102,15 @@ def prepare(video, *, model=None, algo=None, particles=DEFAULT_PARTICLES, init=N
     name, algo, spec = choice.model, choice.algo, get_model_spec(choice.model)
     if notify:  # which model and algorithm, and why: one line
         notify(choice.line(particles))
-    if watch is not None:
-        watch.message = compile_message(name)
     flags = {"--targets": targets, "--template": template and read_support_points(template),
              "--layout": layout, "--no-colour": no_colour or None, "--search": search}
     params = model_params(name, flags, algo)
     check_algo(name, algo, targets is not None, who=f"--algo {algo}")
-    check_particle_memory(particles, spec.bytes_per_particle, algo, targets=targets or 1)
+    if compiler is not None:  # the options go together: compile before anything calls the kernels (building does)
+        compiler.compile(name, [algo], targets is not None)
+    # built first: what the model refuses by sense (more plates than a frame holds) before what memory allows
     built = build_model(name, clip, init=init, init_gt=init_gt, **params)
+    check_particle_memory(particles, spec.bytes_per_particle, algo, targets=targets or 1)
     if search == "nn":  # train (once per template) or load before the first frame
         network_for(built, notify=notify)
     plan = Plan(clip, name, algo, built, frames=_frames(clip.source, max_frames))
@@ -119,6 +123,10 @@ def prepare(video, *, model=None, algo=None, particles=DEFAULT_PARTICLES, init=N
     note = one_based_init_note(clip, init)
     if note and notify:
         notify(note)
+    if plan.start and notify:
+        notify(f"note: the ground truth has no box before frame {plan.start}: tracking starts there (frames 0-"
+               f"{plan.start - 1} get rows with visible=0, lost_reason \"not started\"; scores count from frame "
+               f"{plan.start})")
     if plan.start and max_frames is not None and plan.start >= max_frames:
         raise ValueError(f"--init-gt: the ground truth's first box is at frame {plan.start}, past --max-frames "
                          f"{max_frames}")
@@ -126,13 +134,11 @@ def prepare(video, *, model=None, algo=None, particles=DEFAULT_PARTICLES, init=N
 
 
 def _check_init(init, size):
-    """An ``--init`` box outside the frame is an :class:`~vistrack.registry.OptionError`."""
-    if init is None:
-        return
-    x, y, w, h = init
-    fw, fh = size
-    if x >= fw or y >= fh or x + w <= 0 or y + h <= 0:
-        raise OptionError(f"--init box {x:g},{y:g},{w:g},{h:g} lies outside the {fw}x{fh} frame")
+    """An ``--init`` box outside the frame (its centre not in it: :func:`~vistrack.io.starts.start_box_problem`)
+    is an :class:`~vistrack.registry.OptionError`, found before anything is built."""
+    problem = None if init is None else start_box_problem(init, size)
+    if problem and problem[0] == "outside":
+        raise OptionError(problem[1])
 
 
 def _frames(src, max_frames):
@@ -162,7 +168,7 @@ def _find_plate(plan, video, notify):
     plan.frames = itertools.chain([found[:2]], plan.frames)
 
 
-def execute(plan, particles, seed, *, label="", show_particles=10, progress=None, notify=None, ready=None, **outputs):
+def execute(plan, particles, seed=0, *, label="", show_particles=10, progress=None, notify=None, ready=None, **outputs):
     """Track ``plan`` with ``particles`` particles from ``seed`` (an integer or a ``SeedSequence``:
     :func:`~vistrack.core.seeds.run_seed`): :func:`~vistrack.session.recording.record_video` over its frames from its
     start (``outputs``: ``track_path``, ``out_path``, ``results_path``, ``results_format``, ``sequence``;
@@ -179,3 +185,34 @@ def execute(plan, particles, seed, *, label="", show_particles=10, progress=None
                            video_info=(src.fps, src.size), show_particles=show_particles, label=label,
                            progress=progress, notify=notify, frame_count=exact, start=plan.start, lead=plan.lead,
                            ready=ready, **outputs)
+
+
+def track_video(video, *, particles=DEFAULT_PARTICLES, seed=0, run=0, show_particles=10, outputs=None, note=None,
+                lost=None, compiling_progress=None, frames=None, **options):
+    """``vistrack run VIDEO``: :func:`prepare` with ``options`` (its keywords), the kernels of the model and
+    algorithm chosen compiled first, then :func:`execute` from ``seed``'s stream of run ``run``
+    (:func:`~vistrack.core.seeds.run_seed`) into ``outputs`` (``track_path``, ``out_path``, ``results_path``,
+    ``results_format``, ``sequence``). Returns ``(plan, log, report)``: the :class:`Plan`, the
+    :class:`~vistrack.session.recording.SessionLog` and the :class:`~vistrack.session.run_summary.RunReport`.
+
+    What the user hears on the way, each optional: ``note(line)`` (:func:`prepare`'s notes),
+    ``lost(index, reason, detail)`` where the object is lost, ``compiling_progress(done, total)`` while the
+    kernels compile (:func:`~vistrack.system.compiling.compiling`: the first run after an install, until
+    tracking starts), and ``frames(label, total, initial)``, called when tracking starts, returning the
+    ``progress(ess)`` told after every frame (a progress bar)."""
+    outputs = dict(outputs or {})
+    with compiling(compiling_progress, kernels.use()) as compiler:
+        plan = prepare(video, particles=particles, notify=note, compiler=compiler, **options)
+        label, tick = f"{plan.algo} N={particles}", []
+
+        def ready():  # the kernels are loaded: tracking starts
+            compiler.progress = None
+            tick.append(frames(label, plan.total, len(plan.lead)) if frames else None)
+
+        def progress(ess):
+            if tick[-1]:
+                tick[-1](ess)
+
+        done = execute(plan, particles, run_seed(seed, run), label=label, show_particles=show_particles,
+                       progress=progress, notify=lost, ready=ready, **outputs)
+    return plan, done, run_report(video, plan, done, particles, outputs)

@@ -30,16 +30,13 @@ from ..core.hooks import Confidence, Redetects, offers
 from ..core.particles import DegenerateWeightsWarning
 from ..io.render import annotate, annotate_targets
 from ..io.results_format import result_paths
-from ..io.track_files import TrackCSV
+from ..io.track_files import TrackCSV, check_lost_reason
 from ..io.video_writer import VideoWriter
-from ..loop.profiling import STAGES, Timer, profile_stages
-from ..loop.stepper import step_frames, top_particles, warm_up
-from ..system.signals import HARD_STOP, Terminated, deferred_signals, stop_on_signals, stop_reason
-from .run_summary import summary_lines
+from ..loop.profiling import STAGES, Timer, instrument
+from ..loop.stepper import Stepper, top_particles, warm_up
+from ..system.signals import deferred_signals, stop_reason
 
-# TrackCSV, summary_lines and the signal handling live in track_files, run_summary and signals (re-exported)
-__all__ = ["TrackCSV", "SessionLog", "track_row", "target_rows", "record_video", "summary_lines", "Terminated",
-           "stop_on_signals", "deferred_signals", "HARD_STOP"]
+__all__ = ["SessionLog", "record_video", "track_row", "target_rows"]
 
 
 @dataclass
@@ -60,6 +57,8 @@ class SessionLog:
     losses: list = field(default_factory=list)
     #: a model of several targets: the track rows of every frame and target (:func:`target_rows`)
     target_rows: list = field(default_factory=list)
+    #: the outline last reported (drawn dashed, tagged "lost", on the frames reported lost after it)
+    shown: object = None
     _was_lost: bool = False
 
     def note_lost(self, res, notify=None):
@@ -102,7 +101,7 @@ def _row(model, index, visible, estimate, redetected, ess, ms, lost_reason, conf
     row = {"frame": index, "visible": int(visible), **model.describe(estimate)}
     if offers(model, Redetects):
         row["redetected"] = redetected
-    row["ess"], row["ms"], row["lost_reason"] = ess, ms, lost_reason
+    row["ess"], row["ms"], row["lost_reason"] = ess, ms, check_lost_reason(lost_reason)
     if offers(model, Confidence):
         row["confidence"] = "" if confidence is None else float(confidence)
     return row
@@ -111,14 +110,14 @@ def _row(model, index, visible, estimate, redetected, ess, ms, lost_reason, conf
 def target_rows(model, res):
     """The track-CSV rows of a frame of a model of several targets (:class:`~vistrack.scoring.mot.MultiTarget`):
     one per reported target, ``frame, visible = 1, id``, the target's :meth:`describe_target`
-    columns, ``ess, ms, lost_reason``; one row with ``visible = 0, id = -1``, NaN geometry and the
-    frame's ``lost_reason`` when none is reported."""
+    columns, ``ess, ms, lost_reason``; one row with ``visible = 0, id = -1``, NaN geometry (empty cells in
+    the CSV) and the frame's ``lost_reason`` when none is reported."""
     ids, states = res.targets
     tail = {"ess": res.ess, "ms": res.ms}
     if not len(ids):
         row = {"frame": res.index, "visible": 0, "id": -1}
         row.update({k: np.nan for k in model.describe_target(np.zeros(states.shape[1]))})
-        return [{**row, **tail, "lost_reason": res.lost_reason}]
+        return [{**row, **tail, "lost_reason": check_lost_reason(res.lost_reason)}]
     return [{"frame": res.index, "visible": 1, "id": int(i), **model.describe_target(x), **tail, "lost_reason": ""}
             for i, x in zip(ids, states)]
 
@@ -167,9 +166,9 @@ def record_video(frames, model, filt, particles, rng, *, track_path=None, out_pa
         _record_lead(run, lead, model, outs, writer, label)
         t0, failed = time.perf_counter(), False
         try:
-            with warnings.catch_warnings(), (profile_stages(model, filt, run.timer) if profile else nullcontext()):
+            with warnings.catch_warnings(), (instrument(model, filt, run.timer) if profile else nullcontext()):
                 warnings.simplefilter("ignore", DegenerateWeightsWarning)
-                _track_loop(run, step_frames(frames, filt, particles, rng), model, outs, writer, stop,
+                _track_loop(run, Stepper(filt, particles, rng).steps(frames), model, outs, writer, stop,
                             first=lead[-1][0] + 1 if len(lead) else 0, start=start, frame_count=frame_count,
                             show_particles=show_particles, label=label, notify=notify, progress=progress)
         except (KeyboardInterrupt, SystemError) as e:  # Terminated is a KeyboardInterrupt
@@ -288,7 +287,11 @@ def _record(run, res, model, outs, writer, show_particles, label, notify=None):
         text = f"#{res.index}  {label}  ESS {row['ess']:.1f}"
         particles = model.outline(top_particles(res.particles, show_particles))
         if res.targets is None:
-            img = annotate(res.frame, model.outline(res.estimate) if vis else [], particles, text)
+            if vis:
+                run.shown = model.outline(res.estimate)
+            lost = None if vis else (res.lost_reason, [] if run.shown is None else run.shown)
+            img = annotate(res.frame, run.shown if vis else [], particles, text, lost=lost,
+                           redetected=bool(res.redetected))
         else:
             ids, states = res.targets
             img = annotate_targets(res.frame, ids, model.target_outline(states), particles, text)

@@ -5,7 +5,7 @@ a size too large for the machine is one :class:`TooLarge` line, never a process 
 from __future__ import annotations
 
 __all__ = ["keep_freed_memory", "available_memory", "prepare_worker", "TooLarge", "check_memory", "check_disk",
-           "fmt_bytes"]
+           "fmt_bytes", "WORKER_BYTES", "worker_count"]
 
 
 class TooLarge(ValueError):
@@ -102,3 +102,29 @@ def check_disk(need, folder, what, most_of):
         raise TooLarge(f"{what} about {fmt_bytes(need)}, more than the {fmt_bytes(free)} free on {p}; "
                        f"{most_of(free)}")
     return need
+
+
+#: memory a worker process of the batch engine holds before its task: vistrack, numpy, OpenCV, numba and
+#: Dask loaded (about 125 MB measured; rounded up)
+WORKER_BYTES = 160 << 20
+
+
+def worker_count(requested, tasks, available=None, cores=None):
+    """``(n, note)``: how many worker processes to start for ``tasks`` tasks when ``requested`` were asked
+    for (0: one per core): no more than two per core of the machine (a process more keeps a core busy
+    while another waits on its disk), one per task, and the processes half the available memory holds
+    (:data:`WORKER_BYTES` each; at least one). ``note`` is one line saying what capped a number the
+    user gave (``None`` when nothing did, or none was given)."""
+    import os
+
+    cores = cores or os.cpu_count() or 1
+    avail = available_memory() if available is None else available
+    fit = max(1, int(0.5 * avail // WORKER_BYTES)) if avail is not None else cores
+    limits = [(2 * cores, f"two per core of the machine's {cores} cores"),
+              (max(1, int(tasks)), f"{tasks} task(s) to run"),
+              (fit, f"the {fit} worker processes half the {fmt_bytes(avail or 0)} of memory available holds")]
+    n = min(int(requested) or cores, *(k for k, _ in limits))
+    if not requested or n >= int(requested):
+        return n, None
+    why = next(w for k, w in limits if k == n)
+    return n, f"note: --workers {requested} capped at {n} ({why})"

@@ -1,37 +1,49 @@
 """Signals during a run: Ctrl-C and SIGTERM stop it after the frame in hand, every output flushed
 (:func:`deferred_signals`); the exception a SIGTERM raises (:class:`Terminated`); and Ctrl-C while
 nothing is open (a command's start-up and shut-down: :func:`interrupt_aborts`), which ends the
-process at once with ``Aborted.`` and exit code 130."""
+process at once with ``Aborted.`` and exit code 130. SIGHUP (a closed terminal, a dropped ssh
+session) is handled as SIGTERM is (:data:`TERMINATING`): what was done is kept; a SIGHUP the process
+ignores (``nohup``) stays ignored."""
 
 from __future__ import annotations
 
 import signal
 from contextlib import contextmanager
 
-__all__ = ["Terminated", "stop_on_signals", "deferred_signals", "stop_reason", "HARD_STOP", "interrupt_aborts",
-           "abort_on_interrupt"]
+__all__ = ["Terminated", "TERMINATING", "stop_on_signals", "deferred_signals", "stop_reason", "HARD_STOP",
+           "interrupt_aborts", "abort_on_interrupt"]
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised where the run is, so that it ends as cleanly as on Ctrl-C."""
+    """SIGTERM (or SIGHUP), raised where the run is, so that it ends as cleanly as on Ctrl-C."""
+
+
+#: the signals that end a run as SIGTERM does: SIGTERM, and SIGHUP where the platform has it
+TERMINATING = tuple(s for s in (signal.SIGTERM, signal.Signals.__members__.get("SIGHUP")) if s is not None)
 
 
 @contextmanager
 def stop_on_signals():
-    """Within the block SIGTERM raises :class:`Terminated` (SIGINT already raises
-    ``KeyboardInterrupt``); the previous handler is restored after."""
+    """Within the block SIGTERM and SIGHUP (:data:`TERMINATING`) raise :class:`Terminated` (SIGINT
+    already raises ``KeyboardInterrupt``); an ignored one stays ignored; the previous handlers are
+    restored after."""
     def handler(signum, frame):
         raise Terminated()
 
     try:
-        old = signal.signal(signal.SIGTERM, handler)
+        old = {s: signal.getsignal(s) for s in TERMINATING}
+        for s, h in old.items():
+            if h is not signal.SIG_IGN:
+                signal.signal(s, handler)
     except ValueError:  # not the main thread: leave signals alone
         yield
         return
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, old)
+        for s, h in old.items():
+            if h is not signal.SIG_IGN and h is not None:
+                signal.signal(s, h)
 
 
 class _Stop:
@@ -48,12 +60,12 @@ HARD_STOP = 3
 
 @contextmanager
 def deferred_signals():
-    """Within the block SIGINT and SIGTERM set a flag (the yielded object's ``reason``:
-    ``"terminate"`` once a SIGTERM came, else ``"interrupt"``) instead of raising, so the frame in
-    hand is finished and every writer flushed before the run stops; the :data:`HARD_STOP`-th
-    signal raises (``KeyboardInterrupt``, or :class:`Terminated` for SIGTERM) for a run that does
-    not come back. A SIGINT the process ignores (a background job) stays ignored. Outside the
-    main thread signals are left alone."""
+    """Within the block SIGINT, SIGTERM and SIGHUP set a flag (the yielded object's ``reason``:
+    ``"terminate"`` once a SIGTERM or SIGHUP came, else ``"interrupt"``) instead of raising, so the
+    frame in hand is finished and every writer flushed before the run stops; the
+    :data:`HARD_STOP`-th signal raises (``KeyboardInterrupt``, or :class:`Terminated` for SIGTERM and
+    SIGHUP) for a run that does not come back. A signal the process ignores (a background job's
+    SIGINT, ``nohup``'s SIGHUP) stays ignored. Outside the main thread signals are left alone."""
     import threading
 
     stop = _Stop()
@@ -63,12 +75,12 @@ def deferred_signals():
 
     def handler(signum, frame):
         stop.count += 1
-        if stop.reason is None or signum == signal.SIGTERM:  # a SIGTERM (shutdown) outranks Ctrl-C
-            stop.reason = "terminate" if signum == signal.SIGTERM else "interrupt"
+        if stop.reason is None or signum in TERMINATING:  # a SIGTERM (shutdown) outranks Ctrl-C
+            stop.reason = "terminate" if signum in TERMINATING else "interrupt"
         if stop.count >= HARD_STOP:
-            raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+            raise Terminated() if signum in TERMINATING else KeyboardInterrupt()
 
-    old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    old = {s: signal.getsignal(s) for s in (signal.SIGINT, *TERMINATING)}
     for s, h in old.items():
         if h is not signal.SIG_IGN:
             signal.signal(s, handler)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
-from test_box_dcf import BACK, GONE, reappearing_clip
 
 import vistrack
+from box_helpers import BACK, GONE, reappearing_clip
 from vistrack.models.box.model import Box
 
 

@@ -12,9 +12,9 @@ import copy
 
 import numpy as np
 import pytest
-from test_kernels_box import moving_box_frames
 
 import vistrack
+from box_helpers import moving_box_frames
 from kernel_helpers import both
 from vistrack import kernels
 from vistrack.appearance.correlation import CorrelationFilter

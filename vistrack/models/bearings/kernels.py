@@ -3,7 +3,7 @@
 Per particle and ship, the same arithmetic as :class:`~vistrack.models.bearings.xi.XiProposal`'s
 numpy path (``frame``, ``parts``, ``mixture``, ``_log_mix``), on scalars: about 150 numpy calls
 per LIS step become one. The uniforms and the normal quantiles come from the caller (the same
-draws as the numpy path). Equal to it within 1e-12 relative (``tests/test_bearings_xi.py``):
+draws as the numpy path). Equal to it within 1e-12 relative (``tests/models/bearings/test_bearings_xi.py``):
 ``math``'s transcendental functions and numpy's may differ in the last bit.
 """
 

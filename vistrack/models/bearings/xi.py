@@ -40,7 +40,7 @@ from scipy import special
 
 from ... import kernels
 from ...core.transition import is_prior
-from .laplace_parts import laplace_parts  # noqa: F401  (its home: numba compiles it there)
+from .laplace_parts import laplace_parts  # its home: numba compiles it there
 
 __all__ = ["XiProposal"]
 

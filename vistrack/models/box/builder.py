@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ...appearance.cues import Appearance
 from ..spec import ModelSpec
 from .model import Box
 
@@ -14,4 +15,4 @@ def from_box(frame, box, **params):
 
 
 SPEC = ModelSpec("box", description="any object from a box: colour + template appearance learned from the first frame",
-                 from_box=from_box, bytes_per_particle=32_000, model_class=Box)
+                 from_box=from_box, bytes_per_particle=32_000, model_class=Box, passes_on=(Appearance,))

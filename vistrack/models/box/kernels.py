@@ -1,7 +1,7 @@
 """The box model's filter step (:mod:`~vistrack.models.box.model`, LIS), compiled: fewer, larger calls.
 
 Each kernel does what a chain of small numpy calls does per frame, with the same arithmetic in
-the same order (``tests/test_kernels_box.py`` states each tolerance):
+the same order (``tests/models/box/test_kernels_box.py`` states each tolerance):
 
 - :func:`ar2_predict` and :func:`ar2_logpdf`: ``Box.predict`` (the normal draws made by numpy,
   in the same order) and ``Box.transition_logpdf``;

@@ -39,14 +39,14 @@ class LostAndFound:
             ``True`` the calibrations shipped with the package, a pair of
             :class:`~vistrack.models.box.confidence.Calibration` (an estimate's, a candidate's) or the path
             of an ``.npz`` holding them; ``False``: none (nor without the filter).
-        lost_confidence : float or None
+        lost_confidence : float in [0, 1] or None
             The object is reported lost (``low-confidence``) on a frame whose confidence is below this
             (``None``: the calibration's threshold; 0: never).
-        redetect : float or None
+        redetect : float, >= 0 or None
             Without a confidence (``confidence=False``), a whole-frame search's best place is taken when
             ``log r`` there is within ``redetect`` times the collapse test's ``drop`` of its running level
             (``None``: no search at all).
-        reentry : float
+        reentry : float in [0, 1]
             The share of a pose uniform over the frame in the dynamics on the frame after a re-detection
             (:meth:`~vistrack.models.box.model.Box.predict`).
         every_cue : bool
@@ -75,18 +75,18 @@ class LostAndFound:
 
         Parameters
         ----------
-        redetect_after : int
+        redetect_after : int, >= 1
             Frames reported lost in a row before a frame is searched whole (:meth:`_redetect`).
-        redetect_every : int
+        redetect_every : int, >= 1
             From then on, every this many frames reported lost in a row, one is searched (:meth:`search_due`).
-        search_crop : float or None
+        search_crop : float, > 0 or None
             That search correlates the filter's taps over the object's box grown this many times
             (:meth:`~vistrack.appearance.correlation.CorrelationFilter.search`; ``None``: all its taps, the
             surroundings learnt with it too).
-        search_peaks : int
+        search_peaks : int, >= 1
             The best places of that search whose confidence is computed; the most confident is the
             candidate.
-        search_stride : int
+        search_stride : int, >= 1
             That search's first, coarse correlation is over the frame at the filter's resolution divided by
             this (:meth:`candidates`).
         lean_when_lost : bool

@@ -65,20 +65,20 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         The first frame.
     box : tuple of float
         ``(x, y, w, h)`` of the object in ``frame``.
-    sigma_xy : float or None
+    sigma_xy : float, > 0 or None
         Std of the centre's innovation per frame, as a share of ``sqrt(w_0 h_0)`` (``None``: 0.25 with
         the correlation filter, whose likelihood lets fast objects such as a kicked ball be followed;
         0.06 without).
-    sigma_scale : float or None
+    sigma_scale : float, > 0 or None
         Std of the log-scale's innovation per frame (``None``: 0.02 with the filter, whose scale search
         then moves the scale; 0.002 without).
-    damping : float
+    damping : float in [0, 1]
         ``d``: share of the last frame's velocity carried over.
-    prior_std : tuple of float
+    prior_std : tuple of float, > 0
         Std of ``p_0`` on the centre (share of ``sqrt(w_0 h_0)``) and on the log-scale.
-    window : float
+    window : float, > 0
         LIS/LLS window std as a multiple of the innovation's std.
-    map_stride : int
+    map_stride : int, >= 1
         The LIS proposal map's step in working pixels (:meth:`Appearance.proposal_map`): 2 makes
         ``cv2.matchTemplate`` about 4x cheaper (0.12 against 0.46 ms on girl_otb) but lowers the success
         AUC on the real clips (girl 0.632 against 0.650, 12 seeds; hand 0.39 against 0.44, 24 and 36 seeds;
@@ -87,17 +87,17 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         Learn a correlation filter (:class:`~vistrack.appearance.correlation.CorrelationFilter`) whose
         response is LIS's proposal (:class:`~vistrack.models.box.correlation_proposal.CorrelationProposal`) and a
         term ``λ_dcf y`` of ``log r``; ``False``: the colour/template map proposal alone.
-    lambda_dcf : float
+    lambda_dcf : float, >= 0
         ``λ_dcf``, the weight of the response ``y`` (about 1 at the object) in ``log r``.
-    dcf_share : float
+    dcf_share : float in [0, 1]
         ``β``: the share of particles drawn from the response (the rest from ``K``).
     dcf_tempering : tuple of float
         ``(t, s)``: the response's cells drawn ``∝ (1 - s) exp(t (y - max y)) / Σ + s / C``.
-    dcf_scale_std : float
+    dcf_scale_std : float, > 0
         ``σ_l`` of the proposal's log-scale about the best scale of the search.
-    collapse_drop : float
+    collapse_drop : float, > 0
         With the filter, the collapse test's ``drop`` (:attr:`collapse_options`: 55 without it): ``log r``
-        at the estimate falls by 43-47 on the synthetic clip of ``tests/test_box_dcf.py`` when the object
+        at the estimate falls by 43-47 on the synthetic clip of ``tests/models/box/test_box_dcf.py`` when the object
         vanishes; 28 (the 7-clip mean AUC 0.690 against 0.685 with 35, and with the filter's rate 0.004
         0.695 and the hand held on 6 of 6 seeds: ``docs/experiments.md``).
     confidence, lost_confidence, redetect, reentry, every_cue
@@ -113,7 +113,7 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
     scale_filter : bool or dict
         Learn DSST's scale filter (:class:`~vistrack.models.box.scale_filter.ScaleFilter`, a dict: its
         options) beside the correlation filter; ``False``: none.
-    lambda_scale : float
+    lambda_scale : float, >= 0
         ``λ_s``, the weight of the scale filter's response at each state's log-scale in ``log r``.
     scale_proposal : {"filter", "dcf"}
         The correlation proposal's log-scale centre: the scale filter's refined peak, or the best of the

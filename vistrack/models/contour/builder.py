@@ -82,7 +82,7 @@ def _contour(clip, size, init, init_gt, template, params):
 
 
 
-def train_search(points, size, *, samples=NNSearchConfig.samples, seed=0, path=None, notify=None):
+def train_search(points, size=(320, 240), *, samples=NNSearchConfig.samples, seed=0, path=None, notify=None):
     """The neural-network local search of LS-N-IPS (thesis 001 §4.3.1, Fig. 4.5) for the contour of support
     points ``points`` (``(n, 2)`` pixels as tracked) on frames of ``size``: trained on ``samples`` simulated
     poses from ``seed`` and cached (``path``, else the cache), or loaded where it is there; ``(network,

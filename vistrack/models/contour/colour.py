@@ -63,7 +63,10 @@ class ContourColour:
         around = np.zeros((h, w), np.uint8)
         around[max(0, int(y0 - g)):max(0, int(y1 + g) + 1), max(0, int(x0 - g)):max(0, int(x1 + g) + 1)] = 1
         around[inside > 0] = 0
-        count = lambda m: np.bincount(labels[m > 0], minlength=self.n_bins).astype(float)  # noqa: E731
+
+        def count(m):
+            return np.bincount(labels[m > 0], minlength=self.n_bins).astype(float)
+
         self.colour = TargetColour(count(inside), count(around), lambda_colour=lambda_colour, kappa=kappa)
         rings_in = [self.meas0[::2] * s for s in (0.35, 0.7)] + [np.zeros((1, 2))]
         rings_out = [self.meas0[::2] + d * self.size * self.meas_normals0[::2] for d in band]

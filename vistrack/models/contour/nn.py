@@ -228,11 +228,14 @@ def cache_path(model, cfg=None):
 def load_or_train(model, cfg=None, path=None, notify=None):
     """The cached network of ``model`` (``path``: default :func:`cache_path`), trained and cached
     when the file is missing, corrupt or for other options. ``notify(message)`` hears of training.
-    Returns ``(net, info)`` with ``info``: ``path``, ``trained`` and (trained) ``seconds``, ``cpu_seconds``."""
+    Returns ``(net, info)`` with ``info``: ``path``, ``trained``, ``kept`` (the network is in ``path``)
+    and (trained) ``seconds``, ``cpu_seconds``. A network that cannot be written to a ``path`` given is an
+    :class:`~vistrack.io.outputs.OutputError` (the cache's own folder: a note, and the network is used)."""
     cfg = cfg or NNSearchConfig()
     key = cache_key(model, cfg)
-    path = Path(path) if path is not None else cache_dir() / f"{key}.npz"
-    info = {"path": str(path), "trained": False}
+    given = path is not None
+    path = Path(path) if given else cache_dir() / f"{key}.npz"
+    info = {"path": str(path), "trained": False, "kept": True}
     if path.exists():
         try:
             return NNSearch.load(path, key), info
@@ -247,6 +250,9 @@ def load_or_train(model, cfg=None, path=None, notify=None):
     try:
         net.save(path, key)
     except OSError as e:  # a read-only cache: use the network without keeping it
+        if given:
+            raise
+        info["kept"] = False
         if notify:
             notify(f"cannot cache the network at {path}: {e.strerror}")
     return net, info

@@ -11,7 +11,7 @@ order of sums the track depends on):
   moved poses (:func:`~.contour.loglik`).
 
 Both compute what the separate kernels and numpy steps compute, in the same order (equal bit for
-bit, ``tests/test_kernels_contour_search.py``), without the ``(N, M, 2)`` and ``(N, G)`` arrays
+bit, ``tests/models/contour/test_kernels_contour_search.py``), without the ``(N, M, 2)`` and ``(N, G)`` arrays
 between them and the two dozen Python-level calls per frame. They release the GIL (``nogil``), so
 that the decoding thread runs beside them.
 """

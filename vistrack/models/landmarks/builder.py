@@ -6,6 +6,7 @@ import numpy as np
 
 from ...io.starts import initial_truth
 from ...io.video import VideoError
+from ...scoring.metrics import landmark_error
 from ..spec import ModelOption, ModelSpec
 from .video_model import LandmarkVideo
 
@@ -48,8 +49,16 @@ def _landmarks(clip, size, init_gt, template, params):
     return LandmarkVideo(first, size, **{k: v for k, v in kw.items() if v is not None})
 
 
+def _summary(rows, truth, model):
+    """``run``'s line against landmark ground truth (``lx0.., ly0..``): the mean landmark error."""
+    if "lx0" not in truth:
+        return None
+    err = landmark_error(rows, truth, model.k)
+    return (f"vs ground truth: mean landmark error {err.mean():.2f} px (per frame: median {np.median(err):.2f}, "
+            f"max {err.max():.2f})")
+
 
 SPEC = ModelSpec("landmarks", description="landmark shape (seed 000 §3)", box_init=False,
-                 from_clip=_landmarks_from_clip, model_class=LandmarkVideo, seed="000",
+                 from_clip=_landmarks_from_clip, model_class=LandmarkVideo, seed="000", summary=_summary,
                  options=(ModelOption("template", None, "the first frame's landmark positions (K, 2) in pixels",
                                       flag="--template"),))

@@ -6,6 +6,7 @@ import numpy as np
 
 from ...io.starts import first_frame, initial_truth, start_frame
 from ...io.video import VideoError
+from ...scoring.metrics import plate_frame_measures
 from ..spec import ModelOption, ModelSpec
 from .model import Plate
 from .plates import Plates
@@ -97,12 +98,26 @@ def _plate_from_box(size, box, layout, params, frame=None, angle_sigma=None):
     return model
 
 
+def _summary(rows, truth, model):
+    """``run``'s line against plate ground truth (vertices ``x0..y3``): the frames the plate was lost in (no
+    plate reported, or the vertex error above a third of the plate height), the mean vertex error when
+    tracked and the false reports."""
+    if "x0" not in truth:
+        return None
+    rec = {"reported": [r["visible"] for r in rows],
+           "vertices": [[r[f"{c}{i}"] for i in range(4) for c in "xy"] for r in rows]}
+    has, err, lost, false = plate_frame_measures(rec, truth, model.layout.aspect)
+    ok = has & ~lost
+    mean = f"{np.nanmean(err[ok]):.2f} px" if ok.any() else "n/a (never tracked)"
+    return (f"vs ground truth: plate lost in {int(lost.sum())} of {int(has.sum())} plate frames; mean vertex "
+            f"error {mean} when tracked; {int(false.sum())} frames reported a plate where there was none")
+
 
 SPEC = ModelSpec("plate", description="license-plate template (thesis 001 §1.3.2); acquires plates without a box",
                  from_box=_plate_from_frame_box, from_clip=_plate_from_clip, lost_rule="plate",
-                 bytes_per_particle=48_000, model_class=Plate, targets_class=Plates, options=(
+                 bytes_per_particle=48_000, model_class=Plate, targets_class=Plates, summary=_summary, options=(
                      ModelOption("targets", None, "track up to K plates at once, one slot each", flag="--targets"),
-                     ModelOption("layout", None, "jp or single-row; None: from the clip, the box or the plate found",
-                                 flag="--layout"),
+                     ModelOption("layout", "auto", "a layout's name (LAYOUTS); auto: from the clip, the box or the "
+                                 "plate found", flag="--layout"),
                      ModelOption("appearance", "auto", "learn the plate's appearance from the start box (auto: on "
                                  "real footage)", flag="--no-colour", value=False)))

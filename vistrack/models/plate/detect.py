@@ -238,7 +238,7 @@ def _layout_of(box):
     from .layout import LAYOUTS
 
     r = float(box[2]) / max(float(box[3]), 1e-9)
-    return min(("jp", "single-row"), key=lambda name: abs(np.log(LAYOUTS[name].aspect / r)))
+    return min(LAYOUTS, key=lambda name: abs(np.log(LAYOUTS[name].aspect / r)))
 
 
 def _split_touching(st, aspect=0.62):

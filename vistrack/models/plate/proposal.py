@@ -151,7 +151,7 @@ class PlateLISProposal:
         (the box model's LIS map: template correlation and back-projection contrast) for the
         median box of ``x``, over the windows. The scans of ``r_plate^h``, ``r_plate^v`` alone
         put most draws on the rendered-plate likelihood's modes: on a plate unlike the rendered
-        ones those can be a character pitch off the plate (tests/test_plate_appearance.py: the
+        ones those can be a character pitch off the plate (tests/models/plate/test_plate_appearance.py: the
         yellow plate's ``log r_plate`` is 3.4 higher 8 px to the side, where the appearance's is
         14 lower), and with 100 particles no draw was left on the plate.
 
