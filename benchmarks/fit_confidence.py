@@ -54,8 +54,11 @@ from vistrack.models.box.confidence import CALIBRATION, FEATURES, MONOTONE, SEEN
 from vistrack.scoring.metrics import iou, lt_scores, success_auc
 
 CACHE = Path.home() / ".cache" / "vistrack" / "fit_confidence"
-#: the model's options while the cues are gathered: the confidence computed, never acted on, no re-detection
-OBSERVE = {"lost_confidence": 0.0, "redetect": None}
+#: the model's options while the cues are gathered: every cue of the confidence computed, never acted on, no
+#: re-detection
+OBSERVE = {"lost_confidence": 0.0, "redetect": None, "every_cue": True}
+#: ``--acting``: the shipped model, every cue computed
+ACTING = {"every_cue": True}
 
 
 def code_digest(root=ROOT / "vistrack"):
@@ -324,7 +327,7 @@ def main(argv=None):
             Path(args.json).write_text(json.dumps({"seeds": seeds, "rows": rows}, indent=1))
         return
     digest = code_digest()
-    runs = gather(clips, seeds, "vistrack-probe", None if args.acting else OBSERVE, cache=args.cache,
+    runs = gather(clips, seeds, "vistrack-probe", ACTING if args.acting else OBSERVE, cache=args.cache,
                   workers=args.workers, digest=digest)
     X, y, ious, groups, _ = dataset(clips, runs)
     cal = fit_with_threshold(X, y, ious, groups, C=args.C, max_lost=args.max_lost)

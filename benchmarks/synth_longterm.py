@@ -2,11 +2,13 @@
 
     python benchmarks/synth_longterm.py                  # seeds 1..5, the clips under ~/.cache/vistrack/longterm
     python benchmarks/synth_longterm.py --seeds 3 --gap 1.5
+    python benchmarks/synth_longterm.py --options '{"redetect_every": 3}'   # another configuration of the box model
 
 For each seed, ``vistrack synth longterm --seed S`` (:func:`vistrack.data_synth.longterm_clip.make_longterm_clip`,
 640 x 480, absences of ``--gap`` seconds: the object leaves the frame, comes back through another edge, hides
 behind a pillar and comes out on its other side) is tracked by vistrack's default box tracker
-(``vistrack.Tracker(seed=S)``) from the first ground-truth box. Per seed: the share of the frames without the
+(``vistrack.Tracker(seed=S)``, with ``--options``: ``vistrack.Tracker(seed=S, **options)``) from the first
+ground-truth box. Per seed: the share of the frames without the
 object that the tracker reports lost (``visible=0``; target >= 90 %), and for each return of the object the
 frames until the tracker reports it again with a box overlapping the truth (IoU > 0; target <= 10 on every
 seed), VOT-LT's F-score (:func:`vistrack.scoring.metrics.lt_scores`) and the frames re-detected.
@@ -37,13 +39,13 @@ def clip_for(seed, gap, cache=CACHE):
     return out
 
 
-def check(folder, seed, max_frames=10):
-    """The per-seed numbers of the module docstring for the clip in ``folder``."""
+def check(folder, seed, max_frames=10, options=None):
+    """The per-seed numbers of the module docstring for the clip in ``folder`` (``options``: the tracker's)."""
     clip = load_clip(folder)
     t = clip.truth
     truth = np.column_stack([t["cx"] - t["w"] / 2, t["cy"] - t["h"] / 2, t["w"], t["h"]])
     present = t["visible"] > 0
-    tracker = vistrack.Tracker(seed=seed)
+    tracker = vistrack.Tracker(seed=seed, **(options or {}))
     boxes, shown, conf, found = [], [], [], []
     for k, frame in clip.source:
         if k == 0:
@@ -81,13 +83,15 @@ def main(argv=None):
     ap.add_argument("--seeds", type=int, default=5, help="seeds 1..SEEDS (default 5)")
     ap.add_argument("--gap", type=float, default=2.0, help="seconds of each absence (default 2)")
     ap.add_argument("--cache", default=str(CACHE), help="where the clips are rendered")
+    ap.add_argument("--options", default="{}", type=json.loads,
+                    help='vistrack.Tracker options as JSON, e.g. \'{"redetect_every": 3}\'')
     ap.add_argument("--json", default=None, help="write every number here")
     args = ap.parse_args(argv)
     rows = []
     print(f"{'seed':>4} {'frames':>6} {'absent':>6} {'reported absent':>15} {'re-found after (frames)':>24} "
           f"{'redetected':>10} {'LT F':>6}")
     for s in range(1, args.seeds + 1):
-        r = check(clip_for(s, args.gap, args.cache), s)
+        r = check(clip_for(s, args.gap, args.cache), s, options=args.options)
         rows.append(r)
         after = ", ".join("never" if v is None else str(v) for v in r["refound_after"])
         print(f"{s:>4} {r['frames']:>6} {r['absent']:>6} {100 * r['absent_reported']:14.1f}% {after:>24} "

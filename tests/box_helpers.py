@@ -1,5 +1,5 @@
 """Shared by the box model's tests: a textured background and a striped red object moving along a loop,
-at known boxes."""
+at known boxes; a patterned box moving right and down; an orange square that leaves and comes back elsewhere."""
 
 import cv2
 import numpy as np
@@ -41,3 +41,38 @@ def path(t):
 def clip_frames(n, grey=False, seed=0):
     bg = background(np.random.default_rng(seed), grey)
     return [draw_object(bg, *np.round(path(t))) for t in range(n)]
+
+def moving_box_frames(n=20, seed=0):
+    """A textured background with a coloured, patterned box moving right and down."""
+    rng = np.random.default_rng(seed)
+    bg = cv2.GaussianBlur(rng.integers(0, 256, (120, 160, 3), dtype=np.uint8), (0, 0), 2)
+    frames = []
+    for t in range(n):
+        f = bg.copy()
+        x, y = 40 + 2 * t, 30 + t
+        cv2.rectangle(f, (x, y), (x + 30, y + 36), (30, 200, 220), -1)
+        cv2.circle(f, (x + 15, y + 18), 8, (200, 40, 40), -1)
+        frames.append(f)
+    return frames, (40.0, 30.0, 31.0, 37.0)
+
+
+GONE, BACK = 15, 35  # the object gone from GONE, back (elsewhere) from BACK
+
+
+def reappearing_clip(n=48):
+    """An orange striped square moving right 4 px per frame over a textured background, gone for 20 frames,
+    back 90 px lower and moving left; and its boxes."""
+    rng = np.random.default_rng(4)
+    bg = cv2.GaussianBlur(rng.integers(70, 180, (200, 260, 3)).astype(np.uint8), (0, 0), 3)
+    obj = np.zeros((26, 26, 3), np.uint8)
+    obj[:] = (30, 120, 230)  # orange, with dark stripes
+    obj[::6] = 20
+    frames, boxes = [], []
+    for t in range(n):
+        f = bg.copy()
+        x, y = (30 + 4 * t, 40) if t < BACK else (150 - 2 * (t - BACK), 130)
+        if not GONE <= t < BACK:
+            f[y:y + 26, x:x + 26] = obj
+        frames.append(f)
+        boxes.append((x, y, 26, 26))
+    return frames, boxes

@@ -44,7 +44,7 @@ def test_the_tracker_checks_every_argument_when_it_is_made(kw, words):
 def test_the_tracker_names_the_options_it_takes():
     import vistrack
 
-    with pytest.raises(ValueError, match="lambda_dcf, lambda_scale, lost_confidence, map_stride"):
+    with pytest.raises(ValueError, match="lambda_dcf, lambda_scale, lean_when_lost, lost_confidence, map_stride"):
         vistrack.Tracker(model="box", frobnicate=3)
     vistrack.Tracker(model="box", lambda_dcf=30.0, lambda_template=2.0)  # the model's own and its appearance's
 

@@ -26,94 +26,26 @@ Scale
 
 from __future__ import annotations
 
-import functools
-import math
-
 import cv2
 import numpy as np
 import scipy.fft as sfft
 
 from .. import kernels
 from .features import greedy_peaks
+from .filter_features import as_grey as _grey
+from .filter_features import compiled_kernels as _compiled
+from .filter_features import dcf_features, shrunk_grey
 
-__all__ = ["CorrelationFilter", "DCFResponse", "dcf_features"]
-
-
-def dcf_features(patch, n_orient=6, cell=4, out=None, scratch=None, window=None):
-    """Feature channels ``(n_orient + 1, H, W) float32`` of a grey ``patch (H, W) float32`` (or a BGR or grey
-    uint8 one, made grey as :func:`_grey` makes it) (module docstring): brightness-normalised grey, then
-    gradient orientation cells normalised per block; each channel times ``window (H, W) float32`` if given
-    (the filter's Hann window). ``scratch``: a dict the compiled path keeps its work arrays in from call to call."""
-    h, w = patch.shape[:2]
-    if out is None:
-        out = np.empty((n_orient + 1, h, w), np.float32)
-    dk = _compiled() if kernels.use() else None
-    if dk is not None:  # the channels side by side (H, W, n): one box filter for all of them
-        scratch = {} if scratch is None else scratch
-        key = (h, w, n_orient)
-        if key not in scratch:
-            scratch[key] = (np.empty((h, w, n_orient), np.float32), np.empty((h, w, n_orient), np.float32),
-                            np.empty((h, w), np.float32), np.ones((h, w), np.float32), np.empty((h, w), np.float32))
-        bins, cells, sq, ones, grey = scratch[key]
-        if dk.POLAR_EXACT and patch.dtype == np.uint8 and patch.ndim == 3:  # grey, gradient, bins: one pass
-            total, squares = dk.grey_gradient_cells(patch, n_orient, grey, bins, sq)
-            mean = total * (1.0 / (h * w))  # cv2.meanStdDev's arithmetic (its sums of integers are exact too)
-            m, s = mean, math.sqrt(max(squares * (1.0 / (h * w)) - mean * mean, 0.0))
-            patch = grey
-        else:
-            patch = _grey(patch) if patch.ndim == 3 or patch.dtype != np.float32 else patch
-            m, s = (v[0, 0] for v in cv2.meanStdDev(patch))
-            if dk.POLAR_EXACT:  # the gradient, its polar form and the binning in one pass
-                dk.gradient_cells(patch, n_orient, bins, sq)
-            else:
-                dk.orientation_cells(*_polar_gradient(patch), n_orient, bins, sq)
-        m, inv_s = np.float32(m), np.float32(1.0 / max(float(s), 1.0))
-        energy = cv2.boxFilter(sq, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
-        cv2.boxFilter(bins, -1, (cell, cell), dst=cells, borderType=cv2.BORDER_REFLECT)
-        return dk.normalised_cells(patch, m, inv_s, cells, energy, ones if window is None else window,
-                                   window is not None, out)
-    patch = _grey(patch) if patch.ndim == 3 or patch.dtype != np.float32 else patch
-    m, s = cv2.meanStdDev(patch)
-    m, inv_s = np.float32(m[0, 0]), np.float32(1.0 / max(float(s[0, 0]), 1.0))
-    np.multiply(patch - m, inv_s, out=out[0])
-    mag, ang = _polar_gradient(patch)
-    energy = cv2.boxFilter(mag * mag, -1, (2 * cell, 2 * cell), borderType=cv2.BORDER_REFLECT)
-    norm = np.float32(1.0) / np.sqrt(energy + np.float32(1e-2))
-    pos = (ang % np.float32(np.pi)) * np.float32(n_orient / np.pi)  # unsigned orientation in bins
-    lo = pos.astype(np.int32)
-    frac = pos - lo.astype(np.float32)
-    lo %= n_orient
-    hi = (lo + 1) % n_orient
-    for k in range(n_orient):
-        out[k + 1] = np.where(lo == k, mag * (1 - frac), 0) + np.where(hi == k, mag * frac, 0)
-    for k in range(n_orient):
-        cv2.boxFilter(out[k + 1], -1, (cell, cell), dst=out[k + 1], borderType=cv2.BORDER_REFLECT)
-        out[k + 1] *= norm
-    if window is not None:
-        np.multiply(out, window, out=out)
-    return out
-
-
-@functools.cache
-def _compiled():
-    """The compiled kernels (:mod:`~vistrack.appearance.dcf_kernels`), imported on first use (their probes of
-    numpy's and OpenCV's arithmetic run then, not when vistrack is imported)."""
-    from . import dcf_kernels
-
-    return dcf_kernels
-
-
-def _polar_gradient(patch):
-    """``cv2.cartToPolar`` (magnitude, angle in radians) of the ``ksize=1`` Sobel gradient of ``patch``."""
-    gx = cv2.Sobel(patch, cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REFLECT)
-    gy = cv2.Sobel(patch, cv2.CV_32F, 0, 1, ksize=1, borderType=cv2.BORDER_REFLECT)
-    return cv2.cartToPolar(gx, gy)
+__all__ = ["CorrelationFilter", "DCFResponse", "dcf_features", "shrunk_grey"]
 
 
 class DCFResponse:
     """The filter's responses on one frame: ``maps (S, H, W) float32`` at log-scales ``log_scales (S,)``
     (ascending), map pixel ``(i, j)`` of scale ``k`` at frame point
     ``centre + ((j, i) - anchor) / px[k]`` (``px[k]``: map pixels per frame pixel)."""
+
+    #: the search's spectra, centre, log-scales and scale factors (:meth:`CorrelationFilter.adapt` with ``reuse``)
+    source = None
 
     def __init__(self, maps, log_scales, centre, anchor, px):
         self.maps = maps
@@ -256,6 +188,7 @@ class CorrelationFilter:
         self._terms = None  # detect's conj(A) and B + λ of the applied filter, where the compiled adapt made them
         self._feat = {}  # the features of 1 or S patches, by their number
         self._scratch = {}  # dcf_features' work arrays
+        self._search = {}  # the whole-frame search's taps and their spectra (:meth:`search_taps`), until adapt
         a, b = self._learn(np.asarray(frame), np.array([x + w / 2, y + h / 2]), 0.0)
         self.A, self.B = a, b
         self.A0, self.B0 = a.copy(), b.copy()
@@ -302,14 +235,16 @@ class CorrelationFilter:
             self._applied = (1 - g) * self.A + g * self.A0, (1 - g) * self.B + g * self.B0
         return self._applied
 
-    def detect(self, frame, centre, log_scale):
-        """The :class:`DCFResponse` of a search region about ``centre`` at the scales about ``log_scale``."""
+    def detect(self, frame, centre, log_scale, scales=None):
+        """The :class:`DCFResponse` of a search region about ``centre`` at the scales about ``log_scale``
+        (``scales``: at ``log_scale`` plus these log-scales instead of the filter's ``n_scales``)."""
         if self._terms is not None:  # made by the compiled adapt
             conj_a, den = self._terms
         else:
             A, B = self.filter()
             den, conj_a = B + self.lam, np.conj(A)
-        spectra = self.spectrum(frame, centre, log_scale + self.log_scales)
+        steps = self.log_scales if scales is None else np.asarray(scales, float)
+        spectra = self.spectrum(frame, centre, log_scale + steps)
         if _exact_filter_kernels():
             y = np.empty((len(spectra),) + den.shape, complex)
             for k, Z in enumerate(spectra):
@@ -317,31 +252,34 @@ class CorrelationFilter:
         else:
             y = np.stack([np.sum(conj_a * Z, axis=0) / den for Z in spectra])
         maps = sfft.irfft2(y, s=self.shape).astype(np.float32)
-        px = self.f * np.exp(-(log_scale + self.log_scales))
-        self._last = (spectra, np.asarray(centre, float).copy(), log_scale + self.log_scales, px)
-        return DCFResponse(maps, log_scale + self.log_scales, centre, self.anchor_px, px)
+        px = self.f * np.exp(-(log_scale + steps))
+        self._last = (spectra, np.asarray(centre, float).copy(), log_scale + steps, px)
+        resp = DCFResponse(maps, log_scale + steps, centre, self.anchor_px, px)
+        resp.source = self._last
+        return resp
 
-    def adapt(self, frame, centre, log_scale):
+    def adapt(self, frame, centre, log_scale, response=None):
         """Adapt ``A, B`` towards the patch of ``frame`` about the estimate ``centre`` (frame px) at
-        ``log_scale`` (on a frame where the object is reported)."""
-        last, self._last = self._last, None
+        ``log_scale`` (on a frame where the object is reported); with ``reuse``, the patch of the search that
+        gave ``response`` (a :class:`DCFResponse` of this filter; ``None``: the last search)."""
+        last, self._last = self._last if response is None else response.source, None
+        self._search = {}
         if self.reuse and last is not None:  # the last search's patch at the nearest scale, the label moved
             spectra, c0, scales, px = last
             k = int(np.argmin(np.abs(scales - log_scale)))
             dx, dy = (np.asarray(centre, float) - c0) * px[k]
             F = spectra[k]
-            g = self.G * np.exp(-2j * np.pi * (self._fx * dx + self._fy * dy))
-            a, b = np.conj(g) * F, np.sum((F * np.conj(F)).real, axis=0)
-        elif _exact_filter_kernels():  # learn, blend and the applied filter's terms in one compiled pass
-            F = self.spectrum(frame, centre, log_scale)
+            conj_g = np.conj(self.G * (np.exp(-2j * np.pi * self._fy * dy) * np.exp(-2j * np.pi * self._fx * dx)))
+        else:
+            F, conj_g = self.spectrum(frame, centre, log_scale), self._conj_g
+        if _exact_filter_kernels():  # learn, blend and the applied filter's terms in one compiled pass
             if self._terms is None:
                 self._terms = (np.empty(self.A.shape, complex), np.empty(self.B.shape, np.float32))
-            _compiled().adapt_filter(F, self._conj_g, self.A, self.B, self.A0, self.B0, self.rate, self.anchor,
+            _compiled().adapt_filter(F, conj_g, self.A, self.B, self.A0, self.B0, self.rate, self.anchor,
                                      self.lam, *self._terms)
             self._applied = None
             return
-        else:
-            a, b = self._learn(frame, centre, log_scale)
+        a, b = conj_g * F, np.sum((F * np.conj(F)).real, axis=0)
         r = self.rate
         self.A = (1 - r) * self.A + r * a
         self.B = (1 - r) * self.B + r * b
@@ -350,29 +288,53 @@ class CorrelationFilter:
     def search(self, frame, log_scale, stride=2, crop=None, peaks=1):
         """Whole-frame search at ``log_scale``: the applied filter's spatial taps (``crop``: those over the
         object's box grown ``crop`` times; ``None``: all, the surroundings too, which on a still background find
-        where the object was) correlated with the frame's features at the filter's resolution shrunk by
-        ``stride``. Returns ``(x, y, value)``: the best centre (frame px) and its response; with ``peaks`` > 1, a
-        list of the ``peaks`` best places (:func:`~vistrack.appearance.features.greedy_peaks`), best first."""
-        A, B = self.filter()
-        taps = sfft.irfft2(A / (B + self.lam)[None], s=self.shape)  # h (C, ph, pw): y[n] = sum_m h[m] z[m + n]
-        taps = sfft.fftshift(taps, axes=(1, 2))  # the object's centre at the middle (label at anchor)
-        if crop is not None:  # zero outside the object's box grown crop times about the middle
-            (hx, hy), (ph, pw) = 0.5 * crop * self.size0 * self.f, self.shape
-            taps = taps * np.outer(np.abs(np.arange(ph) - ph // 2) <= hy, np.abs(np.arange(pw) - pw // 2) <= hx)
+        where the object was) correlated with the features of the frame, made grey and shrunk to the filter's
+        resolution divided by ``stride``. Returns ``(x, y, value)``: the best centre (frame px) and its response;
+        with ``peaks`` > 1, a list of the ``peaks`` best places (:func:`~vistrack.appearance.features.greedy_peaks`),
+        best first.
+
+        The channels' correlations are summed in the Fourier domain (one inverse transform for all of them,
+        the frame's features zero beyond its edges); the taps and their spectra are kept until the filter
+        adapts (:meth:`search_taps`), so a run of searches on the frames of a lost track makes them once."""
         s = self.f * np.exp(-log_scale) / stride
-        h, w = frame.shape[:2]
-        img = _grey(cv2.resize(frame, (max(8, int(round(w * s))), max(8, int(round(h * s)))),
-                               interpolation=cv2.INTER_AREA))
+        img = shrunk_grey(frame, s)
         feat = dcf_features(img, self.n_orient)
-        ph, pw = self.shape
-        k = (max(3, int(round(pw / stride))), max(3, int(round(ph / stride))))
-        total = np.zeros(img.shape, np.float32)
-        for c in range(len(feat)):
-            t = cv2.resize(np.ascontiguousarray(taps[c]), k, interpolation=cv2.INTER_AREA) * np.float32(stride**2)
-            total += cv2.filter2D(feat[c], -1, t, borderType=cv2.BORDER_CONSTANT)
+        ih, iw = img.shape
+        taps, (ay, ax) = self.search_taps(stride, crop)
+        shape = (sfft.next_fast_len(ih + taps.shape[1] - 1, real=True),
+                 sfft.next_fast_len(iw + taps.shape[2] - 1, real=True))
+        key = (stride, crop, shape)
+        if key not in self._search:  # the taps' conjugate spectra at this size
+            self._search[key] = np.conj(sfft.rfft2(taps, s=shape))
+        corr = sfft.irfft2(np.einsum("cij,cij->ij", sfft.rfft2(feat, s=shape), self._search[key]), s=shape)
+        total = corr[(np.arange(ih) - ay) % shape[0]][:, (np.arange(iw) - ax) % shape[1]]
         half = [int(np.ceil(v)) for v in 0.5 * self.size0 * self.f / stride]  # the object's half box there
         out = [((j + 0.5) / s, (i + 0.5) / s, v) for i, j, v in greedy_peaks(total, half, peaks)]
         return out[0] if peaks == 1 else out
+
+    def search_taps(self, stride, crop):
+        """The taps :meth:`search` correlates ``(C, kh, kw) float32`` and the point of them on a frame pixel
+        ``(ay, ax)``: ``y[n] = Σ_m h[m] z[n + m - a]``. The applied filter's taps (the object's centre at their
+        middle), zero outside the object's box grown ``crop`` times, resized to the filter's resolution divided
+        by ``stride`` (``INTER_AREA``, times ``stride²``) and cut to the rows and columns not all zero; kept
+        until the filter adapts."""
+        if (stride, crop) not in self._search:
+            A, B = self.filter()
+            taps = sfft.irfft2(A / (B + self.lam)[None], s=self.shape)  # h (C, ph, pw): y[n] = sum_m h[m] z[m + n]
+            taps = sfft.fftshift(taps, axes=(1, 2))  # the object's centre at the middle (label at anchor)
+            (ph, pw) = self.shape
+            if crop is not None:  # zero outside the object's box grown crop times about the middle
+                hx, hy = 0.5 * crop * self.size0 * self.f
+                taps = taps * np.outer(np.abs(np.arange(ph) - ph // 2) <= hy, np.abs(np.arange(pw) - pw // 2) <= hx)
+            k = (max(3, int(round(pw / stride))), max(3, int(round(ph / stride))))
+            small = np.stack([cv2.resize(np.ascontiguousarray(t), k, interpolation=cv2.INTER_AREA) for t in taps])
+            small = (small * np.float32(stride**2)).astype(np.float32)
+            rows, cols = np.flatnonzero(np.abs(small).sum(axis=(0, 2))), np.flatnonzero(np.abs(small).sum(axis=(0, 1)))
+            r0, r1 = (rows[0], rows[-1] + 1) if len(rows) else (0, 1)
+            c0, c1 = (cols[0], cols[-1] + 1) if len(cols) else (0, 1)
+            anchor = (k[1] // 2 - r0, k[0] // 2 - c0)  # filter2D's default anchor, the kernel's middle
+            self._search[(stride, crop)] = (np.ascontiguousarray(small[:, r0:r1, c0:c1]), anchor)
+        return self._search[(stride, crop)]
 
 
 def _exact_filter_kernels():
@@ -381,9 +343,3 @@ def _exact_filter_kernels():
     if not kernels.use():
         return False
     return _compiled().EXACT
-
-
-def _grey(frame):
-    f = np.asarray(frame)
-    g = f if f.ndim == 2 else cv2.cvtColor(f, cv2.COLOR_BGR2GRAY)
-    return g.astype(np.float32)

@@ -23,7 +23,8 @@ from numba import njit
 
 from ..kernels.sampling import NONFINITE, corner_float, fma_lerp, inside, lerp_fma, pairwise_sum
 
-__all__ = ["colour_labels", "bin_integrals", "ncc", "colour_loglik", "box_count", "box_loglik", "map_scores"]
+__all__ = ["colour_labels", "bin_integrals", "ncc", "colour_loglik", "box_count", "box_ring_counts", "affinity",
+           "contrast", "box_loglik", "map_scores"]
 
 #: as :mod:`vistrack.appearance.features`: hue x saturation bins, value bins, and the chroma thresholds
 _HUE, _SAT, _VALUE, _MIN_S, _MIN_V = 8, 3, 4, 48, 40
@@ -127,8 +128,9 @@ def box_count(ii, x0, y0, x1, y1, b):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _d2(counts, bg_weight, q, scratch):
-    """``1 - Σ sqrt(normalise(counts) q)`` (``TargetColour.d2``), the sums in numpy's order."""
+def affinity(counts, bg_weight, q, scratch):
+    """``Σ_u sqrt(p_u q_u)`` of the background-weighted, normalised ``counts`` (``TargetColour.normalise``) and
+    ``q``, the sums in numpy's order (``scratch``: ``(B,)`` work space)."""
     n = counts.shape[0]
     for k in range(n):
         scratch[k] = counts[k] * bg_weight[k]
@@ -136,7 +138,43 @@ def _d2(counts, bg_weight, q, scratch):
     s = s if s > 0 else 1.0
     for k in range(n):
         scratch[k] = np.sqrt(scratch[k] / s * q[k])
-    return 1.0 - pairwise_sum(scratch, 0, n)
+    return pairwise_sum(scratch, 0, n)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _d2(counts, bg_weight, q, scratch):
+    """``1 - Σ sqrt(normalise(counts) q)`` (``TargetColour.d2``), the sums in numpy's order."""
+    return 1.0 - affinity(counts, bg_weight, q, scratch)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def box_ring_counts(ii, x0, y0, f, cx, cy, w, h, ring, inner, outer):
+    """The bin counts ``inner (B,)`` of the box ``(cx, cy, w, h)`` (frame px) and ``outer (B,)`` of the ring of
+    width ``ring (w + h) / 2`` about it, from the per-bin integral image ``ii`` of a region at ``(x0, y0)``,
+    scale ``f`` (``AppearanceFrame.histograms``: the corners rounded at the working resolution)."""
+    u, v = (cx - x0) * f, (cy - y0) * f
+    hw, hh = 0.5 * f * w, 0.5 * f * h
+    g = f * (ring * 0.5 * (w + h))
+    ix0, iy0, ix1, iy1 = int(np.rint(u - hw)), int(np.rint(v - hh)), int(np.rint(u + hw)), int(np.rint(v + hh))
+    ox0, oy0 = int(np.rint(u - hw - g)), int(np.rint(v - hh - g))
+    ox1, oy1 = int(np.rint(u + hw + g)), int(np.rint(v + hh + g))
+    for b in range(ii.shape[2]):
+        inner[b] = box_count(ii, ix0, iy0, ix1, iy1, b)
+        outer[b] = box_count(ii, ox0, oy0, ox1, oy1, b) - inner[b]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def contrast(inner, outer, bp):
+    """The back-projection ``bp``'s mean over the counts ``inner`` less over ``outer`` (``(B,)`` each), the dot
+    products in bin order."""
+    n_bins = inner.shape[0]
+    dot_in = dot_out = 0.0
+    for b in range(n_bins):
+        dot_in += inner[b] * bp[b]
+        dot_out += outer[b] * bp[b]
+    n_in = max(pairwise_sum(inner, 0, n_bins), 1.0)
+    n_out = max(pairwise_sum(outer, 0, n_bins), 1.0)
+    return dot_in / n_in - dot_out / n_out
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -149,23 +187,9 @@ def colour_loglik(ii, x0, y0, f, boxes, ring, bg_weight, q, bp, lam, kappa, out)
     inner, outer = np.empty(n_bins), np.empty(n_bins)
     scratch = np.empty(n_bins)
     for n in range(boxes.shape[0]):
-        u, v = (boxes[n, 0] - x0) * f, (boxes[n, 1] - y0) * f
-        hw, hh = 0.5 * f * boxes[n, 2], 0.5 * f * boxes[n, 3]
-        g = f * (ring * 0.5 * (boxes[n, 2] + boxes[n, 3]))
-        ix0, iy0, ix1, iy1 = int(np.rint(u - hw)), int(np.rint(v - hh)), int(np.rint(u + hw)), int(np.rint(v + hh))
-        ox0, oy0 = int(np.rint(u - hw - g)), int(np.rint(v - hh - g))
-        ox1, oy1 = int(np.rint(u + hw + g)), int(np.rint(v + hh + g))
-        for b in range(n_bins):
-            inner[b] = box_count(ii, ix0, iy0, ix1, iy1, b)
-            outer[b] = box_count(ii, ox0, oy0, ox1, oy1, b) - inner[b]
+        box_ring_counts(ii, x0, y0, f, boxes[n, 0], boxes[n, 1], boxes[n, 2], boxes[n, 3], ring, inner, outer)
         d = _d2(inner, bg_weight, q, scratch) + kappa * (1.0 - _d2(outer, bg_weight, q, scratch))
-        dot_in = dot_out = 0.0
-        for b in range(n_bins):
-            dot_in += inner[b] * bp[b]
-            dot_out += outer[b] * bp[b]
-        n_in = max(pairwise_sum(inner, 0, n_bins), 1.0)
-        n_out = max(pairwise_sum(outer, 0, n_bins), 1.0)
-        out[n] = lam * ((dot_in / n_in - dot_out / n_out) - d)
+        out[n] = lam * (contrast(inner, outer, bp) - d)
     return out
 
 

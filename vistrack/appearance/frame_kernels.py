@@ -8,7 +8,7 @@ where numpy makes a dozen small ones.
 - :func:`window_texture` and :func:`window_labels` are ``AppearanceFrame``'s maps after the grey and HSV
   conversions, over a window of the region each: the texture (grey level and its 3x3 Sobel gradient,
   ``BORDER_REFLECT``: sums of integers, equal to OpenCV's), and the colour labels and their bin integrals
-  (equal).
+  (equal); :func:`window_grey_labels` the same for a grey video's grey-level bins.
 - :func:`adapt_template` is ``Appearance.adapt`` up to the colour histogram's update: the patch
   of the estimate sampled as ``cv2.remap`` samples it (:func:`~vistrack.appearance.cue_kernels.ncc`'s
   sampling), its correlation with the template, the new template and the box's bin counts
@@ -30,9 +30,13 @@ from numba import njit
 
 from ..kernels.sampling import NONFINITE, corner_float, fma_lerp, inside, lerp_fma, pairwise_sum
 from .cue_kernels import box_count, colour_labels
+from .features import GREY_BINS
 
-__all__ = ["predicted_roi", "adapt_template", "window_texture", "window_labels", "shrink_area", "boxes_window",
-           "states_window"]
+#: grey levels per grey-level bin (:func:`~vistrack.appearance.features.colour_bins` with ``grey=True``)
+_GREY_STEP = 256 // GREY_BINS
+
+__all__ = ["predicted_roi", "adapt_template", "window_texture", "window_labels", "window_grey_labels",
+           "window_integrals", "shrink_area", "boxes_window", "states_window"]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -162,8 +166,25 @@ def window_labels(hsv, a0, b0, r0, r1, c0, c1, labels, ii):
     (:func:`bin_integrals` of the window's labels, written at ``ii[r0:r1 + 1, c0:c1 + 1]``: a box inside the
     window counts what it counts in the whole region's). ``hsv (h, w, 3)`` uint8 holds the region's rows
     ``a0..`` and columns ``b0..``."""
-    n_bins = ii.shape[2]
     colour_labels(hsv[r0 - a0:r1 - a0, c0 - b0:c1 - b0], labels[r0:r1, c0:c1])
+    return window_integrals(labels, r0, r1, c0, c1, ii)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def window_grey_labels(grey, a0, b0, r0, r1, c0, c1, labels, ii):
+    """:func:`window_labels` for grey-level bins (``colour_bins(grey=True)``: the grey level over 16) of the grey
+    pixels ``grey (h, w)`` uint8, which hold the region's rows ``a0..`` and columns ``b0..``."""
+    for y in range(r0, r1):
+        for x in range(c0, c1):
+            labels[y, x] = grey[y - a0, x - b0] // _GREY_STEP
+    return window_integrals(labels, r0, r1, c0, c1, ii)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def window_integrals(labels, r0, r1, c0, c1, ii):
+    """The bin integrals ``ii`` of ``labels`` inside rows ``[r0, r1)`` and columns ``[c0, c1)``, counted from the
+    window's corner (:func:`window_labels`)."""
+    n_bins = ii.shape[2]
     row = np.zeros(n_bins, np.int32)
     ii[r0, c0:c1 + 1, :] = 0
     for y in range(r0, r1):

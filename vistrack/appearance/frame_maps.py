@@ -35,6 +35,17 @@ def shrink(image, f, interpolation=cv2.INTER_AREA):
     return cv2.resize(image, (max(1, int(round(w * f))), max(1, int(round(h * f)))), interpolation=interpolation)
 
 
+def _block_factor(image, f, interpolation):
+    """``k`` where a BGR uint8 region is shrunk by a whole factor ``k >= 2`` (``f = 1 / k``) with ``INTER_AREA``
+    (OpenCV averages ``k x k`` blocks: ``AppearanceFrame`` makes the working image block by block where it is
+    read), else 0."""
+    if not (0 < f <= 0.5 and interpolation == cv2.INTER_AREA and image.ndim == 3 and image.shape[2] == 3
+            and image.dtype == np.uint8):
+        return 0
+    k = round(1.0 / f)
+    return k if abs(1.0 / f - k) < 1e-9 and min(image.shape[:2]) >= k else 0
+
+
 def _compiled_shrink(image, f, interpolation):
     """Whether :func:`shrink` takes the compiled area resize (which can also make a window of the result)."""
     h, w = image.shape[:2]
@@ -124,7 +135,7 @@ class AppearanceFrame:
     def __init__(self, frame, roi, f, grey, work=None, interpolation=cv2.INTER_AREA, buffers=None):
         x0, y0, x1, y1 = roi
         self.f = f
-        src = None  # the frame's region, where its working image is made on demand
+        src, k = None, 0  # the frame's region, where its working image is made on demand; a whole factor
         if work is not None and f < 1.0:
             (h, w), (wh, ww) = frame.shape[:2], work.shape[:2]
             c0, r0 = min(int(np.floor(x0 * f)), ww - 1), min(int(np.floor(y0 * f)), wh - 1)
@@ -134,11 +145,17 @@ class AppearanceFrame:
             x1, y1 = (w if c1 == ww else c1 / f), (h if r1 == wh else r1 / f)
         else:
             crop = frame[y0:y1, x0:x1]
-            if f < 1.0:
+            k = _block_factor(crop, f, interpolation)
+            if k:  # whole k x k blocks from the region's corner: any window of them is that part of the whole
+                crop = crop[: crop.shape[0] // k * k, : crop.shape[1] // k * k]
+                x1, y1 = x0 + crop.shape[1], y0 + crop.shape[0]
+                src, crop = crop, None
+            elif f < 1.0:
                 if _compiled_shrink(crop, f, interpolation):
                     src, crop = crop, None
                 else:
                     crop = shrink(crop, f, interpolation)
+        self._block = k
         self.x0, self.y0 = x0, y0
         #: the region ``(x0, y0, x1, y1)`` in frame pixels
         self.roi = (x0, y0, x1, y1)
@@ -146,12 +163,13 @@ class AppearanceFrame:
         #: none), set by the box model on first use
         self.proposal = None
         self.n_bins = n_colour_bins(grey)
+        self._grey_bins = bool(grey)
         self._src, self._image, self._grey, self._buffers = src, crop, None, buffers
         #: the region's size ``(H, W)`` at the working resolution
         self.shape = (crop.shape[:2] if src is None else (round(src.shape[0] * f), round(src.shape[1] * f)))
         # the rows and columns ``(r0, r1, c0, c1)`` whose labels and bin integrals, texture and working image are made
         self._window = self._twindow = self._swindow = None
-        if not (kernels.use() and not grey and (src is not None or crop.ndim == 3)):  # the numpy path: all at once
+        if not (kernels.use() and (src is not None or crop.ndim == 3)):  # the numpy path: all at once
             grey_f = self.grey.astype(np.float32)
             gx = cv2.Sobel(grey_f, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT)
             gy = cv2.Sobel(grey_f, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REFLECT)
@@ -220,11 +238,13 @@ class AppearanceFrame:
 
     def _grown(self, window, done):
         """``window`` clipped to the region, joined to ``done`` (a window made already, or ``None``); ``None``
-        where ``done`` holds it."""
+        where ``done`` holds it or it is empty (``(0, 0, 0, 0)``: no map of that kind is read)."""
         hh, ww = self.shape
         r0, r1, c0, c1 = (0, hh, 0, ww) if window is None else window
         r0, c0 = min(max(r0, 0), hh), min(max(c0, 0), ww)
         r1, c1 = min(max(r1, r0), hh), min(max(c1, c0), ww)
+        if r0 >= r1 or c0 >= c1:
+            return None
         if done is not None:
             if done[0] <= r0 and r1 <= done[1] and done[2] <= c0 and c1 <= done[3]:
                 return None
@@ -252,7 +272,12 @@ class AppearanceFrame:
             grown = self._grown(need, self._swindow)
             if grown is not None:
                 self._swindow = grown
-                fk.shrink_area(self._src, float(self.f), self._work, *grown)
+                if self._block:  # OpenCV's block averages of the window's blocks
+                    k, (r0, r1, c0, c1) = self._block, grown
+                    self._work[r0:r1, c0:c1] = cv2.resize(self._src[k * r0:k * r1, k * c0:k * c1], (c1 - c0, r1 - r0),
+                                                          interpolation=cv2.INTER_AREA)
+                else:
+                    fk.shrink_area(self._src, float(self.f), self._work, *grown)
         img = self._work if self._image is None else self._image
         if tex is not None:
             a0, a1, b0, b1 = reach
@@ -260,7 +285,12 @@ class AppearanceFrame:
             self._twindow = tex
         if lab is not None:
             r0, r1, c0, c1 = lab
-            fk.window_labels(cv2.cvtColor(img[r0:r1, c0:c1], cv2.COLOR_BGR2HSV), r0, c0, *lab, self._labels, self._ii)
+            if self._grey_bins:
+                fk.window_grey_labels(cv2.cvtColor(img[r0:r1, c0:c1], cv2.COLOR_BGR2GRAY), r0, c0, *lab, self._labels,
+                                      self._ii)
+            else:
+                fk.window_labels(cv2.cvtColor(img[r0:r1, c0:c1], cv2.COLOR_BGR2HSV), r0, c0, *lab, self._labels,
+                                 self._ii)
             self._window = lab
         return self
 

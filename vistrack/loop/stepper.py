@@ -141,7 +141,7 @@ class Stepper:
 def warm_up(filt, n, frame):
     """Run ``filt``'s first step and one more step with ``n`` particles on a blank frame shaped like
     ``frame``, with a throwaway generator, the model's likelihood at one particle (what the collapse
-    test computes at the estimate) and an adaptation of a copy of the model, so that the compiled
+    test computes at the estimate) and the confidence and an adaptation of a copy of the model, so that the compiled
     kernels the model and filter call (:mod:`vistrack.kernels`) are loaded before tracking starts:
     their loading (0.1–1 s) is start-up, not tracking, and on the first run after an install, when
     they compile (:mod:`vistrack.system.compiling`), nothing is left to compile mid-track. The model
@@ -164,7 +164,10 @@ def warm_up(filt, n, frame):
             filt.step(particles, obs, rng)
             model.loglik(obs, np.array(particles.states[:1], float))
             twin = copy.deepcopy(model)  # adapted instead of the model, which stays as it was
-            twin.adapt(twin.observe(FeatureMaps(blank), particles), model.estimate(particles))
+            obs, est = twin.observe(FeatureMaps(blank), particles), model.estimate(particles)
+            if offers(twin, Confidence):
+                twin.confidence(obs, est, particles)
+            twin.adapt(obs, est)
         except Exception:  # noqa: BLE001 - best effort: tracking raises the real error itself
             pass
 

@@ -8,6 +8,7 @@ import pytest
 from scipy import stats
 
 import vistrack
+from box_helpers import BACK, GONE, reappearing_clip
 from cli_helpers import run
 from vistrack.appearance.correlation import CorrelationFilter, DCFResponse, dcf_features
 from vistrack.models.box.correlation_proposal import CorrelationProposal
@@ -111,27 +112,6 @@ def test_features_known_answers():
     bright = dcf_features(ramp * 1.6 + 20)  # light changes scale the features little
     assert np.allclose(bright[1:], f[1:], rtol=0.02, atol=1e-3) and np.allclose(bright[0], f[0], atol=1e-5)
 
-
-GONE, BACK = 15, 35  # the object gone from GONE, back (elsewhere) from BACK
-
-
-def reappearing_clip(n=48):
-    """An orange striped square moving right 4 px per frame over a textured background, gone for 20 frames,
-    back 90 px lower and moving left; and its boxes."""
-    rng = np.random.default_rng(4)
-    bg = cv2.GaussianBlur(rng.integers(70, 180, (200, 260, 3)).astype(np.uint8), (0, 0), 3)
-    obj = np.zeros((26, 26, 3), np.uint8)
-    obj[:] = (30, 120, 230)  # orange, with dark stripes
-    obj[::6] = 20
-    frames, boxes = [], []
-    for t in range(n):
-        f = bg.copy()
-        x, y = (30 + 4 * t, 40) if t < BACK else (150 - 2 * (t - BACK), 130)
-        if not GONE <= t < BACK:
-            f[y:y + 26, x:x + 26] = obj
-        frames.append(f)
-        boxes.append((x, y, 26, 26))
-    return frames, boxes
 
 
 def _track(frames, box, seed=1):

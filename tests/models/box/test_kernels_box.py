@@ -16,6 +16,7 @@ import pytest
 
 import vistrack
 import vistrack.appearance.cues
+from box_helpers import moving_box_frames
 from kernel_helpers import both
 from vistrack import kernels
 from vistrack.appearance.features import FeatureMaps
@@ -24,19 +25,6 @@ from vistrack.models.collapse import CollapseWatch
 
 pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not installed")
 
-
-def moving_box_frames(n=20, seed=0):
-    """A textured background with a coloured, patterned box moving right and down."""
-    rng = np.random.default_rng(seed)
-    bg = cv2.GaussianBlur(rng.integers(0, 256, (120, 160, 3), dtype=np.uint8), (0, 0), 2)
-    frames = []
-    for t in range(n):
-        f = bg.copy()
-        x, y = 40 + 2 * t, 30 + t
-        cv2.rectangle(f, (x, y), (x + 30, y + 36), (30, 200, 220), -1)
-        cv2.circle(f, (x + 15, y + 18), 8, (200, 40, 40), -1)
-        frames.append(f)
-    return frames, (40.0, 30.0, 31.0, 37.0)
 
 
 @pytest.fixture(scope="module")

@@ -61,6 +61,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ... import kernels
+
 __all__ = ["FEATURES", "SEEN", "MONOTONE", "CALIBRATION", "Calibration", "BoxConfidence", "apce", "psr"]
 
 #: the cues, in the order of a feature vector
@@ -162,6 +164,9 @@ class Calibration:
 class BoxConfidence:
     """The cues of the box model's estimate on each frame (module docstring) and their confidence.
 
+    Only the cues the calibrations read are computed (the others are NaN in :attr:`features`): the shipped
+    calibration reads eight of the thirteen an estimate has and six of a candidate's ten.
+
     Parameters
     ----------
     model : Box
@@ -170,69 +175,120 @@ class BoxConfidence:
         The maps to a confidence of an estimate and of a whole-frame search's candidate (``None``: those in
         :data:`CALIBRATION`, or none where that file is missing: the cues alone, as
         ``benchmarks/fit_confidence.py`` needs them before a first fit).
+    every_cue : bool
+        Compute every cue of :data:`FEATURES` (and of :data:`SEEN` for a candidate), not only those the
+        calibrations read: what ``benchmarks/fit_confidence.py`` fits on (every cue is also computed without
+        a calibration).
 
     Attributes
     ----------
     features : ndarray of shape (len(FEATURES),) or None
-        The last frame's cues.
+        The last frame's cues (NaN where not computed).
     value : float or None
         The last frame's confidence (1 on the first frame: the user's box; ``None`` without a calibration).
+    frame_cues, candidate_cues_read : tuple of str
+        The cues computed for an estimate and for a candidate.
     """
 
-    def __init__(self, model, calibration=None):
+    def __init__(self, model, calibration=None, every_cue=False):
         if calibration is None and CALIBRATION.is_file():
             calibration = Calibration.load(), Calibration.load(part="candidate")
         self.calibration, self.candidate_calibration = (None, None) if calibration is None else calibration
+        every = every_cue or self.calibration is None
+        self.frame_cues = FEATURES if every else tuple(self.calibration.names)
+        self.candidate_cues_read = SEEN if every or self.candidate_calibration is None \
+            else tuple(self.candidate_calibration.names)
         self.q0 = model.app.colour.q.copy()  # the first frame's colour model (q adapts)
         self.features = None
         self.value = 1.0
 
-    def cues(self, model, obs, state, particles):
+    def cues(self, model, obs, state, particles, names=FEATURES):
         """The cue vector ``(len(FEATURES),)`` of the estimate ``state (6,)`` on the frame observed as ``obs``
         (with its response ``obs.dcf``), ``particles`` the frame's weighted set (``None``: the
-        ``(len(SEEN),)`` cues of the response and the appearance alone)."""
+        ``(len(SEEN),)`` cues of the response and the appearance alone); only the cues ``names``, the
+        others NaN."""
         s = np.asarray(state, float).reshape(1, -1)
         box = model.boxes(s)[0]
+        want = set(names)
+        out = np.full(len(SEEN) if particles is None else len(FEATURES), np.nan)
+        self._response_cues(model, obs, s, want, out)
+        self._appearance_cues(model, obs, box, want, out)
+        if particles is not None:
+            self._particle_cues(model, s[0], box, particles, want, out)
+        return out
+
+    @staticmethod
+    def _response_cues(model, obs, s, want, out):
+        """``apce``, ``psr``, ``peak``, ``response`` and ``drop`` of the pose ``s (1, 6)`` into ``out``."""
         resp = obs.dcf
-        best = resp.maps[resp.best]
-        side = float(np.sqrt(box[2] * box[3]))
+        if want & {"apce", "psr"}:
+            best = resp.maps[resp.best]
+            out[0], out[1] = np.log(max(apce(best), 1e-6)), psr(best)
+        if "peak" in want:
+            out[2] = float(resp.peak)
+        if "response" in want:
+            out[3] = float(resp.read(s)[0])
+        if "drop" in want:
+            level = model.collapse_level
+            loglik = float(model.collapse_loglik(obs, s)[0])  # the collapse test's log r, against its level
+            out[9] = -100.0 if not np.isfinite(loglik) else 0.0 if level is None \
+                else float(np.clip(loglik - level, -100.0, 20.0))
+
+    def _appearance_cues(self, model, obs, box, want, out):
+        """``ncc_first``, ``colour_first``, ``ncc``, ``colour`` and ``contrast`` of ``box (4,)`` into ``out``."""
         app = model.app
+        if want & {"ncc_first", "ncc"} and want & {"colour_first", "colour", "contrast"}:
+            b = np.ascontiguousarray(box, float)[None]
+            obs.maps(obs.window(b, app.ring), obs.window(b))  # the maps both read, made in one pass
+        if "ncc_first" in want:
+            out[4] = app.anchor_ncc(obs, box)
+        if "ncc" in want:
+            out[6] = float(app.ncc(obs, box[None])[0])
+        if not want & {"colour_first", "colour", "contrast"}:
+            return
+        colour = app.colour
+        if kernels.use():
+            from .kernels import colour_cues
+
+            b = np.ascontiguousarray(box, float)
+            _, ii = obs.maps(obs.window(b[None], app.ring))
+            out[[5, 7, 8]] = colour_cues(ii, float(obs.x0), float(obs.y0), float(obs.f), b, float(app.ring),
+                                         colour.bg_weight, self.q0, colour.q, colour.bp, np.empty(3))
+            return
         grow = app.ring * 0.5 * (box[2] + box[3])
         inner, ring = obs.histograms(box[:1], box[1:2], box[2:3], box[3:4], grow=np.array([grow]))
-        colour = app.colour
-        p = colour.normalise(inner[0])
-        colour_first = float(np.sqrt(p * self.q0).sum())
         bp = colour.bp
-        contrast = float(inner[0] @ bp / max(inner[0].sum(), 1) - ring[0] @ bp / max(ring[0].sum(), 1))
-        level = model.collapse_level
-        loglik = float(model.collapse_loglik(obs, s)[0])  # the collapse test's log r, against its level
-        drop = 0.0 if level is None or not np.isfinite(loglik) else float(np.clip(loglik - level, -100.0, 20.0))
-        if not np.isfinite(loglik):
-            drop = -100.0
-        seen = [np.log(max(apce(best), 1e-6)), psr(best), float(resp.peak), float(resp.read(s)[0]),
-                app.anchor_ncc(obs, box), colour_first, float(app.ncc(obs, box[None])[0]),
-                float(1.0 - colour.d2(inner[0])), contrast, drop]
-        if particles is None:
-            return np.array(seen)
-        w = particles.weights
-        c = particles.states[:, :2] - w @ particles.states[:, :2]
-        spread = float(np.sqrt(w @ np.einsum("ij,ij->i", c, c)))
-        pred = model.predicted_pose()
-        step = 0.0 if pred is None else float(np.hypot(*(s[0, :2] - pred[:2])) / (model.sigma[0] * np.exp(pred[2])))
-        return np.array(seen + [particles.ess / particles.n, np.log(max(spread / side, 1e-4)), min(step, 10.0)])
+        out[5] = float(np.sqrt(colour.normalise(inner[0]) * self.q0).sum())
+        out[7] = float(1.0 - colour.d2(inner[0]))
+        out[8] = float(inner[0] @ bp / max(inner[0].sum(), 1) - ring[0] @ bp / max(ring[0].sum(), 1))
 
-    def candidate_cues(self, model, obs, state):
+    @staticmethod
+    def _particle_cues(model, s, box, particles, want, out):
+        """``ess``, ``spread`` and ``motion`` of the weighted ``particles`` about the estimate ``s (6,)``."""
+        if "ess" in want:
+            out[10] = particles.ess / particles.n
+        if "spread" in want:
+            w = particles.weights
+            c = particles.states[:, :2] - w @ particles.states[:, :2]
+            spread = float(np.sqrt(w @ np.einsum("ij,ij->i", c, c)))
+            out[11] = np.log(max(spread / float(np.sqrt(box[2] * box[3])), 1e-4))
+        if "motion" in want:
+            pred = model.predicted_pose()
+            step = 0.0 if pred is None else float(np.hypot(*(s[:2] - pred[:2])) / (model.sigma[0] * np.exp(pred[2])))
+            out[12] = min(step, 10.0)
+
+    def candidate_cues(self, model, obs, state, names=SEEN):
         """The cues ``(len(SEEN),)`` of a whole-frame search's candidate ``state (3,)`` on the frame observed
-        about it as ``obs``: its response's and its appearance's."""
+        about it as ``obs``: its response's and its appearance's (only ``names``, the others NaN)."""
         s = np.ravel(state)[:3]
-        return self.cues(model, obs, np.concatenate([s, s]), None)
+        return self.cues(model, obs, np.concatenate([s, s]), None, names)
 
     def candidate(self, model, obs, state):
         """The confidence of a whole-frame search's candidate ``state (3,)`` on the frame observed about it as
         ``obs`` (:meth:`candidate_cues` through the candidates' calibration); ``None`` without one."""
         if self.candidate_calibration is None:
             return None
-        return float(self.candidate_calibration(self.candidate_cues(model, obs, state)))
+        return float(self.candidate_calibration(self.candidate_cues(model, obs, state, self.candidate_cues_read)))
 
     def update(self, model, obs, state, particles):
         """The confidence of the frame's estimate (kept in :attr:`value`, its cues in :attr:`features`); 1 on
@@ -240,6 +296,6 @@ class BoxConfidence:
         if particles is None or obs.dcf is None:
             self.features, self.value = None, None if self.calibration is None else 1.0
             return self.value
-        self.features = self.cues(model, obs, state, particles)
+        self.features = self.cues(model, obs, state, particles, self.frame_cues)
         self.value = None if self.calibration is None else float(self.calibration(self.features))
         return self.value

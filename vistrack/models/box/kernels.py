@@ -7,7 +7,9 @@ the same order (``tests/models/box/test_kernels_box.py`` states each tolerance):
   in the same order) and ``Box.transition_logpdf``;
 - :func:`lis_predict` and :func:`lis_weigh`: ``LIS.propose`` with the map proposal
   (:func:`~vistrack.kernels.map_draws.grid_points`, :func:`~vistrack.kernels.map_draws.map_sample`)
-  and the likelihood and transition densities in two calls about the proposal map.
+  and the likelihood and transition densities in two calls about the proposal map;
+- :func:`colour_cues`: the confidence's colour cues (``AppearanceFrame.histograms`` and
+  ``TargetColour``'s sums at the estimate).
 
 ``exp`` and ``log`` are the C library's here and in numpy's scalar loops (equal where numpy has
 no SIMD loop for them: the tests compare with a 1e-12 tolerance).
@@ -20,10 +22,10 @@ import math
 import numpy as np
 from numba import njit
 
-from ...appearance.cue_kernels import box_loglik
+from ...appearance.cue_kernels import affinity, box_loglik, box_ring_counts, contrast
 from ...kernels.map_draws import grid_points, map_sample
 
-__all__ = ["ar2_predict", "ar2_logpdf", "lis_predict", "lis_weigh"]
+__all__ = ["ar2_predict", "ar2_logpdf", "lis_predict", "lis_weigh", "colour_cues"]
 
 _LOG2PI = float(np.log(2.0 * np.pi))  # as vistrack.core.gaussian and vistrack.proposals.map_proposal
 
@@ -96,3 +98,20 @@ def lis_weigh(prev, x, sig, offsets, g_unit, log_g_unit, cell, uw, vw, qmap, u0,
         v = (((log_alpha[i] + ll[i]) - log_q[i]) + lz[i]) - lx[i]
         log_incr[i] = v if np.isfinite(log_alpha[i]) else -np.inf
     return z
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def colour_cues(ii, x0, y0, f, box, ring, bg_weight, q0, q, bp, out):
+    """The confidence's colour cues (:class:`~vistrack.models.box.confidence.BoxConfidence`) of ``box (4,)``
+    ``(cx, cy, w, h)`` from the per-bin integral image ``ii`` of a region at ``(x0, y0)``, scale ``f``:
+    ``out (3,)`` = ``colour_first`` (the affinity with the first frame's ``q0``), ``colour`` (``1 - d²`` with
+    ``q``) and ``contrast`` (the back-projection ``bp``'s mean in the box less in its ring of width
+    ``ring (w + h) / 2``); the counts as ``AppearanceFrame.histograms`` makes them, the sums in numpy's order
+    but the dot products with ``bp`` in bin order (1e-15)."""
+    n_bins = ii.shape[2]
+    inner, outer, scratch = np.empty(n_bins), np.empty(n_bins), np.empty(n_bins)
+    box_ring_counts(ii, x0, y0, f, box[0], box[1], box[2], box[3], ring, inner, outer)
+    out[0] = affinity(inner, bg_weight, q0, scratch)
+    out[1] = 1.0 - (1.0 - affinity(inner, bg_weight, q, scratch))
+    out[2] = contrast(inner, outer, bp)
+    return out

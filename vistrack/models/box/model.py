@@ -15,7 +15,7 @@ Likelihood
     learned from the first frame and adapted on confident frames; with the correlation filter
     (``dcf``, on by default), plus ``λ_dcf`` times its response at the state
     (:class:`~vistrack.appearance.correlation.CorrelationFilter`: gradient-orientation and
-    brightness-normalised grey features, a 3-scale search about the dynamics' prediction,
+    brightness-normalised grey features, a search at two scales about the dynamics' prediction,
     adapted on frames where the object is reported, anchored to the first frame's filter).
 Local moves (thesis 001, §4.3–4.5)
     ``ls-n-ips``: ``LS_λ`` = mean shift on the back-projection of the target histogram
@@ -30,7 +30,8 @@ Local moves (thesis 001, §4.3–4.5)
     (:class:`~vistrack.models.box.correlation_proposal.CorrelationProposal`, exact density, proper weights).
 Lost and found
     ``visible=0`` where the collapse test fires or, with the filter, the estimate's calibrated
-    confidence is low; a whole-frame search after a few such frames (:mod:`~vistrack.models.box.lost`).
+    confidence is low; after a few such frames, a whole-frame search every third frame, coarse to fine,
+    and the frames observed lean meanwhile (:mod:`~vistrack.models.box.lost`).
 """
 
 from __future__ import annotations
@@ -99,11 +100,16 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         at the estimate falls by 43-47 on the synthetic clip of ``tests/models/box/test_box_dcf.py`` when the object
         vanishes; 28 (the 7-clip mean AUC 0.690 against 0.685 with 35, and with the filter's rate 0.004
         0.695 and the hand held on 6 of 6 seeds: ``docs/experiments.md``).
-    confidence, lost_confidence, redetect, reentry, redetect_after, search_crop, search_peaks
-        What is reported lost and how it is found again: :meth:`~vistrack.models.box.lost.LostAndFound.init_lost`.
+    confidence, lost_confidence, redetect, reentry, every_cue
+        What is reported lost and the confidence: :meth:`~vistrack.models.box.lost.LostAndFound.init_lost`.
+    redetect_after, redetect_every, search_crop, search_peaks, search_stride, lean_when_lost
+        How it is found again: :meth:`~vistrack.models.box.lost.LostAndFound.init_search`.
     dcf_options : dict or None
-        Passed to :class:`~vistrack.appearance.correlation.CorrelationFilter` (its ``padding``: ``4 sigma_xy``
-        unless given, so that the search region about the dynamics' prediction holds 4 innovation stds).
+        Passed to :class:`~vistrack.appearance.correlation.CorrelationFilter` (unless given: its ``padding``
+        ``4 sigma_xy``, so that the search region about the dynamics' prediction holds 4 innovation stds; two
+        scales, ``n_scales`` 2: mean AUC over the 18 real clips 0.561, against 0.553 with one scale and 0.562 with
+        three, which take a third more time; ``reuse``, the adaptation on the search's own patch:
+        ``docs/experiments.md``).
     scale_filter : bool or dict
         Learn DSST's scale filter (:class:`~vistrack.models.box.scale_filter.ScaleFilter`, a dict: its
         options) beside the correlation filter; ``False``: none.
@@ -111,13 +117,13 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         ``λ_s``, the weight of the scale filter's response at each state's log-scale in ``log r``.
     scale_proposal : {"filter", "dcf"}
         The correlation proposal's log-scale centre: the scale filter's refined peak, or the best of the
-        correlation filter's three scales. The scale filter with ``λ_s`` 20 and its peak as the proposal's
+        correlation filter's scales. The scale filter with ``λ_s`` 20 and its peak as the proposal's
         scale were chosen by leave-one-clip-out cross-validation over the 18 real clips (mean AUC 0.548
         without it, 0.556–0.563 with it; each part alone less: ``benchmarks/tune_box.py``,
         ``docs/experiments.md``).
     **appearance
         Passed to :class:`~vistrack.appearance.cues.Appearance` (with the filter, ``lambda_colour`` 12,
-        ``lambda_template`` 8 and ``kappa`` 0.5 unless given).
+        ``lambda_template`` 8, ``kappa`` 0.5, ``template_points`` 128 and ``whole_factor`` unless given).
     """
 
     dim = 6
@@ -130,8 +136,8 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
                  window=2.5, map_stride=1, dcf=True, lambda_dcf=60.0, dcf_share=0.5, dcf_tempering=(60.0, 0.05),
                  dcf_scale_std=0.02, redetect=0.5, reentry=0.05, collapse_drop=28.0,
                  dcf_options=None, scale_filter=True, lambda_scale=20.0, scale_proposal="filter",
-                 confidence=True, lost_confidence=None, redetect_after=3, search_crop=1.0, search_peaks=3,
-                 **appearance):
+                 confidence=True, lost_confidence=None, redetect_after=3, redetect_every=3, search_crop=1.0,
+                 search_peaks=3, search_stride=2, lean_when_lost=True, every_cue=False, **appearance):
         x, y, w, h = (float(v) for v in box)
         if not (np.isfinite([x, y, w, h]).all() and w > 0 and h > 0):
             raise ValueError(f"the init box needs a finite position and a positive size, got {tuple(box)}")
@@ -140,7 +146,9 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         if dcf:  # the colour and template terms weaker beside the filter's, and the colour ring's pull to larger
             # boxes halved (κ 0.5, not 1: with 1 the estimate's scale is 10-14 % too large on car4 and blurred
             # girl; 7-clip mean AUC 0.685 against 0.670, blur 0.639 against 0.588; docs/experiments.md)
-            appearance = {"lambda_colour": 12.0, "lambda_template": 8.0, "kappa": 0.5, **appearance}
+            # (a 128-point template and a whole shrink factor: the same AUC over the 18 real clips for less time)
+            appearance = {"lambda_colour": 12.0, "lambda_template": 8.0, "kappa": 0.5, "template_points": 128,
+                          "whole_factor": True, **appearance}
         self.app = Appearance(frame, (x, y, w, h), **appearance)
         if sigma_xy is None:
             sigma_xy = 0.25 if dcf else 0.06
@@ -157,7 +165,7 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         self.blob_cell = 0.25 * side  # the colour-blob proposal's cell (frame px)
         self.learn_blob(frame, _inner_ellipse(frame.shape[:2], (x, y, w, h)))
         # the search region: the box grown by 4 innovation stds of the centre on each side, about the prediction
-        dcf_options = {"padding": 4.0 * sigma_xy, **(dcf_options or {})}
+        dcf_options = {"padding": 4.0 * sigma_xy, "n_scales": 2, "reuse": True, **(dcf_options or {})}
         self.cf = CorrelationFilter(frame, (x, y, w, h), **dcf_options) if dcf else None
         self._reach = 1.0 if dcf else 1.0 + self.window  # the observed region's reach, in 4 innovation stds
         if dcf:  # log r's scale with the filter's term: lost 28 below the running level
@@ -171,7 +179,8 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         self.sf = ScaleFilter(frame, (x, y, w, h), **sf_options) if (dcf and scale_filter) else None
         self.lambda_scale = float(lambda_scale)
         self.scale_proposal = scale_proposal
-        self.init_lost(dcf, confidence, lost_confidence, redetect, reentry, redetect_after, search_crop, search_peaks)
+        self.init_lost(dcf, confidence, lost_confidence, redetect, reentry, every_cue)
+        self.init_search(redetect_after, redetect_every, search_crop, search_peaks, search_stride, lean_when_lost)
 
     # -- geometry ---------------------------------------------------------------------
     def boxes(self, states):
@@ -294,16 +303,17 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
             obs.dcf, obs.dcf_share, obs.redetected, obs.frame_image = None, self.dcf_share, False, maps.frame
             return obs
         pred = self._pred = particles.weights @ self.predict_mean(particles.states)[:, :3]
-        if self._lost_run >= self.redetect_after and self.redetect is not None:
+        if self.search_due():
             found = self._redetect(maps.frame)
             if found is not None:
                 return found
-        return self._dcf_frame(maps.frame, roi, pred, self.dcf_share, False)
+        return self._dcf_frame(maps.frame, roi, pred, self.dcf_share, False, lean=self.lean())
 
-    def _dcf_frame(self, frame, roi, centre, share, redetected):
+    def _dcf_frame(self, frame, roi, centre, share, redetected, scale=True, lean=False):
         """The observation over ``roi`` and the correlation filter's search region about ``centre``
-        ``(cx, cy, l)``, with its response (``obs.dcf``), ``β`` and whether it is a re-detection."""
-        resp = self.cf.detect(frame, centre[:2], float(centre[2]))
+        ``(cx, cy, l)``, with its response (``obs.dcf``; ``lean``: at ``l`` alone), ``β``, whether it is a
+        re-detection and (``scale``, not ``lean``) the scale filter's response (:meth:`scale_response`)."""
+        resp = self.cf.detect(frame, centre[:2], float(centre[2]), scales=(0.0,) if lean else None)
         (ox, oy), a = resp.cell_origin()
         h, w = resp.maps.shape[1:]
         grow = self.app.ring * float(np.sum(self.size0 * np.exp(resp.log_scales[-1])))
@@ -312,10 +322,16 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
                max(roi[2], int(np.ceil(x1 + grow))), max(roi[3], int(np.ceil(y1 + grow))))
         obs = self.app.frame(frame, roi)
         obs.dcf, obs.dcf_share, obs.redetected, obs.frame_image = resp, share, redetected, frame
-        obs.scale = None if self.sf is None else self.sf.detect(frame, resp.peak_xy, float(centre[2]))
+        if scale and not lean:
+            self.scale_response(frame, obs, centre)
+        return obs
+
+    def scale_response(self, frame, obs, centre):
+        """The scale filter's response about the correlation filter's peak at the scales about ``centre[2]``
+        (``obs.scale``) and, with ``scale_proposal`` ``"filter"``, its peak as the proposal's log-scale centre."""
+        obs.scale = None if self.sf is None else self.sf.detect(frame, obs.dcf.peak_xy, float(centre[2]))
         if self.scale_proposal == "filter" and obs.scale is not None:
             obs.scale_centre = obs.scale.peak_log_scale
-        return obs
 
     def loglik(self, obs, states):
         """``log r`` of ``states (N, 6)``, shape ``(N,)``: the colour and template terms, plus
@@ -354,9 +370,9 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         resp = obs.dcf
         if resp is not None:
             e = np.asarray(estimate, float).ravel()
-            self.cf.adapt(obs.frame_image, e[:2], float(e[2]))
+            self.cf.adapt(obs.frame_image, e[:2], float(e[2]), resp)
             if self.sf is not None:
-                self.sf.adapt(obs.frame_image, e[:2], float(e[2]))
+                self.sf.adapt(obs.frame_image, e[:2], float(e[2]), obs.scale)
         return done
 
     # -- local moves (and :class:`~vistrack.models.box.moves.BoxMoves`) ------------------------
