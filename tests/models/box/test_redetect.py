@@ -56,7 +56,7 @@ def test_searches_every_kth_lost_frame():
 
 
 def _track(frames, box, seed, **options):
-    t = vistrack.Tracker(seed=seed, **options)
+    t = vistrack.Tracker(model="box", seed=seed, **options)
     t.init(frames[0], box)
     out = []
     for f in frames[1:]:

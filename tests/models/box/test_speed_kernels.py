@@ -29,7 +29,7 @@ pytestmark = pytest.mark.skipif(not kernels.AVAILABLE, reason="numba is not inst
 def tracked():
     """The default box tracker after 8 frames, with the next frame's observation and a step on it."""
     frames, box = moving_box_frames(10)
-    t = vistrack.Tracker(seed=1)
+    t = vistrack.Tracker(model="box", seed=1)
     t.init(frames[0], box)
     for f in frames[1:8]:
         t.update(f)
