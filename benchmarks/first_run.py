@@ -1,13 +1,14 @@
 """How long the first run after an install takes to compile the kernels, per model: ``vistrack run`` on a
-small synthetic clip of each model with its default algorithm (and ``box-real``: the real clip of issue 54,
-``girl_otb.mp4 --init 57,21,31,45``, where ``../shared/data/real`` is there), once with an empty kernel
+small synthetic clip of each model with its default algorithm (and ``default-real``, ``box-real``: the real clip
+of issue 54, ``girl_otb.mp4 --init 57,21,31,45``, with the default model and the box model, where
+``../shared/data/real`` is there), once with an empty kernel
 cache (``NUMBA_CACHE_DIR``: as after a fresh install) and once with the cache it left; the difference in
 CPU seconds (the compile is one thread: on an idle machine the wall time is about the same) is the
 compile time. A first run counts the kernels it compiles ("compiling kernels (first run only): k/n",
 its n printed here); a second run says nothing. The load average is printed beside each line: on a busy
 machine the wall time is longer, and the CPU seconds a little.
 
-    python benchmarks/first_run.py [--models box,box-real,contour,plate,landmarks] [--repeat 1]
+    python benchmarks/first_run.py [--models default-real,box-real,box,contour,plate,landmarks] [--repeat 1]
 """
 
 import argparse
@@ -26,7 +27,8 @@ COUNT = re.compile(r"compiling kernels \(first run only\):.*?(\d+)/(\d+) \[")
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real" / "girl_otb" / "girl_otb.mp4"
 #: a clip of each model and how to run it (from its ground truth where it has one; a real clip: None)
 CLIPS = {
-    "box-real": (None, ["--init", "57,21,31,45"]),
+    "default-real": (None, ["--init", "57,21,31,45"]),  # issue 54: the default model (siam)
+    "box-real": (None, ["--model", "box", "--init", "57,21,31,45"]),
     "box": (["synth", "contour", "--size", "160x120", "--frames", "10"], ["--model", "box", "--init-gt"]),
     "contour": (["synth", "contour", "--size", "160x120", "--frames", "10"], ["--init-gt"]),
     "plate": (["synth", "plate", "--frames", "10"], []),
