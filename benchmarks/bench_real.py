@@ -326,14 +326,14 @@ def markdown(rows, seeds, command, cv=None, spd=None):
     return "\n".join(lines) + "\n"
 
 
-def update_readme(path, table):
+def update_readme(path, table, command):
+    """Rewrite ``path``'s real-clips block with ``table``, its first line naming ``command``."""
     text = Path(path).read_text()
     begin = text.find("<!-- BEGIN real-clips")
     end = text.find("<!-- END real-clips -->")
     if begin < 0 or end < begin:
         sys.exit(f"{path} has no <!-- BEGIN real-clips ... --> ... <!-- END real-clips --> block")
-    begin = text.index("\n", begin) + 1
-    Path(path).write_text(text[:begin] + table + text[end:])
+    Path(path).write_text(text[:begin] + f"<!-- BEGIN real-clips: {command} -->\n" + table + text[end:])
 
 
 def print_report(rows, cv, spd):
@@ -424,8 +424,10 @@ def main():
                 "configurations": cv[0], "scores": cv[1].tolist(), "chosen": [cv[0][k] for k in cv[2]],
                 "held_out": cv[3].tolist()}}, indent=1))
     if args.readme:
-        flags = f"--seeds {args.seeds}" + " --sre" * args.sre + " --speed" * args.speed
-        update_readme(args.readme, markdown(rows, seeds, f"python benchmarks/bench_real.py {flags}", cv, spd))
+        flags = (f"--seeds {args.seeds}" + " --sre" * args.sre + " --speed" * args.speed
+                 + (f" --entries {args.entries}" if args.entries else ""))
+        command = f"python benchmarks/bench_real.py {flags}"
+        update_readme(args.readme, markdown(rows, seeds, command, cv, spd), f"{command} --readme {args.readme}")
 
 
 if __name__ == "__main__":
