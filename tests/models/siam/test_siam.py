@@ -47,18 +47,19 @@ def test_a_non_editable_install_finds_the_weights(tmp_path):
     import subprocess
     import sys
     import zipfile
-    from pathlib import Path
 
-    root = Path(vistrack.__file__).resolve().parents[1]
+    from path_helpers import ROOT as root  # the checkout (vistrack itself may be installed from it, not edited)
+
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w",
                     str(tmp_path), str(root)], check=True)
     wheel = next(tmp_path.glob("vistrack-*.whl"))
     site = tmp_path / "site"
     zipfile.ZipFile(wheel).extractall(site)
-    code = ("import vistrack, vistrack.models.siam.network as n; assert 'site' in vistrack.__file__; "
+    code = ("import sys, vistrack, vistrack.models.siam.network as n; "
+            "assert vistrack.__file__.startswith(sys.argv[1]), vistrack.__file__; "
             "net = n.SiamNetwork(); print(n.WEIGHTS)")
-    out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env={"PYTHONPATH": str(site), "PATH": ""},
-                         capture_output=True, text=True)
+    out = subprocess.run([sys.executable, "-c", code, str(site)], cwd=tmp_path,
+                         env={"PYTHONPATH": str(site), "PATH": ""}, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert str(site) in out.stdout
 
