@@ -18,10 +18,25 @@ from ..core.gaussian import diag_logpdf
 from ..core.transition import Transition
 from ..proposals.blob import BlobProposal, GaussianColour, SubspaceProposal
 
-__all__ = ["ARInnovation"]
+__all__ = ["ARPrior", "ARInnovation"]
 
 
-class ARInnovation:
+class ARPrior:
+    """Mixin: ``p_0`` of an AR(2) pose state ``(z, z')``: ``z ~ N(init_pose, diag(prior_std²))`` at rest (``z' = z``).
+
+    The model supplies ``init_pose`` and ``prior_std`` (each ``(d,)``, or ``prior_std`` a scalar)."""
+
+    def sample_prior(self, n, rng):
+        """``n`` states ``(n, 2 d)`` from ``p_0``: a Gaussian about the first pose, zero velocity."""
+        z = self.init_pose + self.prior_std * rng.standard_normal((n, np.size(self.init_pose)))
+        return np.concatenate([z, z], axis=1)
+
+    def prior_logpdf(self, states):
+        """``log p_0`` of the current pose of ``states (N, 2 d)`` -> ``(N,)``."""
+        return diag_logpdf(states[:, :np.size(self.init_pose)], self.init_pose, self.prior_std)
+
+
+class ARInnovation(ARPrior):
     """Mixin: :class:`~vistrack.models.protocol.InnovationSplit` for states ``(z_t, z_{t-1})``.
 
     The model supplies ``dim``, ``predict_mean(states)``, ``innovation_std(states) -> (N, k)``,

@@ -62,6 +62,7 @@ from pathlib import Path
 import numpy as np
 
 from ... import kernels
+from .. import calibration
 
 __all__ = ["FEATURES", "SEEN", "MONOTONE", "CALIBRATION", "Calibration", "BoxConfidence", "apce", "psr"]
 
@@ -105,60 +106,19 @@ def psr(response, half=PSR_HALF):
 
 
 @dataclass
-class Calibration:
-    """The logistic map from cues to a confidence, and the threshold of ``visible``.
+class Calibration(calibration.Calibration):
+    """The box model's calibrated confidence: :class:`vistrack.models.calibration.Calibration` over cue vectors in
+    :data:`FEATURES` order (a candidate's: :data:`SEEN`, their prefix), shipped in :data:`CALIBRATION`."""
 
-    Attributes
-    ----------
-    names : tuple of str
-        The cues used, a subset of :data:`FEATURES`.
-    mean, scale, coef : ndarray of shape (K,)
-        ``μ``, ``s`` and ``β`` of each cue.
-    intercept : float
-        ``β_0``.
-    threshold : float
-        The object is reported lost (``low-confidence``) below this confidence, and a whole-frame
-        search's candidate is taken at or above it.
-    """
-
-    names: tuple
-    mean: np.ndarray
-    scale: np.ndarray
-    coef: np.ndarray
-    intercept: float
-    threshold: float
-
-    #: the arrays of one calibration in the file, each saved as ``<part>_<key>``
-    KEYS = ("names", "mean", "scale", "coef", "intercept", "threshold")
+    def __post_init__(self):
+        if not self.features:
+            self.features = FEATURES
 
     @classmethod
-    def load(cls, path=CALIBRATION, part="frame"):
+    def load(cls, path=CALIBRATION, part="frame", features=FEATURES):
         """The calibration ``part`` (``"frame"``: an estimate's; ``"candidate"``: a whole-frame search's
         candidate's) in ``path``, an ``.npz`` written by :meth:`save_all`."""
-        with np.load(path, allow_pickle=False) as d:
-            v = [d[f"{part}_{k}"] for k in cls.KEYS]
-        return cls(tuple(str(n) for n in v[0]), *(a.astype(float) for a in v[1:4]), float(v[4]), float(v[5]))
-
-    @classmethod
-    def save_all(cls, path, parts, **extra):
-        """Write the calibrations ``parts`` (``{"frame": ..., "candidate": ...}``) and ``extra`` arrays (the
-        fit's provenance) to ``path``."""
-        arrays = {}
-        for part, c in parts.items():
-            arrays.update({f"{part}_names": np.array(c.names), f"{part}_mean": c.mean, f"{part}_scale": c.scale,
-                           f"{part}_coef": c.coef, f"{part}_intercept": np.float64(c.intercept),
-                           f"{part}_threshold": np.float64(c.threshold)})
-        np.savez(path, **arrays, **extra)
-
-    def index(self):
-        """The columns of a :data:`FEATURES` vector that the calibration reads ``(K,)``."""
-        return np.array([FEATURES.index(n) for n in self.names], np.intp)
-
-    def __call__(self, features):
-        """The confidence of cue vectors ``(..., K)`` in :data:`FEATURES` order (``K`` = ``len(FEATURES)``, or
-        ``len(SEEN)`` for a candidate's) -> ``(...)`` in ``[0, 1]``."""
-        z = (np.asarray(features, float)[..., self.index()] - self.mean) / self.scale
-        return 1.0 / (1.0 + np.exp(-(z @ self.coef + self.intercept)))
+        return super().load(path, part, features)
 
 
 class BoxConfidence:

@@ -220,15 +220,6 @@ class Box(LostAndFound, BoxMoves, CollapseCheck, TranslationMoves, ARInnovation,
         """The colour-blob proposal looks at the observation's region at the working resolution."""
         return obs.image, obs.x0, obs.y0, obs.f
 
-    def sample_prior(self, n, rng):
-        """``n`` states ``(n, 6)`` from ``p_0``: a Gaussian about the first box, zero velocity (previous = current)."""
-        z = self.init_pose + self.prior_std * rng.standard_normal((n, 3))
-        return np.concatenate([z, z], axis=1)
-
-    def prior_logpdf(self, states):
-        """``log p_0`` of the current pose of ``states (N, 6)`` -> ``(N,)``."""
-        return diag_logpdf(states[:, :3], self.init_pose, self.prior_std)
-
     def predict_mean(self, states):
         """The mean of the AR(2) ``K``: ``z + d (z - z')``, with ``z`` as the new previous pose; ``(N, 6)`` ->
         ``(N, 6)``."""

@@ -34,7 +34,7 @@ import math
 import numpy as np
 
 from ... import kernels
-from ...core.gaussian import diag_logpdf
+from ..innovation import ARPrior
 from ..protocol import VideoModelBase
 from .lost import SiamLost
 from .network import CONTEXT, EXEMPLAR, INSTANCE, SiamNetwork, cell_points, context_side, crop
@@ -46,7 +46,7 @@ __all__ = ["Siam"]
 _POINTS = cell_points(15)
 
 
-class Siam(SiamLost, VideoModelBase):
+class Siam(SiamLost, ARPrior, VideoModelBase):
     """Box tracking with a learned Siamese likelihood (module docstring).
 
     Parameters
@@ -187,15 +187,6 @@ class Siam(SiamLost, VideoModelBase):
         return {"cx": s[0], "cy": s[1], "w": w, "h": h, "angle_deg": 0.0, "scale": float(np.exp((s[2] + s[3]) / 2))}
 
     # -- dynamics --------------------------------------------------------------------------------------------
-    def sample_prior(self, n, rng):
-        """``n`` states ``(n, 8)`` from ``p_0``: a Gaussian about the first box, zero velocity."""
-        z = self.init_pose + self.prior_std * rng.standard_normal((n, 4))
-        return np.concatenate([z, z], axis=1)
-
-    def prior_logpdf(self, states):
-        """``log p_0`` of the current pose of ``states (N, 8)`` -> ``(N,)``."""
-        return diag_logpdf(states[:, :4], self.init_pose, self.prior_std)
-
     def predict_mean(self, states):
         """The mean of ``K``: ``z + d (z - z')`` on the centre, ``z`` on the log-sizes; ``(N, 8)`` -> ``(N, 8)``."""
         z1, z2 = states[:, :4], states[:, 4:]
