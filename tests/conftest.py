@@ -7,10 +7,17 @@ check (under a minute there); the fault tests (``tests/<package>/test_faults_*.p
 breaks, every test a command under a fault) are slow as a whole.
 """
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from kernel_helpers import compile_kernels
+
+HERE = Path(__file__).resolve().parent
 
 
 def pytest_sessionstart(session):
@@ -20,7 +27,15 @@ def pytest_sessionstart(session):
     (``-n 0``, a test or two): a test that needs a kernel compiles it as before."""
     config = session.config
     if not hasattr(config, "workerinput") and config.getoption("numprocesses", None):
-        compile_kernels()
+        parts = min(2, os.cpu_count() or 1)  # in as many processes at once as the machine has cores (up to 2)
+        if parts == 1:
+            compile_kernels()
+            return
+        code = f"import sys; sys.path.insert(0, {str(HERE)!r}); from kernel_helpers import compile_kernels; " \
+               "compile_kernels(int(sys.argv[1]), int(sys.argv[2]))"
+        procs = [subprocess.Popen([sys.executable, "-c", code, str(k), str(parts)]) for k in range(parts)]
+        if any(p.wait() for p in procs):
+            pytest.exit("compiling the kernels before the suite failed (its error is above)", returncode=3)
 
 
 def pytest_collection_modifyitems(items):

@@ -31,7 +31,8 @@ COMPILED = (("box", {}, (30, 40, 30, 30), (160, 120), ("lis", "ls-n-ips", "lls",
             ("box", {}, (30, 40, 130, 110), (320, 240), ("lis",)),
             ("contour", {}, (30, 40, 30, 30), (160, 120), ("lis", "ls-n-ips", "lls")),
             ("contour", {"colour": False}, (30, 40, 30, 30), (160, 120), ("ls-n-ips",)),
-            ("plate", {}, (90, 90, 48, 12), (160, 120), ("lis", "bootstrap")))
+            ("plate", {}, (90, 90, 48, 12), (160, 120), ("lis", "bootstrap")),
+            ("siam", {}, (30, 40, 30, 30), (160, 120), ("lis",)))
 
 
 def _frames(size, n=4):
@@ -54,23 +55,38 @@ def _track(filt, frames):
         pass
 
 
-def compile_kernels():
-    """Every kernel the models' and filters' steps call, compiled (or loaded from numba's disk cache,
-    ``cache=True``): a few frames tracked by each model of :data:`COMPILED` with its filters, a plate acquired
-    without a box (the entering-car search), several plates with partitioned LIS, and the bearings ξ
-    proposal's LIS."""
-    if not kernels.use():
-        return
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for name, options, box, size, algos in COMPILED:
-            frames = _frames(size)
-            for algo in algos:
-                _track(make_filter(algo, model_from_box(name, frames[0][1], box, **options)), frames)
-        frames = _frames((160, 120))
-        _track(make_filter("lis", Plate((160, 120))), frames)
-        _track(make_filter("partitioned-lis", Plates((160, 120), 2, "single-row")), frames)
+def _jobs():
+    """What :func:`compile_kernels` tracks, one entry per filter: ``(model, options, box, size, algo)``, then the
+    plate search, several plates and the bearings ξ proposal."""
+    return [(name, options, box, size, algo) for name, options, box, size, algos in COMPILED for algo in algos] + [
+        "plate-search", "plates", "bearings"]
+
+
+def _compile(job):
+    if job == "plate-search":
+        _track(make_filter("lis", Plate((160, 120))), _frames((160, 120)))
+    elif job == "plates":
+        _track(make_filter("partitioned-lis", Plates((160, 120), 2, "single-row")), _frames((160, 120)))
+    elif job == "bearings":
         bearings = Bearings(ships=1)
         _, obs = simulate(bearings, 3, np.random.default_rng(0))
         for _ in filter_steps(make_filter("lis", bearings), obs, 30, np.random.default_rng(0)):
             pass
+    else:
+        name, options, box, size, algo = job
+        frames = _frames(size)
+        _track(make_filter(algo, model_from_box(name, frames[0][1], box, **options)), frames)
+
+
+def compile_kernels(part=0, parts=1):
+    """Every kernel the models' and filters' steps call, compiled (or loaded from numba's disk cache,
+    ``cache=True``): a few frames tracked by each model of :data:`COMPILED` with its filters, a plate acquired
+    without a box (the entering-car search), several plates with partitioned LIS, and the bearings ξ
+    proposal's LIS; ``part`` of ``parts``: every ``parts``-th of those from the ``part``-th (the processes that
+    share the work)."""
+    if not kernels.use():
+        return
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for job in _jobs()[part::parts]:
+            _compile(job)
