@@ -3,6 +3,7 @@ call, with their argument types, so that a run compiles exactly those before it 
 (:mod:`vistrack.system.compiling`). Run from the repository root after changing a kernel or what calls it::
 
     python tools/kernel_manifest.py            # write it (a few minutes: every model and algorithm)
+    python tools/kernel_manifest.py --models siam   # rebuild one model's runs, keep the others'
     python tools/kernel_manifest.py --check    # exit 1 if it differs from what the code calls
 
 Each model and algorithm tracks a few frames of clips of its kind (a small and a large frame, so that
@@ -83,7 +84,7 @@ def clips(folder):
 
 
 #: the clip kind each model tracks here
-KIND = {"box": "contour", "contour": "contour", "plate": "plate", "landmarks": "landmarks"}
+KIND = {"box": "contour", "siam": "contour", "contour": "contour", "plate": "plate", "landmarks": "landmarks"}
 
 
 def called(clip, model, algo, targets=0, from_gt=True):
@@ -98,8 +99,9 @@ def called(clip, model, algo, targets=0, from_gt=True):
     return json.loads(line[len("KERNELS "):])
 
 
-def build(workers=2):
-    """The manifest: ``{"kernels": {id: [module, name, argument types]}, "runs": {model/algo: [ids]}}``."""
+def build(workers=2, models=None):
+    """The manifest: ``{"kernels": {id: [module, name, argument types]}, "runs": {model/algo: [ids]}}`` (of
+    ``models`` only, where given)."""
     from vistrack.registry import MODELS, SEARCH_MODEL
 
     jobs = []
@@ -107,7 +109,7 @@ def build(workers=2):
         by_kind = clips(d)
         for name, spec in MODELS.items():
             kind = KIND.get(name)
-            if kind is None:
+            if kind is None or (models and name not in models):
                 continue
             starts = (True, False) if name == SEARCH_MODEL else (True,)  # from a box, and the plate search
             jobs += [(f"{name}/{a}", clip, name, a, 0, g) for a in spec.algos for clip in by_kind[kind] for g in starts]
@@ -130,10 +132,19 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--check", action="store_true", help="compare with the file instead of writing it")
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--models", default="", help="rebuild these models' runs only (comma-separated), keep the rest")
     args = ap.parse_args()
     from vistrack.system.compiling import MANIFEST
 
-    text = json.dumps(build(args.workers), indent=1) + "\n"
+    models = [m for m in args.models.split(",") if m]
+    built = build(args.workers, models)
+    if models:  # the other models' runs as the file has them
+        old = json.loads(MANIFEST.read_text())
+        runs = {k: v for k, v in old["runs"].items() if k.split("/")[0] not in models} | built["runs"]
+        kernels = {k: v for k, v in (old["kernels"] | built["kernels"]).items()
+                   if any(k in ids for ids in runs.values())}
+        built = {"kernels": dict(sorted(kernels.items())), "runs": dict(sorted(runs.items()))}
+    text = json.dumps(built, indent=1) + "\n"
     if args.check:
         if MANIFEST.read_text() != text:
             raise SystemExit(f"{MANIFEST} differs from what the code calls: python tools/kernel_manifest.py")

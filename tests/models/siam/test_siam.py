@@ -240,3 +240,16 @@ def test_the_search_crop_follows_the_authors_size_rule():
     s_z = context_side(30, 20)
     assert s_z == pytest.approx(np.sqrt(55 * 45))
     assert model.search_side(np.array([0.0, 0.0, 0.0, 0.0])) == pytest.approx(s_z * 255 / 127)
+
+
+@pytest.mark.parametrize("algo", ["lis", "bootstrap", "condensation", "avpf"])
+def test_every_algorithm_the_siam_model_lists_tracks(algo):
+    """AVPF's first step asks ``p_0`` for its mean (``prior_mean``), which the siam model lacked."""
+    from vistrack.registry import get_model_spec
+
+    assert algo in get_model_spec("siam").algos
+    t = vistrack.Tracker(model="siam", algo=algo, particles=50, seed=1)
+    frame = _scene(100, 70)
+    t.init(frame, (100, 70, 30, 30))  # the object's box (_scene's x, y: its top-left corner)
+    visible, box = t.update(_scene(103, 68))  # moved by (+3, -2): its centre (118, 83)
+    assert visible and abs(box[0] + box[2] / 2 - 118) < 3 and abs(box[1] + box[3] / 2 - 83) < 3

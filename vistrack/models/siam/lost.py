@@ -132,7 +132,7 @@ class SiamLost:
         if kernels.use():
             from .kernels import cloud_stats
 
-            spread = float(cloud_stats(np.ascontiguousarray(particles.states, float), particles.weights, 0.0,
+            spread = float(cloud_stats(np.ascontiguousarray(particles.states, float), np.array(particles.weights), 0.0,
                                        np.empty(5))[4])
         else:
             w = particles.weights

@@ -141,6 +141,7 @@ class Siam(SiamLost, ARPrior, VideoModelBase):
         self.sigma_scale, self.sigma_aspect = float(sigma_scale), float(sigma_aspect)
         self.prior_std = np.array([prior_std[0] * self.side0] * 2 + [prior_std[1]] * 2)
         self.init_pose = np.array([x + w / 2, y + h / 2, 0.0, 0.0])
+        self.prior_mean = np.concatenate([self.init_pose, self.init_pose])  # p_0's mean: the first box, at rest
         self.lambda_logit = float(lambda_logit)
         self.box_std = tuple(float(v) for v in box_std)
         self.box_gate = bool(box_gate)
@@ -296,7 +297,7 @@ class Siam(SiamLost, ARPrior, VideoModelBase):
         if kernels.use():
             from .kernels import cloud_stats
 
-            stats = cloud_stats(np.ascontiguousarray(particles.states, float), w, self.damping, np.empty(5))
+            stats = cloud_stats(np.ascontiguousarray(particles.states, float), np.array(w), self.damping, np.empty(5))
             pred = self._pred = stats[:4]
             spread = float(stats[4])
         else:
@@ -336,7 +337,8 @@ class Siam(SiamLost, ARPrior, VideoModelBase):
         if kernels.use():
             from .kernels import mode_mean
 
-            return mode_mean(np.ascontiguousarray(s, float), w, self.side0, self.mode_radius, np.empty(s.shape[1]))
+            return mode_mean(np.ascontiguousarray(s, float), np.array(w), self.side0, self.mode_radius,
+                             np.empty(s.shape[1]))
         side = self.side0 * np.exp((s[:, 2] + s[:, 3]) / 2)
         d = s[:, None, :2] - s[None, :, :2]
         near = np.einsum("ijk,ijk->ij", d, d) <= (self.mode_radius * side[:, None]) ** 2
