@@ -80,13 +80,20 @@ def _compile(job):
 
 def compile_kernels(part=0, parts=1):
     """Every kernel the models' and filters' steps call, compiled (or loaded from numba's disk cache,
-    ``cache=True``): a few frames tracked by each model of :data:`COMPILED` with its filters, a plate acquired
-    without a box (the entering-car search), several plates with partitioned LIS, and the bearings ξ
-    proposal's LIS; ``part`` of ``parts``: every ``parts``-th of those from the ``part``-th (the processes that
-    share the work)."""
+    ``cache=True``): each kernel of the package's manifest (``vistrack/system/kernel_manifest.json``: what every
+    model and algorithm calls, for small and large frames) with its argument types, then what the manifest does not
+    hold, tracked: a few frames of each model of :data:`COMPILED` with its filters, a plate acquired without a box,
+    several plates with partitioned LIS and the bearings ξ proposal's LIS (then loaded from the cache). ``part``
+    of ``parts``: every ``parts``-th of those from the ``part``-th (the processes that share the work)."""
     if not kernels.use():
         return
+    from vistrack.system.compiling import kernel, manifest
+
+    listed = [("kernel", *v) for _, v in sorted(manifest().get("kernels", {}).items())]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        for job in _jobs()[part::parts]:
-            _compile(job)
+        for job in (listed + _jobs())[part::parts]:
+            if job[0] == "kernel":
+                kernel(job[1], job[2]).compile(f"({job[3]},)")
+            else:
+                _compile(job)
