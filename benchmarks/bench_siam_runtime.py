@@ -1,7 +1,7 @@
 """The runtime for NanoTrack v3's networks (issue 51, item 1): onnxruntime against ``cv2.dnn``, side by side in one
 process, one thread each, on the same crops.
 
-    python benchmarks/bench_siam_runtime.py            # ms per call, median of --reps rounds of --calls calls
+    python benchmarks/bench_siam_runtime.py            # ms per call, the fastest of --reps rounds of --calls calls
     python benchmarks/bench_siam_runtime.py --reps 9 --calls 200
 
 Rows: the backbone on a 255 search crop and on the 127 exemplar crop, the head on a search crop's features
@@ -13,24 +13,18 @@ the graph, onnxruntime only). The outputs of both runtimes agree to 1e-4 (printe
 from __future__ import annotations
 
 import argparse
-import time
 
 import cv2
 import numpy as np
 
 from vistrack.models.siam.network import EXEMPLAR, INSTANCE, WEIGHTS, SiamNetwork
+from vistrack.scoring.metrics import best_ms
 
 
 def _ms(fn, calls, reps):
-    """Median over ``reps`` rounds of the mean ms of ``calls`` calls of ``fn``."""
+    """ms per call of ``fn``: the fastest of ``reps`` rounds of ``calls`` calls (:func:`best_ms`), after a warm-up."""
     fn()
-    out = []
-    for _ in range(reps):
-        t0 = time.perf_counter()
-        for _ in range(calls):
-            fn()
-        out.append((time.perf_counter() - t0) * 1e3 / calls)
-    return float(np.median(out))
+    return best_ms(lambda: [fn() for _ in range(calls)], reps) / calls
 
 
 def main():
@@ -68,7 +62,7 @@ def main():
             ("backbone, 127 exemplar crop", lambda: net.features(z), lambda: dnn_backbone(z)),
             ("head, the exemplar's features as an input", lambda: net.head(xf, z=zf), lambda: dnn_head(zf, xf)),
             ("head made for its exemplar (siam's)", lambda: net.head(xf), None)]
-    print(f"one thread each, median of {a.reps} rounds of {a.calls} calls (outputs agree to {diff:.1e})")
+    print(f"one thread each, the fastest of {a.reps} rounds of {a.calls} calls (outputs agree to {diff:.1e})")
     print(f"{'':44s} {'onnxruntime':>12s} {'cv2.dnn':>9s} {'ratio':>6s}")
     for name, ort_fn, dnn_fn in rows:
         o = _ms(ort_fn, a.calls, a.reps)
